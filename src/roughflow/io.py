@@ -1,0 +1,107 @@
+"""Self-describing netCDF datasets: writing atomically, reading surfaces back.
+
+Every variable carries ``units`` and ``long_name``; parameters are attributes
+or coordinates. Files are written to a temporary name in the same folder and
+renamed into place, so an interrupted job never leaves a file that looks valid.
+"""
+
+from __future__ import annotations
+
+import os
+import tempfile
+from pathlib import Path
+
+import numpy as np
+import xarray as xr
+
+from roughflow.errors import InputError
+from roughflow.surface import Surface, SurfaceSpec
+
+LENGTH_UNITS = "L (cell side; dimensionless)"
+
+
+def _attr_value(v):
+    """netCDF attributes cannot hold None or bool: store them as strings/ints."""
+    if v is None:
+        return "none"
+    if isinstance(v, (bool, np.bool_)):
+        return int(v)
+    return v
+
+
+def clean_attrs(attrs: dict) -> dict:
+    return {k: _attr_value(v) for k, v in attrs.items()}
+
+
+def write_dataset(ds: xr.Dataset, path: str | os.PathLike) -> Path:
+    """Write ``ds`` to ``path`` atomically (temporary file + rename)."""
+    path = Path(path)
+    path.parent.mkdir(parents=True, exist_ok=True)
+    ds = ds.copy()
+    ds.attrs = clean_attrs(ds.attrs)
+    for name in ds.variables:
+        ds[name].attrs = clean_attrs(ds[name].attrs)
+    fd, tmp = tempfile.mkstemp(suffix=".nc.part", dir=path.parent)
+    os.close(fd)
+    try:
+        ds.to_netcdf(tmp)
+        os.replace(tmp, path)
+    except BaseException:
+        if os.path.exists(tmp):
+            os.unlink(tmp)
+        raise
+    return path
+
+
+def grid_coords(nx: int, ny: int, lx: float, ly: float) -> dict:
+    """Cell-centre coordinates x, y with units."""
+    x = (np.arange(nx) + 0.5) * lx / nx
+    y = (np.arange(ny) + 0.5) * ly / ny
+    return {
+        "x": ("x", x, {"units": LENGTH_UNITS, "long_name": "position along x (axis 0)"}),
+        "y": ("y", y, {"units": LENGTH_UNITS, "long_name": "position along y (axis 1)"}),
+    }
+
+
+def surface_to_dataset(surface: Surface) -> xr.Dataset:
+    """Dataset with ``heights(x, y)`` and every spec parameter as an attribute."""
+    nx, ny = surface.shape
+    ds = xr.Dataset(
+        {
+            "heights": (
+                ("x", "y"),
+                surface.heights,
+                {"units": LENGTH_UNITS, "long_name": "height of the rigid rough surface"},
+            )
+        },
+        coords=grid_coords(nx, ny, surface.lx, surface.ly),
+        attrs={"lx": surface.lx, "ly": surface.ly, "title": "roughflow surface"},
+    )
+    if surface.spec is not None:
+        ds.attrs.update({f"spec_{k}": v for k, v in surface.spec.as_attrs().items()})
+    return ds
+
+
+def surface_from_dataset(ds: xr.Dataset) -> Surface:
+    """Inverse of :func:`surface_to_dataset` (the spec is restored when present)."""
+    if "heights" not in ds:
+        raise InputError("dataset has no 'heights' variable: not a roughflow surface file")
+    heights = np.asarray(ds["heights"].transpose("x", "y").values, dtype=np.float64)
+    spec = None
+    if "spec_nx" in ds.attrs:
+        kw = {k[5:]: ds.attrs[k] for k in ds.attrs if k.startswith("spec_")}
+        for k in ("nx", "ny", "seed"):
+            kw[k] = int(kw[k])
+        for k in ("lx", "ly", "hurst", "gamma", "lambda_r", "lambda_s", "rms_slope"):
+            kw[k] = float(kw[k])
+        spec = SurfaceSpec(**kw)
+    return Surface(heights=heights, lx=float(ds.attrs["lx"]), ly=float(ds.attrs["ly"]), spec=spec)
+
+
+def read_surface(path: str | os.PathLike) -> Surface:
+    """Read a surface file written by ``roughflow surface``."""
+    path = Path(path)
+    if not path.exists():
+        raise InputError(f"surface file {str(path)!r} does not exist")
+    with xr.open_dataset(path) as ds:
+        return surface_from_dataset(ds.load())

@@ -1,0 +1,256 @@
+"""Random-phase rough surfaces, isotropic and Peklenik-anisotropic (paper Sect. 2.1, Eq. 1-2).
+
+Fourier amplitudes are deterministic, |h~(q)| = sqrt(C(q_P)), phases uniform on
+[0, 2 pi) (random-phase approximation), with the effective wavenumber (Eq. 1)
+
+    q_P = sqrt(gamma q_x^2 + q_y^2 / gamma),
+
+so gamma > 1 stretches the surface along x (axis 0). The spectrum (Eq. 2, with the
+exponent corrected as in ``shared/docs/physics.md`` Sect. 2: the 2D spectrum of
+a self-affine surface falls as q^(-2(1+H)))
+
+    C(q) ~ Theta(q_s - q) / (1 + (q/q_r)^2)^(1+H)          (rolloff="smooth")
+    C(q) ~ Theta(q_s - q) min(1, (q/q_r)^(-2(1+H)))        (rolloff="plateau")
+
+Heights are normalised to the rms gradient ``rms_slope`` computed spectrally from
+the discrete spectrum with the true q_x, q_y (rectangular cells work). Units:
+lengths in units of the cell's linear size (default L = 1), heights in the same
+unit, slopes dimensionless.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import asdict, dataclass
+
+import numpy as np
+
+from roughflow import fft
+from roughflow.errors import InputError, require_finite, require_positive
+
+ROLLOFF_FORMS = ("smooth", "plateau")
+
+
+@dataclass(frozen=True)
+class SurfaceSpec:
+    """Parameters of a random-phase surface on an ``nx`` x ``ny`` grid of size ``lx`` x ``ly``.
+
+    ``lambda_r`` and ``lambda_s`` are the roll-off and short-cutoff wavelengths of the
+    underlying isotropic surface (q_r = 2 pi / lambda_r, q_s = 2 pi / lambda_s).
+    Validation happens on construction; bad values raise :class:`InputError`.
+    """
+
+    nx: int
+    ny: int
+    lx: float
+    ly: float
+    hurst: float
+    gamma: float
+    lambda_r: float
+    lambda_s: float
+    seed: int
+    rms_slope: float = 1.0
+    rolloff: str = "smooth"
+
+    def __post_init__(self) -> None:
+        for name in ("nx", "ny"):
+            v = getattr(self, name)
+            if isinstance(v, bool) or not isinstance(v, (int, np.integer)) or v < 4:
+                raise InputError(f"{name} must be an integer >= 4, got {v!r}")
+        for name in ("lx", "ly", "gamma", "lambda_r", "lambda_s", "rms_slope"):
+            require_positive(name, getattr(self, name))
+        h = require_finite("hurst", self.hurst)
+        if not 0 < h <= 1:
+            raise InputError(f"hurst must lie in (0, 1], got {self.hurst!r}")
+        if isinstance(self.seed, bool) or not isinstance(self.seed, (int, np.integer)) or self.seed < 0:
+            raise InputError(f"seed must be a non-negative integer, got {self.seed!r}")
+        if self.rolloff not in ROLLOFF_FORMS:
+            raise InputError(f"rolloff must be one of {ROLLOFF_FORMS}, got {self.rolloff!r}")
+        if self.lambda_s > self.lambda_r:
+            raise InputError(
+                f"lambda_s={self.lambda_s!r} exceeds lambda_r={self.lambda_r!r}"
+            )
+        sg = math.sqrt(self.gamma)
+        # Shortest wavelength kept along each axis: the cutoff ellipse q_P = q_s.
+        for axis, lam, d in (("x", self.lambda_s * sg, self.dx), ("y", self.lambda_s / sg, self.dy)):
+            if lam < 2 * d * (1 - 1e-12):
+                raise InputError(
+                    f"lambda_s={self.lambda_s!r} is under two grid spacings along {axis}: the "
+                    f"shortest wavelength there is {lam:.4g} but the spacing is {d:.4g} "
+                    f"(gamma={self.gamma!r}); use a finer grid or a larger lambda_s"
+                )
+        for axis, lam, length in (("x", self.lambda_r * sg, self.lx), ("y", self.lambda_r / sg, self.ly)):
+            if lam > length * (1 + 1e-12):
+                raise InputError(
+                    f"lambda_r={self.lambda_r!r} is larger than the cell: its stretched length "
+                    f"along {axis} is {lam:.4g} > l{axis}={length!r} (gamma={self.gamma!r})"
+                )
+
+    @property
+    def dx(self) -> float:
+        return self.lx / self.nx
+
+    @property
+    def dy(self) -> float:
+        return self.ly / self.ny
+
+    def as_attrs(self) -> dict:
+        """Parameters as a flat dict (for netCDF attributes)."""
+        return asdict(self)
+
+    @classmethod
+    def from_sweep(
+        cls,
+        *,
+        gamma: float = 1.0,
+        hurst: float = 0.8,
+        l_over_lambda_r: float | None = None,
+        eps_f: float = 1 / 16,
+        points_per_lambda_s: float = 8.0,
+        aspect: float = 1.0,
+        seed: int = 0,
+        rolloff: str = "smooth",
+        area: float = 1.0,
+    ) -> SurfaceSpec:
+        """Spec from the sweep's dimensionless numbers.
+
+        The cell has area ``area`` (default 1) and aspect ratio ``aspect = lx / ly``;
+        ``L = sqrt(lx ly)``. ``l_over_lambda_r`` defaults to the paper's
+        ``4 max(sqrt(gamma), 1/sqrt(gamma))``; ``lambda_s = eps_f lambda_r``.
+        The grid has at least ``points_per_lambda_s`` points per shortest wavelength
+        along each axis (lambda_s sqrt(gamma) along x, lambda_s / sqrt(gamma) along y),
+        rounded up to an FFT-friendly size (2^a 3^b 5^c, even).
+        """
+        gamma = require_positive("gamma", gamma)
+        area = require_positive("area", area)
+        aspect = require_positive("aspect", aspect)
+        eps_f = require_positive("eps_f", eps_f)
+        ppl = require_positive("points_per_lambda_s", points_per_lambda_s)
+        if ppl < 2:
+            raise InputError(f"points_per_lambda_s must be >= 2, got {points_per_lambda_s!r}")
+        if eps_f > 1:
+            raise InputError(f"eps_f = lambda_s/lambda_r must be <= 1, got {eps_f!r}")
+        sg = math.sqrt(gamma)
+        if l_over_lambda_r is None:
+            l_over_lambda_r = 4 * max(sg, 1 / sg)
+        l_over_lambda_r = require_positive("l_over_lambda_r", l_over_lambda_r)
+        length = math.sqrt(area)
+        lx, ly = length * math.sqrt(aspect), length / math.sqrt(aspect)
+        lambda_r = length / l_over_lambda_r
+        lambda_s = eps_f * lambda_r
+        nx = fft_friendly(math.ceil(ppl * lx / (lambda_s * sg) - 1e-9))
+        ny = fft_friendly(math.ceil(ppl * ly / (lambda_s / sg) - 1e-9))
+        return cls(
+            nx=nx, ny=ny, lx=lx, ly=ly, hurst=hurst, gamma=gamma,
+            lambda_r=lambda_r, lambda_s=lambda_s, seed=seed, rolloff=rolloff,
+        )
+
+
+def fft_friendly(n: int) -> int:
+    """Smallest even integer >= max(n, 4) whose prime factors are 2, 3 and 5."""
+    m = max(int(n), 4)
+    while True:
+        if m % 2 == 0:
+            k = m
+            for p in (2, 3, 5):
+                while k % p == 0:
+                    k //= p
+            if k == 1:
+                return m
+        m += 1
+
+
+@dataclass(frozen=True, eq=False)
+class Surface:
+    """Heights ``heights[ix, iy]`` (float64) of a periodic cell of size ``lx`` x ``ly``."""
+
+    heights: np.ndarray
+    lx: float
+    ly: float
+    spec: SurfaceSpec | None = None
+
+    @property
+    def shape(self) -> tuple[int, int]:
+        return self.heights.shape
+
+    @property
+    def dx(self) -> float:
+        return self.lx / self.heights.shape[0]
+
+    @property
+    def dy(self) -> float:
+        return self.ly / self.heights.shape[1]
+
+    @classmethod
+    def from_array(cls, heights, lx: float = 1.0, ly: float | None = None) -> Surface:
+        """Wrap a user height map (validated: 2D, finite, at least 4 x 4)."""
+        from roughflow.errors import require_field
+
+        h = require_field("heights", heights)
+        if min(h.shape) < 4:
+            raise InputError(f"heights must be at least 4 x 4, got shape {h.shape}")
+        lx = require_positive("lx", lx)
+        ly = lx * h.shape[1] / h.shape[0] if ly is None else require_positive("ly", ly)
+        return cls(heights=h, lx=lx, ly=ly)
+
+
+def spectrum(q: np.ndarray, spec: SurfaceSpec) -> np.ndarray:
+    """Unnormalised C(q) of Eq. (2) (corrected exponent), zero at q = 0 and beyond q_s."""
+    qr = 2 * np.pi / spec.lambda_r
+    qs = 2 * np.pi / spec.lambda_s
+    x = q / qr
+    if spec.rolloff == "smooth":
+        c = (1.0 + x * x) ** (-(1.0 + spec.hurst))
+    else:
+        with np.errstate(divide="ignore"):
+            c = np.minimum(1.0, x ** (-2.0 * (1.0 + spec.hurst)))
+    return np.where((q > 0) & (q <= qs * (1 + 1e-12)), c, 0.0)
+
+
+def peklenik_wavenumber(qx: np.ndarray, qy: np.ndarray, gamma: float) -> np.ndarray:
+    """Effective wavenumber q_P = sqrt(gamma q_x^2 + q_y^2 / gamma), Eq. (1)."""
+    return np.sqrt(gamma * qx * qx + qy * qy / gamma)
+
+
+def rms_gradient(heights: np.ndarray, lx: float, ly: float) -> float:
+    """Spectral rms gradient sqrt(<|grad h|^2>) of a periodic height map."""
+    nx, ny = heights.shape
+    c = fft.rfft2(heights)
+    qx, qy = fft.wavevectors(nx, ny, lx, ly)
+    w = fft.rfft_weights(ny)
+    return float(np.sqrt((w * (qx**2 + qy**2) * np.abs(c) ** 2).sum()) / (nx * ny))
+
+
+def generate(spec: SurfaceSpec) -> Surface:
+    """Random-phase surface for ``spec``: real, zero mean, rms gradient ``spec.rms_slope``.
+
+    Exact Hermitian symmetry: the phase of mode -q is minus that of q (the
+    difference of two independent uniform phases is again uniform); the
+    self-conjugate modes (q_x and q_y each 0 or Nyquist) get a real amplitude
+    of random sign. The result depends only on ``spec`` (same seed, same heights).
+    """
+    nx, ny = spec.nx, spec.ny
+    rng = np.random.default_rng(spec.seed)
+    qx = 2 * np.pi * np.fft.fftfreq(nx, d=spec.dx)
+    qy = 2 * np.pi * np.fft.fftfreq(ny, d=spec.dy)
+    qp = peklenik_wavenumber(qx[:, None], qy[None, :], spec.gamma)
+    amplitude = np.sqrt(spectrum(qp, spec))
+    phi = rng.uniform(0.0, 2 * np.pi, size=(nx, ny))
+    # index of -q in fftfreq order: (-i) mod n
+    minus = (-np.arange(nx)) % nx, (-np.arange(ny)) % ny
+    phi = phi - phi[np.ix_(*minus)]
+    self_conj = np.zeros((nx, ny), dtype=bool)
+    ix0 = [0] + ([nx // 2] if nx % 2 == 0 else [])
+    iy0 = [0] + ([ny // 2] if ny % 2 == 0 else [])
+    self_conj[np.ix_(ix0, iy0)] = True
+    signs = rng.integers(0, 2, size=self_conj.sum())
+    phi[self_conj] = np.pi * signs
+    full = amplitude * np.exp(1j * phi)
+    half = full[:, : ny // 2 + 1]
+    heights = fft.irfft2(half, (nx, ny))
+    heights -= heights.mean()
+    g = rms_gradient(heights, spec.lx, spec.ly)
+    if g == 0:
+        raise InputError(f"spectrum of {spec} has no modes inside the cutoff")
+    heights *= spec.rms_slope / g
+    return Surface(heights=heights, lx=spec.lx, ly=spec.ly, spec=spec)
