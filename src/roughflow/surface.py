@@ -224,29 +224,28 @@ def rms_gradient(heights: np.ndarray, lx: float, ly: float) -> float:
 def generate(spec: SurfaceSpec) -> Surface:
     """Random-phase surface for ``spec``: real, zero mean, rms gradient ``spec.rms_slope``.
 
-    Exact Hermitian symmetry: the phase of mode -q is minus that of q (the
+    Works on the half (rfft) spectrum. Exact Hermitian symmetry: in the columns
+    q_y = 0 and q_y = Nyquist, the phase of mode -q is minus that of q (the
     difference of two independent uniform phases is again uniform); the
-    self-conjugate modes (q_x and q_y each 0 or Nyquist) get a real amplitude
-    of random sign. The result depends only on ``spec`` (same seed, same heights).
+    self-conjugate modes (q_x and q_y each 0 or Nyquist) get a real amplitude of
+    random sign. The result depends only on ``spec`` (same seed, same heights).
+    Peak memory is about 40 bytes per grid point.
     """
     nx, ny = spec.nx, spec.ny
     rng = np.random.default_rng(spec.seed)
-    qx = 2 * np.pi * np.fft.fftfreq(nx, d=spec.dx)
-    qy = 2 * np.pi * np.fft.fftfreq(ny, d=spec.dy)
-    qp = peklenik_wavenumber(qx[:, None], qy[None, :], spec.gamma)
-    amplitude = np.sqrt(spectrum(qp, spec))
-    phi = rng.uniform(0.0, 2 * np.pi, size=(nx, ny))
-    # index of -q in fftfreq order: (-i) mod n
-    minus = (-np.arange(nx)) % nx, (-np.arange(ny)) % ny
-    phi = phi - phi[np.ix_(*minus)]
-    self_conj = np.zeros((nx, ny), dtype=bool)
-    ix0 = [0] + ([nx // 2] if nx % 2 == 0 else [])
-    iy0 = [0] + ([ny // 2] if ny % 2 == 0 else [])
-    self_conj[np.ix_(ix0, iy0)] = True
-    signs = rng.integers(0, 2, size=self_conj.sum())
-    phi[self_conj] = np.pi * signs
-    full = amplitude * np.exp(1j * phi)
-    half = full[:, : ny // 2 + 1]
+    qx, qy = fft.wavevectors(nx, ny, spec.lx, spec.ly)
+    half = peklenik_wavenumber(qx, qy, spec.gamma)
+    half = np.sqrt(spectrum(half, spec)).astype(np.complex128)
+    phase = rng.uniform(0.0, 2 * np.pi, size=half.shape)
+    minus_x = (-np.arange(nx)) % nx
+    conj_cols = [0] + ([ny // 2] if ny % 2 == 0 else [])
+    self_conj_rows = [0] + ([nx // 2] if nx % 2 == 0 else [])
+    for col in conj_cols:
+        phi = phase[:, col] - phase[minus_x, col]
+        phi[self_conj_rows] = np.pi * rng.integers(0, 2, size=len(self_conj_rows))
+        phase[:, col] = phi
+    half *= np.exp(1j * phase)
+    del phase
     heights = fft.irfft2(half, (nx, ny))
     heights -= heights.mean()
     g = rms_gradient(heights, spec.lx, spec.ly)
