@@ -62,7 +62,8 @@ class SurfaceSpec:
         h = require_finite("hurst", self.hurst)
         if not 0 < h <= 1:
             raise InputError(f"hurst must lie in (0, 1], got {self.hurst!r}")
-        if isinstance(self.seed, bool) or not isinstance(self.seed, (int, np.integer)) or self.seed < 0:
+        seed = self.seed
+        if isinstance(seed, bool) or not isinstance(seed, (int, np.integer)) or seed < 0:
             raise InputError(f"seed must be a non-negative integer, got {self.seed!r}")
         if self.rolloff not in ROLLOFF_FORMS:
             raise InputError(f"rolloff must be one of {ROLLOFF_FORMS}, got {self.rolloff!r}")
@@ -72,14 +73,16 @@ class SurfaceSpec:
             )
         sg = math.sqrt(self.gamma)
         # Shortest wavelength kept along each axis: the cutoff ellipse q_P = q_s.
-        for axis, lam, d in (("x", self.lambda_s * sg, self.dx), ("y", self.lambda_s / sg, self.dy)):
+        shortest = (("x", self.lambda_s * sg, self.dx), ("y", self.lambda_s / sg, self.dy))
+        for axis, lam, d in shortest:
             if lam < 2 * d * (1 - 1e-12):
                 raise InputError(
                     f"lambda_s={self.lambda_s!r} is under two grid spacings along {axis}: the "
                     f"shortest wavelength there is {lam:.4g} but the spacing is {d:.4g} "
                     f"(gamma={self.gamma!r}); use a finer grid or a larger lambda_s"
                 )
-        for axis, lam, length in (("x", self.lambda_r * sg, self.lx), ("y", self.lambda_r / sg, self.ly)):
+        longest = (("x", self.lambda_r * sg, self.lx), ("y", self.lambda_r / sg, self.ly))
+        for axis, lam, length in longest:
             if lam > length * (1 + 1e-12):
                 raise InputError(
                     f"lambda_r={self.lambda_r!r} is larger than the cell: its stretched length "
@@ -221,29 +224,52 @@ def rms_gradient(heights: np.ndarray, lx: float, ly: float) -> float:
     return float(np.sqrt((w * (qx**2 + qy**2) * np.abs(c) ** 2).sum()) / (nx * ny))
 
 
+def _phase_box(spec: SurfaceSpec) -> tuple[np.ndarray, int, int]:
+    """Uniform phases on the integer wavevectors |k_x| <= K_x, 0 <= k_y <= K_y enclosing the cutoff.
+
+    The box depends only on the cell, gamma, lambda_s and the seed, not on the grid, so one
+    seed gives the same physical surface at every resolution (a band-limited function
+    sampled on finer grids): resolution studies compare like with like.
+    """
+    qs = 2 * np.pi / spec.lambda_s
+    kx_max = int(np.floor(qs / math.sqrt(spec.gamma) * spec.lx / (2 * np.pi) + 1e-9))
+    ky_max = int(np.floor(qs * math.sqrt(spec.gamma) * spec.ly / (2 * np.pi) + 1e-9))
+    rng = np.random.default_rng(spec.seed)
+    return rng.uniform(0.0, 2 * np.pi, size=(2 * kx_max + 1, ky_max + 1)), kx_max, ky_max
+
+
 def generate(spec: SurfaceSpec) -> Surface:
     """Random-phase surface for ``spec``: real, zero mean, rms gradient ``spec.rms_slope``.
 
-    Works on the half (rfft) spectrum. Exact Hermitian symmetry: in the columns
-    q_y = 0 and q_y = Nyquist, the phase of mode -q is minus that of q (the
-    difference of two independent uniform phases is again uniform); the
-    self-conjugate modes (q_x and q_y each 0 or Nyquist) get a real amplitude of
-    random sign. The result depends only on ``spec`` (same seed, same heights).
-    Peak memory is about 40 bytes per grid point.
+    Amplitudes sqrt(C(q_P)) are deterministic; phases come from :func:`_phase_box`, so the
+    same seed gives the same surface on any grid that resolves it (coarse = fine[::2, ::2]).
+    Exact Hermitian symmetry on the half (rfft) spectrum: in the columns q_y = 0 and
+    q_y = Nyquist the phase of -q is minus that of q (a difference of two independent
+    uniform phases is again uniform); the self-conjugate modes (q_x and q_y each 0 or
+    Nyquist) get a real amplitude of random sign. Peak memory about 32 bytes per point.
     """
     nx, ny = spec.nx, spec.ny
-    rng = np.random.default_rng(spec.seed)
+    box, kx_max, ky_max = _phase_box(spec)
     qx, qy = fft.wavevectors(nx, ny, spec.lx, spec.ly)
     half = peklenik_wavenumber(qx, qy, spec.gamma)
     half = np.sqrt(spectrum(half, spec)).astype(np.complex128)
-    phase = rng.uniform(0.0, 2 * np.pi, size=half.shape)
-    minus_x = (-np.arange(nx)) % nx
-    conj_cols = [0] + ([ny // 2] if ny % 2 == 0 else [])
+
+    kx = np.rint(np.fft.fftfreq(nx) * nx).astype(np.int64)
+    ky = np.arange(ny // 2 + 1)
+    rows = np.flatnonzero(np.abs(kx) <= kx_max)
+    cols = ky[ky <= ky_max]
+    phase = np.zeros(half.shape)
+    phase[np.ix_(rows, cols)] = box[np.ix_(kx[rows] + kx_max, cols)]
     self_conj_rows = [0] + ([nx // 2] if nx % 2 == 0 else [])
-    for col in conj_cols:
-        phi = phase[:, col] - phase[minus_x, col]
-        phi[self_conj_rows] = np.pi * rng.integers(0, 2, size=len(self_conj_rows))
-        phase[:, col] = phi
+    for col in [0] + ([ny // 2] if ny % 2 == 0 else []):
+        if col > ky_max:
+            continue
+        b = box[:, col]
+        phi = b[kx[rows] + kx_max] - b[np.clip(-kx[rows], -kx_max, kx_max) + kx_max]
+        phase[rows, col] = phi
+        for r in self_conj_rows:
+            if abs(kx[r]) <= kx_max:
+                phase[r, col] = np.pi * (np.cos(b[kx[r] + kx_max]) < 0)
     half *= np.exp(1j * phase)
     del phase
     heights = fft.irfft2(half, (nx, ny))

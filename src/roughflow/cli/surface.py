@@ -52,8 +52,8 @@ def register(sub: argparse._SubParsersAction) -> None:
 def spec_from_args(args: argparse.Namespace) -> SurfaceSpec:
     explicit = (args.nx, args.ny, args.lambda_r, args.lambda_s)
     if any(v is not None for v in explicit):
-        missing = [n for n, v in zip(("--nx", "--ny", "--lambda-r", "--lambda-s"), explicit)
-                   if v is None]
+        names = ("--nx", "--ny", "--lambda-r", "--lambda-s")
+        missing = [n for n, v in zip(names, explicit, strict=True) if v is None]
         if missing:
             from roughflow.errors import InputError
 

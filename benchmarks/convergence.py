@@ -1,0 +1,589 @@
+"""Convergence studies: numerical error against wall time for a_c* and sigma (issue 8).
+
+Phases (each appends JSON lines under ``--out``; ``report`` turns them into tables + PNGs):
+
+- ``resolution``: per seed, one surface generated at the finest resolution and sampled at
+  every coarser one (the spectrum is band-limited below q_s, so ``h[::k, ::k]`` is the same
+  continuum surface on a coarser grid: a resolution study on one physical surface).
+  For each points_per_lambda_s: a_c* along x and y (``percolation.threshold``), one extra
+  contact solve at the threshold for the contact-line length, and sigma_x at a_c = 0.2 and
+  0.35 (pressure found by a secant in erfinv(a_c), then one flow solve). The first solve of
+  each target is at a fixed pressure (the same at every resolution): those points fit the
+  perimeter constant c of :func:`roughflow.accuracy.perimeter_corrected_area`.
+- ``tol``: at the default resolution, a_c*, a_c, mean gap and sigma against the contact
+  solver tolerance, and a_c* against the bisection tolerance.
+- ``report``: tables (markdown + CSV) and error-versus-time plots under ``--out``.
+
+Reproduce (about 30 min on one loaded core)::
+
+    ROUGHFLOW_FFT_THREADS=1 python benchmarks/convergence.py resolution --seeds 0 1 2
+    ROUGHFLOW_FFT_THREADS=1 python benchmarks/convergence.py tol --seeds 0 1 2
+    python benchmarks/convergence.py report
+"""
+
+from __future__ import annotations
+
+import argparse
+import json
+import math
+import os
+import sys
+import time
+from pathlib import Path
+
+import numpy as np
+
+os.environ.setdefault("ROUGHFLOW_FFT_THREADS", "1")
+
+from scipy.special import erfinv  # noqa: E402
+
+from roughflow import accuracy, contact, flow, percolation  # noqa: E402
+from roughflow.errors import ConvergenceError  # noqa: E402
+from roughflow.surface import Surface, SurfaceSpec, generate  # noqa: E402
+
+TARGETS = (0.2, 0.35)
+#: d ln sigma / d a_c ~ -beta / (a_c* - a_c), beta = 69/20 (physics.md 5): used only to
+#: move sigma by the last few 1e-4 of contact area onto the exact target
+BETA, A_STAR = 69 / 20, 0.42
+P_OF_A = 1 / math.sqrt(math.pi)  # p ~ erfinv(a) / sqrt(pi) (simulated small-load slope 2)
+
+
+def _append(path: Path, rec: dict) -> None:
+    path.parent.mkdir(parents=True, exist_ok=True)
+    with path.open("a") as f:
+        f.write(json.dumps(rec) + "\n")
+    print(json.dumps(rec), flush=True)
+
+
+def _surface(seed: int, ppl: int, ppl_max: int, cache: dict) -> Surface:
+    if seed not in cache:
+        spec = SurfaceSpec.from_sweep(points_per_lambda_s=ppl_max, seed=seed)
+        cache[seed] = generate(spec)
+    s = cache[seed]
+    k = ppl_max // ppl
+    if k * ppl != ppl_max:
+        raise SystemExit(f"points_per_lambda_s {ppl} does not divide {ppl_max}")
+    return Surface.from_array(np.ascontiguousarray(s.heights[::k, ::k]), lx=s.lx, ly=s.ly)
+
+
+def _hit_area(surf: Surface, target: float, *, tol_a: float, ctol: float, init=None):
+    """Contact solves until |a_c - target| < tol_a; returns (first, last, n_solves)."""
+    p = float(erfinv(target)) * P_OF_A
+    pts = []
+    r = first = None
+    for _ in range(8):
+        r = contact.solve(surf, p, tol=ctol, init=init)
+        init = r
+        first = first or r
+        pts.append((p, float(erfinv(r.area_fraction))))
+        if abs(r.area_fraction - target) < tol_a:
+            break
+        z = float(erfinv(target))
+        if len(pts) == 1:
+            p = p * z / pts[0][1]
+        else:
+            (p0, z0), (p1, z1) = pts[-2], pts[-1]
+            p = p1 + (z - z1) * (p1 - p0) / (z1 - z0) if z1 != z0 else p1 * z / z1
+    return first, r, len(pts)
+
+
+def phase_resolution(args) -> None:
+    out = Path(args.out) / "convergence_resolution.jsonl"
+    ppl_max = max(args.ppl)
+    cache: dict = {}
+    for ppl in sorted(args.ppl):
+        for seed in args.seeds:
+            surf = _surface(seed, ppl, ppl_max, cache)
+            n = surf.shape[0]
+            t0 = time.perf_counter()
+            th = percolation.threshold(surf, axis=None, tol=args.bisect_tol,
+                                       contact_tol=args.threshold_contact_tol)
+            t_th = time.perf_counter() - t0
+            p_mid = 0.25 * (th[0].p_lo + th[0].p_hi + th[1].p_lo + th[1].p_hi)
+            t0 = time.perf_counter()
+            rm = contact.solve(surf, p_mid, tol=args.threshold_contact_tol)
+            t_mid = time.perf_counter() - t0
+            rec = dict(kind="threshold", seed=seed, ppl=ppl, n=n, bisect_tol=args.bisect_tol,
+                       contact_tol=args.threshold_contact_tol, time=t_th, time_mid=t_mid,
+                       n_solves=th[0].n_solves, a_mid=rm.area_fraction,
+                       perim_mid=accuracy.perimeter_term(rm.contact, surf.lx, surf.ly))
+            for ax in (0, 1):
+                rec[f"a_star_{ax}"] = th[ax].a_c_star
+                rec[f"a_lo_{ax}"], rec[f"a_hi_{ax}"] = th[ax].a_lo, th[ax].a_hi
+            _append(out, rec)
+            init = None
+            for target in TARGETS:
+                t0 = time.perf_counter()
+                first, r, ns = _hit_area(surf, target, tol_a=args.area_tol,
+                                         ctol=args.contact_tol, init=init)
+                t_c = time.perf_counter() - t0
+                init = r
+                t0 = time.perf_counter()
+                fr = flow.solve(r.gap, 0, lx=surf.lx, ly=surf.ly)
+                t_f = time.perf_counter() - t0
+                a = r.area_fraction
+                sig = fr.sigma
+                ln_sig_t = (math.log(sig) - BETA / (A_STAR - a) * (target - a)
+                            if sig > 0 else float("nan"))
+                _append(out, dict(
+                    kind="sigma", seed=seed, ppl=ppl, n=n, target=target,
+                    p_fixed=first.pressure, a_fixed=first.area_fraction,
+                    gap_fixed=first.mean_gap,
+                    perim_fixed=accuracy.perimeter_term(first.contact, surf.lx, surf.ly),
+                    a=a, perim=accuracy.perimeter_term(r.contact, surf.lx, surf.ly),
+                    sigma_raw=sig, sigma=math.exp(ln_sig_t), mean_gap=r.mean_gap,
+                    n_contact_solves=ns, time_contact=t_c, time_flow=t_f,
+                    flow_residual=fr.residual, flux_imbalance=fr.flux_imbalance,
+                    contact_tol=args.contact_tol,
+                ))
+
+
+def phase_tol(args) -> None:
+    out = Path(args.out) / "convergence_tol.jsonl"
+    ppl = args.tol_ppl
+    for seed in args.seeds:
+        spec = SurfaceSpec.from_sweep(points_per_lambda_s=ppl, seed=seed)
+        surf = generate(spec)
+        # contact tolerance at fixed load (a_c ~ 0.35 and ~ 0.2), cold solves
+        for target in TARGETS:
+            p = float(erfinv(target)) * P_OF_A
+            for ctol in args.contact_tols:
+                t0 = time.perf_counter()
+                r = contact.solve(surf, p, tol=ctol)
+                t_c = time.perf_counter() - t0
+                t0 = time.perf_counter()
+                sig = flow.solve(r.gap, 0, lx=surf.lx, ly=surf.ly).sigma
+                t_f = time.perf_counter() - t0
+                _append(out, dict(kind="contact_tol", seed=seed, ppl=ppl, target=target,
+                                  p=p, contact_tol=ctol, a=r.area_fraction,
+                                  mean_gap=r.mean_gap, sigma=sig, iterations=r.iterations,
+                                  time_contact=t_c, time_flow=t_f))
+        # contact tolerance inside the threshold bisection
+        for ctol in args.threshold_contact_tols:
+            t0 = time.perf_counter()
+            try:
+                th = percolation.threshold(surf, axis=None, tol=args.threshold_bisect_tol,
+                                           contact_tol=ctol, max_solves=80)
+            except ConvergenceError as e:  # a loose contact tol makes a(p) jump
+                _append(out, dict(kind="threshold_contact_tol_failed", seed=seed, ppl=ppl,
+                                  contact_tol=ctol, bisect_tol=args.threshold_bisect_tol,
+                                  error=str(e)))
+                continue
+            _append(out, dict(kind="threshold_contact_tol", seed=seed, ppl=ppl,
+                              contact_tol=ctol, bisect_tol=args.threshold_bisect_tol,
+                              time=time.perf_counter() - t0, n_solves=th[0].n_solves,
+                              a_star_0=th[0].a_c_star, a_star_1=th[1].a_c_star))
+        for btol in args.bisect_tols:
+            t0 = time.perf_counter()
+            try:
+                th = percolation.threshold(surf, axis=None, tol=btol, max_solves=80,
+                                           contact_tol=args.threshold_contact_tol)
+            except ConvergenceError as e:
+                _append(out, dict(kind="bisect_tol_failed", seed=seed, ppl=ppl,
+                                  bisect_tol=btol, error=str(e)))
+                continue
+            _append(out, dict(kind="bisect_tol", seed=seed, ppl=ppl, bisect_tol=btol,
+                              contact_tol=args.threshold_contact_tol,
+                              time=time.perf_counter() - t0, n_solves=th[0].n_solves,
+                              a_star_0=th[0].a_c_star, a_star_1=th[1].a_c_star,
+                              width_0=th[0].width, width_1=th[1].width))
+
+
+# ---------------------------------------------------------------------------------------
+# report
+# ---------------------------------------------------------------------------------------
+
+def _load(path: Path) -> list[dict]:
+    if not path.exists():
+        return []
+    return [json.loads(line) for line in path.read_text().splitlines() if line.strip()]
+
+
+def _md_table(header: list[str], rows: list[list]) -> str:
+    def fmt(v):
+        if isinstance(v, float):
+            return f"{v:.4g}"
+        return str(v)
+    lines = ["| " + " | ".join(header) + " |", "|" + "---|" * len(header)]
+    lines += ["| " + " | ".join(fmt(v) for v in r) + " |" for r in rows]
+    return "\n".join(lines)
+
+
+def _fit_c(sig: list[dict], ppls: list[int], exclude_seed=None) -> float:
+    pts = [r for r in sig if r["ppl"] in ppls and r["seed"] != exclude_seed]
+    if len({r["ppl"] for r in pts}) < 2:
+        return float("nan")
+    fit = accuracy.fit_perimeter_constant(
+        [(r["seed"], r["target"]) for r in pts], [r["a_fixed"] for r in pts],
+        [r["perim_fixed"] for r in pts])
+    return fit.c
+
+
+def _sigma_at_corrected_area(q: dict, target: float, c: float) -> float:
+    """ln sigma at the state whose perimeter-corrected area equals ``target``."""
+    a, a0 = q["a"], q["a_fixed"]
+    slope = -BETA / (A_STAR - a)
+    if abs(a - a0) > 1e-4:
+        slope += 3 * (math.log(q["mean_gap"]) - math.log(q["gap_fixed"])) / (a - a0)
+    a_cor = a - c * q["perim"]
+    return math.log(q["sigma_raw"]) + slope * (target - a_cor)
+
+
+def report(args) -> None:
+    import matplotlib
+
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+
+    outdir = Path(args.out)
+    res = _load(outdir / "convergence_resolution.jsonl")
+    tol = _load(outdir / "convergence_tol.jsonl")
+    md: list[str] = ["# Convergence study (generated by benchmarks/convergence.py report)\n"]
+    csv_rows: list[str] = ["quantity,variant,ppl,seed,value,reference,error,time_s"]
+    thr = [r for r in res if r["kind"] == "threshold"]
+    sig = [r for r in res if r["kind"] == "sigma"]
+    ppls = sorted({r["ppl"] for r in res})
+    seeds = sorted({r["seed"] for r in res})
+    # keep only seeds with every resolution
+    seeds = [s for s in seeds if all(any(r["seed"] == s and r["ppl"] == p for r in thr)
+                                     for p in ppls)]
+    fit_ppls = [p for p in ppls if p >= args.fit_min_ppl]
+    c_all = _fit_c(sig, fit_ppls) if sig else float("nan")
+    fit = None
+    if sig and len(fit_ppls) >= 2:
+        pts = [r for r in sig if r["ppl"] in fit_ppls]
+        fit = accuracy.fit_perimeter_constant(
+            [(r["seed"], r["target"]) for r in pts], [r["a_fixed"] for r in pts],
+            [r["perim_fixed"] for r in pts])
+    md.append(f"Seeds {seeds}, points per lambda_s {ppls}. Perimeter constant fitted on the "
+              f"fixed-load contact areas at ppl {fit_ppls}: c = {c_all:.4f}"
+              + (f" (rms residual {fit.rms:.2e}, {fit.n} points)" if fit else "")
+              + "; each seed is corrected with c fitted on the other seeds.\n")
+
+    # fixed-load a_c and mean gap against resolution
+    rows = []
+    for target in TARGETS:
+        for p in ppls:
+            e_a, e_g, e_c = [], [], []
+            for s in seeds:
+                rr = {q["ppl"]: q for q in sig if q["seed"] == s and q["target"] == target}
+                if p not in rr or max(ppls) not in rr:
+                    continue
+                ref = rr[max(ppls)]
+                fine_ppls = sorted(rr)[-2:]
+                a_ref = accuracy.richardson(rr[fine_ppls[0]]["a_fixed"],
+                                            rr[fine_ppls[1]]["a_fixed"],
+                                            ratio=fine_ppls[1] / fine_ppls[0])
+                e_a.append(rr[p]["a_fixed"] - a_ref)
+                cs = _fit_c(sig, fit_ppls, exclude_seed=s) if len(seeds) > 1 else c_all
+                e_c.append(rr[p]["a_fixed"] - cs * rr[p]["perim_fixed"] - a_ref)
+                e_g.append(rr[p]["gap_fixed"] / ref["gap_fixed"] - 1)
+            if e_a:
+                rows.append([target, p, float(np.mean(e_a)), float(np.mean(e_c)),
+                             float(np.mean(np.abs(e_g)))])
+    md.append("## Contact area and mean gap at fixed load\n")
+    md.append("Error of a_c against the Richardson extrapolation of the two finest grids; "
+              "perimeter-corrected a_c; relative error of the mean gap against the finest grid "
+              "(means over seeds).\n")
+    md.append(_md_table(["a_c target", "ppl", "a_c error", "corrected a_c error",
+                         "|mean gap rel. error|"], rows) + "\n")
+
+    # a_c* against resolution: raw, corrected, Richardson
+    fig, axs = plt.subplots(1, 3, figsize=(15, 4.5))
+    pareto = {}
+    f0, f1 = (ppls[-2], ppls[-1]) if len(ppls) > 1 else (ppls[-1], ppls[-1])
+    if thr and len(ppls) >= 2:
+        rows = []
+        refs = {}
+        for s in seeds:
+            rr = {q["ppl"]: q for q in thr if q["seed"] == s}
+            f0, f1 = ppls[-2], ppls[-1]
+            for ax in (0, 1):
+                refs[(s, ax)] = accuracy.richardson(rr[f0][f"a_star_{ax}"],
+                                                    rr[f1][f"a_star_{ax}"], ratio=f1 / f0)
+        spread = np.std([refs[(s, 0)] for s in seeds] + [refs[(s, 1)] for s in seeds], ddof=1)
+        variants = {"raw": [], "perimeter": [], "richardson": []}
+        for p in ppls:
+            err = {k: [] for k in variants}
+            tt = {k: [] for k in variants}
+            for s in seeds:
+                rr = {q["ppl"]: q for q in thr if q["seed"] == s}
+                cs = _fit_c(sig, fit_ppls, exclude_seed=s) if len(seeds) > 1 else c_all
+                t_raw = rr[p]["time"]
+                for ax in (0, 1):
+                    v = rr[p][f"a_star_{ax}"]
+                    ref = refs[(s, ax)]
+                    err["raw"].append(v - ref)
+                    tt["raw"].append(t_raw)
+                    vc = v - cs * rr[p]["perim_mid"]
+                    err["perimeter"].append(vc - ref)
+                    tt["perimeter"].append(t_raw + rr[p]["time_mid"])
+                    csv_rows.append(f"a_c_star_{'xy'[ax]},raw,{p},{s},{v},{ref},{v - ref},{t_raw}")
+                    csv_rows.append(f"a_c_star_{'xy'[ax]},perimeter,{p},{s},{vc},{ref},"
+                                    f"{vc - ref},{t_raw + rr[p]['time_mid']}")
+                    if p // 2 in rr and p < f1:  # at f1 it is the reference itself
+                        vr = accuracy.richardson(rr[p // 2][f"a_star_{ax}"], v)
+                        err["richardson"].append(vr - ref)
+                        tr = t_raw + rr[p // 2]["time"]
+                        tt["richardson"].append(tr)
+                        csv_rows.append(f"a_c_star_{'xy'[ax]},richardson,{p // 2}+{p},{s},{vr},"
+                                        f"{ref},{vr - ref},{tr}")
+            for k in variants:
+                if err[k]:
+                    e = np.asarray(err[k])
+                    variants[k].append((p, float(np.median(tt[k])), float(np.sqrt(np.mean(e**2))),
+                                        float(np.mean(e)), float(np.std(e, ddof=1)) if e.size > 1
+                                        else float("nan")))
+        for k, v in variants.items():
+            for p, t, rms, mean, sd in v:
+                rows.append([k, p, t, mean, rms, sd])
+        md.append("## a_c* against resolution (both axes)\n")
+        md.append(f"Reference: Richardson extrapolation (first order) of the two finest grids "
+                  f"(ppl {ppls[-2]}, {ppls[-1]}), per seed and axis. Seed-to-seed standard "
+                  f"deviation of the reference a_c*: {spread:.4f} (over {len(seeds)} seeds x 2 "
+                  f"axes). Time: median wall time of one threshold (both axes) per seed; "
+                  f"Richardson = both grids; perimeter = threshold + one contact solve.\n")
+        md.append(_md_table(["variant", "ppl", "time [s]", "mean error", "rms error",
+                             "sd of error over seeds"], rows) + "\n")
+        pareto["a_c_star"] = variants
+        ax = axs[0]
+        for i, (k, v) in enumerate(variants.items()):
+            if v:
+                col = f"C{i}"
+                ax.loglog([t for _, t, *_ in v], [max(r, 1e-5) for _, _, r, *_ in v], "o-",
+                          color=col, label=f"{k}: rms per seed")
+                ax.loglog([t for _, t, *_ in v], [max(abs(m), 1e-5) for _, _, _, m, _ in v],
+                          "s--", color=col, mfc="none", label=f"{k}: |mean| (bias)")
+                for p, t, r, *_ in v:
+                    ax.annotate(str(p), (t, max(r, 1e-5)), fontsize=7)
+        ax.axhline(0.01 / 3, color="k", ls=":", label="1/3 of seed SE (0.01)")
+        ax.set_xlabel("wall time per threshold [s]")
+        ax.set_ylabel("rms error of a_c*")
+        ax.set_title("a_c* (x and y), labels: points per lambda_s")
+        ax.legend(fontsize=7)
+
+    # sigma at fixed a_c against resolution: raw a_c, and a_c perimeter-corrected
+    rows = []
+    for j, target in enumerate(TARGETS):
+        pts = {"raw": [], "perimeter": [], "richardson": []}
+        refs = {}
+        for s in seeds:
+            rr = {q["ppl"]: q for q in sig if q["seed"] == s and q["target"] == target}
+            if f0 in rr and f1 in rr and f0 != f1:
+                refs[s] = accuracy.richardson(math.log(rr[f0]["sigma"]),
+                                              math.log(rr[f1]["sigma"]), ratio=f1 / f0)
+        for p in ppls:
+            e = {k: [] for k in pts}
+            tt = []
+            for s in seeds:
+                rr = {q["ppl"]: q for q in sig if q["seed"] == s and q["target"] == target}
+                if p not in rr or s not in refs:
+                    continue
+                q = rr[p]
+                ref = refs[s]
+                cs = _fit_c(sig, fit_ppls, exclude_seed=s) if len(seeds) > 1 else c_all
+                ln_raw = math.log(q["sigma"])
+                e["raw"].append(ln_raw - ref)
+                ln_cor = _sigma_at_corrected_area(q, target, cs)
+                e["perimeter"].append(ln_cor - ref)
+                tt.append(q["time_contact"] + q["time_flow"])
+                if p // 2 in rr and p < f1:
+                    ln_ri = accuracy.richardson(math.log(rr[p // 2]["sigma"]), ln_raw)
+                    e["richardson"].append(ln_ri - ref)
+                    t_ri = tt[-1] + rr[p // 2]["time_contact"] + rr[p // 2]["time_flow"]
+                    csv_rows.append(f"ln_sigma_{target},richardson,{p // 2}+{p},{s},{ln_ri},"
+                                    f"{ref},{ln_ri - ref},{t_ri}")
+                csv_rows.append(f"ln_sigma_{target},raw,{p},{s},{ln_raw},{ref},{ln_raw - ref},"
+                                f"{tt[-1]}")
+                csv_rows.append(f"ln_sigma_{target},perimeter,{p},{s},{ln_cor},{ref},"
+                                f"{ln_cor - ref},{tt[-1]}")
+            for k in pts:
+                if e[k]:
+                    ea = np.asarray(e[k])
+                    rms = float(np.sqrt(np.mean(ea**2)))
+                    t_k = float(np.median(tt))
+                    if k == "richardson":  # both grids
+                        t_k += float(np.median([pp[1] for pp in pts["raw"] if pp[0] == p // 2]))
+                    pts[k].append((p, t_k, rms, float(np.mean(ea))))
+                    rows.append([target, k, p, t_k, float(np.mean(ea)), rms])
+        if len(refs) > 1:
+            md.append(f"Seed-to-seed sd of ln sigma at a_c = {target} (reference): "
+                      f"{np.std(list(refs.values()), ddof=1):.3f}\n")
+        ax = axs[1 + j]
+        for k, v in pts.items():
+            if v:
+                ax.loglog([t for _, t, *_ in v], [max(r, 1e-4) for _, _, r, *_ in v], "o-",
+                          label=k)
+                for p, t, r, *_ in v:
+                    ax.annotate(str(p), (t, max(r, 1e-4)), fontsize=7)
+        ax.set_xlabel("wall time (contact to target + flow) [s]")
+        ax.set_ylabel("rms |ln(sigma / sigma_ref)|")
+        ax.set_title(f"sigma_x at a_c = {target}")
+        ax.legend(fontsize=7)
+    md.append("## sigma_x at fixed a_c against resolution\n")
+    md.append("Error: ln sigma minus the Richardson extrapolation (first order) of ln sigma "
+              "over the two finest grids. raw: sigma at raw a_c = target; perimeter: sigma at "
+              "perimeter-corrected a_c = target (shifted along the load path with the local "
+              "slope d ln sigma / d a_c = 3 d ln(mean gap)/d a_c - (69/20)/(a_c* - a_c), "
+              "Eq. 16, the mean-gap derivative measured from the two nearest solves). Time: "
+              "contact solves to reach the target area (warm-started secant) + one flow "
+              "solve.\n")
+    md.append(_md_table(["a_c", "variant", "ppl", "time [s]", "mean ln error", "rms ln error"],
+                        rows) + "\n")
+    fig.tight_layout()
+    fig.savefig(outdir / "convergence_resolution.png", dpi=120)
+    plt.close(fig)
+
+    # tolerances
+    fig, axs = plt.subplots(1, 3, figsize=(15, 4.5))
+    ct = [r for r in tol if r["kind"] == "contact_tol"]
+    if ct:
+        rows = []
+        tols = sorted({r["contact_tol"] for r in ct}, reverse=True)
+        tref = min(tols)
+        for target in TARGETS:
+            pts = []
+            for ctl in tols:
+                ea, eg, es, tt, it = [], [], [], [], []
+                for r in ct:
+                    if r["target"] != target or r["contact_tol"] != ctl:
+                        continue
+                    ref = next((q for q in ct if q["seed"] == r["seed"]
+                                and q["target"] == target and q["contact_tol"] == tref), None)
+                    if ref is None:
+                        continue
+                    ea.append(abs(r["a"] - ref["a"]))
+                    eg.append(abs(r["mean_gap"] / ref["mean_gap"] - 1))
+                    es.append(abs(r["sigma"] / ref["sigma"] - 1) if ref["sigma"] > 0 else 0.0)
+                    tt.append(r["time_contact"])
+                    it.append(r["iterations"])
+                if not ea:
+                    continue
+                rows.append([target, ctl, float(np.median(tt)), float(np.median(it)),
+                             float(np.max(ea)), float(np.max(eg)), float(np.max(es))])
+                pts.append((ctl, float(np.median(tt)), max(float(np.max(ea)), 1e-7)))
+            axs[0].semilogy([t for _, t, _ in pts], [e for *_, e in pts], "o-",
+                          label=f"a_c ~ {target}")
+            for c, t, e in pts:
+                axs[0].annotate(f"{c:g}", (t, e), fontsize=7)
+        md.append(f"## Contact solver tolerance (ppl {ct[0]['ppl']}, cold solves, "
+                  f"reference tol {tref:g})\n")
+        md.append(_md_table(["a_c", "contact tol", "time [s]", "iterations", "max |d a_c|",
+                             "max |d gap|/gap", "max |d sigma|/sigma"], rows) + "\n")
+        axs[0].axhline(0.01 / 3, color="k", ls=":")
+        axs[0].set_xlabel("contact solve wall time [s]")
+        axs[0].set_ylabel("max |a_c - a_c(ref)|")
+        axs[0].set_title("contact tolerance (labels: tol)")
+        axs[0].legend(fontsize=7)
+    tct = [r for r in tol if r["kind"] == "threshold_contact_tol"]
+    if tct:
+        rows = []
+        tols = sorted({r["contact_tol"] for r in tct}, reverse=True)
+        tref = min(tols)
+        for ctl in tols:
+            e, tt = [], []
+            for r in tct:
+                if r["contact_tol"] != ctl:
+                    continue
+                ref = next((q for q in tct if q["seed"] == r["seed"]
+                            and q["contact_tol"] == tref), None)
+                if ref is None:
+                    continue
+                e += [abs(r["a_star_0"] - ref["a_star_0"]), abs(r["a_star_1"] - ref["a_star_1"])]
+                tt.append(r["time"])
+            if not e:
+                continue
+            rows.append([ctl, float(np.median(tt)), float(np.max(e))])
+        md.append(f"## Contact tolerance inside the threshold search (bisection tol "
+                  f"{tct[0]['bisect_tol']:g}, reference contact tol {tref:g})\n")
+        md.append(_md_table(["contact tol", "time [s]", "max |d a_c*|"], rows) + "\n")
+        axs[1].semilogy([r[1] for r in rows], [max(r[2], 1e-6) for r in rows], "o-",
+                      label="a_c* vs contact tol")
+        for r in rows:
+            axs[1].annotate(f"{r[0]:g}", (r[1], max(r[2], 1e-6)), fontsize=7)
+        axs[1].set_xlabel("threshold wall time [s]")
+        axs[1].set_ylabel("max |a_c* - a_c*(ref)|")
+        axs[1].set_title("contact tol in the threshold")
+        axs[1].axhline(0.01 / 3, color="k", ls=":")
+    bt = [r for r in tol if r["kind"] == "bisect_tol"]
+    if bt:
+        rows = []
+        tols = sorted({r["bisect_tol"] for r in bt}, reverse=True)
+        tref = min(tols)
+        pts = []
+        for btl in tols:
+            e, tt, ns = [], [], []
+            for r in bt:
+                if r["bisect_tol"] != btl:
+                    continue
+                ref = next((q for q in bt if q["seed"] == r["seed"]
+                            and q["bisect_tol"] == tref), None)
+                if ref is None:
+                    continue
+                e += [r["a_star_0"] - ref["a_star_0"], r["a_star_1"] - ref["a_star_1"]]
+                tt.append(r["time"])
+                ns.append(r["n_solves"])
+            if not e:
+                continue
+            ea = np.asarray(e)
+            rows.append([btl, float(np.median(tt)), float(np.median(ns)),
+                         float(np.sqrt(np.mean(ea**2))), float(np.max(np.abs(ea)))])
+            pts.append((btl, float(np.median(tt)), max(float(np.sqrt(np.mean(ea**2))), 1e-6)))
+        md.append(f"## Bisection tolerance (ppl {bt[0]['ppl']}, reference tol {tref:g})\n")
+        md.append(_md_table(["bisection tol", "time [s]", "contact solves", "rms |d a_c*|",
+                             "max |d a_c*|"], rows) + "\n")
+        axs[2].semilogy([t for _, t, _ in pts], [e for *_, e in pts], "o-", label="a_c*")
+        for b, t, e in pts:
+            axs[2].annotate(f"{b:g}", (t, e), fontsize=7)
+        axs[2].axhline(0.01 / 3, color="k", ls=":", label="1/3 of seed SE")
+        axs[2].set_xlabel("threshold wall time [s]")
+        axs[2].set_ylabel("rms |a_c* - a_c*(ref)|")
+        axs[2].set_title("bisection tolerance (labels: tol)")
+        axs[2].legend(fontsize=7)
+    fig.tight_layout()
+    fig.savefig(outdir / "convergence_tolerances.png", dpi=120)
+    plt.close(fig)
+    (outdir / "convergence.md").write_text("\n".join(md))
+    (outdir / "convergence.csv").write_text("\n".join(csv_rows) + "\n")
+    print("\n".join(md))
+
+
+def main(argv=None) -> int:
+    ap = argparse.ArgumentParser(description=__doc__.split("\n")[0])
+    ap.add_argument("phase", choices=("resolution", "tol", "report", "all"))
+    ap.add_argument("--out", default="results/benchmarks", help="output folder")
+    ap.add_argument("--seeds", type=int, nargs="+", default=[0, 1, 2], help="surface seeds")
+    ap.add_argument("--ppl", type=int, nargs="+", default=[2, 4, 8, 16],
+                    help="points per lambda_s of the resolution study (each divides the max)")
+    ap.add_argument("--bisect-tol", type=float, default=1e-3,
+                    help="bisection tol (a_hi - a_lo) of the resolution study")
+    ap.add_argument("--threshold-contact-tol", type=float, default=1e-5,
+                    help="contact tol inside threshold searches")
+    ap.add_argument("--contact-tol", type=float, default=1e-6,
+                    help="contact tol of the fixed-area solves of the resolution study")
+    ap.add_argument("--area-tol", type=float, default=3e-4,
+                    help="how close a_c must come to the sigma targets")
+    ap.add_argument("--tol-ppl", type=int, default=4, help="resolution of the tolerance study")
+    ap.add_argument("--contact-tols", type=float, nargs="+",
+                    default=[1e-3, 1e-4, 1e-5, 1e-6, 1e-8], help="contact tols (last = ref)")
+    ap.add_argument("--threshold-contact-tols", type=float, nargs="+",
+                    default=[1e-3, 1e-4, 1e-5, 1e-7], help="contact tols inside the threshold")
+    ap.add_argument("--threshold-bisect-tol", type=float, default=1e-3,
+                    help="bisection tol of the contact-tol study inside the threshold")
+    ap.add_argument("--bisect-tols", type=float, nargs="+",
+                    default=[0.032, 0.016, 0.008, 0.004, 0.002, 0.001, 0.0005, 0.00025],
+                    help="bisection tols (last = reference)")
+    ap.add_argument("--fit-min-ppl", type=int, default=4,
+                    help="smallest resolution used to fit the perimeter constant")
+    args = ap.parse_args(argv)
+    if args.phase in ("tol", "all"):
+        phase_tol(args)
+    if args.phase in ("resolution", "all"):
+        phase_resolution(args)
+    if args.phase in ("report", "all"):
+        report(args)
+    return 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())

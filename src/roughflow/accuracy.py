@@ -1,0 +1,156 @@
+"""Cheaper accuracy for the contact area: perimeter correction and Richardson extrapolation.
+
+The relative contact area a_c of a discretised elastic contact converges only to first
+order in the grid spacing: a cell whose centre lies in contact is counted whole, and the
+discrete solution over-predicts contact in a band of about one cell along every contact
+line. The excess is therefore proportional to the contact-line length times the grid
+spacing. Two remedies (docs/accuracy.md has the measurements):
+
+- :func:`perimeter_corrected_area`: a_c - c * (contact-line length) * dx / (cell area),
+  with the contact-line length counted as the number of contact/non-contact cell faces
+  times the face length (4-neighbour, periodic). ``c`` is fitted to converged references
+  with :func:`fit_perimeter_constant`; :data:`PERIMETER_C` is the value measured by
+  ``benchmarks/convergence.py`` on the default sweep surfaces (elastic, H = 0.8,
+  eps_f = 1/16). Yastrebov, Anciaux & Molinari (Tribol. Int. 114 (2017) 161) derived a
+  correction of the same form from the geometry of the contact edge.
+- :func:`richardson`: extrapolation of a first-order quantity from two resolutions,
+  a_inf = (r^p a_fine - a_coarse) / (r^p - 1).
+
+Units: lengths in L (cell side), areas as fractions of the cell area.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+
+from roughflow.errors import InputError, require_finite, require_positive
+
+#: Perimeter constant c fitted by ``benchmarks/convergence.py`` (elastic contact, default
+#: sweep surfaces, 2 to 16 points per lambda_s; docs/accuracy.md). Faces are counted
+#: along the grid axes (Manhattan length, on average 4/pi times the Euclidean length).
+PERIMETER_C = 0.105
+
+
+def _mask(contact) -> np.ndarray:
+    m = np.asarray(contact)
+    if m.ndim != 2:
+        raise InputError(f"contact mask must be 2D, got shape {m.shape}")
+    if m.dtype != np.bool_:
+        raise InputError(f"contact mask must be boolean, got dtype {m.dtype}")
+    return m
+
+
+def contact_faces(contact) -> tuple[int, int]:
+    """Number of contact/non-contact cell faces normal to x and normal to y (periodic)."""
+    m = _mask(contact)
+    fx = int(np.count_nonzero(m != np.roll(m, -1, axis=0)))
+    fy = int(np.count_nonzero(m != np.roll(m, -1, axis=1)))
+    return fx, fy
+
+
+def contact_line_length(contact, lx: float = 1.0, ly: float | None = None) -> float:
+    """Length of the contact line (units of L) counted along cell faces.
+
+    A face between cells ix and ix+1 has length dy; one between iy and iy+1 has length dx.
+    """
+    m = _mask(contact)
+    lx = require_positive("lx", lx)
+    ly = lx if ly is None else require_positive("ly", ly)
+    fx, fy = contact_faces(m)
+    nx, ny = m.shape
+    return fx * ly / ny + fy * lx / nx
+
+
+def perimeter_term(contact, lx: float = 1.0, ly: float | None = None) -> float:
+    """Contact-line length times the grid spacing over the cell area (dimensionless).
+
+    For square cells this is (number of contact/non-contact faces) / (number of cells);
+    it is the quantity multiplied by ``c`` in :func:`perimeter_corrected_area`.
+    """
+    m = _mask(contact)
+    lx = require_positive("lx", lx)
+    ly = lx if ly is None else require_positive("ly", ly)
+    nx, ny = m.shape
+    h = np.sqrt((lx / nx) * (ly / ny))  # geometric mean spacing
+    return contact_line_length(m, lx, ly) * h / (lx * ly)
+
+
+def perimeter_corrected_area(
+    contact, lx: float = 1.0, ly: float | None = None, *, c: float = PERIMETER_C
+) -> float:
+    """Relative contact area corrected for the first-order pixel bias: a_c - c * P h / A.
+
+    ``contact``: boolean mask ``[ix, iy]``; ``c``: the perimeter constant (default
+    :data:`PERIMETER_C`, measured); returns a fraction of the cell area.
+    """
+    m = _mask(contact)
+    c = require_finite("c", c)
+    return float(m.mean()) - c * perimeter_term(m, lx, ly)
+
+
+def richardson(coarse: float, fine: float, *, ratio: float = 2.0, order: float = 1.0) -> float:
+    """Richardson extrapolation to zero grid spacing from two resolutions.
+
+    ``fine`` was computed with a spacing ``ratio`` times smaller than ``coarse``; the error
+    is assumed to be C h^order. Returns (r^p fine - coarse) / (r^p - 1).
+    """
+    coarse = require_finite("coarse", coarse)
+    fine = require_finite("fine", fine)
+    ratio = require_positive("ratio", ratio)
+    order = require_positive("order", order)
+    if ratio == 1.0:
+        raise InputError("ratio must differ from 1")
+    k = ratio**order
+    return (k * fine - coarse) / (k - 1.0)
+
+
+@dataclass(frozen=True)
+class PerimeterFit:
+    """Least-squares fit of a(h) = a_inf[group] + c * P h over resolutions.
+
+    ``c``: shared perimeter constant; ``a_inf``: extrapolated area per group;
+    ``rms``: rms residual of the fit; ``n``: number of data points.
+    """
+
+    c: float
+    a_inf: dict
+    rms: float
+    n: int
+
+
+def fit_perimeter_constant(groups, areas, perimeter_terms) -> PerimeterFit:
+    """Fit a shared c in a_c = a_inf(group) + c * perimeter_term over all points.
+
+    ``groups``: labels identifying the same physical state (same surface and load) at
+    different resolutions; ``areas``: measured a_c; ``perimeter_terms``: values of
+    :func:`perimeter_term` for the same solves. Needs at least two resolutions per group.
+    """
+    g = list(groups)
+    a = np.asarray(areas, dtype=np.float64)
+    t = np.asarray(perimeter_terms, dtype=np.float64)
+    if not (len(g) == a.size == t.size) or a.ndim != 1:
+        raise InputError(
+            f"groups, areas and perimeter_terms must have equal length, got "
+            f"{len(g)}, {a.size}, {t.size}"
+        )
+    if not (np.isfinite(a).all() and np.isfinite(t).all()):
+        raise InputError("areas and perimeter_terms must be finite")
+    labels = sorted(set(g), key=str)
+    if len(labels) == 0 or a.size < len(labels) + 1:
+        raise InputError(f"need at least two resolutions per group, got {a.size} points "
+                         f"in {len(labels)} groups")
+    idx = {lab: i for i, lab in enumerate(labels)}
+    design = np.zeros((a.size, len(labels) + 1))
+    for k, lab in enumerate(g):
+        design[k, idx[lab]] = 1.0
+    design[:, -1] = t
+    coef, *_ = np.linalg.lstsq(design, a, rcond=None)
+    resid = a - design @ coef
+    return PerimeterFit(
+        c=float(coef[-1]),
+        a_inf={lab: float(coef[idx[lab]]) for lab in labels},
+        rms=float(np.sqrt(np.mean(resid**2))),
+        n=int(a.size),
+    )

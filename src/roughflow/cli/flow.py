@@ -1,0 +1,129 @@
+"""``roughflow flow``: Reynolds flow through the gap of a contact file."""
+
+from __future__ import annotations
+
+import argparse
+import logging
+
+import numpy as np
+
+from roughflow.errors import InputError
+from roughflow.flow.linsolve import METHODS
+
+from ._common import add_output, axis_arg
+
+log = logging.getLogger(__name__)
+
+SIGMA_UNITS = "u^3 / eta (L^3 / eta; dimensionless with eta = 1)"
+FLUX_UNITS = "volume flow per unit width per unit pressure drop (dimensionless)"
+
+
+def register(sub: argparse._SubParsersAction) -> None:
+    p = sub.add_parser(
+        "flow",
+        help="Reynolds flow through a contact gap: conductances sigma_x, sigma_y",
+        description=(
+            "Read gap(x, y) and the cell lengths lx, ly (attributes) from a file written by "
+            "`roughflow contact`, solve div(u^3/(12 eta) grad p) = 0 with a unit pressure "
+            "drop between reservoirs at the two ends of each requested axis (periodic "
+            "across it), and write sigma_x / sigma_y (scalar variables and attributes), "
+            "the pressure and the flux fields. sigma = 0 when the gap does not percolate."
+        ),
+    )
+    p.add_argument("input", metavar="CONTACT.nc", help="contact file with a gap(x, y) variable")
+    p.add_argument("--axis", type=axis_arg, default=None, metavar="{x,y,both}",
+                   help="flow direction(s): x, y or both (both)")
+    p.add_argument("--eta", type=float, default=1.0, help="viscosity eta (1)")
+    p.add_argument("--tol", type=float, default=1e-8,
+                   help="relative residual of the linear solve (1e-8)")
+    p.add_argument("--method", choices=METHODS, default="auto",
+                   help="linear solver: auto (direct for small systems, else rs), rs "
+                        "(Ruge-Stueben AMG + CG), sa (smoothed aggregation + CG), direct, cg")
+    p.add_argument("--plot", metavar="FILE.png", default=None,
+                   help="also draw the flux magnitude over the contact map (one panel per axis)")
+    add_output(p)
+    p.set_defaults(func=run)
+
+
+def _read_gap(path: str):
+    import xarray as xr
+
+    try:
+        with xr.open_dataset(path) as ds:
+            ds.load()
+    except (OSError, ValueError) as exc:
+        raise InputError(f"cannot read {path!r}: {exc}") from None
+    if "gap" not in ds:
+        raise InputError(f"{path!r} has no 'gap' variable (variables: {list(ds.data_vars)})")
+    if ds["gap"].dims != ("x", "y"):
+        raise InputError(f"gap in {path!r} must have dims ('x', 'y'), got {ds['gap'].dims}")
+    try:
+        lx, ly = float(ds.attrs["lx"]), float(ds.attrs["ly"])
+    except KeyError as exc:
+        raise InputError(f"{path!r} lacks the attribute {exc.args[0]!r}") from None
+    gap = ds["gap"].values.astype(np.float64)
+    contact = ds["contact"].values.astype(bool) if "contact" in ds else gap <= 0
+    return ds, gap, contact, lx, ly
+
+
+def run(args: argparse.Namespace) -> None:
+    import xarray as xr
+
+    from roughflow.flow import solve
+    from roughflow.io import write_dataset
+
+    ds_in, gap, contact, lx, ly = _read_gap(args.input)
+    axes = (0, 1) if args.axis is None else (args.axis,)
+    results = {}
+    for ax in axes:
+        results[ax] = solve(gap, ax, lx=lx, ly=ly, eta=args.eta, tol=args.tol,
+                            method=args.method)
+        log.info("sigma_%s = %.6e (%s, %d iterations, residual %.1e)", "xy"[ax],
+                 results[ax].sigma, results[ax].method, results[ax].iterations,
+                 results[ax].residual)
+
+    coords = {k: ds_in.coords[k] for k in ("x", "y") if k in ds_in.coords}
+    out = xr.Dataset(coords=coords)
+    out["contact"] = (("x", "y"), contact.astype(np.int8),
+                      {"units": "1", "long_name": "contact mask (1 = contact)"})
+    attrs = {"title": "roughflow flow", "source": str(args.input), "lx": lx, "ly": ly,
+             "eta": args.eta, "tol": args.tol}
+    for k, v in ds_in.attrs.items():
+        if k not in ("title", "lx", "ly"):
+            attrs[f"contact_{k}"] = v
+    for ax, r in results.items():
+        a = "xy"[ax]
+        out[f"sigma_{a}"] = ((), r.sigma, {
+            "units": SIGMA_UNITS,
+            "long_name": f"effective conductance along {a}, Q L_{a} / (L_across dp) (Eq. 4)"})
+        out[f"pressure_{a}"] = (("x", "y"), r.pressure, {
+            "units": "dp (inlet 1, outlet 0)",
+            "long_name": f"fluid pressure for flow along {a}; NaN where no flow"})
+        for comp, field in (("x", r.flux_x), ("y", r.flux_y)):
+            out[f"flux_{comp}_{a}"] = (("x", "y"), field, {
+                "units": FLUX_UNITS,
+                "long_name": f"{comp} component of the flux density for flow along {a}"})
+        attrs.update({f"sigma_{a}": r.sigma, f"residual_{a}": r.residual,
+                      f"flux_imbalance_{a}": r.flux_imbalance, f"iterations_{a}": r.iterations,
+                      f"percolating_{a}": r.percolating, f"method_{a}": r.method,
+                      f"sigma_flux_{a}": r.sigma_flux})
+    out.attrs = attrs
+    write_dataset(out, args.output)
+    if args.plot:
+        _plot(results, contact, args.plot)
+
+
+def _plot(results: dict, contact: np.ndarray, path: str) -> None:
+    import matplotlib
+
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+
+    from roughflow.flow import plot_flux
+
+    fig, axes = plt.subplots(1, len(results), figsize=(5 * len(results), 4.2), squeeze=False)
+    for ax, r in zip(axes[0], results.values(), strict=True):
+        plot_flux(r, contact, ax=ax)
+    fig.tight_layout()
+    fig.savefig(path, dpi=120)
+    plt.close(fig)

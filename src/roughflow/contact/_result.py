@@ -1,0 +1,60 @@
+"""The result of a contact solve (shared by every model and method)."""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+
+
+@dataclass(frozen=True, eq=False)
+class ContactResult:
+    """Solution of a rigid rough surface pressed onto a flat elastic half-space.
+
+    Units: lengths in L (cell side), pressures in E* gbar (E* = 1, rms gradient 1 for
+    the project's surfaces). Fields are indexed ``[ix, iy]``.
+
+    gap: interfacial separation u_g(r) >= 0 (zero in contact).
+    contact_pressure: local contact pressure (>= 0 for repulsive models; negative values
+        are adhesive tension); its mean equals ``pressure``.
+    contact: boolean contact mask (gap == 0 for the elastic and bearing models; repulsive
+        interaction, i.e. overlap, for the adhesive model).
+    area_fraction: relative contact area a_c = contact.mean().
+    mean_gap: mean of ``gap`` over the cell.
+    pressure: applied mean pressure (load per area).
+    iterations, residual, converged: solver diagnostics (residual as defined by the
+        method; see ``roughflow.contact.solve``).
+    model, method: what produced the result.
+    separation: position of the elastic body's mean plane relative to the surface's mean
+        plane (the "d" of the bearing model).
+
+    Warm starts (``solve(..., init=result)``) use ``contact_pressure`` (cg) or
+    ``heights + gap`` (gfmd), so any result on the same surface can seed any method.
+    """
+
+    gap: np.ndarray
+    contact_pressure: np.ndarray
+    contact: np.ndarray
+    area_fraction: float
+    mean_gap: float
+    pressure: float
+    iterations: int
+    residual: float
+    converged: bool
+    model: str
+    method: str
+    separation: float = float("nan")
+
+    def scalars(self) -> dict:
+        """Every scalar field, for netCDF attributes."""
+        return {
+            "area_fraction": self.area_fraction,
+            "mean_gap": self.mean_gap,
+            "pressure": self.pressure,
+            "iterations": self.iterations,
+            "residual": self.residual,
+            "converged": self.converged,
+            "model": self.model,
+            "method": self.method,
+            "separation": self.separation,
+        }

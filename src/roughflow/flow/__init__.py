@@ -1,0 +1,11 @@
+"""Reynolds flow through the gap of a rough contact (paper Sect. 2.2, Eq. 3-4).
+
+``solve(gap, axis, ...) -> FlowResult`` and ``conductance(gap, axis=None, ...)``
+compute the effective conductances sigma_x, sigma_y by cell-centred finite
+volumes with AMG-preconditioned CG; ``plot_flux`` draws the flux over the contact map.
+"""
+
+from .core import FlowResult, conductance, solve
+from .plot import plot_flux
+
+__all__ = ["FlowResult", "conductance", "plot_flux", "solve"]

@@ -1,0 +1,228 @@
+"""Reynolds flow through a contact gap: effective conductances sigma_x, sigma_y.
+
+Solves div(sigma grad p) = 0 with sigma = u^3 / (12 eta) (paper Eq. 3-4) on the
+cell-centred grid of the gap field (see :mod:`roughflow.flow.assembly` for the
+discretisation), with a pressure drop dp = 1 between reservoirs at the two ends
+of ``axis`` and periodic boundaries across it. Units: the gap u in L (cell side)
+units, eta = 1 by default, so sigma is in L^3 / eta units (paper: u^3 / (12 eta)).
+
+The effective conductance is sigma_eff = Q L_flow / (L_across dp). It is computed
+from the dissipation, sum over faces of T (delta p)^2 = Q dp, which is variational
+(its error is quadratic in the pressure error) and so about 100x more accurate than
+the reservoir flux at the same solver tolerance; the relative difference between
+inlet and outlet flux is reported as ``flux_imbalance``.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+
+from roughflow.errors import InputError, require_field, require_positive
+from roughflow.percolation import spanning_cells
+
+from .assembly import Faces, assemble, face_transmissibilities
+from .linsolve import LinearSolution, check_method, solve_spd
+
+
+@dataclass(frozen=True)
+class FlowResult:
+    """Reynolds flow along one axis.
+
+    sigma: effective conductance Q L_flow / (L_across dp), units of u^3 / eta (Eq. 4).
+    pressure: (nx, ny) pressure, inlet reservoir 1, outlet 0; NaN in cells that
+        carry no flow (contact and cells not connected to both reservoirs).
+    flux_x, flux_y: (nx, ny) cell-centred flux density -sigma grad p (volume flow
+        per unit width per unit dp), the mean of the two face values in each direction.
+    residual: relative residual ||b - A p|| / ||b|| of the linear system (<= ``tol``).
+    flux_imbalance: |Q_in - Q_out| / Q, a check of the solve (0 without a solve).
+    iterations: CG iterations (0 for a direct solve or when no solve was needed).
+    percolating: whether the open cells connect the two reservoirs.
+    axis: flow axis (0 = x, 1 = y); method: linear solver used ("none" if none);
+    sigma_flux: the boundary-flux estimate of sigma (less accurate, for comparison);
+    n_active: number of unknowns (cells connected to both reservoirs).
+    """
+
+    sigma: float
+    pressure: np.ndarray
+    flux_x: np.ndarray
+    flux_y: np.ndarray
+    residual: float
+    flux_imbalance: float
+    iterations: int
+    percolating: bool
+    axis: int = 0
+    method: str = "none"
+    sigma_flux: float = 0.0
+    n_active: int = 0
+
+
+_AXES = {0: 0, 1: 1, "x": 0, "y": 1}
+
+
+def _check_axis(axis) -> int:
+    try:
+        return _AXES[axis]
+    except (KeyError, TypeError):
+        raise InputError(f"axis must be 0, 1, 'x' or 'y', got {axis!r}") from None
+
+
+def check_gap(gap) -> np.ndarray:
+    """Return ``gap`` as a float64 2D array, or raise :class:`InputError`."""
+    g = require_field("gap", gap)
+    if (g < 0).any():
+        idx = tuple(int(i) for i in np.argwhere(g < 0)[0])
+        raise InputError(f"gap must be >= 0, got {g[idx]!r} at {idx}")
+    return g
+
+
+def _cell_fluxes(faces: Faces, p: np.ndarray, h_flow: float, h_across: float):
+    """Cell-centred flux densities (along, across) from face values, flow along axis 0."""
+    q = np.where(np.isnan(p), 0.0, p)
+    # face flux densities: transmissibility * dp / face length
+    f_along = faces.t_along * (q[:-1] - q[1:]) / h_across
+    f_in = faces.t_in * (1.0 - q[0]) / h_across
+    f_out = faces.t_out * q[-1] / h_across
+    faces_along = np.concatenate([f_in[None], f_along, f_out[None]], axis=0)
+    j_along = 0.5 * (faces_along[:-1] + faces_along[1:])
+    f_across = faces.t_across * (q - np.roll(q, -1, axis=1)) / h_flow
+    j_across = 0.5 * (f_across + np.roll(f_across, 1, axis=1))
+    return j_along, j_across
+
+
+def _dissipation(faces: Faces, q: np.ndarray) -> float:
+    """Sum over faces of T (delta p)^2 = Q dp for dp = 1 (flow along axis 0)."""
+    return float(
+        np.sum(faces.t_along * (q[:-1] - q[1:]) ** 2)
+        + np.sum(faces.t_across * (q - np.roll(q, -1, axis=1)) ** 2)
+        + np.sum(faces.t_in * (1.0 - q[0]) ** 2)
+        + np.sum(faces.t_out * q[-1] ** 2)
+    )
+
+
+def _solve_flux_balanced(matrix, rhs, cells, act, faces: Faces, *, tol: float, method: str,
+                         rounds: int = 4):
+    """Solve to ||b - A x|| <= tol ||b|| (else :class:`ConvergenceError`), then refine
+    while the flux imbalance |Q_in - Q_out| / Q exceeds ``tol`` and the residual still falls.
+
+    Near a_c* the flux through the last constriction is many decades below ||b|| (which
+    the well-connected reservoir cells dominate), so the first criterion alone left
+    |Q_in - Q_out| / Q = 2e-4 with RS-AMG and a negative outlet flux with SA-AMG (issue 8
+    stress test). Each refinement round tightens the relative tolerance by the missing
+    factor and restarts from the last iterate, down to the float64 floor (the reservoir
+    fluxes are differences 1 - p of order Q / T, so their round-off is eps T / Q). sigma
+    comes from the dissipation, whose error is quadratic in the pressure error, and is
+    unaffected. Returns (solution, pressure with 0 in inactive cells, Q, |Q_in - Q_out|/Q).
+    """
+    sol = solve_spd(matrix, rhs, tol=tol, method=method)
+    for round_ in range(rounds + 1):
+        q = np.zeros(act.shape)
+        q.ravel()[cells] = sol.x
+        dissipation = _dissipation(faces, q)
+        q_in = float(np.sum(faces.t_in * (1.0 - q[0])))
+        q_out = float(np.sum(faces.t_out * q[-1]))
+        imbalance = abs(q_in - q_out) / dissipation
+        if imbalance <= tol or round_ == rounds:
+            break
+        rel = max(sol.residual * 0.25 * tol / imbalance, 1e-16)
+        better = solve_spd(matrix, rhs, tol=rel, method=method, x0=sol.x, strict=False)
+        if not better.residual < 0.5 * sol.residual:  # stalled at round-off
+            break
+        sol = LinearSolution(better.x, better.residual, sol.iterations + better.iterations,
+                             sol.method)
+    return sol, q, dissipation, imbalance
+
+
+def solve(
+    gap,
+    axis,
+    *,
+    lx: float = 1.0,
+    ly: float | None = None,
+    eta: float = 1.0,
+    tol: float = 1e-8,
+    method: str | None = None,
+) -> FlowResult:
+    """Reynolds flow along ``axis`` (0/"x" or 1/"y") through the gap field ``gap[ix, iy]``.
+
+    ``lx``, ``ly``: cell lengths (``ly`` defaults to ``lx``); ``eta``: viscosity;
+    ``tol``: relative residual of the linear solve (refined further, down to round-off,
+    until |Q_in - Q_out| / Q <= ``tol``); ``method``: None/"auto"
+    (direct up to 70k unknowns, else "rs"), "rs", "sa", "direct" or "cg" (see
+    :mod:`roughflow.flow.linsolve`). A gap whose open cells (u > 0) do not connect
+    the two reservoirs gives sigma = 0 without a solve. Raises ``InputError`` for
+    bad input and ``ConvergenceError`` if the solver misses ``tol``.
+    """
+    g = check_gap(gap)
+    ax = _check_axis(axis)
+    lx = require_positive("lx", lx)
+    ly = lx if ly is None else require_positive("ly", ly)
+    eta = require_positive("eta", eta)
+    tol = require_positive("tol", tol)
+    method = check_method(method)
+
+    nx, ny = g.shape
+    hx, hy = lx / nx, ly / ny
+    sigma_local = g**3 / (12.0 * eta)
+    open_mask = sigma_local > 0  # a gap so small that u^3 underflows is closed
+    active = spanning_cells(open_mask, ax)
+
+    nan = np.full(g.shape, np.nan)
+    zeros = np.zeros(g.shape)
+    if not active.any():
+        return FlowResult(0.0, nan, zeros, zeros.copy(), 0.0, 0.0, 0, False, ax)
+
+    # work with flow along axis 0
+    if ax == 0:
+        s, act, h_flow, h_across, l_flow, l_across = sigma_local, active, hx, hy, lx, ly
+    else:
+        s, act, h_flow, h_across, l_flow, l_across = sigma_local.T, active.T, hy, hx, ly, lx
+    s = np.where(act, s, 0.0)
+    faces = face_transmissibilities(s, h_flow, h_across)
+    matrix, rhs, cells = assemble(faces, act)
+    sol, q, dissipation, imbalance = _solve_flux_balanced(
+        matrix, rhs, cells, act, faces, tol=tol, method=method
+    )
+    p = np.full(s.shape, np.nan)
+    p.ravel()[cells] = sol.x
+    q_in = float(np.sum(faces.t_in * (1.0 - q[0])))
+    q_out = float(np.sum(faces.t_out * q[-1]))
+    q_mean = 0.5 * (q_in + q_out)
+    scale = l_flow / l_across
+    j_along, j_across = _cell_fluxes(faces, p, h_flow, h_across)
+    if ax == 0:
+        pressure, fx, fy = p, j_along, j_across
+    else:
+        pressure, fx, fy = p.T.copy(), j_across.T.copy(), j_along.T.copy()
+    return FlowResult(
+        sigma=float(dissipation * scale),
+        pressure=pressure,
+        flux_x=fx,
+        flux_y=fy,
+        residual=sol.residual,
+        flux_imbalance=imbalance,
+        iterations=sol.iterations,
+        percolating=True,
+        axis=ax,
+        method=sol.method,
+        sigma_flux=q_mean * scale,
+        n_active=int(cells.size),
+    )
+
+
+def conductance(
+    gap,
+    axis=None,
+    *,
+    lx: float = 1.0,
+    ly: float | None = None,
+    eta: float = 1.0,
+    tol: float = 1e-8,
+    method: str | None = None,
+) -> float | tuple[float, float]:
+    """Effective conductance along ``axis``, or ``(sigma_x, sigma_y)`` when ``axis`` is None."""
+    kw = dict(lx=lx, ly=ly, eta=eta, tol=tol, method=method)
+    if axis is None:
+        return solve(gap, 0, **kw).sigma, solve(gap, 1, **kw).sigma
+    return solve(gap, axis, **kw).sigma

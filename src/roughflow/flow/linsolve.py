@@ -1,0 +1,114 @@
+"""Sparse SPD solvers for the Reynolds system: AMG-preconditioned CG or a direct solve.
+
+The relative residual is ||b - A x|| / ||b|| of the unscaled system. (A symmetric
+diagonal scaling D^-1/2 A D^-1/2 was tried: it changes the classical strength of
+connection and made RS-AMG need ~160 instead of ~8 CG iterations on bearing gaps
+at n = 512, for no gain in the accuracy of sigma.) Since sigma is computed from
+the dissipation, its relative error is of order (residual)^2 times the condition
+factor: at 1e-8 it is about 1e-11 on bearing gaps.
+
+Methods (chosen by measurement, see ``benchmarks/bench_flow.py`` and docs/flow.md):
+
+- ``"rs"``: CG preconditioned by one V-cycle of classical Ruge-Stueben AMG with
+  second-pass coarsening (``CF=("RS", {"second_pass": True})``); the default for
+  large systems.
+- ``"sa"``: CG preconditioned by smoothed-aggregation AMG.
+- ``"direct"``: sparse LU (SuperLU, COLAMD ordering); the default
+  for small systems.
+- ``"cg"``: CG without preconditioner (benchmark reference; slow).
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+import scipy.sparse as sp
+import scipy.sparse.linalg as spla
+
+from roughflow.errors import ConvergenceError, InputError
+
+METHODS = ("auto", "rs", "sa", "direct", "cg")
+#: below this many unknowns ``"auto"`` uses the direct solver (measured crossover)
+DIRECT_MAX_UNKNOWNS = 70_000
+MAX_ITER_AMG = 500
+MAX_ITER_CG = 20_000
+
+
+@dataclass(frozen=True)
+class LinearSolution:
+    x: np.ndarray
+    residual: float
+    iterations: int
+    method: str
+
+
+def check_method(method: str | None) -> str:
+    m = "auto" if method is None else method
+    if m not in METHODS:
+        raise InputError(f"method must be one of {METHODS} or None, got {method!r}")
+    return m
+
+
+def _amg_preconditioner(a: sp.csr_matrix, method: str) -> spla.LinearOperator:
+    import pyamg
+
+    if method == "rs":
+        ml = pyamg.ruge_stuben_solver(a, CF=("RS", {"second_pass": True}), max_coarse=500,
+                                      coarse_solver="splu")
+    else:
+        ml = pyamg.smoothed_aggregation_solver(a, max_coarse=500, coarse_solver="splu")
+    return ml.aspreconditioner(cycle="V")
+
+
+def solve_spd(
+    a: sp.csr_matrix, b: np.ndarray, *, tol: float, method: str = "auto",
+    max_iter: int | None = None, x0: np.ndarray | None = None, strict: bool = True,
+) -> LinearSolution:
+    """Solve A x = b for symmetric positive definite A to relative residual ``tol``.
+
+    ``x0`` is a starting guess for the iterative methods (a refinement step of the
+    direct one). Raises :class:`ConvergenceError` (with the residual reached) when the
+    tolerance is not met, unless ``strict=False`` (then the best iterate is returned with
+    its residual: used for refinement beyond a tolerance already met).
+    """
+    method = check_method(method)
+    n = a.shape[0]
+    if method == "auto":
+        method = "direct" if n <= DIRECT_MAX_UNKNOWNS else "rs"
+    a_s, b_s = a.tocsr(), b
+    bnorm = np.linalg.norm(b_s)
+    if bnorm == 0.0:
+        return LinearSolution(np.zeros(n), 0.0, 0, method)
+
+    iterations = 0
+    if method == "direct":
+        lu = spla.splu(a_s.tocsc(), permc_spec="COLAMD")
+        y = lu.solve(b_s) if x0 is None else x0 + lu.solve(b_s - a_s @ x0)
+        for _refine in range(3):  # iterative refinement until the residual stalls
+            r = b_s - a_s @ y
+            if np.linalg.norm(r) <= tol * bnorm:
+                break
+            y += lu.solve(r)
+    else:
+        m = None if method == "cg" else _amg_preconditioner(a_s, method)
+        if max_iter is None:
+            max_iter = MAX_ITER_AMG if m is not None else MAX_ITER_CG
+
+        def count(_):
+            nonlocal iterations
+            iterations += 1
+
+        y = np.zeros(n) if x0 is None else np.array(x0, dtype=np.float64)
+        for _restart in range(3):  # CG's recursive residual can drift from the true one
+            y, _info = spla.cg(a_s, b_s, x0=y, rtol=tol, atol=0.0, maxiter=max_iter - iterations,
+                               M=m, callback=count)
+            if np.linalg.norm(b_s - a_s @ y) <= tol * bnorm or iterations >= max_iter:
+                break
+    residual = float(np.linalg.norm(b_s - a_s @ y) / bnorm)
+    if not np.isfinite(residual) or (strict and residual > tol):
+        raise ConvergenceError(
+            f"Reynolds solver ({method}) did not reach relative residual {tol:g}",
+            residual=residual, iterations=iterations,
+        )
+    return LinearSolution(y, residual, iterations, method)

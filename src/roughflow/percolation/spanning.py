@@ -1,0 +1,126 @@
+"""Does the fluid (or the contact) span the cell along an axis? (paper Sect. 2.2)
+
+Fluid = open (non-contact) cells, connected through shared faces (4 neighbours). For flow
+along ``axis`` the boundaries along ``axis`` are open (reservoirs) and the cell is periodic
+across it; a cluster percolates when it touches both the first and the last slab along
+``axis``. Contact cells connect through 8 neighbours, which makes the two phases exactly
+dual on the square grid: fluid spans x  <=>  no contact cluster winds around y on the same
+cylinder (open in x, periodic in y), and vice versa (physics notes Sect. 4).
+"""
+
+from __future__ import annotations
+
+import numpy as np
+from scipy import ndimage
+
+from .labels import _STRUCTURES, check_axis, check_connectivity, check_mask, label_raw
+
+
+def _periodic_across(axis: int) -> tuple[bool, bool]:
+    return (False, True) if axis == 0 else (True, False)
+
+
+def _spanning_labels(open_mask: np.ndarray, axis: int, connectivity: int):
+    raw, lut, _ = label_raw(open_mask, _periodic_across(axis), connectivity)
+    first = lut[raw.take(0, axis=axis)]
+    last = lut[raw.take(-1, axis=axis)]
+    common = np.intersect1d(first[first > 0], last[last > 0])
+    return raw, lut, common
+
+
+def percolates(open_mask, axis: int, *, connectivity: int = 4) -> bool:
+    """True when a cluster of open (True) cells connects the two ends along ``axis``.
+
+    ``axis`` 0 = x, 1 = y; open boundaries along ``axis``, periodic across it;
+    ``connectivity`` 4 (fluid, default) or 8.
+    """
+    m = check_mask("open_mask", open_mask)
+    ax = check_axis(axis)
+    conn = check_connectivity(connectivity)
+    if not (m.take(0, axis=ax).any() and m.take(-1, axis=ax).any()):
+        return False
+    return _spanning_labels(m, ax, conn)[2].size > 0
+
+
+def spanning_cells(open_mask, axis: int, *, connectivity: int = 4) -> np.ndarray:
+    """Bool mask of the open cells in clusters that touch both ends along ``axis``.
+
+    These are the cells that can carry flow along ``axis`` (the rest are dead ends or
+    isolated pools; within a spanning cluster, dead-end branches are included).
+    """
+    m = check_mask("open_mask", open_mask)
+    ax = check_axis(axis)
+    conn = check_connectivity(connectivity)
+    raw, lut, common = _spanning_labels(m, ax, conn)
+    if common.size == 0:
+        return np.zeros(m.shape, dtype=bool)
+    good_raw = np.isin(lut, common)
+    good_raw[0] = False
+    return good_raw[raw]
+
+
+def _wraps(mask: np.ndarray, axis: int, connectivity: int) -> bool:
+    """True when a cluster winds around the periodic direction ``axis`` (open across it).
+
+    Labels the grid without periodicity, then joins labels across the seam of ``axis``
+    with a union-find that keeps the winding number (offset) of each label: a seam pair
+    whose two labels are already joined with a different offset closes a loop around
+    the cylinder.
+    """
+    raw, n = ndimage.label(mask, structure=_STRUCTURES[connectivity])
+    if n == 0:
+        return False
+    hi = raw.take(-1, axis=axis)  # last slab; its neighbour across the seam is slab 0
+    lo = raw.take(0, axis=axis)
+    pairs = [(hi, lo)]
+    if connectivity == 8:
+        pairs += [(hi[1:], lo[:-1]), (hi[:-1], lo[1:])]
+    a = np.concatenate([p[0] for p in pairs])
+    b = np.concatenate([p[1] for p in pairs])
+    keep = (a > 0) & (b > 0)
+    if not keep.any():
+        return False
+    edges = np.unique(np.stack([a[keep], b[keep]], axis=1), axis=0)
+    parent: dict[int, int] = {}
+    offset: dict[int, int] = {}  # winding of node relative to its parent
+
+    def find(x: int) -> tuple[int, int]:
+        w = 0
+        path = []
+        while parent.get(x, x) != x:
+            path.append(x)
+            w += offset[x]
+            x = parent[x]
+        # path compression: point every visited node at the root with its total offset
+        acc = w
+        for node in path:
+            o = offset[node]
+            parent[node] = x
+            offset[node] = acc
+            acc -= o
+        return x, w
+
+    for u, v in edges.tolist():  # crossing from u (last slab) to v (slab 0): winding +1
+        ru, wu = find(u)
+        rv, wv = find(v)
+        if ru == rv:
+            if wv - wu != 1:
+                return True
+        else:
+            parent[rv] = ru
+            offset[rv] = wu + 1 - wv
+    return False
+
+
+def contact_percolates(contact_mask, axis: int) -> bool:
+    """True when an 8-connected contact cluster spans the cell along ``axis``, closing on
+    itself through the periodic seam of ``axis`` (a contact wall around the cylinder that
+    is open across ``axis``).
+
+    This is the geometry that blocks flow across ``axis``: for any mask,
+    ``contact_percolates(c, 1) == (not percolates(~c, 0))`` and likewise with the axes
+    swapped (4/8 duality on the square grid).
+    """
+    m = check_mask("contact_mask", contact_mask)
+    ax = check_axis(axis)
+    return _wraps(m, ax, 8)

@@ -1,0 +1,76 @@
+"""Short-range adhesion potential (physics.md 3.3) and its helpers."""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+import pytest
+
+from roughflow.contact import Adhesion, full_contact_energy, tabor_parameter
+from roughflow.contact.adhesion import adhesion_for, adhesion_summary
+from roughflow.errors import InputError
+from roughflow.surface import SurfaceSpec, generate
+
+
+def test_potential_shape():
+    ad = Adhesion(surface_energy=0.3, range=0.02)
+    g = np.array([0.0, 0.01, 0.02, 0.05])
+    # v(0) = -gamma_s, v(rho) = 0, nothing beyond the range (exact by construction)
+    np.testing.assert_allclose(ad.energy(g), [-0.3, -0.15, 0.0, 0.0], atol=1e-15)
+    # maximum tension pi gamma_s / (2 rho) at rho/2
+    assert ad.pressure(np.array([0.01]))[0] == pytest.approx(-math.pi * 0.3 / 0.04)
+    assert ad.max_tension == pytest.approx(math.pi * 0.3 / 0.04)
+    # harmonic repulsion for g < 0 with kappa = pi^2 gamma_s / (2 rho^2)
+    assert ad.pressure(np.array([-1e-3]))[0] == pytest.approx(ad.kappa * 1e-3)
+
+
+def test_pressure_is_minus_derivative_and_smooth():
+    ad = Adhesion(surface_energy=0.7, range=0.1)
+    g = np.linspace(-0.05, 0.15, 2001)
+    d = 1e-9
+    numeric = -(ad.energy(g + d) - ad.energy(g - d)) / (2 * d)
+    # central differences of a C^1 function: error at most d |v''| ~ 3e-7 where the curvature
+    # jumps (g = rho), plus round-off ~ 1e-16 * 0.7 / d ~ 1e-7
+    np.testing.assert_allclose(ad.pressure(g), numeric, atol=1e-6)
+    # curvature continuous at g = 0 (kappa chosen for that)
+    assert ad.curvature(np.array([-1e-12]))[0] == pytest.approx(ad.curvature(np.array([0.0]))[0])
+
+
+def test_full_contact_energy_of_a_sinusoid():
+    # v_ela^full of h0 cos(2 pi x / lambda) is pi E* h0^2 / (4 lambda) (work p* h0 / 4,
+    # p* = pi E* h0 / lambda); exact on the grid up to round-off
+    n, h0 = 64, 0.01
+    x = (np.arange(n) + 0.5) / n
+    h = h0 * np.cos(2 * np.pi * x)[:, None] * np.ones((1, n))
+    assert full_contact_energy(h, 1.0, 1.0) == pytest.approx(math.pi * h0**2 / 4, rel=1e-12)
+
+
+def test_tabor_round_trip():
+    s = generate(SurfaceSpec.from_sweep(points_per_lambda_s=2, seed=0))
+    ad = adhesion_for(s.heights, s.lx, s.ly, tabor=2.0, gamma_over_v_full=0.203)
+    summary = adhesion_summary(s.heights, s.lx, s.ly, ad)
+    assert summary["tabor"] == pytest.approx(2.0, rel=1e-12)
+    assert summary["gamma_over_v_full"] == pytest.approx(0.203, rel=1e-12)
+    assert tabor_parameter(s.heights, s.lx, s.ly, ad) == pytest.approx(2.0, rel=1e-12)
+
+
+@pytest.mark.parametrize(("gs", "rho"), [(0.0, 0.1), (-1.0, 0.1), (1.0, 0.0), (1.0, float("inf"))])
+def test_bad_adhesion(gs, rho):
+    with pytest.raises(InputError):
+        Adhesion(surface_energy=gs, range=rho)
+
+
+def test_adhesive_solve_pulls_surfaces_together():
+    # At equal load, attraction can only add contact and shrink the gap; the load is still
+    # carried (mean contact pressure = load up to the solver tolerance on the mean force).
+    from roughflow.contact import solve
+
+    s = generate(SurfaceSpec.from_sweep(points_per_lambda_s=2, seed=3))
+    ad = adhesion_for(s.heights, s.lx, s.ly, tabor=2.0, gamma_over_v_full=0.203)
+    rep = solve(s, 0.05)
+    adh = solve(s, 0.05, model="adhesive", adhesion=ad, max_iter=5000)
+    assert adh.area_fraction > rep.area_fraction
+    assert adh.mean_gap < rep.mean_gap
+    assert adh.contact_pressure.mean() == pytest.approx(0.05, rel=1e-3)
+    assert adh.contact_pressure.min() < 0  # tension in the adhesive necks

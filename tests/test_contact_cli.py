@@ -1,0 +1,72 @@
+"""``roughflow contact``: file in, self-describing file out, clean errors."""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+import xarray as xr
+
+from roughflow.cli import main
+from roughflow.contact import solve
+from roughflow.io import read_surface
+
+
+@pytest.fixture(scope="module")
+def surface_file(tmp_path_factory):
+    path = tmp_path_factory.mktemp("contact") / "s.nc"
+    assert main(["surface", "--points-per-lambda-s", "2", "--seed", "1", "-o", str(path)]) in (
+        0, None)
+    return path
+
+
+def test_cli_elastic_matches_api(surface_file, tmp_path):
+    out = tmp_path / "c.nc"
+    main(["contact", str(surface_file), "--pressure", "0.1", "-o", str(out)])
+    ref = solve(read_surface(surface_file), 0.1)
+    with xr.open_dataset(out) as ds:
+        for name in ("gap", "contact", "contact_pressure"):
+            assert ds[name].dims == ("x", "y")
+            assert "units" in ds[name].attrs and "long_name" in ds[name].attrs
+        np.testing.assert_array_equal(ds["gap"].values, ref.gap)
+        np.testing.assert_array_equal(ds["contact"].values.astype(bool), ref.contact)
+        for key, value in ref.scalars().items():
+            got = ds.attrs[key]
+            if isinstance(value, str):
+                assert got == value
+            else:
+                assert float(got) == pytest.approx(float(value))
+        assert ds.attrs["spec_seed"] == 1
+        assert ds.attrs["spec_hurst"] == pytest.approx(0.8)
+
+
+def test_cli_bearing(surface_file, tmp_path):
+    out = tmp_path / "b.nc"
+    main(["contact", str(surface_file), "--model", "bearing", "--area-fraction", "0.4",
+          "-o", str(out)])
+    with xr.open_dataset(out) as ds:
+        assert ds.attrs["area_fraction"] == pytest.approx(0.4, abs=1e-4)
+        assert ds.attrs["model"] == "bearing"
+
+
+@pytest.mark.parametrize(
+    ("extra", "code"),
+    [
+        (["--pressure", "-1"], 2),
+        (["--model", "bearing", "--area-fraction", "1.5"], 2),
+        (["--pressure", "0.1", "--tol", "0"], 2),
+        (["--model", "adhesive", "--pressure", "0.1"], 2),
+        (["--pressure", "0.1", "--max-iter", "2"], 3),
+    ],
+)
+def test_cli_errors(surface_file, tmp_path, extra, code):
+    with pytest.raises(SystemExit) as exc:
+        main(["contact", str(surface_file), *extra, "-o", str(tmp_path / "x.nc")])
+    assert exc.value.code == code
+    assert not (tmp_path / "x.nc").exists()
+
+
+def test_cli_missing_file(tmp_path):
+    with pytest.raises(SystemExit) as exc:
+        main(["contact", str(tmp_path / "nope.nc"), "--pressure", "0.1",
+              "-o", str(tmp_path / "x.nc")])
+    assert exc.value.code == 2

@@ -1,0 +1,71 @@
+"""CLI ``roughflow flow`` and the flux plot."""
+
+from __future__ import annotations
+
+import matplotlib
+
+matplotlib.use("Agg")
+
+import numpy as np  # noqa: E402
+import pytest  # noqa: E402
+import xarray as xr  # noqa: E402
+
+from roughflow.cli import main  # noqa: E402
+from roughflow.flow import conductance, plot_flux, solve  # noqa: E402
+from roughflow.io import grid_coords, write_dataset  # noqa: E402
+
+
+def write_contact(path, gap, lx=1.0, ly=1.0):
+    nx, ny = gap.shape
+    ds = xr.Dataset({"gap": (("x", "y"), gap, {"units": "L"})},
+                    coords=grid_coords(nx, ny, lx, ly),
+                    attrs={"lx": lx, "ly": ly, "title": "test contact", "area_fraction": 0.1})
+    write_dataset(ds, path)
+
+
+@pytest.fixture
+def gap():
+    rng = np.random.default_rng(2)
+    g = np.maximum(rng.normal(0.5, 0.4, (24, 16)), 0.0)
+    g[:, 7] = 0.0  # a contact line along x: blocks flow along y, not along x
+    return g
+
+
+def test_cli_both_axes(tmp_path, gap):
+    src, out, png = tmp_path / "c.nc", tmp_path / "f.nc", tmp_path / "f.png"
+    write_contact(src, gap, lx=1.5, ly=1.0)
+    assert main(["flow", str(src), "--axis", "both", "-o", str(out), "--plot", str(png)]) == 0
+    with xr.open_dataset(out) as ds:
+        sx, sy = conductance(gap, lx=1.5, ly=1.0)
+        assert float(ds["sigma_x"]) == pytest.approx(sx, rel=1e-12)
+        assert ds.attrs["sigma_x"] == pytest.approx(sx, rel=1e-12)
+        assert float(ds["sigma_y"]) == 0.0 and ds.attrs["percolating_y"] == 0
+        assert "units" in ds["sigma_x"].attrs and "units" in ds["flux_x_x"].attrs
+        assert ds["pressure_x"].shape == gap.shape
+        assert ds.attrs["contact_area_fraction"] == 0.1
+    assert png.stat().st_size > 1000
+
+
+def test_cli_single_axis_and_errors(tmp_path, gap, capsys):
+    src, out = tmp_path / "c.nc", tmp_path / "f.nc"
+    write_contact(src, gap)
+    assert main(["flow", str(src), "--axis", "x", "-o", str(out)]) == 0
+    with xr.open_dataset(out) as ds:
+        assert "sigma_x" in ds and "sigma_y" not in ds
+    bad = tmp_path / "bad.nc"
+    write_contact(bad, -gap - 0.1)
+    with pytest.raises(SystemExit) as exc:
+        main(["flow", str(bad), "-o", str(out)])
+    assert exc.value.code == 2 and "gap must be >= 0" in capsys.readouterr().err
+    nogap = tmp_path / "nogap.nc"
+    write_dataset(xr.Dataset({"h": (("x", "y"), gap)}, attrs={"lx": 1.0, "ly": 1.0}), nogap)
+    with pytest.raises(SystemExit) as exc:
+        main(["flow", str(nogap), "-o", str(out)])
+    assert exc.value.code == 2 and "no 'gap' variable" in capsys.readouterr().err
+
+
+def test_plot_flux_returns_axes(tmp_path, gap):
+    r = solve(gap, 0)
+    ax = plot_flux(r, gap == 0)
+    assert "sigma" in ax.get_title()
+    ax.figure.savefig(tmp_path / "p.png")

@@ -1,0 +1,139 @@
+"""Cluster statistics, the percolating-channel map (paper Fig. 1 b, c) and the CLI."""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+import xarray as xr
+
+from roughflow.cli import main
+from roughflow.errors import InputError
+from roughflow.io import surface_to_dataset, write_dataset
+from roughflow.percolation import (
+    cluster_sizes,
+    cluster_stats,
+    fisher_exponent,
+    percolation_map,
+    size_distribution,
+    threshold,
+)
+from roughflow.percolation.clusters import CONTACT, FLUID, PERCOLATING
+from roughflow.surface import SurfaceSpec, generate
+
+
+def test_cluster_sizes_of_hand_made_mask():
+    c = np.zeros((6, 6), dtype=bool)
+    c[0, 0] = c[5, 5] = True  # corner cells: one patch only when 8-connected via both seams
+    c[2:4, 2:5] = True  # a 2 x 3 block
+    assert list(cluster_sizes(c)) == [6, 1, 1]
+    assert list(cluster_sizes(c, connectivity=8)) == [6, 2]
+    assert list(cluster_sizes(c, periodic=(False, False), connectivity=8)) == [6, 1, 1]
+
+
+def test_fisher_exponent_recovers_a_power_law():
+    rng = np.random.default_rng(0)
+    tau = 2.2
+    sizes = np.floor((1 - rng.random(200_000)) ** (-1 / (tau - 1))).astype(int)
+    # Drawn from P(S >= s) = s^-(tau-1): density ~ s^-tau. Discreteness (floor) biases the
+    # smallest bins, so fit from s = 4; 200000 samples give a slope good to about 0.05.
+    assert fisher_exponent(sizes, s_min=4, s_max=1e4) == pytest.approx(tau, abs=0.07)
+
+
+def test_size_distribution_density_integrates_to_count():
+    sizes = np.array([1, 1, 2, 3, 5, 8, 13, 21, 34, 55, 89, 144])
+    s, n = size_distribution(sizes, bins_per_decade=3)
+    # rebuild the bin widths from the same rule and check sum(n * width) = count
+    top = np.log10(sizes.max()) + 1e-9
+    nb = int(np.ceil(top * 3))
+    edges = np.unique(np.floor(np.logspace(0, top, nb + 1)).astype(int))
+    edges[-1] = sizes.max() + 1
+    counts, _ = np.histogram(sizes, bins=edges)
+    width = np.diff(edges)[counts > 0]
+    assert np.sum(n * width) == pytest.approx(sizes.size)
+    assert np.all(np.diff(s) > 0)
+
+
+def test_size_distribution_bad_input():
+    with pytest.raises(InputError, match="sizes"):
+        size_distribution(np.array([0, 3]))
+    with pytest.raises(InputError, match="sizes"):
+        size_distribution(np.array([]))
+
+
+def test_percolation_map_marks_spanning_channel():
+    c = np.ones((7, 5), dtype=bool)
+    c[:, 1] = False  # a channel along x
+    c[2, 3] = False  # an isolated pool
+    m = percolation_map(c, axis=0)
+    assert set(np.unique(m)) == {CONTACT, FLUID, PERCOLATING}
+    assert np.all(m[:, 1] == PERCOLATING)
+    assert m[2, 3] == FLUID
+    assert np.all(m[c] == CONTACT)
+    # along y nothing spans: the channel is light (non-percolating) fluid
+    assert not np.any(percolation_map(c, axis=1) == PERCOLATING)
+
+
+def test_cluster_stats_of_a_contact_state():
+    spec = SurfaceSpec.from_sweep(points_per_lambda_s=2, seed=2)
+    h = generate(spec).heights
+    c = h > np.quantile(h, 0.7)  # bearing contact at a_c = 0.3: fluid spans both ways
+    st = cluster_stats(c)
+    assert st.area_fraction == pytest.approx(0.3, abs=1e-4)
+    assert st.patch_sizes.sum() == c.sum() and st.fluid_sizes.sum() == (~c).sum()
+    assert st.n_patches == st.patch_sizes.size > 10
+    assert 0.5 < st.percolating_fraction_x <= 0.7 and 0.5 < st.percolating_fraction_y <= 0.7
+
+
+# ---- CLI -----------------------------------------------------------------------------
+
+@pytest.fixture()
+def surface_file(tmp_path):
+    s = generate(SurfaceSpec.from_sweep(points_per_lambda_s=2, l_over_lambda_r=2, seed=1))
+    path = tmp_path / "s.nc"
+    write_dataset(surface_to_dataset(s), path)
+    return s, path
+
+
+def test_cli_threshold_bearing_both_axes(surface_file, tmp_path):
+    s, path = surface_file
+    out = tmp_path / "t.nc"
+    assert main(["threshold", str(path), "--axis", "both", "--model", "bearing",
+                 "-o", str(out)]) == 0
+    ref = threshold(s, model="bearing")
+    with xr.open_dataset(out) as ds:
+        assert list(ds["direction"].values) == ["x", "y"]
+        assert ds["a_c_star"].attrs["units"] == "1"
+        for i in (0, 1):
+            assert float(ds["a_c_star"][i]) == ref[i].a_c_star
+        assert ds.attrs["model"] == "bearing"
+
+
+def test_cli_threshold_elastic_one_axis(surface_file, tmp_path):
+    s, path = surface_file
+    out = tmp_path / "t.nc"
+    assert main(["threshold", str(path), "--axis", "y", "--tol", "4e-3", "-o", str(out)]) == 0
+    with xr.open_dataset(out) as ds:
+        assert list(ds["direction"].values) == ["y"]
+        lo, hi = float(ds["a_lo"][0]), float(ds["a_hi"][0])
+        assert 0 < hi - lo <= 4e-3
+        assert ds.sizes["solve"] == ds.attrs["n_solves"] >= 2
+        assert float(ds["p_lo"][0]) < float(ds["p_hi"][0])
+
+
+def test_cli_threshold_errors(surface_file, tmp_path):
+    _, path = surface_file
+    out = tmp_path / "t.nc"
+    with pytest.raises(SystemExit) as e:
+        main(["threshold", str(path), "--tol", "0", "-o", str(out)])
+    assert e.value.code == 2
+    with pytest.raises(SystemExit) as e:
+        main(["threshold", str(path), "--model", "adhesive", "-o", str(out)])
+    assert e.value.code == 2
+    with pytest.raises(SystemExit) as e:  # always percolates below p = 1e-2
+        main(["threshold", str(path), "--p-max", "0.01", "-o", str(out)])
+    assert e.value.code == 2
+    assert not out.exists()
+    assert main(["threshold", str(path), "--p-max", "0.01", "--allow-unbracketed",
+                 "-o", str(out)]) == 0
+    with xr.open_dataset(out) as ds:
+        assert np.all(ds["bracketed"].values == 0) and np.all(np.isnan(ds["a_c_star"]))

@@ -1,0 +1,208 @@
+"""Labelling and spanning on hand-made masks with known answers, against a brute-force
+flood fill, and the 4/8 duality on random masks (physics notes Sect. 4)."""
+
+from __future__ import annotations
+
+from collections import deque
+
+import numpy as np
+import pytest
+from hypothesis import given, settings
+from hypothesis import strategies as st
+from hypothesis.extra.numpy import arrays
+
+from roughflow.errors import InputError
+from roughflow.percolation import contact_percolates, label, percolates, spanning_cells
+
+
+def _neighbours(i, j, nx, ny, periodic, connectivity):
+    steps = [(1, 0), (-1, 0), (0, 1), (0, -1)]
+    if connectivity == 8:
+        steps += [(1, 1), (1, -1), (-1, 1), (-1, -1)]
+    for di, dj in steps:
+        a, b = i + di, j + dj
+        if periodic[0]:
+            a %= nx
+        if periodic[1]:
+            b %= ny
+        if 0 <= a < nx and 0 <= b < ny:
+            yield a, b
+
+
+def _flood_components(mask, periodic, connectivity):
+    """Reference labelling: breadth-first flood fill, returns a list of cell sets."""
+    nx, ny = mask.shape
+    seen = np.zeros_like(mask)
+    comps = []
+    for i in range(nx):
+        for j in range(ny):
+            if mask[i, j] and not seen[i, j]:
+                comp, todo = set(), deque([(i, j)])
+                seen[i, j] = True
+                while todo:
+                    c = todo.popleft()
+                    comp.add(c)
+                    for nb in _neighbours(*c, nx, ny, periodic, connectivity):
+                        if mask[nb] and not seen[nb]:
+                            seen[nb] = True
+                            todo.append(nb)
+                comps.append(comp)
+    return comps
+
+
+def _flood_spans(mask, axis, connectivity=4):
+    periodic = (False, True) if axis == 0 else (True, False)
+    n = mask.shape[axis]
+    cells = set()
+    for comp in _flood_components(mask, periodic, connectivity):
+        ends = {c[axis] for c in comp}
+        if 0 in ends and n - 1 in ends:
+            cells |= comp
+    return cells
+
+
+def _mask(rows: list[str]) -> np.ndarray:
+    """Mask from strings: row k is x index k, '.' open (True), '#' closed."""
+    return np.array([[ch == "." for ch in r] for r in rows])
+
+
+# ---- hand-made masks -----------------------------------------------------------------
+
+def test_straight_channel_along_x():
+    m = np.zeros((8, 6), dtype=bool)
+    m[:, 2] = True  # a line of open cells running along x at y index 2
+    assert percolates(m, 0)
+    assert not percolates(m, 1)
+    assert np.array_equal(spanning_cells(m, 0), m)
+    assert not spanning_cells(m, 1).any()
+
+
+def test_straight_channel_along_y():
+    m = np.zeros((8, 6), dtype=bool)
+    m[3, :] = True
+    assert percolates(m, 1)
+    assert not percolates(m, 0)
+
+
+def test_channel_through_periodic_seam_only():
+    # Along x the channel leaves through the y seam and comes back: it spans x only
+    # because y is periodic. Along y (x periodic) the two half-channels are dead ends.
+    m = _mask([
+        "##.#",
+        "##.#",
+        "##..",
+        ".##.",  # row x=3: (3, 3) and (3, 0) are neighbours only across the y seam
+        ".###",
+    ])
+    assert percolates(m, 0)
+    assert not percolates(m, 1)
+    # Without the seam (plain label, no periodicity) the two parts are separate clusters.
+    _, n_open = label(m, periodic=(False, False))
+    _, n_per = label(m, periodic=(False, True))
+    assert (n_open, n_per) == (2, 1)
+
+
+def test_spiral_is_one_cluster_that_does_not_span():
+    m = _mask([
+        ".......",
+        "######.",
+        ".....#.",
+        ".###.#.",
+        ".#...#.",
+        ".#####.",
+        ".......",
+    ])
+    m = np.pad(m, 1, constant_values=False)  # closed frame: nothing touches the edges
+    lab, n = label(m)
+    assert n == 1
+    assert not percolates(m, 0) and not percolates(m, 1)
+    # Opening one frame cell at each end along x lets the spiral's outer arm span x.
+    m2 = m.copy()
+    m2[0, 1] = m2[-1, 1] = True
+    assert percolates(m2, 0)
+    assert spanning_cells(m2, 0).sum() == m2.sum()
+
+
+def test_checkerboard_connectivity():
+    m = (np.add.outer(np.arange(6), np.arange(6)) % 2 == 0)
+    assert label(m, connectivity=4)[1] == 18  # every cell alone
+    assert label(m, connectivity=8)[1] == 1  # diagonals join everything
+    assert not percolates(m, 0) and not percolates(m, 1)
+    assert percolates(m, 0, connectivity=8) and percolates(m, 1, connectivity=8)
+    # the closed cells of a checkerboard wind around both directions (8-connected)
+    assert contact_percolates(~m, 0) and contact_percolates(~m, 1)
+
+
+def test_diagonal_contact_line_does_not_block():
+    # A contact diagonal touches both ends along y but does not close on itself across the
+    # y seam, so fluid still crosses along x: contact_percolates tests winding, not touching.
+    c = np.eye(6, dtype=bool)
+    assert percolates(~c, 0) and not contact_percolates(c, 1)
+
+
+def test_label_matches_flood_fill_on_seams_and_corners():
+    rng = np.random.default_rng(3)
+    for _ in range(40):
+        m = rng.random((9, 7)) < 0.45
+        for periodic in [(True, True), (True, False), (False, True), (False, False)]:
+            for conn in (4, 8):
+                lab, n = label(m, periodic=periodic, connectivity=conn)
+                comps = _flood_components(m, periodic, conn)
+                assert n == len(comps)
+                assert set(np.unique(lab[m])) == set(range(1, n + 1))
+                assert not lab[~m].any()
+                for comp in comps:
+                    assert len({lab[c] for c in comp}) == 1
+
+
+@settings(max_examples=200, deadline=None)
+@given(arrays(np.bool_, st.tuples(st.integers(1, 9), st.integers(1, 9))), st.sampled_from([0, 1]))
+def test_spanning_matches_flood_fill(m, axis):
+    ref = _flood_spans(m, axis)
+    got = spanning_cells(m, axis)
+    assert {tuple(c) for c in np.argwhere(got)} == ref
+    assert percolates(m, axis) == bool(ref)
+
+
+@settings(max_examples=300, deadline=None)
+@given(arrays(np.bool_, st.tuples(st.integers(1, 12), st.integers(1, 12))), st.sampled_from([0, 1]))
+def test_duality_fluid_spans_iff_contact_does_not(contact, axis):
+    # Exact on the square grid: open 4-connected fluid crosses along `axis` exactly when no
+    # 8-connected contact cluster closes around the other direction.
+    assert percolates(~contact, axis) != contact_percolates(contact, 1 - axis)
+
+
+def test_duality_on_dense_random_masks_near_threshold():
+    rng = np.random.default_rng(1)
+    for _ in range(30):
+        c = rng.random((40, 30)) < 0.41  # site percolation of the 8-connected phase
+        for axis in (0, 1):
+            assert percolates(~c, axis) != contact_percolates(c, 1 - axis)
+
+
+# ---- bad input -----------------------------------------------------------------------
+
+@pytest.mark.parametrize("bad", [np.zeros((4, 4)), np.zeros((4, 4), dtype=int),
+                                 np.zeros(4, dtype=bool), np.zeros((2, 2, 2), dtype=bool),
+                                 np.zeros((0, 3), dtype=bool)])
+def test_mask_must_be_2d_boolean(bad):
+    with pytest.raises(InputError, match="mask"):
+        percolates(bad, 0)
+    with pytest.raises(InputError, match="mask"):
+        label(bad)
+    with pytest.raises(InputError, match="mask"):
+        contact_percolates(bad, 0)
+
+
+@pytest.mark.parametrize("axis", [2, -1, "x", None, True])
+def test_axis_must_be_0_or_1(axis):
+    m = np.ones((3, 3), dtype=bool)
+    with pytest.raises(InputError, match="axis"):
+        percolates(m, axis)
+    with pytest.raises(InputError, match="axis"):
+        spanning_cells(m, axis)
+
+
+def test_connectivity_must_be_4_or_8():
+    with pytest.raises(InputError, match="connectivity"):
+        label(np.ones((3, 3), dtype=bool), connectivity=6)

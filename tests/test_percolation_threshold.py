@@ -1,0 +1,209 @@
+"""Critical contact area a_c*: exact bearing sweep, bisection, elastic bracket (paper Sect.
+2.2 and 3.2; physics notes Sect. 4)."""
+
+from __future__ import annotations
+
+import os
+
+import numpy as np
+import pytest
+
+from roughflow.errors import InputError
+from roughflow.percolation import (
+    Threshold,
+    ThresholdNotBracketed,
+    critical_open_count,
+    percolates,
+    threshold,
+)
+from roughflow.surface import Surface, SurfaceSpec, generate
+
+os.environ.setdefault("ROUGHFLOW_FFT_THREADS", "1")
+
+
+def _surface(seed=0, ppl=2, l_over_lambda_r=None):
+    return generate(SurfaceSpec.from_sweep(points_per_lambda_s=ppl, seed=seed,
+                                           l_over_lambda_r=l_over_lambda_r))
+
+
+def _bearing_open(h, a):
+    """Open mask of the bearing model at contact area a (top round(a N) heights closed)."""
+    n_closed = int(round(a * h.size))
+    order = np.argsort(h, axis=None)
+    m = np.zeros(h.size, dtype=bool)
+    m[order[: h.size - n_closed]] = True
+    return m.reshape(h.shape)
+
+
+# ---- exact union-find sweep ----------------------------------------------------------
+
+def test_sweep_count_is_first_spanning_prefix():
+    rng = np.random.default_rng(5)
+    for _ in range(60):
+        shape = tuple(rng.integers(1, 12, 2))
+        order = rng.permutation(shape[0] * shape[1])
+        for axis in (0, 1):
+            k = critical_open_count(order, shape, axis)
+            m = np.zeros(order.size, dtype=bool)
+            m[order[:k]] = True
+            assert percolates(m.reshape(shape), axis)
+            m[order[k - 1]] = False
+            assert not percolates(m.reshape(shape), axis)
+
+
+def test_bearing_bracket_is_one_cell_and_correct():
+    rng = np.random.default_rng(2)
+    for _ in range(10):
+        h = rng.standard_normal((12, 9))
+        res = threshold(Surface.from_array(h), model="bearing")
+        for axis, t in res.items():
+            assert t.n_solves == 0 and t.bracketed
+            assert t.a_hi - t.a_lo == pytest.approx(1 / h.size)
+            assert percolates(_bearing_open(h, t.a_lo), axis)
+            assert not percolates(_bearing_open(h, t.a_hi), axis)
+
+
+def test_bearing_exact_sweep_agrees_with_plain_bisection():
+    # Plain bisection uses only contact.solve(model="bearing") and percolates(), so this is
+    # an independent check of the sweep; both brackets must overlap, their midpoints agree
+    # within tol.
+    s = _surface(seed=4)
+    exact = threshold(s, model="bearing")
+    bis = threshold(s, model="bearing", exact_bearing=False, strategy="bisect", tol=2e-3)
+    pred = threshold(s, model="bearing", exact_bearing=False, strategy="predict", tol=2e-3)
+    for axis in (0, 1):
+        for other in (bis[axis], pred[axis]):
+            assert other.a_hi - other.a_lo <= 2e-3
+            assert other.a_lo <= exact[axis].a_lo and exact[axis].a_hi <= other.a_hi
+            assert abs(other.a_c_star - exact[axis].a_c_star) <= 2e-3
+        # the predictor is exact for the bearing model: it needs far fewer evaluations
+        assert pred[axis].n_solves < bis[axis].n_solves
+
+
+def test_bearing_mean_threshold_is_one_half():
+    # Self-duality of level sets of an isotropic random field: a_c* = 1/2 (physics notes
+    # 3.4). 10 seeds at L/lambda_r = 16, 512^2 (2 points per lambda_s). Measured spread of a
+    # single-axis value 0.03 at this size (0.015 at L/lambda_r = 32); the tolerance is three
+    # standard errors of the seed means, computed from the data, and must itself be small.
+    vals = []
+    for seed in range(10):
+        r = threshold(_surface(seed=seed, l_over_lambda_r=16), model="bearing")
+        vals.append(0.5 * (r[0].a_c_star + r[1].a_c_star))
+    vals = np.array(vals)
+    se = vals.std(ddof=1) / np.sqrt(vals.size)
+    assert se < 0.015
+    assert abs(vals.mean() - 0.5) < 3 * se
+
+
+def test_bearing_ties_give_an_honest_bracket():
+    # Heights on a coarse ladder: whole levels open at once, so the threshold is only
+    # known to lie within a tie group; that must be reported, not a fabricated number.
+    s = _surface(seed=1)
+    h = np.round(s.heights / s.heights.std() * 2) / 2
+    flat = Surface.from_array(h)
+    with pytest.raises(ThresholdNotBracketed, match="share the critical height"):
+        threshold(flat, axis=0, model="bearing")
+    t = threshold(flat, axis=0, model="bearing", on_unbracketed="nan")
+    assert not t.bracketed and np.isnan(t.a_c_star)
+    assert t.a_hi - t.a_lo > 2e-3
+    # the bracket is still true: all cells below the tie level open -> no span, tie open -> span
+    level_lo = np.sort(h, axis=None)[int(round((1 - t.a_hi) * h.size))]
+    assert not percolates(h < level_lo, 0)
+    assert percolates(h <= level_lo, 0)
+
+
+# ---- elastic -------------------------------------------------------------------------
+
+@pytest.fixture(scope="module")
+def elastic_pair():
+    s = _surface(seed=3)
+    return s, threshold(s)
+
+
+def test_elastic_bracket_is_verified_by_fresh_cold_solves(elastic_pair):
+    from roughflow.contact import solve
+
+    s, res = elastic_pair
+    for axis, t in res.items():
+        assert isinstance(t, Threshold) and t.bracketed
+        assert 0 < t.a_hi - t.a_lo <= 2e-3
+        assert t.p_lo < t.p_hi
+        assert t.n_solves <= 12  # target of the issue for one (x, y) pair
+        lo, hi = solve(s, t.p_lo, tol=1e-8), solve(s, t.p_hi, tol=1e-8)
+        assert percolates(~lo.contact, axis) and not percolates(~hi.contact, axis)
+        # contact masks of the 1e-5 solves used by threshold() agree with 1e-8 solves
+        assert abs(lo.area_fraction - t.a_lo) <= 1e-4
+        assert abs(hi.area_fraction - t.a_hi) <= 1e-4
+
+
+def test_elastic_single_axis_and_bisection_agree_with_joint_call(elastic_pair):
+    s, res = elastic_pair
+    for axis in (0, 1):
+        one = threshold(s, axis, strategy="bisect", warm_start=False)
+        # both are brackets of the same sharp event in a(p): they must overlap
+        assert one.a_lo < res[axis].a_hi and res[axis].a_lo < one.a_hi
+        assert abs(one.a_c_star - res[axis].a_c_star) <= 2e-3
+
+
+def test_elastic_unbracketed_pressure_range():
+    s = _surface(seed=0, l_over_lambda_r=2)  # 64 x 64
+    with pytest.raises(ThresholdNotBracketed, match="still spans"):
+        threshold(s, 0, p_range=(1e-4, 1e-2))
+    t = threshold(s, 0, p_range=(1e-4, 1e-2), on_unbracketed="nan")
+    assert not t.bracketed and np.isnan(t.a_c_star) and np.isnan(t.a_hi)
+    assert t.a_lo < 0.05  # the highest pressure tried gave a small, spanning contact
+    with pytest.raises(ThresholdNotBracketed, match="does not span"):
+        threshold(s, 1, p_range=(3.0, 4.0))
+
+
+# ---- bad input -----------------------------------------------------------------------
+
+@pytest.mark.parametrize(("kwargs", "match"), [
+    ({"tol": 0.0}, "tol"), ({"tol": -1e-3}, "tol"), ({"tol": 1.5}, "tol"),
+    ({"axis": 2}, "axis"), ({"axis": "x"}, "axis"), ({"model": "plastic"}, "model"),
+    ({"strategy": "guess"}, "strategy"), ({"p_range": (0.5, 0.1)}, "p_range"),
+    ({"p_range": (-1.0, 1.0)}, "p_range"), ({"model": "adhesive"}, "adhesion"),
+    ({"on_unbracketed": "ignore"}, "on_unbracketed"), ({"max_solves": 1}, "max_solves"),
+])
+def test_bad_arguments_raise_before_work(kwargs, match):
+    s = Surface.from_array(np.random.default_rng(0).standard_normal((8, 8)))
+    with pytest.raises(InputError, match=match):
+        threshold(s, **kwargs)
+
+
+def test_surface_must_be_a_surface():
+    with pytest.raises(InputError, match="Surface"):
+        threshold(np.zeros((8, 8)), model="bearing")
+
+
+# ---- elastic a_c* against the paper --------------------------------------------------
+
+@pytest.mark.slow
+def test_elastic_mean_threshold_gamma_1():
+    # Paper: a_c* = 0.415 +- 0.01 in the large-system limit, "about 0.4" at its default
+    # size L/lambda_r = 4 (gamma = 1, H = 0.8, eps_f = 1/16); the issue asks for a mean in
+    # 0.40-0.43. CI affords 10 seeds at 256^2 (4 points per lambda_s). The single-axis
+    # spread is 0.03 at this size, so the 10-seed mean carries a standard error of about
+    # 0.006, computed from the data; the band is widened by two of them. (Larger runs in
+    # docs/percolation.md: 0.432 +- 0.006 at 512^2, 0.436 +- 0.005 at L/lambda_r = 8.)
+    # The same surfaces in the bearing model must sit clearly higher (paper: 0.4 vs 0.5).
+    el, be, co = [], [], []
+    for seed in range(10):
+        s = _surface(seed=seed, ppl=4)
+        r = threshold(s)
+        b = threshold(s, model="bearing")
+        assert r[0].n_solves <= 12
+        el.append(0.5 * (r[0].a_c_star + r[1].a_c_star))
+        co.append(0.5 * (r[0].a_c_star_corrected + r[1].a_c_star_corrected))
+        be.append(0.5 * (b[0].a_c_star + b[1].a_c_star))
+        assert b[0].a_c_star_corrected == b[0].a_c_star  # level-set cell counts are unbiased
+    el, be, co = np.array(el), np.array(be), np.array(co)
+    se = el.std(ddof=1) / np.sqrt(el.size)
+    assert se < 0.012
+    assert 0.40 - 2 * se <= el.mean() <= 0.43 + 2 * se
+    assert be.mean() - el.mean() > 0.04
+    # The perimeter correction removes the first-order grid excess of the contact area:
+    # docs/accuracy.md measured +0.032 raw and +0.004 +- 0.006 corrected at 4 points per
+    # lambda_s, so the shift must be 0.015-0.05 and the corrected mean lie in the band.
+    assert 0.015 < (el - co).mean() < 0.05
+    assert 0.40 - 2 * se <= co.mean() <= 0.43 + 2 * se

@@ -1,0 +1,121 @@
+"""``roughflow theory``: both forms, netCDF output, clean errors."""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+import xarray as xr
+
+from roughflow.cli import main
+from roughflow.io import grid_coords, write_dataset
+from roughflow.surface import SurfaceSpec, generate
+from roughflow.theory import bruggeman, bruggeman_anisotropic, closed_form, predict_conductance
+
+SPEC = SurfaceSpec.from_sweep(gamma=2.0, points_per_lambda_s=2)
+
+
+def _gap_file(path, levels=(0.2, 0.35)):
+    """Bearing-model gaps of one surface at two contact fractions, dims (pressure, x, y)."""
+    s = generate(SPEC)
+    gaps = np.stack([np.maximum(s.heights - np.quantile(s.heights, a), 0.0) for a in levels])
+    ds = xr.Dataset(
+        {"gap": (("pressure", "x", "y"), gaps, {"units": "L", "long_name": "gap"})},
+        coords={"pressure": ("pressure", [0.1, 0.2], {"units": "E* gbar",
+                                                        "long_name": "pressure"}),
+                **grid_coords(SPEC.nx, SPEC.ny, SPEC.lx, SPEC.ly)},
+        attrs={"lx": SPEC.lx, "ly": SPEC.ly, "spec_gamma": SPEC.gamma, "model": "bearing"},
+    )
+    write_dataset(ds, path)
+    return gaps
+
+
+def test_gap_file(tmp_path, capsys):
+    gaps = _gap_file(tmp_path / "r.nc")
+    out = tmp_path / "t.nc"
+    assert main(["theory", str(tmp_path / "r.nc"), "--a-c-star", "0.5", "-o", str(out)]) == 0
+    assert "closed_form" in capsys.readouterr().out
+    with xr.open_dataset(out) as ds:
+        for name in ds.variables:
+            assert ds[name].attrs.get("units") and ds[name].attrs.get("long_name"), name
+        assert ds.attrs["kind"] == "bearing" and ds.attrs["gamma"] == 2.0
+        assert ds["sigma_bruggeman"].dims == ("pressure",)
+        for i, u in enumerate(gaps):
+            sig = u**3 / 12
+            assert ds["sigma_bruggeman"][i] == pytest.approx(
+                bruggeman(sig, a_c_star=0.5).sigma, rel=1e-12)
+            cor = bruggeman_anisotropic(sig, a_c_star=0.5, gamma=2.0)
+            assert ds["sigma_x_corrected"][i] == pytest.approx(cor.sigma_x, rel=1e-12)
+            assert ds["sigma_closed_form"][i] == pytest.approx(closed_form(
+                u.mean(), (u == 0).mean(), a_c_star=0.5, kind="bearing"), rel=1e-12)
+        # easy direction x for gamma > 1
+        assert np.all(ds["sigma_x_corrected"] > ds["sigma_y_corrected"])
+
+
+def test_gap_file_conductivity_peklenik(tmp_path):
+    _gap_file(tmp_path / "r.nc")
+    out = tmp_path / "t.nc"
+    main(["theory", str(tmp_path / "r.nc"), "--peklenik", "conductivity", "-o", str(out)])
+    with xr.open_dataset(out) as ds:
+        # bearing gaps inherit the height anisotropy (gamma = 2) up to sample scatter
+        assert np.all(np.abs(ds["peklenik"].values / 2.0 - 1) < 0.3)
+
+
+def test_spec_form(tmp_path, capsys):
+    out = tmp_path / "p.nc"
+    main(["theory", "--points-per-lambda-s", "2", "--pressures", "0.01,0.1", "-o", str(out)])
+    assert "mean_gap" in capsys.readouterr().out
+    ref = predict_conductance(SurfaceSpec.from_sweep(points_per_lambda_s=2), [0.01, 0.1],
+                              a_c_star=0.415)
+    with xr.open_dataset(out) as ds:
+        np.testing.assert_allclose(ds["mean_gap"].values, ref.mean_gap, rtol=1e-12)
+        np.testing.assert_allclose(ds["sigma"].values, ref.sigma, rtol=1e-12)
+        assert ds["pressure"].attrs["units"] == "E* gbar"
+
+
+def test_surface_file_form(tmp_path, capsys):
+    surf = tmp_path / "s.nc"
+    main(["surface", "--points-per-lambda-s", "2", "-o", str(surf)])
+    main(["theory", str(surf), "--pressures", "0.05"])
+    line = capsys.readouterr().out.strip().splitlines()[-1].split()
+    ref = predict_conductance(SurfaceSpec.from_sweep(points_per_lambda_s=2), [0.05],
+                              a_c_star=0.415)
+    assert float(line[2]) == pytest.approx(ref.mean_gap[0], rel=1e-4)
+
+
+@pytest.mark.parametrize("args,msg", [
+    (["--a-c-star", "1.5"], "a_c_star"),
+    (["--pressures", "0.1,-1"], "pressure"),
+    (["--pressures", "a,b"], "pressures"),
+    (["/nonexistent/file.nc"], "does not exist"),
+])
+def test_bad_input_exits_2(args, msg, capsys):
+    with pytest.raises(SystemExit) as exc:
+        main(["theory", "--points-per-lambda-s", "2", *args])
+    assert exc.value.code == 2
+    assert msg in capsys.readouterr().err
+
+
+def test_negative_gap_file_exits_2(tmp_path, capsys):
+    ds = xr.Dataset({"gap": (("x", "y"), -np.ones((8, 8)))})
+    write_dataset(ds, tmp_path / "bad.nc")
+    with pytest.raises(SystemExit) as exc:
+        main(["theory", str(tmp_path / "bad.nc")])
+    assert exc.value.code == 2
+    assert "negative" in capsys.readouterr().err
+
+
+def test_flow_file_values_are_carried(tmp_path, capsys):
+    # a flow file for a single gap field: its sigma_x, sigma_y appear next to the theory
+    s = generate(SPEC)
+    gap = np.maximum(s.heights - np.quantile(s.heights, 0.2), 0.0)
+    write_dataset(xr.Dataset({"gap": (("x", "y"), gap)}, attrs={"lx": 1.0, "ly": 1.0}),
+                  tmp_path / "c.nc")
+    write_dataset(xr.Dataset({"sigma_x": ((), 1.5e-9), "sigma_y": ((), 2.5e-10)}),
+                  tmp_path / "f.nc")
+    out = tmp_path / "t.nc"
+    main(["theory", str(tmp_path / "c.nc"), "--flow", str(tmp_path / "f.nc"), "-o", str(out)])
+    assert "sx_reynolds" in capsys.readouterr().out
+    with xr.open_dataset(out) as ds:
+        assert float(ds["sigma_x_reynolds"][0]) == 1.5e-9
+        assert float(ds["sigma_y_reynolds"][0]) == 2.5e-10
+        assert ds["sigma_x_reynolds"].attrs["units"]
