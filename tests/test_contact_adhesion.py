@@ -74,3 +74,19 @@ def test_adhesive_solve_pulls_surfaces_together():
     assert adh.mean_gap < rep.mean_gap
     assert adh.contact_pressure.mean() == pytest.approx(0.05, rel=1e-3)
     assert adh.contact_pressure.min() < 0  # tension in the adhesive necks
+
+
+def test_hard_wall_adhesion_keeps_gap_nonnegative_and_adds_contact():
+    # Hard-wall repulsion (kappa -> infinity): contact is gap == 0 exactly, the gap never
+    # goes negative, attraction adds contact at equal load and the load is carried.
+    from roughflow.contact import solve
+
+    s = generate(SurfaceSpec.from_sweep(points_per_lambda_s=4, seed=0))
+    ad = Adhesion(surface_energy=4e-4, range=3 * s.dx, repulsion="hard")
+    rep = solve(s, 0.05)
+    adh = solve(s, 0.05, model="adhesive", adhesion=ad)
+    assert adh.gap.min() >= 0 and np.all(adh.gap[adh.contact] == 0)
+    assert adh.area_fraction > rep.area_fraction + 0.01
+    assert adh.contact_pressure.mean() == pytest.approx(0.05, rel=1e-3)
+    with pytest.raises(InputError, match="repulsion"):
+        Adhesion(surface_energy=1e-4, range=1e-3, repulsion="soft")

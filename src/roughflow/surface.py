@@ -75,7 +75,7 @@ class SurfaceSpec:
         # Shortest wavelength kept along each axis: the cutoff ellipse q_P = q_s.
         shortest = (("x", self.lambda_s * sg, self.dx), ("y", self.lambda_s / sg, self.dy))
         for axis, lam, d in shortest:
-            if lam < 2 * d * (1 - 1e-12):
+            if lam < 2 * d * (1 - 1e-9):  # from_sweep rounds with 1e-9 slack
                 raise InputError(
                     f"lambda_s={self.lambda_s!r} is under two grid spacings along {axis}: the "
                     f"shortest wavelength there is {lam:.4g} but the spacing is {d:.4g} "

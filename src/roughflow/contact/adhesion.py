@@ -5,6 +5,14 @@ Potential per unit area of the gap g (surface energy gamma_s, range rho):
     v(g) = -(gamma_s/2) (1 + cos(pi g / rho))        for 0 <= g <= rho
     v(g) = 0                                         for g > rho
 Maximum tension pi gamma_s / (2 rho) at g = rho/2. Units: gamma_s in E* L, rho in L.
+
+The harmonic branch is the default (as in the Mueser group's code); ``repulsion="hard"``
+replaces it by a hard wall (gap >= 0), the kappa -> infinity limit. In the paper's case kappa is ~14x the largest elastic
+stiffness of the grid, so the wall is nearly hard anyway; on affordable grids, where the
+range must be a few grid spacings, kappa = pi^2 gamma_s / (2 rho^2) becomes softer than the
+elastic grid stiffness and cells sink into the wall, inflating the contact area (measured:
+a_c at fixed load *grew* when gamma_s fell, at rho = 2 dx, 256^2). With the hard wall,
+contact is gap = 0 exactly as in the elastic model.
 """
 
 from __future__ import annotations
@@ -21,14 +29,20 @@ from .elastic import full_contact_energy
 
 @dataclass(frozen=True)
 class Adhesion:
-    """Surface energy ``surface_energy`` (gamma_s, units E* L) and range ``range`` (rho, L)."""
+    """Surface energy ``surface_energy`` (gamma_s, units E* L), range ``range`` (rho, L) and
+    the repulsion: ``"harmonic"`` (default, kappa above) or a ``"hard"`` wall."""
 
     surface_energy: float
     range: float
+    repulsion: str = "harmonic"
 
     def __post_init__(self) -> None:
         require_positive("surface_energy", self.surface_energy)
         require_positive("range", self.range)
+        if self.repulsion not in ("hard", "harmonic"):
+            from roughflow.errors import InputError
+
+            raise InputError(f"repulsion must be 'hard' or 'harmonic', got {self.repulsion!r}")
 
     @property
     def kappa(self) -> float:

@@ -19,7 +19,8 @@ has f = 0 off the active set and f <= 0 on it: exactly the contact (KKT) conditi
 GFMD and CG solve the same discrete problem. Plain projection of a mass-weighted step
 (no active set) spuriously detaches points and stalls FIRE (measured: dt -> 0).
 Cost: two FFT pairs per step (force, preconditioning).
-Adhesive model: the interaction of ``adhesion.Adhesion`` acts on the gap; no wall.
+Adhesive model: the cosine attraction of ``adhesion.Adhesion`` acts on the gap; with
+``repulsion="hard"`` the same active-set wall as above, with ``"harmonic"`` no wall.
 
 Residual (checked every ``check_every`` steps, one more inverse FFT): max |G f_eff| / rms(h),
 the largest displacement the unbalanced force would still cause, in units of the rms
@@ -94,20 +95,21 @@ def gfmd(
     hscale = math.sqrt(dot(h, h) / size) or 1.0
     # masses m(q) = sqrt((z k_min)^2 + k^2) (+ kappa with adhesion); kept as 1/m
     inv_mass = np.hypot(Z_MASS * kmin, neg_k)
-    if adhesion is not None:
+    soft = adhesion is not None and adhesion.repulsion == "harmonic"
+    if soft:
         # the repulsion adds a local stiffness kappa: keep the contact points' frequency ~ 1
         inv_mass += ADHESIVE_MASS * adhesion.kappa
-    dt_max = DT_MAX if adhesion is None else ADHESIVE_DT0
+    dt_max = ADHESIVE_DT0 if soft else DT_MAX
     np.reciprocal(inv_mass, out=inv_mass)
     neg_k *= -1.0
 
     if u0 is not None:
         u = np.asarray(u0, dtype=np.float64).ravel() - h0
-    elif adhesion is None:
+    elif not soft:
         u = np.full(size, h.max())
     else:
         u = np.full(size, h.max() + 0.5 * adhesion.range)  # top point at maximum tension
-    if adhesion is None:
+    if not soft:
         np.maximum(u, h, out=u)
     v = np.zeros(size)
     f = np.empty(size)
@@ -123,7 +125,8 @@ def gfmd(
     if adhesion is None and load > 0:
         load_scale = min(load_scale, load)
     eps = 1e-12 * hscale  # round-off of the FFT round trip: points this close touch
-    h_clip = h if adhesion is None else np.full(size, -np.inf)
+    h_clip = np.full(size, -np.inf) if soft else h
+    tension = np.zeros(size)
 
     def forces(check: bool) -> float:
         """Fill f (force off the active set), sigma, active and a = M^-1 f; with ``check``
@@ -133,6 +136,11 @@ def gfmd(
         fel = plan.inverse(ft).ravel()
         if adhesion is None:
             wall_forces(fel, u, h, eps, load, f, sigma, active)
+        elif not soft:  # hard wall plus cosine tension (<= 0) on the free points
+            tension[...] = adhesion.pressure(np.maximum(u - h, 0.0))
+            np.add(fel, tension, out=fel)
+            wall_forces(fel, u, h, eps, load, f, sigma, active)
+            np.add(sigma, tension, out=sigma)
         else:
             sigma[...] = adhesion.pressure(u - h)
             np.add(fel, sigma - load, out=f)
@@ -146,7 +154,7 @@ def gfmd(
             return math.inf
         return max(float(np.abs(plan.inverse(ftc)).max()) / hscale, imbalance)
 
-    dt, alpha, n_pos = (DT0 if adhesion is None else ADHESIVE_DT0), ALPHA0, 0
+    dt, alpha, n_pos = (ADHESIVE_DT0 if soft else DT0), ALPHA0, 0
     it = 0
     res = forces(True)
     while res > tol and it < max_iter:
@@ -173,7 +181,7 @@ def gfmd(
             res = r
     separation = float(u.mean())
     g = np.subtract(u, h, out=f).reshape(shape)
-    if adhesion is None:
+    if not soft:
         contact = active.reshape(shape) | (g <= eps)
         g[contact] = 0.0
     else:

@@ -1,0 +1,32 @@
+# roughflow sweep workflow: every study of Wang & Mueser (2021) from one config.
+#   snakemake --cores all                                   # default config (reduced sizes)
+#   snakemake --cores all --configfile config/paper.yaml    # paper sizes (see README: cluster)
+#   snakemake results/threshold_vs_gamma/figure.png         # one study only
+# The rules are in workflow/rules/*.smk; each calls one `roughflow` command.
+
+from snakemake.utils import min_version
+
+min_version("8.0")
+
+
+# The default config unless one is given with --configfile (a --configfile would
+# otherwise only extend the default, and its studies would leak into the run).
+if "studies" not in config:
+
+    configfile: "config/config.yaml"
+
+
+
+report: "workflow/report/workflow.rst"
+
+
+include: "workflow/rules/common.smk"
+include: "workflow/rules/scenes.smk"
+include: "workflow/rules/studies.smk"
+include: "workflow/rules/accuracy.smk"
+
+
+rule all:
+    input:
+        study_targets(),
+    default_target: True

@@ -1,0 +1,24 @@
+"""``roughflow aggregate``: combine per-job datasets into one study dataset."""
+
+from __future__ import annotations
+
+import argparse
+
+from ._common import add_output
+
+
+def register(sub: argparse._SubParsersAction) -> None:
+    p = sub.add_parser(
+        "aggregate", help="combine per-job netCDF files into one study dataset",
+        description="Combine per-job datasets by their coordinates (outer join): missing jobs "
+                    "stay NaN, integer variables keep the fill value -1.")
+    p.add_argument("inputs", nargs="+", metavar="JOB.nc", help="per-job datasets")
+    p.add_argument("--study", default=None, help="study name stored as an attribute")
+    add_output(p)
+    p.set_defaults(func=run)
+
+
+def run(args: argparse.Namespace) -> None:
+    from roughflow.aggregate import aggregate
+
+    aggregate(args.inputs, args.output, study=args.study)

@@ -1,0 +1,32 @@
+"""``roughflow figure``: draw a study's figure (PNG and PDF) from its dataset."""
+
+from __future__ import annotations
+
+import argparse
+
+from ._common import add_output
+
+STUDIES = ("channels", "threshold_vs_gamma", "threshold_vs_size", "threshold_vs_hurst",
+           "flow_isotropic", "flow_anisotropic")
+
+
+def register(sub: argparse._SubParsersAction) -> None:
+    p = sub.add_parser(
+        "figure", help="draw a study's figure (PNG + PDF) from its aggregated dataset",
+        description="Draw the paper figure of a study from its aggregated dataset; writes "
+                    "the PNG given by -o and a PDF next to it, and prints the caption.")
+    p.add_argument("study", choices=STUDIES, help="study name")
+    p.add_argument("dataset", metavar="DATASET.nc", help="aggregated study dataset")
+    p.add_argument("--fit", default=None, metavar="FIT.nc",
+                   help="fit results (threshold_vs_size)")
+    p.add_argument("--caption", action="store_true", help="print the caption to stdout")
+    add_output(p)
+    p.set_defaults(func=run)
+
+
+def run(args: argparse.Namespace) -> None:
+    from roughflow.figures import make_figure
+
+    caption = make_figure(args.study, args.dataset, args.output, fit=args.fit)
+    if args.caption:
+        print(caption)

@@ -1,0 +1,42 @@
+"""Helpers of the conductance figures (Fig. 5-7)."""
+
+from __future__ import annotations
+
+import numpy as np
+import xarray as xr
+
+
+def ladder(ds: xr.Dataset, model: str) -> xr.Dataset:
+    """The model's ladder with length-1 parameter dimensions dropped."""
+    sub = ds.sel(model=model)
+    for dim in ("gamma", "hurst", "eps_t", "eps_f"):
+        if dim in sub.dims:
+            # models may run at different sizes (series): keep the entries with data
+            other = [d for d in sub["area_fraction"].dims if d != dim]
+            ran = sub["area_fraction"].notnull().any(other).values
+            if ran.sum() != 1 and sub.sizes[dim] != 1:
+                raise ValueError(f"the flow figures expect one {dim} per model, got "
+                                 f"{sub[dim].values[ran]}")
+            sub = sub.isel({dim: int(np.argmax(ran)) if ran.any() else 0})
+    return sub
+
+
+def sigma_ref(sub: xr.Dataset) -> float:
+    """Full Reynolds conductance at a_c -> 0+, averaged over seeds and directions."""
+    return float(sub["sigma_ref"].mean(skipna=True))
+
+
+def curve(a_c: xr.DataArray, y: xr.DataArray) -> tuple[np.ndarray, np.ndarray]:
+    """Seed-averaged (a_c, y) along the ladder, positive y only (for log axes)."""
+    x = a_c.mean("seed", skipna=True).values
+    v = y.mean("seed", skipna=True).values
+    ok = np.isfinite(x) & np.isfinite(v) & (v > 0)
+    return x[ok], v[ok]
+
+
+def points(a_c: xr.DataArray, y: xr.DataArray) -> tuple[np.ndarray, np.ndarray]:
+    """Every seed's (a_c, y), positive y only."""
+    x, v = np.broadcast_arrays(a_c.values, y.values)
+    x, v = x.ravel(), v.ravel()
+    ok = np.isfinite(x) & np.isfinite(v) & (v > 0)
+    return x[ok], v[ok]

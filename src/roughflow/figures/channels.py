@@ -1,0 +1,47 @@
+"""Fig. 1: height map and fluid channels of an isotropic and a stretched surface."""
+
+from __future__ import annotations
+
+import matplotlib.pyplot as plt
+import numpy as np
+import xarray as xr
+from matplotlib.colors import ListedColormap
+
+CAPTION = (
+    "Fluid channels of an isotropic and an anisotropic surface (paper Fig. 1). "
+    "(a) Height of the isotropic surface on its 0.5 x 2 cell (gamma = 1), which is also the "
+    "anisotropic gamma = 4 unit square after stretching x by 2 and compressing y by 2, in "
+    "units of the maximum height. (b) Isotropic and (c) anisotropic elastic contact at "
+    "a_c ~ 0.4: contact in orange, fluid channels percolating from left to right (along x) "
+    "in dark blue, other non-contact in light blue. Both maps are drawn on the same square "
+    "frame, so x and y are not to scale for the isotropic cell."
+)
+
+PHASE_COLORS = ListedColormap(["#f28e2b", "#1f3b99", "#a6cee3"])
+
+
+def draw(ds: xr.Dataset, fit=None) -> plt.Figure:
+    fig, axes = plt.subplots(1, 3, figsize=(12, 4.6), constrained_layout=True)
+    h = ds["heights_iso"].values
+    im = axes[0].imshow((h / np.abs(h).max()).T, origin="lower", cmap="viridis",
+                        aspect="auto", extent=(0, 1, 0, 1))
+    fig.colorbar(im, ax=axes[0], shrink=0.8, label="h / max|h|")
+    axes[0].set_title(f"(a) height, {ds.attrs['iso_lx']:g} x {ds.attrs['iso_ly']:g} "
+                      f"(gamma = 1) = 1 x 1 (gamma = {ds.attrs['gamma']:g})", fontsize=9)
+    for ax, name, label in ((axes[1], "iso", "(b) isotropic"), (axes[2], "aniso",
+                                                                "(c) anisotropic")):
+        a = ds.attrs
+        ax.imshow(ds[f"phase_{name}"].values.T, origin="lower", cmap=PHASE_COLORS, vmin=-0.5,
+                  vmax=2.5, aspect="auto", extent=(0, 1, 0, 1), interpolation="nearest")
+        perc = "percolates" if a[f"{name}_fluid_percolates_x"] else "does not percolate"
+        ax.set_title(f"{label}: gamma = {a[f'{name}_gamma']:g}, "
+                     f"{a[f'{name}_lx']:g} x {a[f'{name}_ly']:g} cell\n"
+                     f"a_c = {a[f'{name}_area_fraction']:.3f}; fluid along x {perc}",
+                     fontsize=9)
+    for ax in axes:
+        ax.set_xlabel("x / Lx")
+        ax.set_ylabel("y / Ly")
+    handles = [plt.Rectangle((0, 0), 1, 1, color=c) for c in PHASE_COLORS.colors]
+    fig.legend(handles, ["contact", "fluid percolating along x", "other fluid"],
+               loc="outside lower center", ncol=3, fontsize=8, frameon=False)
+    return fig

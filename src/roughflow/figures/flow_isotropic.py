@@ -1,0 +1,54 @@
+"""Fig. 5: conductance versus contact area, isotropic, three contact models."""
+
+from __future__ import annotations
+
+import matplotlib.pyplot as plt
+import numpy as np
+import xarray as xr
+
+from ._flow import curve, ladder, points, sigma_ref
+
+CAPTION = (
+    "Fluid-flow conductance sigma versus relative contact area a_c (paper Fig. 5), "
+    "normalised by sigma_ref, the full Reynolds conductance at a_c -> 0+: full Reynolds "
+    "(circles, every seed, mean of x and y), full Bruggeman effective-medium theory (solid "
+    "lines) and the closed forms of Eq. 16 (dashed lines) for (a) elastic, non-adhesive "
+    "contact, (b) short-range adhesive contact, (c) the bearing-area model, as far as the "
+    "config contains them. In (a) a dotted line shows the full Bruggeman treatment with "
+    "a_c* = 0.5; the other lines use the a_c* of the config (paper: 0.4 for (a), (b))."
+)
+TITLES = {"elastic": "elastic, non-adhesive", "adhesive": "short-range adhesion",
+          "bearing": "bearing-area model"}
+
+
+def draw(ds: xr.Dataset, fit=None) -> plt.Figure:
+    models = [m for m in ("elastic", "adhesive", "bearing") if m in ds["model"].values]
+    fig, axes = plt.subplots(1, len(models), figsize=(4.6 * len(models), 4.2),
+                             constrained_layout=True, squeeze=False)
+    for ax, model, tag in zip(axes[0], models, "abc", strict=False):
+        sub = ladder(ds, model)
+        ref = sigma_ref(sub)
+        a = sub["area_fraction"]
+        rey = sub["sigma"].mean("axis")
+        x, y = points(a, rey / ref)
+        ax.plot(x, y, "o", mfc="white", color="k", label="full Reynolds")
+        emt = sub["sigma_emt"]
+        x, y = curve(a, emt.sel(emt="isotropic").isel(axis=0) / ref)
+        ax.plot(x, y, "-", color="tab:blue", label="full Bruggeman")
+        x, y = curve(a, sub["sigma_closed_form"] / ref)
+        ax.plot(x, y, "--", color="tab:green", label="closed form, Eq. 16")
+        alt = float(sub.attrs.get("a_c_star_alt", ds.attrs.get("a_c_star_alt", np.nan)))
+        if model == "elastic" and np.isfinite(alt):
+            x, y = curve(a, emt.sel(emt="isotropic_alt").isel(axis=0) / ref)
+            ax.plot(x, y, ":", color="tab:purple", label=f"full Bruggeman, a_c* = {alt:g}")
+        if not (np.nanmax(a.values, initial=0.0) > 0):
+            ax.text(0.5, 0.5, "no contact area in the data:\nsee the job log", ha="center",
+                    va="center", transform=ax.transAxes, color="tab:red")
+        ax.set_yscale("log")
+        ax.set_xlim(0, max(0.5, float(np.nanmax(a.values)) + 0.05))
+        ax.set_xlabel("relative contact area a_c")
+        ax.set_ylabel("sigma / sigma_ref")
+        ax.set_title(f"({tag}) {TITLES[model]}", fontsize=10)
+        ax.grid(alpha=0.3, which="both")
+        ax.legend(fontsize=7)
+    return fig

@@ -1,0 +1,41 @@
+"""Fig. 4: a_c* versus gamma for two Hurst exponents."""
+
+from __future__ import annotations
+
+import matplotlib.pyplot as plt
+import numpy as np
+import xarray as xr
+
+from roughflow.scenes._data import threshold_values
+
+from ._threshold import format_gamma_axis, plot_vs_gamma
+
+CAPTION = (
+    "Perimeter-corrected a_c* (first-order grid bias of the contact area removed; "
+    "docs/accuracy.md). "
+    "Critical contact areas a_c* along x (stretching, blue) and y (contraction, red) versus "
+    "the Peklenik number gamma for the Hurst exponents of the config (paper Fig. 4: "
+    "H = 0.3 full triangles, H = 0.8 open circles), elastic contact, eps_f = 1/16, "
+    "L/lambda_r = 4 max(sqrt(gamma), 1/sqrt(gamma)); seed means with standard errors."
+)
+
+
+def draw(ds: xr.Dataset, fit=None) -> plt.Figure:
+    fig, ax = plt.subplots(figsize=(5.5, 4.2), constrained_layout=True)
+    a = threshold_values(ds)
+    for dim in ("model", "eps_f"):
+        if dim in a.dims and a.sizes[dim] == 1:
+            a = a.isel({dim: 0})
+    if "eps_t" in a.dims:
+        a = a.max("eps_t", skipna=True) if a.sizes["eps_t"] > 1 else a.isel(eps_t=0)
+    hursts = sorted(a["hurst"].values)
+    for h in hursts:
+        sub = a.sel(hurst=h)
+        if not np.isfinite(sub.values).any():
+            continue
+        low = h == hursts[0] and len(hursts) > 1
+        plot_vs_gamma(ax, sub, marker="^" if low else "o", filled=low, label=f"H = {h:g}",
+                      offset=1.02 if low else 1.0)
+    format_gamma_axis(ax, a["gamma"].values)
+    ax.legend(fontsize=7)
+    return fig

@@ -1,0 +1,270 @@
+"""Finite-size scaling of the percolation threshold (paper Fig. 3).
+
+    a_c*(eps) = a_c*(0) + A eps^(1/nu)
+
+with nu = 4/3 (random-bond percolation) fixed or free; per direction (easy: stretching,
+hard: contraction) with its own a_c*(0), or jointly with a shared a_c*(0) and one
+amplitude per direction (the corrections have opposite signs). Fits are least squares on
+the seed means at each system size; uncertainties come from a bootstrap over seeds
+(resampling whole seeds with replacement keeps the correlations between sizes and
+directions of one surface family).
+"""
+
+from __future__ import annotations
+
+import logging
+from dataclasses import dataclass, field
+
+import numpy as np
+import xarray as xr
+from scipy.optimize import least_squares
+
+from roughflow.errors import InputError
+
+log = logging.getLogger(__name__)
+
+NU_PERCOLATION = 4.0 / 3.0
+NU_BOUNDS = (0.3, 6.0)
+
+
+def scaling(eps, a_star: float, amplitude: float, nu: float = NU_PERCOLATION) -> np.ndarray:
+    """a_c*(eps) = a_star + amplitude eps^(1/nu)."""
+    return a_star + amplitude * np.asarray(eps, dtype=float) ** (1.0 / nu)
+
+
+@dataclass(frozen=True)
+class ScalingFit:
+    """Result of one finite-size-scaling fit.
+
+    ``amplitude`` maps direction name -> A; ``*_err`` are bootstrap standard deviations
+    (NaN without bootstrap); ``nu_free`` tells whether nu was fitted.
+    """
+
+    a_star: float
+    amplitude: dict[str, float]
+    nu: float
+    nu_free: bool
+    rms_residual: float
+    n_points: int
+    a_star_err: float = float("nan")
+    amplitude_err: dict[str, float] = field(default_factory=dict)
+    nu_err: float = float("nan")
+    n_boot: int = 0
+
+    @property
+    def nu_at_bound(self) -> bool:
+        """A free nu stuck at ``NU_BOUNDS``: the data do not determine it."""
+        return self.nu_free and any(abs(self.nu - b) < 1e-6 * b for b in NU_BOUNDS)
+
+
+def _clean(eps, a) -> tuple[np.ndarray, np.ndarray]:
+    eps = np.asarray(eps, dtype=float).ravel()
+    a = np.asarray(a, dtype=float).ravel()
+    if eps.shape != a.shape:
+        raise InputError(f"eps and a_c* need the same shape, got {eps.shape} and {a.shape}")
+    ok = np.isfinite(eps) & np.isfinite(a)
+    if np.any(eps[ok] <= 0):
+        raise InputError(f"eps must be positive, got {eps[ok].min()!r}")
+    return eps[ok], a[ok]
+
+
+def fit_scaling(data: dict[str, tuple], *, nu: float | None = NU_PERCOLATION) -> ScalingFit:
+    """Joint fit with a shared a_c*(0): ``data`` maps direction -> (eps, a_c*).
+
+    One direction gives the separate fit. ``nu=None`` fits nu as well (bounded to
+    ``NU_BOUNDS``). Needs more points than parameters.
+    """
+    names = list(data)
+    cleaned = {k: _clean(*data[k]) for k in names}
+    n = sum(len(e) for e, _ in cleaned.values())
+    n_par = 1 + len(names) + (nu is None)
+    if n < n_par:
+        raise InputError(f"{n} points cannot fix {n_par} parameters ({', '.join(names)})")
+
+    def unpack(x):
+        return x[0], x[1:1 + len(names)], (x[-1] if nu is None else nu)
+
+    def resid(x):
+        a0, amps, v = unpack(x)
+        return np.concatenate([scaling(e, a0, amp, v) - a
+                               for (e, a), amp in zip(cleaned.values(), amps, strict=True)])
+
+    all_a = np.concatenate([a for _, a in cleaned.values()])
+    x0 = [float(np.mean(all_a))] + [0.0] * len(names) + ([NU_PERCOLATION] if nu is None else [])
+    lo = [-np.inf] * (1 + len(names)) + ([NU_BOUNDS[0]] if nu is None else [])
+    hi = [np.inf] * (1 + len(names)) + ([NU_BOUNDS[1]] if nu is None else [])
+    sol = least_squares(resid, x0, bounds=(lo, hi))
+    a0, amps, v = unpack(sol.x)
+    r = resid(sol.x)
+    amplitude = dict(zip(names, map(float, amps), strict=True))
+    return ScalingFit(a_star=float(a0), amplitude=amplitude, nu=float(v), nu_free=nu is None,
+                      rms_residual=float(np.sqrt(np.mean(r**2))), n_points=n)
+
+
+def bootstrap_fit(eps: dict[str, np.ndarray], a_seed: dict[str, np.ndarray], *,
+                  nu: float | None = NU_PERCOLATION, n_boot: int = 200,
+                  rng: np.random.Generator | int | None = 0) -> ScalingFit:
+    """Fit the seed means, with bootstrap errors over seeds.
+
+    ``eps[d]`` has shape (n_points,), ``a_seed[d]`` shape (n_seeds, n_points) with NaN
+    where a seed was not run; the same seed index is resampled in every direction.
+    """
+    rng = np.random.default_rng(rng)
+    names = list(eps)
+    n_seeds = {np.asarray(a_seed[d]).shape[0] for d in names}
+    if len(n_seeds) != 1:
+        raise InputError(f"every direction needs the same seeds, got {n_seeds}")
+    ns = n_seeds.pop()
+
+    def means(idx):
+        with np.errstate(invalid="ignore"), _quiet():
+            return {d: (eps[d], np.nanmean(np.asarray(a_seed[d], float)[idx], axis=0))
+                    for d in names}
+
+    best = fit_scaling(means(np.arange(ns)), nu=nu)
+    if n_boot <= 0 or ns < 2:
+        return best
+    samples = []
+    for _ in range(n_boot):
+        idx = rng.integers(0, ns, ns)
+        try:
+            f = fit_scaling(means(idx), nu=nu)
+        except InputError:
+            continue
+        samples.append([f.a_star, *[f.amplitude[d] for d in names], f.nu])
+    s = np.asarray(samples)
+    if len(s) < 2:
+        return best
+    err = s.std(axis=0, ddof=1)
+    return ScalingFit(
+        a_star=best.a_star, amplitude=best.amplitude, nu=best.nu, nu_free=best.nu_free,
+        rms_residual=best.rms_residual, n_points=best.n_points, a_star_err=float(err[0]),
+        amplitude_err={d: float(e) for d, e in zip(names, err[1:-1], strict=True)},
+        nu_err=float(err[-1]) if nu is None else float("nan"), n_boot=len(s),
+    )
+
+
+class _quiet:
+    """Silence numpy's 'mean of empty slice' warnings inside the bootstrap."""
+
+    def __enter__(self):
+        import warnings
+
+        self._w = warnings.catch_warnings()
+        self._w.__enter__()
+        warnings.simplefilter("ignore", category=RuntimeWarning)
+
+    def __exit__(self, *exc):
+        return self._w.__exit__(*exc)
+
+
+def direction_names(gamma: float) -> dict[str, str]:
+    """axis label -> easy/hard (gamma > 1 stretches along x: x is the easy direction)."""
+    return {"x": "easy", "y": "hard"} if gamma >= 1 else {"x": "hard", "y": "easy"}
+
+
+def threshold_points(ds: xr.Dataset, group: str) -> tuple[dict, dict]:
+    """(eps, a_seed) per direction from a threshold study dataset.
+
+    ``group`` "anisotropic" takes every gamma != 1, "isotropic" gamma == 1 (its x and y
+    thresholds are one direction, "both"). Points are the (gamma, eps_t) pairs with data.
+    """
+    from roughflow.scenes._data import threshold_values
+
+    a = threshold_values(ds)
+    for dim in ("model", "hurst", "eps_f"):
+        if dim in a.dims:
+            if a.sizes[dim] != 1:
+                raise InputError(f"fit needs one {dim}, the dataset has {a.sizes[dim]}")
+            a = a.isel({dim: 0})
+    eps, aseed = {}, {}
+    for g in a["gamma"].values:
+        iso = bool(np.isclose(g, 1.0))
+        if (group == "isotropic") != iso:
+            continue
+        sub = a.sel(gamma=g)
+        names = {"x": "both", "y": "both"} if iso else direction_names(float(g))
+        for e in sub["eps_t"].values:
+            col = sub.sel(eps_t=e).transpose("seed", "axis").values
+            if not np.isfinite(col).any():
+                continue
+            for k, ax in enumerate(("x", "y")):
+                d = names[ax]
+                eps.setdefault(d, []).append(float(e))
+                aseed.setdefault(d, []).append(col[:, k])
+    if not eps:
+        raise InputError(f"no {group} thresholds in the dataset")
+    return ({d: np.asarray(v) for d, v in eps.items()},
+            {d: np.stack(v, axis=1) for d, v in aseed.items()})
+
+
+def fit_dataset(ds: xr.Dataset, *, n_boot: int = 200, nu: float = NU_PERCOLATION,
+                seed: int = 0) -> xr.Dataset:
+    """Every fit of Fig. 3 as a dataset over (group, fit, nu_mode).
+
+    fit: "easy", "hard" (separate a_c*(0) per direction) and "joint" (shared); for the
+    isotropic group only "joint" (x and y pooled). nu_mode: "fixed" (nu given) or "free".
+    """
+    groups = [g for g in ("anisotropic", "isotropic")
+              if ((ds["gamma"] != 1.0).any() if g == "anisotropic" else (ds["gamma"] == 1.0).any())]
+    fits, modes = ("easy", "hard", "joint"), ("fixed", "free")
+    shape = (len(groups), len(fits), len(modes))
+    out = {k: np.full(shape, np.nan) for k in ("a_star", "a_star_err", "amp_easy",
+                                               "amp_easy_err", "amp_hard", "amp_hard_err",
+                                               "nu", "nu_err", "rms_residual")}
+    out["n_points"] = np.zeros(shape, dtype=np.int32)
+    out["nu_at_bound"] = np.zeros(shape, dtype=np.int32)
+    for gi, group in enumerate(groups):
+        try:
+            eps, aseed = threshold_points(ds, group)
+        except InputError as exc:
+            log.warning("%s", exc)
+            continue
+        for fi, which in enumerate(fits):
+            dirs = list(eps) if which == "joint" else [which]
+            if any(d not in eps for d in dirs):
+                continue
+            for mi, mode in enumerate(modes):
+                try:
+                    f = bootstrap_fit({d: eps[d] for d in dirs}, {d: aseed[d] for d in dirs},
+                                      nu=nu if mode == "fixed" else None, n_boot=n_boot,
+                                      rng=seed)
+                except InputError as exc:
+                    log.warning("%s %s nu %s: %s", group, which, mode, exc)
+                    continue
+                out["a_star"][gi, fi, mi] = f.a_star
+                out["a_star_err"][gi, fi, mi] = f.a_star_err
+                out["nu"][gi, fi, mi] = f.nu
+                out["nu_err"][gi, fi, mi] = f.nu_err
+                out["rms_residual"][gi, fi, mi] = f.rms_residual
+                out["n_points"][gi, fi, mi] = f.n_points
+                out["nu_at_bound"][gi, fi, mi] = int(f.nu_at_bound)
+                for d in ("easy", "hard"):
+                    key = d if d in f.amplitude else ("both" if "both" in f.amplitude else None)
+                    if key is not None:
+                        out[f"amp_{d}"][gi, fi, mi] = f.amplitude[key]
+                        out[f"amp_{d}_err"][gi, fi, mi] = f.amplitude_err.get(key, np.nan)
+                log.info("%s %s nu %s: a_c* = %.4f +- %.4f, nu = %.3f", group, which, mode,
+                         f.a_star, f.a_star_err, f.nu)
+    dims = ("group", "fit", "nu_mode")
+    meta = {
+        "a_star": "extrapolated threshold a_c*(eps -> 0)",
+        "a_star_err": "bootstrap standard deviation of a_c*(0)",
+        "amp_easy": "amplitude A of the easy (stretching) direction",
+        "amp_easy_err": "bootstrap standard deviation of A (easy)",
+        "amp_hard": "amplitude A of the hard (contraction) direction",
+        "amp_hard_err": "bootstrap standard deviation of A (hard)",
+        "nu": "correlation-length exponent nu", "nu_err": "bootstrap standard deviation of nu",
+        "rms_residual": "rms residual of the fit to the seed means",
+        "n_points": "points in the fit",
+        "nu_at_bound": "1 where a free nu stopped at its bound (nu not determined by the data)",
+    }
+    data = {k: (dims, v, {"units": "1", "long_name": meta[k]}) for k, v in out.items()}
+    res = xr.Dataset(data, coords={"group": list(groups), "fit": list(fits),
+                                   "nu_mode": list(modes)},
+                     attrs={"title": "finite-size-scaling fits a_c*(eps) = a_c* + A eps^(1/nu)",
+                            "nu_fixed": nu, "n_boot": n_boot,
+                            "eps": "eps_t = max(sqrt(gamma), 1/sqrt(gamma)) lambda_r / L"})
+    for name in ("n_points", "nu_at_bound"):
+        res[name].encoding = {"dtype": "int32", "_FillValue": np.int32(-1)}
+    return res

@@ -1,0 +1,293 @@
+"""Jobs of the sweep workflow: frozen parameter sets, their file names and CLI arguments.
+
+A study block of the workflow config (``config/config.yaml``) expands into jobs with
+:func:`expand_study`; every job knows its id (used as the file name), the arguments of
+``roughflow scene <kind>`` that run it, its grid size (for resource estimates) and the
+dataset coordinates it fills. Floats are rounded to 12 significant digits so that values
+computed in different jobs combine onto one coordinate.
+"""
+
+from __future__ import annotations
+
+import hashlib
+import itertools
+import math
+from dataclasses import dataclass, field
+
+from roughflow.errors import InputError
+from roughflow.surface import SurfaceSpec
+
+THRESHOLD_STUDIES = ("threshold_vs_gamma", "threshold_vs_size", "threshold_vs_hurst")
+FLOW_STUDIES = ("flow_isotropic", "flow_anisotropic")
+STUDIES = ("channels", *THRESHOLD_STUDIES, *FLOW_STUDIES)
+SWEEP_KEYS = ("model", "gamma", "hurst", "l_over_lambda_r", "eps_f", "points_per_lambda_s")
+# Dimensions of every per-job dataset (length 1 in a job, filled by the aggregation).
+PARAM_DIMS = ("model", "gamma", "hurst", "eps_t", "eps_f")
+
+
+def rnd(v: float) -> float:
+    """``v`` rounded to 12 significant digits (stable coordinate values across jobs)."""
+    return float(f"{float(v):.12g}")
+
+
+def fmt(v: float) -> str:
+    """Short, file-name-safe text for a number (``0.0625``, ``5.65685``)."""
+    return f"{float(v):.6g}"
+
+
+def default_l_over_lambda_r(gamma: float) -> float:
+    """The paper's default system size 4 max(sqrt(gamma), 1/sqrt(gamma))."""
+    s = math.sqrt(gamma)
+    return 4.0 * max(s, 1.0 / s)
+
+
+@dataclass(frozen=True)
+class SurfaceParams:
+    """The sweep's dimensionless numbers of one surface family (unit-area cell).
+
+    ``l_over_lambda_r`` None means the paper's default. ``eps_t`` is lambda_r in the easy
+    direction over L: max(sqrt(gamma), 1/sqrt(gamma)) / (L / lambda_r).
+    """
+
+    gamma: float = 1.0
+    hurst: float = 0.8
+    l_over_lambda_r: float | None = None
+    eps_f: float = 1 / 16
+    points_per_lambda_s: float = 8.0
+    aspect: float = 1.0
+
+    @property
+    def size(self) -> float:
+        """L / lambda_r actually used."""
+        if self.l_over_lambda_r is None:
+            return default_l_over_lambda_r(self.gamma)
+        return float(self.l_over_lambda_r)
+
+    @property
+    def eps_t(self) -> float:
+        s = math.sqrt(self.gamma)
+        return rnd(max(s, 1.0 / s) / self.size)
+
+    def spec(self, seed: int = 0) -> SurfaceSpec:
+        """The surface spec (raises :class:`InputError` for unresolvable sizes)."""
+        return SurfaceSpec.from_sweep(
+            gamma=self.gamma, hurst=self.hurst, l_over_lambda_r=self.size, eps_f=self.eps_f,
+            points_per_lambda_s=self.points_per_lambda_s, aspect=self.aspect, seed=int(seed),
+        )
+
+    def tag(self) -> str:
+        return (f"g{fmt(self.gamma)}_H{fmt(self.hurst)}_L{fmt(self.size)}_f{fmt(self.eps_f)}"
+                f"_p{fmt(self.points_per_lambda_s)}")
+
+    def cli_args(self) -> list[str]:
+        args = ["--gamma", repr(float(self.gamma)), "--hurst", repr(float(self.hurst)),
+                "--eps-f", repr(float(self.eps_f)),
+                "--points-per-lambda-s", repr(float(self.points_per_lambda_s))]
+        if self.l_over_lambda_r is not None:
+            args += ["--l-over-lambda-r", repr(float(self.l_over_lambda_r))]
+        if self.aspect != 1.0:
+            args += ["--aspect", repr(float(self.aspect))]
+        return args
+
+
+def _seed_tag(seeds: tuple[int, ...]) -> str:
+    s = sorted(seeds)
+    if s == list(range(s[0], s[-1] + 1)) and len(s) > 1:
+        return f"s{s[0]}-{s[-1]}"
+    return "s" + "_".join(str(v) for v in s)
+
+
+@dataclass(frozen=True)
+class ThresholdJob:
+    """Percolation thresholds a_c*(x), a_c*(y) of ``seeds`` (contact bisection, no flow)."""
+
+    surface: SurfaceParams
+    model: str = "elastic"
+    seeds: tuple[int, ...] = (0,)
+    tol: float = 2e-3
+    kind: str = field(default="threshold", init=False)
+
+    @property
+    def job_id(self) -> str:
+        return (f"{self.model}_{self.surface.tag()}_{_seed_tag(self.seeds)}"
+                f"_t{fmt(self.tol)}")
+
+    def cli_args(self) -> list[str]:
+        return [self.kind, *self.surface.cli_args(), "--model", self.model,
+                "--seeds", *[str(s) for s in self.seeds], "--tol", repr(float(self.tol))]
+
+
+@dataclass(frozen=True)
+class LadderJob:
+    """Contact along an area ladder, Reynolds flow along x and y, theory predictions."""
+
+    surface: SurfaceParams
+    model: str = "elastic"
+    seeds: tuple[int, ...] = (0,)
+    area_fractions: tuple[float, ...] = (0.1, 0.2, 0.3)
+    a_c_star: float = 0.4
+    a_c_star_alt: float | None = None
+    tabor: float = 2.0
+    surface_energy_ratio: float = 0.203
+    kind: str = field(default="ladder", init=False)
+
+    @property
+    def job_id(self) -> str:
+        # the ladder and theory settings enter through a short hash of the arguments
+        digest = hashlib.sha1(" ".join(self.cli_args()).encode()).hexdigest()[:6]
+        return f"{self.model}_{self.surface.tag()}_{_seed_tag(self.seeds)}_{digest}"
+
+    def cli_args(self) -> list[str]:
+        args = [self.kind, *self.surface.cli_args(), "--model", self.model,
+                "--seeds", *[str(s) for s in self.seeds],
+                "--area-fractions", *[repr(float(a)) for a in self.area_fractions],
+                "--a-c-star", repr(float(self.a_c_star))]
+        if self.a_c_star_alt is not None:
+            args += ["--a-c-star-alt", repr(float(self.a_c_star_alt))]
+        if self.model == "adhesive":
+            args += ["--tabor", repr(float(self.tabor)),
+                     "--surface-energy-ratio", repr(float(self.surface_energy_ratio))]
+        return args
+
+
+@dataclass(frozen=True)
+class ChannelsJob:
+    """Fig. 1: an isotropic 0.5 x 2 cell and its gamma-stretched square version at a_c."""
+
+    gamma: float = 4.0
+    hurst: float = 0.8
+    l_over_lambda_r: float = 4.0
+    eps_f: float = 0.1
+    area_fraction: float = 0.4
+    model: str = "elastic"
+    seed: int = 1
+    points_per_lambda_s: float = 8.0
+    kind: str = field(default="channels", init=False)
+
+    @property
+    def job_id(self) -> str:
+        return "channels"
+
+    def surfaces(self) -> tuple[SurfaceParams, SurfaceParams]:
+        """(isotropic rectangular cell with lx/ly = 1/gamma, stretched square cell)."""
+        iso = SurfaceParams(gamma=1.0, hurst=self.hurst, l_over_lambda_r=self.l_over_lambda_r,
+                            eps_f=self.eps_f, points_per_lambda_s=self.points_per_lambda_s,
+                            aspect=1.0 / self.gamma)
+        aniso = SurfaceParams(gamma=self.gamma, hurst=self.hurst,
+                              l_over_lambda_r=self.l_over_lambda_r, eps_f=self.eps_f,
+                              points_per_lambda_s=self.points_per_lambda_s)
+        return iso, aniso
+
+    def cli_args(self) -> list[str]:
+        return [self.kind, "--gamma", repr(float(self.gamma)), "--hurst", repr(float(self.hurst)),
+                "--l-over-lambda-r", repr(float(self.l_over_lambda_r)),
+                "--eps-f", repr(float(self.eps_f)),
+                "--points-per-lambda-s", repr(float(self.points_per_lambda_s)),
+                "--area-fraction", repr(float(self.area_fraction)), "--model", self.model,
+                "--seeds", str(self.seed)]
+
+
+Job = ThresholdJob | LadderJob | ChannelsJob
+
+
+def grid_points(job: Job) -> int:
+    """Grid points of one surface of the job (for memory and runtime estimates)."""
+    if isinstance(job, ChannelsJob):
+        spec = job.surfaces()[1].spec(job.seed)
+    else:
+        spec = job.surface.spec(job.seeds[0])
+    return spec.nx * spec.ny
+
+
+def _as_list(v) -> list:
+    return list(v) if isinstance(v, (list, tuple)) else [v]
+
+
+def _series(block: dict) -> list[dict]:
+    base = {k: v for k, v in block.items() if k != "series"}
+    series = block.get("series") or [{}]
+    return [{**base, **s} for s in series]
+
+
+def expand_study(name: str, block: dict) -> dict[str, Job]:
+    """Jobs of one study block (already validated against the schema), keyed by job id.
+
+    List keys expand as a Cartesian product per series; seeds are grouped into
+    ``seeds_per_job`` per job. Every surface spec is built here, so an unresolvable size
+    raises :class:`InputError` naming the study, key and value before any job runs.
+    """
+    if name not in STUDIES:
+        raise InputError(f"unknown study {name!r}; known studies: {', '.join(STUDIES)}")
+    if name == "channels":
+        job = ChannelsJob(**{k: block[k] for k in block})
+        for p in job.surfaces():
+            _check_spec(name, p, job.seed)
+        return {job.job_id: job}
+    jobs: dict[str, Job] = {}
+    for s in _series(block):
+        seeds = [int(v) for v in _as_list(s["seeds"])]
+        per = int(s.get("seeds_per_job", 1))
+        groups = [tuple(seeds[i:i + per]) for i in range(0, len(seeds), per)]
+        ppl = float(s.get("points_per_lambda_s", 8))
+        for model, gamma, hurst, size, eps_f in itertools.product(
+            _as_list(s.get("model", "elastic")), _as_list(s.get("gamma", 1.0)),
+            _as_list(s.get("hurst", 0.8)), _as_list(s.get("l_over_lambda_r", None)),
+            _as_list(s.get("eps_f", 1 / 16)),
+        ):
+            size = default_l_over_lambda_r(float(gamma)) if size is None else float(size)
+            p = SurfaceParams(gamma=float(gamma), hurst=float(hurst), l_over_lambda_r=size,
+                              eps_f=float(eps_f), points_per_lambda_s=ppl)
+            _check_spec(name, p, seeds[0])
+            for g in groups:
+                if name in THRESHOLD_STUDIES:
+                    job = ThresholdJob(surface=p, model=model, seeds=g,
+                                       tol=float(s.get("tol", 2e-3)))
+                else:
+                    stars = s.get("a_c_star") or {}
+                    default = {"elastic": 0.4, "adhesive": 0.4, "bearing": 0.5}[model]
+                    adh = s.get("adhesion") or {}
+                    alt = s.get("a_c_star_alt", None)
+                    job = LadderJob(
+                        surface=p, model=model, seeds=g,
+                        area_fractions=tuple(sorted(float(a) for a in s["area_fraction"])),
+                        a_c_star=float(stars.get(model, default)),
+                        a_c_star_alt=None if alt is None else float(alt),
+                        tabor=float(adh.get("tabor", 2.0)),
+                        surface_energy_ratio=float(adh.get("surface_energy_ratio", 0.203)),
+                    )
+                jobs.setdefault(job.job_id, job)
+    return jobs
+
+
+def _check_spec(study: str, p: SurfaceParams, seed: int) -> None:
+    try:
+        p.spec(seed)
+    except InputError as exc:
+        raise InputError(
+            f"config studies.{study}: gamma={p.gamma:g}, hurst={p.hurst:g}, "
+            f"l_over_lambda_r={p.size:g}, eps_f={p.eps_f:g}, "
+            f"points_per_lambda_s={p.points_per_lambda_s:g}: {exc}"
+        ) from None
+
+
+# Cost model (CPU seconds on one core of the development machine), calibrated with single
+# runs of `roughflow scene` (see docs/workflow.md): an elastic threshold bisection costs
+# about 2.4 s per seed at N = 256^2 grid points and grows like N^1.5 (the CG iterations
+# grow with resolution and anisotropy); a Reynolds solve about 1 s at 256^2, like N^1.1;
+# one warm-started contact solve of a ladder about 0.3 s at 128 x 256, like N^1.25.
+# A rough guide for resource requests and core-hour estimates, not a benchmark.
+def estimated_seconds(job: Job) -> float:
+    """Estimated CPU seconds of ``job`` (plus ~3 s start-up per job)."""
+    n = grid_points(job)
+    if isinstance(job, ChannelsJob):
+        return 3.0 + 20 * 0.3 * (n / 32768) ** 1.25
+    seeds = len(job.seeds)
+    if isinstance(job, ThresholdJob):
+        per = 0.05 * n / 65536 if job.model == "bearing" else 2.4 * (n / 65536) ** 1.5
+        return 3.0 + seeds * per
+    flow = 1.0 * (n / 65536) ** 1.1
+    contact = 0.0 if job.model == "bearing" else 0.3 * (n / 32768) ** 1.25
+    if job.model == "adhesive":
+        contact *= 4.0
+    steps = len(job.area_fractions)
+    return 3.0 + seeds * (steps * (2 * flow + contact) + 2 * flow)

@@ -1,0 +1,119 @@
+"""Finite-size-scaling fits recover known a_c* and nu from synthetic noisy data."""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+import xarray as xr
+
+from roughflow.errors import InputError
+from roughflow.fits import (
+    NU_PERCOLATION,
+    bootstrap_fit,
+    fit_dataset,
+    fit_scaling,
+    scaling,
+    threshold_points,
+)
+
+EPS = np.array([0.02, 0.04, 0.08, 0.12, 0.18, 0.25])
+
+
+def synthetic(a_star=0.415, amps=(0.3, -0.25), nu=NU_PERCOLATION, noise=0.004, n_seeds=10,
+              seed=1):
+    """Seeds x points per direction: a_c* + A eps^(1/nu) + Gaussian seed noise."""
+    rng = np.random.default_rng(seed)
+    eps = {d: EPS for d in ("easy", "hard")}
+    a = {d: scaling(EPS, a_star, amp, nu) + noise * rng.standard_normal((n_seeds, EPS.size))
+         for d, amp in zip(("easy", "hard"), amps, strict=True)}
+    return eps, a
+
+
+def test_noise_free_fit_is_exact():
+    # Exact model data: least squares must return the parameters to solver precision.
+    data = {"easy": (EPS, scaling(EPS, 0.42, 0.3)), "hard": (EPS, scaling(EPS, 0.42, -0.2))}
+    f = fit_scaling(data)
+    assert f.a_star == pytest.approx(0.42, abs=1e-8)
+    assert f.amplitude["easy"] == pytest.approx(0.3, abs=1e-7)
+    assert f.amplitude["hard"] == pytest.approx(-0.2, abs=1e-7)
+    free = fit_scaling(data, nu=None)
+    assert free.nu == pytest.approx(NU_PERCOLATION, abs=1e-5)
+    assert not free.nu_at_bound
+
+
+def test_joint_fit_recovers_a_star_within_bootstrap_error():
+    eps, a = synthetic()
+    f = bootstrap_fit(eps, a, n_boot=200, rng=3)
+    # seed noise 0.004 over 10 seeds: the error of a_c* is a few 1e-3; demand the truth
+    # within 3 bootstrap standard deviations and a bootstrap error of the right size.
+    assert 5e-4 < f.a_star_err < 0.01
+    assert abs(f.a_star - 0.415) < 3 * f.a_star_err
+    assert f.amplitude["easy"] > 0 > f.amplitude["hard"]
+
+
+def test_free_nu_is_recovered():
+    eps, a = synthetic(nu=1.0, amps=(0.5, -0.5), noise=0.002)
+    f = bootstrap_fit(eps, a, nu=None, n_boot=100, rng=5)
+    # with a large amplitude and small noise nu is fixed to about 10 %; 3 sigma or 0.15
+    assert abs(f.nu - 1.0) < max(3 * f.nu_err, 0.15)
+    assert abs(f.a_star - 0.415) < max(3 * f.a_star_err, 0.01)
+
+
+def test_separate_fits_differ_from_joint_when_directions_disagree():
+    # directions with different limits: separate fits find each, the joint fit lies between
+    data = {"easy": (EPS, scaling(EPS, 0.45, 0.2)), "hard": (EPS, scaling(EPS, 0.38, -0.2))}
+    easy = fit_scaling({"easy": data["easy"]})
+    hard = fit_scaling({"hard": data["hard"]})
+    joint = fit_scaling(data)
+    assert easy.a_star == pytest.approx(0.45, abs=1e-7)
+    assert hard.a_star == pytest.approx(0.38, abs=1e-7)
+    assert 0.38 < joint.a_star < 0.45
+    assert joint.rms_residual > 1e-3
+
+
+def test_too_few_points_raise():
+    with pytest.raises(InputError, match="points cannot fix"):
+        fit_scaling({"easy": (EPS[:2], scaling(EPS[:2], 0.4, 0.1))}, nu=None)
+    with pytest.raises(InputError, match="same shape"):
+        fit_scaling({"easy": (EPS, EPS[:3])})
+
+
+def _threshold_dataset(a_star=0.415, nu=NU_PERCOLATION, noise=0.003, seed=2):
+    """A threshold_vs_size-like dataset: gamma 2 at several sizes, gamma 1 at two."""
+    rng = np.random.default_rng(seed)
+    gammas = np.array([1.0, 2.0])
+    eps_t = np.array([0.0625, 0.125, 0.25])
+    seeds = np.arange(8)
+    a = np.full((1, 2, 1, 3, 1, 8, 2), np.nan)
+    for gi, g in enumerate(gammas):
+        for ei, e in enumerate(eps_t):
+            if g == 1.0 and ei == 0:
+                continue  # missing job: stays NaN
+            amps = (0.0, 0.0) if g == 1.0 else (0.25, -0.2)
+            for k, amp in enumerate(amps):
+                a[0, gi, 0, ei, 0, :, k] = scaling(e, a_star, amp, nu) + noise * \
+                    rng.standard_normal(8)
+    dims = ("model", "gamma", "hurst", "eps_t", "eps_f", "seed", "axis")
+    return xr.Dataset({"a_c_star": (dims, a)}, coords={
+        "model": ["elastic"], "gamma": gammas, "hurst": [0.8], "eps_t": eps_t,
+        "eps_f": [0.0625], "seed": seeds, "axis": ["x", "y"]})
+
+
+def test_threshold_points_skip_missing_jobs():
+    ds = _threshold_dataset()
+    eps, a = threshold_points(ds, "isotropic")
+    assert list(eps) == ["both"]
+    assert eps["both"].size == 4  # 2 sizes x 2 axes; the missing size is skipped
+    eps, a = threshold_points(ds, "anisotropic")
+    assert set(eps) == {"easy", "hard"} and a["easy"].shape == (8, 3)
+
+
+def test_fit_dataset_recovers_a_star():
+    res = fit_dataset(_threshold_dataset(), n_boot=50)
+    joint = res.sel(group="anisotropic", fit="joint", nu_mode="fixed")
+    # 8 seeds with noise 0.003: the truth lies within 3 bootstrap errors (or 0.01)
+    assert abs(float(joint["a_star"]) - 0.415) < max(3 * float(joint["a_star_err"]), 0.01)
+    assert float(joint["amp_easy"]) > 0 > float(joint["amp_hard"])
+    iso = res.sel(group="isotropic", fit="joint", nu_mode="fixed")
+    assert abs(float(iso["a_star"]) - 0.415) < 0.01
+    assert res["a_star"].attrs["units"] == "1"

@@ -1,0 +1,207 @@
+"""Scene runners, job planning and aggregation of the sweep workflow (tiny grids)."""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+import xarray as xr
+
+from roughflow.aggregate import aggregate, combine, load
+from roughflow.cli import main
+from roughflow.cli.scene import build_parser_for_tests
+from roughflow.errors import InputError
+from roughflow.io import write_dataset
+from roughflow.scenes import (
+    LadderJob,
+    SurfaceParams,
+    ThresholdJob,
+    expand_study,
+    run_ladder,
+    run_threshold,
+)
+from roughflow.surface import generate
+
+TINY = SurfaceParams(gamma=1.0, l_over_lambda_r=2.0, eps_f=0.125, points_per_lambda_s=2)
+
+
+def test_expand_study_product_series_and_seed_groups():
+    block = {"gamma": [1, 2], "hurst": [0.8], "l_over_lambda_r": [None], "eps_f": [0.0625],
+             "seeds": [0, 1, 2], "seeds_per_job": 2, "points_per_lambda_s": 2,
+             "series": [{"model": ["elastic"]}, {"model": ["bearing"], "gamma": [1]}]}
+    jobs = expand_study("threshold_vs_gamma", block)
+    # 2 gammas x 2 seed groups (elastic) + 1 gamma x 2 groups (bearing)
+    assert len(jobs) == 6
+    assert sorted({j.seeds for j in jobs.values()}) == [(0, 1), (2,)]
+    g2 = [j for j in jobs.values() if j.surface.gamma == 2.0][0]
+    assert g2.surface.size == pytest.approx(4 * np.sqrt(2))  # paper default size
+    assert g2.surface.eps_t == pytest.approx(0.25)
+
+
+def test_expand_study_names_unresolvable_sizes():
+    block = {"gamma": [1], "seeds": [0], "points_per_lambda_s": 1.5}
+    with pytest.raises(InputError, match="points_per_lambda_s=1.5"):
+        expand_study("threshold_vs_gamma", block)
+    block = {"gamma": [4], "l_over_lambda_r": [1.0], "seeds": [0]}
+    with pytest.raises(InputError, match="larger than the cell"):
+        expand_study("threshold_vs_gamma", block)
+
+
+def test_cli_arguments_round_trip():
+    job = LadderJob(surface=SurfaceParams(gamma=2.0, l_over_lambda_r=8.0, eps_f=1 / 32),
+                    model="adhesive", seeds=(3, 4), area_fractions=(0.1, 0.2),
+                    a_c_star=0.41, a_c_star_alt=0.5, tabor=1.5)
+    args = build_parser_for_tests().parse_args(["scene", *job.cli_args(), "-o", "x.nc"])
+    from roughflow.cli.scene import job_from_args
+
+    assert job_from_args(args) == job
+    t = ThresholdJob(surface=TINY, model="bearing", seeds=(0, 1), tol=0.01)
+    args = build_parser_for_tests().parse_args(["scene", *t.cli_args(), "-o", "x.nc"])
+    assert job_from_args(args) == t
+
+
+def test_threshold_scene_matches_percolation_stage():
+    from roughflow.percolation import threshold
+
+    job = ThresholdJob(surface=TINY, model="bearing", seeds=(0, 1), tol=0.01)
+    ds = run_threshold(job)
+    assert ds["a_c_star"].dims == ("model", "gamma", "hurst", "eps_t", "eps_f", "seed", "axis")
+    direct = threshold(generate(TINY.spec(1)), axis=None, model="bearing", tol=0.01)
+    got = ds["a_c_star"].sel(seed=1).squeeze()
+    # the scene only repackages the stage's result: equality to float precision
+    assert float(got.sel(axis="x")) == pytest.approx(direct[0].a_c_star, abs=1e-12)
+    assert float(got.sel(axis="y")) == pytest.approx(direct[1].a_c_star, abs=1e-12)
+    for name in ds.data_vars:
+        assert "units" in ds[name].attrs and "long_name" in ds[name].attrs
+
+
+def test_elastic_threshold_scene_brackets():
+    ds = run_threshold(ThresholdJob(surface=TINY, model="elastic", seeds=(0,), tol=0.01))
+    lo, hi = ds["a_lo"].values.ravel(), ds["a_hi"].values.ravel()
+    # the bisection stops when the bracket is below tol; the threshold lies inside it
+    assert np.all(hi - lo <= 0.01 + 1e-12)
+    a = ds["a_c_star"].values.ravel()
+    assert np.all((lo <= a) & (a <= hi)) and np.all((a > 0.05) & (a < 0.95))
+    assert np.all(ds["n_solves"].values > 0)
+
+
+def test_ladder_scene_flow_only_where_percolating():
+    from roughflow import flow
+
+    job = LadderJob(surface=TINY, model="bearing", seeds=(0,),
+                    area_fractions=(0.05, 0.3, 0.8), a_c_star=0.5, a_c_star_alt=0.4)
+    ds = run_ladder(job).squeeze(("model", "gamma", "hurst", "eps_t", "eps_f"))
+    a = ds["area_fraction"].sel(seed=0).values
+    np.testing.assert_allclose(a, [0.05, 0.3, 0.8], atol=1.5 / TINY.spec().nx ** 2)
+    perc = ds["percolating"].sel(seed=0).values
+    sig = ds["sigma"].sel(seed=0).values
+    # at 80 % bearing contact (threshold 1/2) nothing percolates: sigma = 0, not solved
+    assert np.all(perc[2] == 0) and np.all(sig[2] == 0) and np.all(
+        ds["flow_iterations"].sel(seed=0).values[2] == 0)
+    assert np.all(perc[0] == 1) and np.all(sig[0] > 0)
+    # the ladder's conductance is the flow stage's (same gap: bearing is deterministic)
+    from roughflow import contact
+
+    s = generate(TINY.spec(0))
+    gap = contact.solve(s, model="bearing", area_fraction=0.3).gap
+    ref = flow.conductance(gap, 0, lx=s.lx, ly=s.ly)
+    assert float(sig[1, 0]) == pytest.approx(ref, rel=1e-6)
+    # conductance falls with contact area; sigma_ref (a_c -> 0+) is the largest
+    assert np.all(sig[0] > sig[1]) and np.all(ds["sigma_ref"].values > sig[0])
+    emt = ds["sigma_emt"].sel(seed=0, emt="isotropic", axis="x").values
+    assert emt[2] == 0.0 and emt[0] > emt[1] > 0
+
+
+def test_elastic_ladder_warm_starts_and_increasing_area():
+    job = LadderJob(surface=TINY, model="elastic", seeds=(0,), area_fractions=(0.1, 0.2, 0.3))
+    ds = run_ladder(job)
+    a = ds["area_fraction"].values.ravel()
+    p = ds["pressure"].values.ravel()
+    assert np.all(np.diff(a) > 0) and np.all(np.diff(p) > 0)
+    # the load ladder aims at the targets from an erf model: within a few percent
+    assert np.all(np.abs(a - [0.1, 0.2, 0.3]) < 0.06)
+    assert np.all(ds["contact_iterations"].values > 0)
+
+
+def _tiny_threshold_file(tmp_path, gamma, seeds):
+    p = SurfaceParams(gamma=gamma, l_over_lambda_r=4 * max(np.sqrt(gamma), 1 / np.sqrt(gamma)),
+                      eps_f=0.125, points_per_lambda_s=2)
+    ds = run_threshold(ThresholdJob(surface=p, model="bearing", seeds=seeds, tol=0.01))
+    return write_dataset(ds, tmp_path / f"g{gamma}_{seeds[0]}.nc")
+
+
+def test_aggregate_outer_join_keeps_missing_as_nan(tmp_path):
+    files = [_tiny_threshold_file(tmp_path, 1.0, (0, 1)), _tiny_threshold_file(tmp_path, 1.0, (2,)),
+             _tiny_threshold_file(tmp_path, 2.0, (0, 1))]
+    out = aggregate(files, tmp_path / "study.nc", study="test")
+    assert dict(out.sizes)["seed"] == 3 and dict(out.sizes)["gamma"] == 2
+    back = load(tmp_path / "study.nc")
+    a = back["a_c_star"].squeeze(("model", "hurst", "eps_t", "eps_f"))
+    assert np.isnan(a.sel(gamma=2.0, seed=2)).all()  # job not run: NaN, not zero
+    assert np.isfinite(a.sel(gamma=1.0)).all()
+    # integer variable: stored as int32 with fill value -1, decoded as NaN where missing
+    with xr.open_dataset(tmp_path / "study.nc", mask_and_scale=False) as raw:
+        assert raw["n_solves"].dtype == np.int32
+        assert int(raw["n_solves"].attrs["_FillValue"]) == -1
+        for c in ("gamma", "eps_t", "eps_f", "hurst"):
+            assert "_FillValue" not in raw[c].attrs
+    assert np.isnan(back["n_solves"].sel(gamma=2.0, seed=2)).all()
+
+
+def test_combine_rejects_empty():
+    with pytest.raises(InputError, match="nothing to aggregate"):
+        combine([])
+
+
+def test_cli_scene_threshold_and_bad_input(tmp_path, capsys):
+    out = tmp_path / "t.nc"
+    assert main(["scene", "threshold", "--model", "bearing", "--l-over-lambda-r", "2",
+                 "--eps-f", "0.125", "--points-per-lambda-s", "2", "--seeds", "0",
+                 "-o", str(out)]) == 0
+    assert load(out)["a_c_star"].size == 2
+    with pytest.raises(SystemExit) as exc:
+        main(["scene", "threshold", "--hurst", "1.5", "-o", str(tmp_path / "bad.nc")])
+    assert exc.value.code == 2
+    assert "hurst" in capsys.readouterr().err
+    assert not (tmp_path / "bad.nc").exists()
+
+
+def _forbid(*_, **__):
+    raise AssertionError("this job must not call this solver")
+
+
+def test_threshold_jobs_never_solve_flow(monkeypatch):
+    import roughflow.flow
+
+    monkeypatch.setattr(roughflow.flow, "solve", _forbid)
+    monkeypatch.setattr(roughflow.flow, "conductance", _forbid)
+    ds = run_threshold(ThresholdJob(surface=TINY, model="elastic", seeds=(0,), tol=0.02))
+    assert np.isfinite(ds["a_c_star"]).all()
+
+
+def test_bearing_ladder_never_solves_elasticity(monkeypatch):
+    import roughflow.contact.cg
+    import roughflow.contact.gfmd
+
+    monkeypatch.setattr(roughflow.contact.cg, "polonsky_keer", _forbid)
+    monkeypatch.setattr(roughflow.contact.gfmd, "gfmd", _forbid)
+    ds = run_ladder(LadderJob(surface=TINY, model="bearing", seeds=(0,),
+                              area_fractions=(0.1, 0.3)))
+    assert np.isfinite(ds["sigma"]).all()
+
+
+def test_flow_is_solved_only_along_percolating_directions(monkeypatch):
+    import roughflow.flow
+
+    calls = []
+    real = roughflow.flow.solve
+
+    def counting(gap, axis, **kw):
+        calls.append(axis)
+        return real(gap, axis, **kw)
+
+    monkeypatch.setattr(roughflow.flow, "solve", counting)
+    ds = run_ladder(LadderJob(surface=TINY, model="bearing", seeds=(0,),
+                              area_fractions=(0.1, 0.45, 0.55, 0.9)))
+    # one solve per percolating (step, axis) pair and none elsewhere
+    assert len(calls) == int((ds["percolating"] == 1).sum())
+    assert int((ds["percolating"] == 0).sum()) >= 2  # 90 % contact: no fluid path

@@ -1,0 +1,251 @@
+"""The Snakemake workflow end to end on config/test.yaml, dry runs and bad configs.
+
+Snakemake runs in a subprocess in a temporary copy of the workflow (Snakefile, workflow/,
+config/, profiles/), as a user would run it from a fresh checkout.
+"""
+
+from __future__ import annotations
+
+import os
+import re
+import shutil
+import signal
+import subprocess
+import sys
+import time
+from pathlib import Path
+
+import numpy as np
+import pytest
+import xarray as xr
+import yaml
+
+ROOT = Path(__file__).resolve().parents[1]
+SNAKEMAKE = Path(sys.executable).with_name("snakemake")
+STUDIES = ("channels", "threshold_vs_gamma", "threshold_vs_size", "threshold_vs_hurst",
+           "flow_isotropic", "flow_anisotropic")
+
+pytestmark = pytest.mark.skipif(not SNAKEMAKE.exists(), reason="snakemake not installed")
+
+
+def copy_workflow(dest: Path) -> Path:
+    for name in ("Snakefile", "workflow", "config", "profiles"):
+        src = ROOT / name
+        if src.is_dir():
+            shutil.copytree(src, dest / name)
+        else:
+            shutil.copy(src, dest / name)
+    return dest
+
+
+def snakemake(cwd: Path, *args: str, timeout: int = 600) -> subprocess.CompletedProcess:
+    env = {**os.environ, "ROUGHFLOW_FFT_THREADS": "1", "MPLBACKEND": "Agg"}
+    return subprocess.run([str(SNAKEMAKE), *args], cwd=cwd, env=env, capture_output=True,
+                          text=True, timeout=timeout)
+
+
+def job_counts(output: str) -> dict[str, int]:
+    """The 'Job stats' table of a snakemake (dry) run."""
+    table = output.split("Job stats:")[1].split("total")[0]
+    return {m.group(1): int(m.group(2)) for m in re.finditer(r"^(\w+)\s+(\d+)\s*$", table, re.M)}
+
+
+@pytest.fixture(scope="module")
+def test_run(tmp_path_factory):
+    wd = copy_workflow(tmp_path_factory.mktemp("wf"))
+    first = snakemake(wd, "--configfile", "config/test.yaml", "--cores", "2")
+    assert first.returncode == 0, first.stdout[-3000:] + first.stderr[-3000:]
+    return wd, first
+
+
+@pytest.mark.slow
+def test_every_study_produces_dataset_and_figures(test_run):
+    wd, _ = test_run
+    for study in STUDIES:
+        for ext in ("png", "pdf"):
+            fig = wd / "results" / study / f"figure.{ext}"
+            assert fig.exists() and fig.stat().st_size > 5000, fig
+        assert (wd / "results" / study / "dataset.nc").exists()
+    assert (wd / "results" / "threshold_vs_size" / "fit.nc").exists()
+    # every job logged its progress to its log file
+    logs = list((wd / "results" / "logs" / "jobs").rglob("*.log"))
+    assert logs and all("INFO" in p.read_text() for p in logs)
+
+
+@pytest.mark.slow
+def test_threshold_datasets_are_complete_and_physical(test_run):
+    wd, _ = test_run
+    cfg = yaml.safe_load((ROOT / "config" / "test.yaml").read_text())["studies"]
+    with xr.open_dataset(wd / "results" / "threshold_vs_gamma" / "dataset.nc") as ds:
+        assert set(ds["a_c_star"].dims) == {"model", "gamma", "hurst", "eps_t", "eps_f",
+                                            "seed", "axis"}
+        assert sorted(ds["gamma"].values) == sorted(cfg["threshold_vs_gamma"]["gamma"])
+        assert list(ds["seed"].values) == cfg["threshold_vs_gamma"]["seeds"]
+        a = ds["a_c_star"].squeeze(("hurst", "eps_t", "eps_f"))
+        # every configured job ran: no NaN; thresholds are contact fractions well inside
+        # (0, 1) (small systems scatter by +-0.15 around 0.4-0.5)
+        assert np.isfinite(a.values).all()
+        assert ((a > 0.15) & (a < 0.85)).all()
+        assert (ds["a_hi"] - ds["a_lo"] <= 0.01 + 1e-9).all()
+    with xr.open_dataset(wd / "results" / "threshold_vs_size" / "dataset.nc") as ds:
+        a = ds["a_c_star"]
+        # sparse sweep: the pairs (gamma, eps_t) that were not run stay NaN, the others not
+        ran = np.isfinite(a).any(("seed", "axis"))
+        assert ran.sum() == 4 and np.isfinite(a.where(ran)).sum() == 4 * 2 * 2
+    with xr.open_dataset(wd / "results" / "threshold_vs_size" / "fit.nc") as fit:
+        a_star = float(fit["a_star"].sel(group="anisotropic", fit="joint", nu_mode="fixed"))
+        assert 0.2 < a_star < 0.7
+
+
+@pytest.mark.slow
+def test_flow_datasets_are_physical(test_run):
+    wd, _ = test_run
+    for study in ("flow_isotropic", "flow_anisotropic"):
+        with xr.open_dataset(wd / "results" / study / "dataset.nc") as ds:
+            # models may run at different sizes: (model, eps_t) pairs not run stay NaN
+            ran = ds["area_fraction"].notnull()
+            assert int(ran.sum()) > 0
+            assert ran.any(("seed", "step")).sum() == ds.sizes["model"]
+            sig = ds["sigma"].where(ran)
+            a = ds["area_fraction"].where(ran)
+            assert np.isfinite(sig.values[np.broadcast_to(ran.values[..., None],
+                                                          sig.shape)]).all()
+            assert (sig.fillna(0) >= 0).all()
+            # non-percolating directions carry exactly zero, percolating ones more
+            perc = ds["percolating"]
+            assert ((sig == 0) == (perc == 0)).where(ran).fillna(True).all()
+            # conductance never exceeds its a_c -> 0+ value and falls along the ladder
+            assert (sig <= ds["sigma_ref"] * 1.0001).where(ran).fillna(True).all()
+            assert (sig.diff("step") <= 1e-30).where(sig.diff("step").notnull()) \
+                .fillna(True).all()
+            assert ((a > 0) & (a < 1)).where(ran).fillna(True).all()
+            for name in ds.data_vars:
+                assert "units" in ds[name].attrs and "long_name" in ds[name].attrs
+    with xr.open_dataset(wd / "results" / "channels" / "dataset.nc") as ds:
+        for name in ("iso", "aniso"):
+            assert abs(ds.attrs[f"{name}_area_fraction"] - 0.4) < 0.01
+            assert set(np.unique(ds[f"phase_{name}"].values)) <= {0, 1, 2}
+
+
+@pytest.mark.slow
+def test_second_invocation_does_nothing(test_run):
+    wd, _ = test_run
+    again = snakemake(wd, "--configfile", "config/test.yaml", "--cores", "2")
+    assert again.returncode == 0
+    assert "Nothing to be done" in again.stdout + again.stderr
+
+
+@pytest.mark.slow
+def test_report_shows_every_figure(test_run):
+    wd, _ = test_run
+    res = snakemake(wd, "--configfile", "config/test.yaml", "--report", "report.html")
+    assert res.returncode == 0, res.stderr[-2000:]
+    assert (wd / "report.html").stat().st_size > 10000
+    assert res.stdout.count("Adding figure.png") + res.stderr.count("Adding figure.png") \
+        == len(STUDIES)
+
+
+@pytest.mark.slow
+def test_figure_style_change_does_not_rerun_simulations(test_run):
+    wd, _ = test_run
+    # touching the figure's caption (a report input) or the library must not rerun jobs;
+    # forcing the figure reruns only the figure
+    dry = snakemake(wd, "--configfile", "config/test.yaml", "-n", "--forcerun", "figure")
+    counts = job_counts(dry.stdout)
+    assert counts.get("figure") == len(STUDIES) and "scene" not in counts
+
+
+def test_only_requested_targets_run(tmp_path):
+    wd = copy_workflow(tmp_path)
+    dry = snakemake(wd, "--configfile", "config/test.yaml", "-n",
+                    "results/threshold_vs_gamma/figure.png")
+    assert dry.returncode == 0, dry.stderr
+    counts = job_counts(dry.stdout)
+    # 2 gammas x 2 models, seeds grouped 2 per job: 4 threshold jobs, no ladder/channels
+    assert counts == {"scene": 4, "aggregate": 1, "figure": 1}
+    assert "ladder" not in dry.stdout
+
+
+def test_paper_config_dry_run_job_counts(tmp_path):
+    wd = copy_workflow(tmp_path)
+    dry = snakemake(wd, "--configfile", "config/paper.yaml", "-n", timeout=300)
+    assert dry.returncode == 0, dry.stderr[-3000:]
+    counts = job_counts(dry.stdout)
+    # Counted by hand from config/paper.yaml (10 seeds; one seed per elastic threshold job,
+    # all 10 in one job for the cheap bearing model, one seed per ladder job):
+    #   threshold_vs_gamma: 7 gammas x (elastic 1/16, elastic 1/64) = 14 elastic points,
+    #     7 bearing points
+    #   threshold_vs_size: gamma 2 at 5 sizes + 4 gammas at L = 32 + isotropic at 4 sizes
+    #     = 13, minus the points shared with threshold_vs_gamma (gamma 2 at L 5.66,
+    #     gamma 1 at L 4) = 11
+    #   threshold_vs_hurst: 7 gammas x H 0.3 (H 0.8 is shared with threshold_vs_gamma) = 7
+    #   -> 32 elastic points x 10 jobs + 7 bearing jobs = 327 threshold jobs
+    #   flow: 3 isotropic + 2 anisotropic models x 10 seeds = 50 ladder jobs
+    assert counts["scene"] == 327 + 50
+    assert counts["channels"] == 1
+    assert counts["aggregate"] == 5 and counts["fit"] == 1 and counts["figure"] == 6
+
+
+BAD = {
+    "unknown key": (lambda c: c["studies"]["threshold_vs_gamma"].update(colour="red"),
+                    ["studies.threshold_vs_gamma", "colour"]),
+    "gamma <= 0": (lambda c: c["studies"]["threshold_vs_gamma"].update(gamma=[1, -2]),
+                   ["studies.threshold_vs_gamma.gamma.1", "-2"]),
+    "hurst > 1": (lambda c: c["studies"]["threshold_vs_hurst"].update(hurst=[0.3, 1.5]),
+                  ["studies.threshold_vs_hurst.hurst.1", "1.5"]),
+    "under-resolved": (lambda c: c["studies"]["flow_isotropic"].update(points_per_lambda_s=1),
+                       ["studies.flow_isotropic", "points_per_lambda_s", "1"]),
+    "empty seeds": (lambda c: c["studies"]["threshold_vs_size"].update(seeds=[]),
+                    ["studies.threshold_vs_size.seeds", "[]"]),
+    "unknown study": (lambda c: c["studies"].update(fig9={"seeds": [0]}),
+                      ["studies", "fig9"]),
+}
+
+
+@pytest.mark.parametrize("case", sorted(BAD))
+def test_bad_config_fails_before_any_job(tmp_path, case):
+    wd = copy_workflow(tmp_path)
+    cfg = yaml.safe_load((wd / "config" / "test.yaml").read_text())
+    edit, needles = BAD[case]
+    edit(cfg)
+    (wd / "config" / "bad.yaml").write_text(yaml.safe_dump(cfg))
+    res = snakemake(wd, "--configfile", "config/bad.yaml", "-n")
+    out = res.stdout + res.stderr
+    assert res.returncode != 0
+    assert "invalid config" in out
+    for needle in needles:
+        assert needle in out, (needle, out[-2000:])
+    assert not (wd / "results").exists()
+
+
+@pytest.mark.slow
+def test_killed_job_leaves_no_trusted_output(tmp_path):
+    wd = copy_workflow(tmp_path)
+    cfg = {"studies": {"threshold_vs_gamma": {
+        "gamma": [1], "l_over_lambda_r": [8], "eps_f": [0.0625], "seeds": [0, 1, 2, 3],
+        "seeds_per_job": 4, "points_per_lambda_s": 2, "tol": 0.002}}}
+    (wd / "config" / "kill.yaml").write_text(yaml.safe_dump(cfg))
+    env = {**os.environ, "ROUGHFLOW_FFT_THREADS": "1"}
+    proc = subprocess.Popen([str(SNAKEMAKE), "--configfile", "config/kill.yaml", "--cores", "1"],
+                            cwd=wd, env=env, stdout=subprocess.DEVNULL,
+                            stderr=subprocess.DEVNULL, start_new_session=True)
+    logs = wd / "results" / "logs" / "jobs" / "threshold"
+    deadline = time.time() + 120
+    while time.time() < deadline:
+        started = [p for p in logs.glob("*.log") if "seed 0" in p.read_text()] \
+            if logs.exists() else []
+        if started:
+            break
+        time.sleep(0.2)
+    else:
+        proc.kill()
+        pytest.fail("the job never started")
+    time.sleep(1.0)
+    os.killpg(proc.pid, signal.SIGKILL)  # snakemake and its job die without cleaning up
+    proc.wait()
+    jobs = list((wd / "results" / "jobs").rglob("*.nc"))
+    assert jobs == [], "a killed job left an output file"
+    # the rerun plans the job again (Snakemake also marks it incomplete)
+    dry = snakemake(wd, "--configfile", "config/kill.yaml", "-n")
+    assert dry.returncode == 0, dry.stderr
+    assert job_counts(dry.stdout).get("scene") == 1

@@ -1,0 +1,50 @@
+# Accuracy budget (issue 8): convergence of a_c* and sigma against grid resolution, contact
+# solver tolerance and bisection tolerance, with wall times; tables and error-vs-time plots
+# under results/benchmarks/. Not part of the default target: `snakemake --cores 1 accuracy`
+# (about 30 min on one core). Seeds and resolutions via config["accuracy"] (optional):
+#   accuracy: {seeds: [0, 1, 2, 3, 4, 5], points_per_lambda_s: [2, 4, 8, 16]}
+
+_ACC = config.get("accuracy", {}) or {}
+_ACC_SEEDS = " ".join(str(s) for s in _ACC.get("seeds", [0, 1, 2, 3, 4, 5]))
+_ACC_PPL = " ".join(str(p) for p in _ACC.get("points_per_lambda_s", [2, 4, 8, 16]))
+_ACC_OUT = "results/benchmarks"
+
+
+rule accuracy_resolution:
+    """a_c*, a_c and sigma at a_c = 0.2, 0.35 on one surface per seed at every resolution."""
+    output:
+        f"{_ACC_OUT}/convergence_resolution.jsonl",
+    log:
+        f"{_ACC_OUT}/logs/convergence_resolution.log",
+    threads: 1
+    shell:
+        "rm -f {output} && ROUGHFLOW_FFT_THREADS={threads} python benchmarks/convergence.py "
+        "resolution --out {_ACC_OUT} --seeds {_ACC_SEEDS} --ppl {_ACC_PPL} > {log} 2>&1"
+
+
+rule accuracy_tolerances:
+    """Contact-solver and bisection tolerances at the default resolution."""
+    output:
+        f"{_ACC_OUT}/convergence_tol.jsonl",
+    log:
+        f"{_ACC_OUT}/logs/convergence_tol.log",
+    threads: 1
+    shell:
+        "rm -f {output} && ROUGHFLOW_FFT_THREADS={threads} python benchmarks/convergence.py "
+        "tol --out {_ACC_OUT} --seeds {_ACC_SEEDS} > {log} 2>&1"
+
+
+rule accuracy:
+    """Tables (markdown, CSV) and error-versus-time (Pareto) plots of the accuracy budget."""
+    input:
+        f"{_ACC_OUT}/convergence_resolution.jsonl",
+        f"{_ACC_OUT}/convergence_tol.jsonl",
+    output:
+        f"{_ACC_OUT}/convergence.md",
+        f"{_ACC_OUT}/convergence.csv",
+        f"{_ACC_OUT}/convergence_resolution.png",
+        f"{_ACC_OUT}/convergence_tolerances.png",
+    log:
+        f"{_ACC_OUT}/logs/convergence_report.log",
+    shell:
+        "python benchmarks/convergence.py report --out {_ACC_OUT} > {log} 2>&1"

@@ -1,0 +1,120 @@
+# Config validation and job planning (runs before any job starts).
+
+import math
+import sys
+from pathlib import Path
+
+from snakemake.exceptions import WorkflowError
+from snakemake.utils import validate
+
+
+SCHEMA = Path(workflow.basedir) / "workflow" / "schemas" / "config.schema.yaml"
+
+
+def _validate_config(config):
+    """JSON-schema validation with a message naming the key and the value.
+
+    jsonschema's best match gives the path of the offending key; snakemake's validate
+    then fills in the schema's defaults.
+    """
+    import jsonschema
+    import yaml
+
+    schema = yaml.safe_load(SCHEMA.read_text())
+    error = jsonschema.exceptions.best_match(
+        jsonschema.Draft202012Validator(schema).iter_errors(config)
+    )
+    if error is not None:
+        key = ".".join(str(p) for p in error.absolute_path) or "<top level>"
+        raise WorkflowError(f"invalid config: key {key!r} = {error.instance!r}: {error.message}")
+    validate(config, "../schemas/config.schema.yaml")
+
+
+_validate_config(config)
+
+from roughflow.errors import InputError  # noqa: E402
+from roughflow.scenes import (  # noqa: E402
+    FLOW_STUDIES,
+    THRESHOLD_STUDIES,
+    expand_study,
+    grid_points,
+)
+from roughflow.scenes.jobs import estimated_seconds  # noqa: E402
+
+RESULTS = config.get("results", "results")
+# the roughflow of the Python that runs snakemake (no PATH lookup needed)
+RF = f"{sys.executable} -m roughflow"
+STUDIES = config["studies"]
+try:
+    JOBS = {name: expand_study(name, block) for name, block in STUDIES.items()}
+except InputError as exc:
+    raise WorkflowError(f"invalid config: {exc}") from None
+
+# One pool of jobs per kind, keyed by job id: a job shared by several studies (same
+# parameters, e.g. elastic gamma = 2 at the default size) runs once.
+POOL = {"threshold": {}, "ladder": {}}
+for _study, _jobs in JOBS.items():
+    for _id, _job in _jobs.items():
+        if _job.kind in POOL:
+            if POOL[_job.kind].setdefault(_id, _job) != _job:
+                raise WorkflowError(f"two different jobs share the id {_id!r}")
+
+THRESHOLD_NAMES = [s for s in STUDIES if s in THRESHOLD_STUDIES]
+FLOW_NAMES = [s for s in STUDIES if s in FLOW_STUDIES]
+
+
+def _alternatives(names):
+    # a regex that matches none of the study names when the list is empty
+    return "|".join(names) if names else "(?!x)x"
+
+
+wildcard_constraints:
+    study="|".join(STUDIES),
+    kind="threshold|ladder",
+    job=r"[A-Za-z0-9_.+\-]+",
+
+
+def job_of(wildcards):
+    try:
+        return POOL[wildcards.kind][wildcards.job]
+    except KeyError:
+        raise WorkflowError(
+            f"no {wildcards.kind} job {wildcards.job!r} in the config"
+        ) from None
+
+
+def job_args(wildcards):
+    """The `roughflow scene` arguments of a job (also the rerun trigger of its rule)."""
+    return " ".join(job_of(wildcards).cli_args())
+
+
+def runtime_min(wildcards):
+    # three times the cost model of roughflow.scenes.jobs.estimated_seconds (minutes)
+    return max(2, math.ceil(3 * estimated_seconds(job_of(wildcards)) / 60))
+
+
+def mem_mb(wildcards):
+    # ~40 float64 fields of the grid (surface, gap, pressure, FFT buffers, AMG hierarchy)
+    return 500 + math.ceil(grid_points(job_of(wildcards)) * 8 * 40 / 1e6)
+
+
+def jobs_of(study):
+    return [f"{RESULTS}/jobs/{job.kind}/{job_id}.nc"
+            for job_id, job in sorted(JOBS[study].items())]
+
+
+def study_targets():
+    out = []
+    for study in STUDIES:
+        out += [f"{RESULTS}/{study}/dataset.nc", f"{RESULTS}/{study}/figure.png",
+                f"{RESULTS}/{study}/figure.pdf"]
+        if study == "threshold_vs_size":
+            out.append(f"{RESULTS}/{study}/fit.nc")
+    return out
+
+
+def figure_inputs(wildcards):
+    out = {"dataset": f"{RESULTS}/{wildcards.study}/dataset.nc"}
+    if wildcards.study == "threshold_vs_size":
+        out["fit"] = f"{RESULTS}/{wildcards.study}/fit.nc"
+    return out

@@ -1,0 +1,72 @@
+# Aggregation, fits and figures of each study.
+
+
+rule aggregate:
+    """Combine the study's per-job datasets (outer join on the coordinates)."""
+    input:
+        lambda wc: jobs_of(wc.study),
+    output:
+        f"{RESULTS}/{{study}}/dataset.nc",
+    log:
+        f"{RESULTS}/logs/{{study}}/aggregate.log",
+    benchmark:
+        f"{RESULTS}/benchmarks/workflow/{{study}}/aggregate.tsv"
+    wildcard_constraints:
+        study=_alternatives(THRESHOLD_NAMES + FLOW_NAMES),
+    threads: 1
+    resources:
+        mem_mb=1000,
+        runtime=5,
+    shell:
+        "{RF} -v aggregate {input} --study {wildcards.study} -o {output} 2> {log}"
+
+
+rule fit:
+    """Finite-size-scaling fits (nu = 4/3 and free; per direction and joint; bootstrap)."""
+    input:
+        f"{RESULTS}/{{study}}/dataset.nc",
+    output:
+        f"{RESULTS}/{{study}}/fit.nc",
+    params:
+        bootstrap=lambda wc: STUDIES[wc.study].get("fit", {}).get("bootstrap", 200),
+        nu=lambda wc: STUDIES[wc.study].get("fit", {}).get("nu", 4 / 3),
+    log:
+        f"{RESULTS}/logs/{{study}}/fit.log",
+    benchmark:
+        f"{RESULTS}/benchmarks/workflow/{{study}}/fit.tsv"
+    wildcard_constraints:
+        study="threshold_vs_size",
+    threads: 1
+    resources:
+        mem_mb=1000,
+        runtime=5,
+    shell:
+        "{RF} -v fit {input} --bootstrap {params.bootstrap} --nu {params.nu} "
+        "-o {output} 2> {log}"
+
+
+rule figure:
+    """The study's figure (PNG and PDF) with its caption."""
+    input:
+        unpack(figure_inputs),
+    output:
+        png=report(
+            f"{RESULTS}/{{study}}/figure.png",
+            caption="../report/figure.rst",
+            category="Figures",
+            labels={"study": "{study}"},
+        ),
+        pdf=f"{RESULTS}/{{study}}/figure.pdf",
+    params:
+        fit=lambda wc, input: f"--fit {input.fit}" if "fit" in input.keys() else "",
+    log:
+        f"{RESULTS}/logs/{{study}}/figure.log",
+    benchmark:
+        f"{RESULTS}/benchmarks/workflow/{{study}}/figure.tsv"
+    threads: 1
+    resources:
+        mem_mb=1000,
+        runtime=5,
+    shell:
+        "MPLBACKEND=Agg {RF} -v figure {wildcards.study} {input.dataset} {params.fit} "
+        "-o {output.png} 2> {log}"

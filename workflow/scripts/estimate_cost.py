@@ -1,0 +1,57 @@
+"""Core-hours of a config from the cost model ``roughflow.scenes.jobs.estimated_seconds``.
+
+    python workflow/scripts/estimate_cost.py config/paper.yaml
+
+With ``--benchmarks results/benchmarks/workflow`` it also prints, for every finished
+scene job of the current config, the measured CPU time next to the model's estimate
+(Snakemake's cpu_time samples the process tree and reads about 30 % low).
+"""
+
+from __future__ import annotations
+
+import argparse
+import csv
+from collections import defaultdict
+from pathlib import Path
+
+import yaml
+
+from roughflow.scenes import expand_study, grid_points
+from roughflow.scenes.jobs import estimated_seconds
+
+
+def plan(config: str) -> dict:
+    jobs = {}
+    for name, block in yaml.safe_load(open(config))["studies"].items():
+        jobs.update(expand_study(name, block))
+    return jobs
+
+
+def main() -> None:
+    ap = argparse.ArgumentParser(description=__doc__)
+    ap.add_argument("config", nargs="?", default="config/paper.yaml")
+    ap.add_argument("--benchmarks", default=None, help="compare with a finished run")
+    args = ap.parse_args()
+    jobs = plan(args.config)
+    total = defaultdict(float)
+    for job in jobs.values():
+        total[(job.kind, getattr(job, "model", ""))] += estimated_seconds(job)
+    for (kind, model), sec in sorted(total.items()):
+        print(f"{kind:9s} {model:8s} {sec / 3600:8.2f} core-hours")
+    largest = max(jobs.values(), key=estimated_seconds)
+    print(f"total {sum(total.values()) / 3600:.1f} core-hours for {len(jobs)} jobs; largest "
+          f"job {largest.job_id}: {estimated_seconds(largest) / 3600:.1f} h, "
+          f"{grid_points(largest)} grid points")
+    if args.benchmarks:
+        for tsv in sorted(Path(args.benchmarks).glob("jobs/*/*.tsv")):
+            job = jobs.get(tsv.stem)
+            if job is None:
+                continue
+            with tsv.open() as fh:
+                row = next(csv.DictReader(fh, delimiter="\t"))
+            print(f"{tsv.stem}: measured cpu {float(row['cpu_time']):.1f} s, "
+                  f"model {estimated_seconds(job):.1f} s")
+
+
+if __name__ == "__main__":
+    main()
