@@ -9,9 +9,10 @@ Maximum tension pi gamma_s / (2 rho) at g = rho/2. Units: gamma_s in E* L, rho i
 The harmonic branch is the default (as in the Mueser group's code); ``repulsion="hard"``
 replaces it by a hard wall (gap >= 0), the kappa -> infinity limit. In the paper's case
 kappa is ~14x the largest elastic stiffness of the grid, so the wall is nearly hard
-anyway; on affordable grids, where the range must be a few grid spacings, kappa = pi^2 gamma_s / (2 rho^2) becomes softer than the
-elastic grid stiffness and cells sink into the wall, inflating the contact area (measured:
-a_c at fixed load *grew* when gamma_s fell, at rho = 2 dx, 256^2). With the hard wall,
+anyway; on affordable grids, where the range must be a few grid spacings,
+kappa = pi^2 gamma_s / (2 rho^2) becomes softer than the elastic grid stiffness and cells
+sink into the wall, inflating the contact area (measured: a_c at fixed load *grew* when
+gamma_s fell, at rho = 2 dx, 256^2). With the hard wall,
 contact is gap = 0 exactly as in the elastic model.
 """
 
