@@ -4,7 +4,14 @@
 #   snakemake results/threshold_vs_gamma/figure.png         # one study only
 # The rules are in workflow/rules/*.smk; each calls one `roughflow` command.
 
+import os
+
 from snakemake.utils import min_version
+
+# One BLAS/OpenMP thread per job: multi-threaded OpenBLAS spinning on a busy machine made
+# the ladder scene 2.2x slower (docs/accuracy.md, profile); jobs inherit this environment.
+for _var in ("OPENBLAS_NUM_THREADS", "OMP_NUM_THREADS"):
+    os.environ.setdefault(_var, "1")
 
 min_version("8.0")
 

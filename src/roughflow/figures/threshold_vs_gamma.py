@@ -11,8 +11,9 @@ from roughflow.scenes._data import threshold_values
 from ._threshold import format_gamma_axis, plot_vs_gamma
 
 CAPTION = (
-    "Perimeter-corrected a_c* (first-order grid bias of the contact area removed; "
-    "docs/accuracy.md). "
+    "a_c* is perimeter-corrected (first-order grid bias of the contact area removed, "
+    "docs/accuracy.md) on grids with >= 4 points per lambda_s, raw on coarser ones (raw "
+    "values there are biased high by about 0.03). "
     "Critical contact areas a_c* in the stretching (x, blue) and contraction (y, red) "
     "directions versus the Peklenik number gamma (paper Fig. 2): seed means with standard "
     "errors. (a) Elastic contact for the ratios eps_f = lambda_s/lambda_r of the config "

@@ -11,8 +11,9 @@ from roughflow.scenes._data import threshold_values
 from ._threshold import format_gamma_axis, plot_vs_gamma
 
 CAPTION = (
-    "Perimeter-corrected a_c* (first-order grid bias of the contact area removed; "
-    "docs/accuracy.md). "
+    "a_c* is perimeter-corrected (first-order grid bias of the contact area removed, "
+    "docs/accuracy.md) on grids with >= 4 points per lambda_s, raw on coarser ones (raw "
+    "values there are biased high by about 0.03). "
     "Critical contact areas a_c* along x (stretching, blue) and y (contraction, red) versus "
     "the Peklenik number gamma for the Hurst exponents of the config (paper Fig. 4: "
     "H = 0.3 full triangles, H = 0.8 open circles), elastic contact, eps_f = 1/16, "

@@ -12,8 +12,9 @@ from roughflow.scenes._data import threshold_values
 from ._style import EASY, HARD, seed_stats
 
 CAPTION = (
-    "Perimeter-corrected a_c* (first-order grid bias of the contact area removed; "
-    "docs/accuracy.md). "
+    "a_c* is perimeter-corrected (first-order grid bias of the contact area removed, "
+    "docs/accuracy.md) on grids with >= 4 points per lambda_s, raw on coarser ones (raw "
+    "values there are biased high by about 0.03). "
     "Size dependence of a_c* in the stretching (x, blue) and contraction (y, red) "
     "directions, H = 0.8 (paper Fig. 3), versus eps_t = max(sqrt(gamma), 1/sqrt(gamma)) "
     "lambda_r / L. Circles: the anisotropic gamma with the most system sizes, varying "
