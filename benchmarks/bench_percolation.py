@@ -101,7 +101,7 @@ def bench_threshold(n: int, seed: int, naive: bool) -> dict:
     row = {
         "n": spec.nx, "seed": seed, "cold_s": t_cold, "cold_iter": cold.iterations,
         "pair_solves": pair[0].n_solves, "pair_s": t_pair,
-        "pair_iter": sum(it for _, _, it in pair[0].solves),
+        "pair_iter": sum(step[2] for step in pair[0].solves),
         "a_x": pair[0].a_c_star, "a_y": pair[1].a_c_star,
         "naive_solves": float("nan"), "naive_s": float("nan"), "naive_iter": float("nan"),
     }
@@ -111,7 +111,7 @@ def bench_threshold(n: int, seed: int, naive: bool) -> dict:
                for ax in (0, 1)]
         row["naive_s"] = time.perf_counter() - t0
         row["naive_solves"] = sum(r.n_solves for r in res)
-        row["naive_iter"] = sum(it for r in res for _, _, it in r.solves)
+        row["naive_iter"] = sum(step[2] for r in res for step in r.solves)
         for ax, r in enumerate(res):  # the two methods bracket the same event
             assert abs(r.a_c_star - pair[ax].a_c_star) <= 2e-3 + 1e-12, (r, pair[ax])
     row["pair_cost_in_cold"] = t_pair / t_cold

@@ -48,6 +48,9 @@ def register(sub: argparse._SubParsersAction) -> None:
                    help="contact model (elastic)")
     t.add_argument("--tol", type=float, default=2e-3,
                    help="bisection tolerance on the contact area (0.002)")
+    t.add_argument("--contact-tol", type=float, default=1e-4,
+                   help="tolerance of each contact solve, gap error / rms height (1e-4; "
+                        "docs/accuracy.md: changes a_c* by < 4e-5)")
     t.set_defaults(func=run)
 
     ld = kinds.add_parser("ladder", help="contact ladder + Reynolds flow + theory",
@@ -95,7 +98,7 @@ def job_from_args(args: argparse.Namespace):
                             points_per_lambda_s=args.points_per_lambda_s, aspect=args.aspect)
     if args.kind == "threshold":
         return ThresholdJob(surface=surface, model=args.model, seeds=tuple(args.seeds),
-                            tol=args.tol)
+                            tol=args.tol, contact_tol=args.contact_tol)
     return LadderJob(surface=surface, model=args.model, seeds=tuple(args.seeds),
                      area_fractions=tuple(args.area_fractions), a_c_star=args.a_c_star,
                      a_c_star_alt=args.a_c_star_alt, tabor=args.tabor,

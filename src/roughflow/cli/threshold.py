@@ -102,6 +102,8 @@ def threshold_dataset(results: dict, surface_path: str, surface) -> xr.Dataset:
             "units": "1", "long_name": "contact area of each contact solve"})
         ds["solve_iterations"] = ("solve", s[:, 2].astype(np.int64), {
             "units": "1", "long_name": "solver iterations of each contact solve"})
+        ds["solve_residual"] = ("solve", s[:, 3], {
+            "units": "1", "long_name": "residual of each contact solve (gap error / rms height)"})
     return ds
 
 

@@ -5,6 +5,8 @@ from __future__ import annotations
 import matplotlib.pyplot as plt
 import xarray as xr
 
+from roughflow.scenes._data import area_values
+
 from ._flow import curve, ladder, points, sigma_ref
 from ._style import EASY, HARD
 
@@ -16,7 +18,9 @@ CAPTION = (
     "theory (Eq. 9); dashed: Persson's form (Eq. 7-8); grey dotted: isotropic Bruggeman. "
     "Right panel: the ratio chi = sigma_x / sigma_y of full Reynolds (symbols) and the "
     "corrected theory (lines) with the height value gamma^2 (grey); the paper reports "
-    "chi ~ 8 near a_c* for the elastic contact at gamma = 2 versus 4 from the theory."
+    "chi ~ 8 near a_c* for the elastic contact at gamma = 2 versus 4 from the theory. "
+    "Elastic a_c is perimeter-corrected (first-order grid bias of the contact area "
+    "removed, docs/accuracy.md); bearing and adhesive a_c are cell counts."
 )
 MODEL_MARKER = {"elastic": "o", "bearing": "s", "adhesive": "^"}
 
@@ -30,7 +34,7 @@ def draw(ds: xr.Dataset, fit=None) -> plt.Figure:
     for ax, model, tag in zip(axes[:-1], models, "abc", strict=False):
         sub = ladder(ds, model)
         ref = sigma_ref(sub)
-        a = sub["area_fraction"]
+        a = area_values(sub)
         emt = sub["sigma_emt"]
         for axis, color in (("x", EASY), ("y", HARD)):
             x, y = points(a, sub["sigma"].sel(axis=axis) / ref)

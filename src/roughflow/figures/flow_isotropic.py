@@ -6,6 +6,8 @@ import matplotlib.pyplot as plt
 import numpy as np
 import xarray as xr
 
+from roughflow.scenes._data import area_values
+
 from ._flow import curve, ladder, points, sigma_ref
 
 CAPTION = (
@@ -15,7 +17,9 @@ CAPTION = (
     "lines) and the closed forms of Eq. 16 (dashed lines) for (a) elastic, non-adhesive "
     "contact, (b) short-range adhesive contact, (c) the bearing-area model, as far as the "
     "config contains them. In (a) a dotted line shows the full Bruggeman treatment with "
-    "a_c* = 0.5; the other lines use the a_c* of the config (paper: 0.4 for (a), (b))."
+    "a_c* = 0.5; the other lines use the a_c* of the config (paper: 0.4 for (a), (b)). "
+    "Elastic a_c is perimeter-corrected (first-order grid bias of the contact area "
+    "removed, docs/accuracy.md); bearing and adhesive a_c are cell counts."
 )
 TITLES = {"elastic": "elastic, non-adhesive", "adhesive": "short-range adhesion",
           "bearing": "bearing-area model"}
@@ -28,7 +32,7 @@ def draw(ds: xr.Dataset, fit=None) -> plt.Figure:
     for ax, model, tag in zip(axes[0], models, "abc", strict=False):
         sub = ladder(ds, model)
         ref = sigma_ref(sub)
-        a = sub["area_fraction"]
+        a = area_values(sub)
         rey = sub["sigma"].mean("axis")
         x, y = points(a, rey / ref)
         ax.plot(x, y, "o", mfc="white", color="k", label="full Reynolds")

@@ -84,7 +84,7 @@ class Threshold:
     tol: float
     bracketed: bool = True
     message: str = ""
-    solves: tuple = field(default=(), repr=False)  # (pressure, a_c, iterations) per solve
+    solves: tuple = field(default=(), repr=False)  # (pressure, a_c, iterations, residual)
     a_c_star_corrected: float = float("nan")
 
     @property
@@ -362,7 +362,8 @@ def _refine(
         run(_s_for_area(target, samples, lo, hi, extrapolate, s_range))
 
     n = len(samples)
-    log = tuple((q.s, q.a, getattr(q.state, "iterations", 0)) for q in samples)
+    log = tuple((q.s, q.a, getattr(q.state, "iterations", 0),
+                 float(getattr(q.state, "residual", 0.0))) for q in samples)
     nan = float("nan")
     out = {}
     for ax in axes:

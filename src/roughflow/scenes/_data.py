@@ -78,3 +78,14 @@ def threshold_values(ds):
     fine = ds["points_per_lambda_s"] >= CORRECTION_MIN_POINTS
     corrected = ds["a_c_star_corrected"]
     return xr.where(fine & corrected.notnull(), corrected, raw).transpose(*raw.dims)
+
+
+def area_values(ds):
+    """The contact area to plot sigma against: the perimeter-corrected ``a_c`` where the
+    ladder stored one (elastic; the fixed-load correction is calibrated from 2 points per
+    lambda_s up, error +0.004 at 2 points, docs/accuracy.md), the raw ``a_c`` elsewhere."""
+    raw = ds["area_fraction"]
+    if "area_fraction_corrected" not in ds:
+        return raw
+    corrected = ds["area_fraction_corrected"]
+    return xr.where(corrected.notnull(), corrected, raw).transpose(*raw.dims)

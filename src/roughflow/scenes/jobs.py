@@ -105,16 +105,18 @@ class ThresholdJob:
     model: str = "elastic"
     seeds: tuple[int, ...] = (0,)
     tol: float = 2e-3
+    contact_tol: float = 1e-4
     kind: str = field(default="threshold", init=False)
 
     @property
     def job_id(self) -> str:
         return (f"{self.model}_{self.surface.tag()}_{_seed_tag(self.seeds)}"
-                f"_t{fmt(self.tol)}")
+                f"_t{fmt(self.tol)}_c{fmt(self.contact_tol)}")
 
     def cli_args(self) -> list[str]:
         return [self.kind, *self.surface.cli_args(), "--model", self.model,
-                "--seeds", *[str(s) for s in self.seeds], "--tol", repr(float(self.tol))]
+                "--seeds", *[str(s) for s in self.seeds], "--tol", repr(float(self.tol)),
+                "--contact-tol", repr(float(self.contact_tol))]
 
 
 @dataclass(frozen=True)
@@ -241,7 +243,8 @@ def expand_study(name: str, block: dict) -> dict[str, Job]:
             for g in groups:
                 if name in THRESHOLD_STUDIES:
                     job = ThresholdJob(surface=p, model=model, seeds=g,
-                                       tol=float(s.get("tol", 2e-3)))
+                                       tol=float(s.get("tol", 2e-3)),
+                                       contact_tol=float(s.get("contact_tol", 1e-4)))
                 else:
                     stars = s.get("a_c_star") or {}
                     default = {"elastic": 0.4, "adhesive": 0.4, "bearing": 0.5}[model]

@@ -18,6 +18,8 @@ import numpy as np
 import xarray as xr
 from scipy.special import erfinv
 
+from roughflow.accuracy import PERIMETER_C, perimeter_corrected_area
+from roughflow.contact import DEFAULT_TOL
 from roughflow.errors import InputError
 from roughflow.surface import Surface, generate
 
@@ -63,7 +65,10 @@ class PressureLadder:
 
 
 def _contact_ladder(surface: Surface, job: LadderJob, threads: int | None):
-    """Yield (target, ContactResult) along the job's area ladder."""
+    """Yield (target, ContactResult) along the job's area ladder.
+
+    The targets are met in the perimeter-corrected area for the elastic model (the
+    continuum estimate, :func:`_corrected_area`), in the cell count otherwise."""
     from roughflow import contact
 
     kw = {} if threads is None else {"threads": threads}
@@ -90,7 +95,8 @@ def _contact_ladder(surface: Surface, job: LadderJob, threads: int | None):
         if p > 0 and res.area_fraction == 0:
             log.warning("%s contact at p = %.4g has no contact at all (%d iterations): check "
                         "the contact solver", job.model, p, res.iterations)
-        ladder.add(res.pressure, res.area_fraction)
+        ladder.add(res.pressure, _corrected_area(res, job.model, surface.lx, surface.ly)
+                   if job.model == "elastic" else res.area_fraction)
         prev = res
         yield a, res
 
@@ -118,6 +124,13 @@ def _theory(gap: np.ndarray, contact: np.ndarray, a_c: float, mean_gap: float,
     return out
 
 
+def _corrected_area(c, model: str, lx: float, ly: float) -> float:
+    """Perimeter-corrected contact area of one ladder state (see the variable's long_name)."""
+    if model == "elastic":
+        return perimeter_corrected_area(c.contact, lx, ly)
+    return float(c.area_fraction) if model == "bearing" else math.nan
+
+
 def run_ladder(job: LadderJob, *, threads: int | None = None) -> xr.Dataset:
     """Dataset over (seed, step[, axis]) for the job's area ladder."""
     from roughflow import flow, percolation
@@ -127,7 +140,8 @@ def run_ladder(job: LadderJob, *, threads: int | None = None) -> xr.Dataset:
     p = job.surface
     ns, nk = len(job.seeds), len(job.area_fractions)
     nan2 = np.full((ns, nk), np.nan)
-    r = {k: nan2.copy() for k in ("area_fraction", "pressure", "mean_gap", "contact_residual",
+    r = {k: nan2.copy() for k in ("area_fraction", "area_fraction_corrected", "pressure",
+                                  "mean_gap", "contact_residual",
                                   "sigma_closed_form", "gamma_tilde", "emt_residual")}
     r["contact_iterations"] = np.full((ns, nk), -1, dtype=np.int64)
     r["sigma"] = np.full((ns, nk, 2), np.nan)
@@ -149,6 +163,7 @@ def run_ladder(job: LadderJob, *, threads: int | None = None) -> xr.Dataset:
         log.info("seed %d: sigma_ref = (%.4g, %.4g)", seed, *r["sigma_ref"][i])
         for k, (target, c) in enumerate(_contact_ladder(surface, job, threads)):
             r["area_fraction"][i, k] = c.area_fraction
+            r["area_fraction_corrected"][i, k] = a_cont = _corrected_area(c, job.model, lx, ly)
             r["pressure"][i, k] = c.pressure
             r["mean_gap"][i, k] = c.mean_gap
             r["contact_residual"][i, k] = c.residual
@@ -166,7 +181,8 @@ def run_ladder(job: LadderJob, *, threads: int | None = None) -> xr.Dataset:
                 r["sigma"][i, k, ax] = fr.sigma
                 r["flow_residual"][i, k, ax] = fr.residual
                 r["flow_iterations"][i, k, ax] = fr.iterations
-            th = _theory(c.gap, ~open_mask, c.area_fraction, c.mean_gap, job)
+            th = _theory(c.gap, ~open_mask, c.area_fraction if math.isnan(a_cont) else a_cont,
+                         c.mean_gap, job)
             r["sigma_emt"][i, k] = th["sigma_emt"]
             for name in ("sigma_closed_form", "gamma_tilde", "emt_residual"):
                 r[name][i, k] = th[name]
@@ -179,6 +195,10 @@ def run_ladder(job: LadderJob, *, threads: int | None = None) -> xr.Dataset:
     sk, ska = ("seed", "step"), ("seed", "step", "axis")
     data = {
         "area_fraction": var(r["area_fraction"], sk, "1", "relative contact area a_c"),
+        "area_fraction_corrected": var(
+            r["area_fraction_corrected"], sk, "1",
+            "a_c with the perimeter correction (elastic: first-order grid bias removed, "
+            "docs/accuracy.md; bearing: = a_c, unbiased; adhesive: NaN, not calibrated)"),
         "target_area_fraction": var(np.broadcast_to(job.area_fractions, (ns, nk)), sk, "1",
                                     "target of the area ladder"),
         "pressure": var(r["pressure"], sk, "E* gbar", "applied mean pressure"),
@@ -211,6 +231,8 @@ def run_ladder(job: LadderJob, *, threads: int | None = None) -> xr.Dataset:
     a_alt = job.a_c_star_alt if job.a_c_star_alt is not None else math.nan
     ds = xr.Dataset(data, coords=coords, attrs={
         "title": "roughflow ladder scene", "scene": "ladder", "job_id": job.job_id,
+        "error_budget_points_per_lambda_s": p.points_per_lambda_s,
+        "error_budget_contact_tol": DEFAULT_TOL, "error_budget_perimeter_c": PERIMETER_C,
         "a_c_star_theory": job.a_c_star, "a_c_star_alt": a_alt,
         "emt_forms": "isotropic: Eq. 5-6 with a_c_star_theory; isotropic_alt: the same with "
                      "a_c_star_alt; anisotropic_corrected: Eq. 9; anisotropic_persson: Eq. 7-8",

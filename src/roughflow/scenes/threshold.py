@@ -52,6 +52,7 @@ def run_threshold(job: ThresholdJob, *, threads: int | None = None) -> xr.Datase
     values = {k: np.full((len(job.seeds), 2), np.nan) for k in FIELDS}
     values["n_solves"] = np.full((len(job.seeds), 2), -1, dtype=np.int64)
     seconds = np.zeros(len(job.seeds))
+    residual = np.zeros(len(job.seeds))
     for i, seed in enumerate(job.seeds):
         t0 = time.perf_counter()
         spec = p.spec(seed)
@@ -59,11 +60,13 @@ def run_threshold(job: ThresholdJob, *, threads: int | None = None) -> xr.Datase
         log.info("seed %d: %s model, %d x %d grid, gamma=%g H=%g L/lambda_r=%g eps_f=%g",
                  seed, job.model, spec.nx, spec.ny, p.gamma, p.hurst, p.size, p.eps_f)
         res = threshold(surface, axis=None, model=job.model, tol=job.tol, threads=threads,
-                        on_unbracketed="nan")
+                        contact_tol=job.contact_tol, on_unbracketed="nan")
         for k, step in enumerate(getattr(_per_axis(res, 0), "solves", ()) or ()):
             log.info("seed %d bisection step %d: %s", seed, k + 1,
                      ", ".join(f"{n} {v:.5g}" for n, v in zip(
-                         ("p", "a_c", "iterations"), step, strict=False)))
+                         ("p", "a_c", "iterations", "residual"), step, strict=False)))
+            if len(step) > 3:
+                residual[i] = max(residual[i], float(step[3]))
         for ax in (0, 1):
             r = _per_axis(res, ax)
             if not getattr(r, "bracketed", True):
@@ -77,6 +80,9 @@ def run_threshold(job: ThresholdJob, *, threads: int | None = None) -> xr.Datase
         log.info("seed %d done in %.1f s", seed, seconds[i])
     data = {k: var(values[k], ("seed", "axis"), u, n) for k, (u, n, _) in FIELDS.items()}
     data["wall_time"] = var(seconds, ("seed",), "s", "wall time of the seed's bisection")
+    data["contact_residual"] = var(residual, ("seed",), "1",
+                                   "largest residual of the seed's contact solves "
+                                   "(gap error / rms height)")
     data.update(surface_vars(p, job.seeds[0]))
     coords = param_coords(p, job.model)
     coords["seed"] = ("seed", np.asarray(job.seeds, dtype=np.int64), {"long_name": "surface seed"})
@@ -84,6 +90,7 @@ def run_threshold(job: ThresholdJob, *, threads: int | None = None) -> xr.Datase
     ds = xr.Dataset(data, coords=coords, attrs={
         "title": "roughflow threshold scene", "scene": "threshold", "tol": job.tol,
         "job_id": job.job_id, "error_budget_points_per_lambda_s": p.points_per_lambda_s,
-        "error_budget_bisection_tol": job.tol, "error_budget_perimeter_c": PERIMETER_C,
+        "error_budget_bisection_tol": job.tol, "error_budget_contact_tol": job.contact_tol,
+        "error_budget_perimeter_c": PERIMETER_C,
     })
     return no_fill_on_coords(ds)
