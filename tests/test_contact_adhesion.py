@@ -90,3 +90,49 @@ def test_hard_wall_adhesion_keeps_gap_nonnegative_and_adds_contact():
     assert adh.contact_pressure.mean() == pytest.approx(0.05, rel=1e-3)
     with pytest.raises(InputError, match="repulsion"):
         Adhesion(surface_energy=1e-4, range=1e-3, repulsion="soft")
+
+
+def test_adhesion_for_takes_a_range_or_a_tabor_parameter():
+    s = generate(SurfaceSpec.from_sweep(points_per_lambda_s=2, seed=0))
+    ad = adhesion_for(s.heights, s.lx, s.ly, gamma_over_v_full=0.1, range=0.01)
+    assert ad.range == 0.01
+    assert ad.surface_energy == pytest.approx(0.1 * full_contact_energy(s.heights, s.lx, s.ly))
+    for kw in ({}, {"tabor": 2.0, "range": 0.01}):
+        with pytest.raises(InputError, match="exactly one of tabor= and range="):
+            adhesion_for(s.heights, s.lx, s.ly, gamma_over_v_full=0.1, **kw)
+    with pytest.raises(InputError, match="range"):
+        adhesion_for(s.heights, s.lx, s.ly, gamma_over_v_full=0.1, range=-1.0)
+
+
+@pytest.mark.slow
+def test_default_adhesion_reproduces_the_papers_adhesive_case():
+    # Paper Sect. 3.3: about 1 % contact at zero load; 10 % (40 %) contact at 1/8 (1/4) of the
+    # load that gives 10 % (40 %) without adhesion. Surface of Fig. 5: H = 0.8, L/lambda_r = 16,
+    # eps_f = 1/16, here at 2 points per lambda_s (512^2, seed 0).
+    # Tolerances: over seeds 0 and 1 these values agree to 0.001 (docs/contact.md), but going
+    # from 2 to 4 points per lambda_s raises a_c by up to 10 % (first order in the spacing), and
+    # the paper quotes its targets as "about": a(p10/8), a(p40/4) within 25 % of 0.10 and 0.40,
+    # and the zero-load contact between 0.5 % and 2.5 %.
+    from roughflow.contact import solve
+    from roughflow.contact.adhesion import PAPER_RANGE_OVER_LAMBDA_S, PAPER_SURFACE_ENERGY_RATIO
+
+    spec = SurfaceSpec.from_sweep(l_over_lambda_r=16, eps_f=1 / 16, points_per_lambda_s=2,
+                                  seed=0)
+    s = generate(spec)
+
+    def load_for(target):  # non-adhesive load at a_c = target (log bisection, warm starts)
+        lo, hi, prev = 1e-3, 1.0, None
+        while hi / lo > 1.01:
+            mid = math.sqrt(lo * hi)
+            prev = solve(s, mid, tol=1e-5, init=prev)
+            lo, hi = (mid, hi) if prev.area_fraction < target else (lo, mid)
+        return math.sqrt(lo * hi)
+
+    ad = adhesion_for(s.heights, s.lx, s.ly, gamma_over_v_full=PAPER_SURFACE_ENERGY_RATIO,
+                      range=PAPER_RANGE_OVER_LAMBDA_S * spec.lambda_s)
+    a0 = solve(s, 0.0, model="adhesive", adhesion=ad, tol=1e-5)
+    a10 = solve(s, load_for(0.10) / 8, model="adhesive", adhesion=ad, tol=1e-5, init=a0)
+    a40 = solve(s, load_for(0.40) / 4, model="adhesive", adhesion=ad, tol=1e-5, init=a10)
+    assert 0.005 < a0.area_fraction < 0.025
+    assert a10.area_fraction == pytest.approx(0.10, rel=0.25)
+    assert a40.area_fraction == pytest.approx(0.40, rel=0.25)

@@ -49,7 +49,8 @@ def test_expand_study_names_unresolvable_sizes():
 def test_cli_arguments_round_trip():
     job = LadderJob(surface=SurfaceParams(gamma=2.0, l_over_lambda_r=8.0, eps_f=1 / 32),
                     model="adhesive", seeds=(3, 4), area_fractions=(0.1, 0.2),
-                    a_c_star=0.41, a_c_star_alt=0.5, tabor=1.5)
+                    a_c_star=0.41, a_c_star_alt=0.5, tabor=1.5,
+                    range_over_lambda_s=None)
     args = build_parser_for_tests().parse_args(["scene", *job.cli_args(), "-o", "x.nc"])
     from roughflow.cli.scene import job_from_args
 

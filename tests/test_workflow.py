@@ -222,8 +222,10 @@ def test_bad_config_fails_before_any_job(tmp_path, case):
 def test_killed_job_leaves_no_trusted_output(tmp_path):
     wd = copy_workflow(tmp_path)
     cfg = {"studies": {"threshold_vs_gamma": {
-        "gamma": [1], "l_over_lambda_r": [8], "eps_f": [0.0625], "seeds": [0, 1, 2, 3],
-        "seeds_per_job": 4, "points_per_lambda_s": 2, "tol": 0.002}}}
+        # a job of several seconds (6 seeds at 512^2), so that it is surely still running
+        # 1 s after its first seed started
+        "gamma": [1], "l_over_lambda_r": [8], "eps_f": [0.0625], "seeds": [0, 1, 2, 3, 4, 5],
+        "seeds_per_job": 6, "points_per_lambda_s": 4, "tol": 0.002}}}
     (wd / "config" / "kill.yaml").write_text(yaml.safe_dump(cfg))
     env = {**os.environ, "ROUGHFLOW_FFT_THREADS": "1"}
     proc = subprocess.Popen([str(SNAKEMAKE), "--configfile", "config/kill.yaml", "--cores", "1"],

@@ -6,6 +6,7 @@ import argparse
 import logging
 import time
 
+from roughflow.contact.adhesion import PAPER_RANGE_OVER_LAMBDA_S, PAPER_SURFACE_ENERGY_RATIO
 from roughflow.io import write_dataset
 
 from ._common import add_output
@@ -66,10 +67,15 @@ def register(sub: argparse._SubParsersAction) -> None:
                     help="a_c* of the theory lines (0.4)")
     ld.add_argument("--a-c-star-alt", type=float, default=None,
                     help="a second a_c* for the isotropic Bruggeman line (none)")
-    ld.add_argument("--tabor", type=float, default=2.0,
-                    help="Tabor parameter of the adhesive model (2)")
-    ld.add_argument("--surface-energy-ratio", type=float, default=0.203,
-                    help="gamma_s / v_ela^full of the adhesive model (0.203)")
+    ld.add_argument("--surface-energy-ratio", type=float, default=PAPER_SURFACE_ENERGY_RATIO,
+                    help="gamma_s / v_ela^full of the adhesive model "
+                         f"({PAPER_SURFACE_ENERGY_RATIO}, the paper's case)")
+    rng = ld.add_mutually_exclusive_group()
+    rng.add_argument("--range-over-lambda-s", type=float, default=None,
+                     help="interaction range rho / lambda_s of the adhesive model "
+                          f"({PAPER_RANGE_OVER_LAMBDA_S}, the paper's case)")
+    rng.add_argument("--tabor", type=float, default=None,
+                     help="Tabor parameter instead of the range (sets rho from R_c)")
     ld.set_defaults(func=run)
 
     c = kinds.add_parser("channels", help="Fig. 1: isotropic 0.5 x 2 cell vs stretched cell",
@@ -102,7 +108,10 @@ def job_from_args(args: argparse.Namespace):
     return LadderJob(surface=surface, model=args.model, seeds=tuple(args.seeds),
                      area_fractions=tuple(args.area_fractions), a_c_star=args.a_c_star,
                      a_c_star_alt=args.a_c_star_alt, tabor=args.tabor,
-                     surface_energy_ratio=args.surface_energy_ratio)
+                     surface_energy_ratio=args.surface_energy_ratio,
+                     range_over_lambda_s=(
+                         None if args.tabor is not None else PAPER_RANGE_OVER_LAMBDA_S
+                         if args.range_over_lambda_s is None else args.range_over_lambda_s))
 
 
 def run(args: argparse.Namespace) -> None:

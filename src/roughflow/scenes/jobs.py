@@ -14,6 +14,7 @@ import itertools
 import math
 from dataclasses import dataclass, field
 
+from roughflow.contact.adhesion import PAPER_RANGE_OVER_LAMBDA_S, PAPER_SURFACE_ENERGY_RATIO
 from roughflow.errors import InputError
 from roughflow.surface import SurfaceSpec
 
@@ -119,6 +120,20 @@ class ThresholdJob:
                 "--contact-tol", repr(float(self.contact_tol))]
 
 
+def _adhesion_args(adh: dict) -> dict:
+    """LadderJob keywords from a config ``adhesion`` block (a Tabor parameter replaces the
+    default range)."""
+    out = {"surface_energy_ratio": float(adh.get("surface_energy_ratio",
+                                                 PAPER_SURFACE_ENERGY_RATIO))}
+    if adh.get("tabor") is not None:
+        if adh.get("range_over_lambda_s") is not None:
+            raise InputError("adhesion: give range_over_lambda_s or tabor, not both "
+                             f"(got {adh!r})")
+        return {**out, "tabor": float(adh["tabor"]), "range_over_lambda_s": None}
+    return {**out, "range_over_lambda_s": float(adh.get("range_over_lambda_s",
+                                                        PAPER_RANGE_OVER_LAMBDA_S))}
+
+
 @dataclass(frozen=True)
 class LadderJob:
     """Contact along an area ladder, Reynolds flow along x and y, theory predictions."""
@@ -129,9 +144,22 @@ class LadderJob:
     area_fractions: tuple[float, ...] = (0.1, 0.2, 0.3)
     a_c_star: float = 0.4
     a_c_star_alt: float | None = None
-    tabor: float = 2.0
-    surface_energy_ratio: float = 0.203
+    # adhesive model: gamma_s / v_ela^full and either the range rho / lambda_s or the Tabor
+    # parameter (the defaults reproduce the paper's adhesive case, contact.adhesion)
+    surface_energy_ratio: float = PAPER_SURFACE_ENERGY_RATIO
+    range_over_lambda_s: float | None = PAPER_RANGE_OVER_LAMBDA_S
+    tabor: float | None = None
     kind: str = field(default="ladder", init=False)
+
+    def __post_init__(self) -> None:
+        if self.model == "adhesive" and (self.tabor is None) == (self.range_over_lambda_s is None):
+            raise InputError("adhesion needs exactly one of range_over_lambda_s and tabor, got "
+                             f"range_over_lambda_s={self.range_over_lambda_s!r}, "
+                             f"tabor={self.tabor!r}")
+        for name in ("surface_energy_ratio", "range_over_lambda_s", "tabor"):
+            value = getattr(self, name)
+            if value is not None and not (math.isfinite(value) and value > 0):
+                raise InputError(f"{name} must be a positive number, got {value!r}")
 
     @property
     def job_id(self) -> str:
@@ -147,8 +175,9 @@ class LadderJob:
         if self.a_c_star_alt is not None:
             args += ["--a-c-star-alt", repr(float(self.a_c_star_alt))]
         if self.model == "adhesive":
-            args += ["--tabor", repr(float(self.tabor)),
-                     "--surface-energy-ratio", repr(float(self.surface_energy_ratio))]
+            args += ["--surface-energy-ratio", repr(float(self.surface_energy_ratio))]
+            args += (["--tabor", repr(float(self.tabor))] if self.tabor is not None else
+                     ["--range-over-lambda-s", repr(float(self.range_over_lambda_s))])
         return args
 
 
@@ -255,8 +284,7 @@ def expand_study(name: str, block: dict) -> dict[str, Job]:
                         area_fractions=tuple(sorted(float(a) for a in s["area_fraction"])),
                         a_c_star=float(stars.get(model, default)),
                         a_c_star_alt=None if alt is None else float(alt),
-                        tabor=float(adh.get("tabor", 2.0)),
-                        surface_energy_ratio=float(adh.get("surface_energy_ratio", 0.203)),
+                        **_adhesion_args(adh),
                     )
                 jobs.setdefault(job.job_id, job)
     return jobs

@@ -64,6 +64,17 @@ class PressureLadder:
         return max(p, p1 * 1.02 if p1 > 0 else p1 + 1e-3)
 
 
+def _adhesion(surface: Surface, job: LadderJob):
+    """The job's adhesion on this surface: gamma_s = ratio x v_ela^full of the surface, and
+    rho = range_over_lambda_s x lambda_s (or from the Tabor parameter)."""
+    from roughflow.contact.adhesion import adhesion_for
+
+    rho = (None if job.range_over_lambda_s is None else
+           job.range_over_lambda_s * job.surface.spec(0).lambda_s)
+    return adhesion_for(surface.heights, surface.lx, surface.ly, tabor=job.tabor, range=rho,
+                        gamma_over_v_full=job.surface_energy_ratio)
+
+
 def _contact_ladder(surface: Surface, job: LadderJob, threads: int | None):
     """Yield (target, ContactResult) along the job's area ladder.
 
@@ -78,10 +89,7 @@ def _contact_ladder(surface: Surface, job: LadderJob, threads: int | None):
         return
     adhesion = None
     if job.model == "adhesive":
-        from roughflow.contact.adhesion import adhesion_for
-
-        adhesion = adhesion_for(surface.heights, surface.lx, surface.ly, tabor=job.tabor,
-                                gamma_over_v_full=job.surface_energy_ratio)
+        adhesion = _adhesion(surface, job)
         log.info("adhesion: surface energy %.4g, range %.4g", adhesion.surface_energy,
                  adhesion.range)
         kw["adhesion"] = adhesion
@@ -238,5 +246,14 @@ def run_ladder(job: LadderJob, *, threads: int | None = None) -> xr.Dataset:
                      "a_c_star_alt; anisotropic_corrected: Eq. 9; anisotropic_persson: Eq. 7-8",
     })
     if job.model == "adhesive":
-        ds.attrs.update(tabor=job.tabor, surface_energy_ratio=job.surface_energy_ratio)
+        from roughflow.contact.adhesion import adhesion_summary
+
+        spec = p.spec(job.seeds[0])
+        s0 = generate(spec)
+        adh = _adhesion(s0, job)
+        summary = adhesion_summary(s0.heights, s0.lx, s0.ly, adh)
+        ds.attrs.update(surface_energy_ratio=job.surface_energy_ratio,
+                        range_over_lambda_s=adh.range / spec.lambda_s,
+                        tabor=summary["tabor"], adhesion_surface_energy=adh.surface_energy,
+                        adhesion_range=adh.range, adhesion_repulsion=adh.repulsion)
     return no_fill_on_coords(ds)
