@@ -54,7 +54,7 @@ def test_cli_bearing(surface_file, tmp_path):
         (["--pressure", "-1"], 2),
         (["--model", "bearing", "--area-fraction", "1.5"], 2),
         (["--pressure", "0.1", "--tol", "0"], 2),
-        (["--model", "adhesive", "--pressure", "0.1"], 2),
+        (["--model", "adhesive", "--pressure", "0.1", "--surface-energy", "1e-4"], 2),
         (["--pressure", "0.1", "--max-iter", "2"], 3),
     ],
 )
@@ -63,6 +63,26 @@ def test_cli_errors(surface_file, tmp_path, extra, code):
         main(["contact", str(surface_file), *extra, "-o", str(tmp_path / "x.nc")])
     assert exc.value.code == code
     assert not (tmp_path / "x.nc").exists()
+
+
+def test_cli_adhesive_defaults_to_the_papers_case(surface_file, tmp_path):
+    # no --surface-energy/--range: gamma_s = 0.1 v_ela^full, rho = 0.42 lambda_s of the file's
+    # spec, and the result equals the API call with those parameters (same deterministic solve)
+    from roughflow.contact import full_contact_energy
+    from roughflow.contact.adhesion import adhesion_for
+
+    out = tmp_path / "a.nc"
+    main(["contact", str(surface_file), "--model", "adhesive", "--pressure", "0.05",
+          "-o", str(out)])
+    s = read_surface(surface_file)
+    ad = adhesion_for(s.heights, s.lx, s.ly, gamma_over_v_full=0.1,
+                      range=0.42 * s.spec.lambda_s)
+    ref = solve(s, 0.05, model="adhesive", adhesion=ad)
+    with xr.open_dataset(out) as ds:
+        assert ds.attrs["surface_energy"] == pytest.approx(
+            0.1 * full_contact_energy(s.heights, s.lx, s.ly), rel=1e-12)
+        assert ds.attrs["adhesion_range"] == pytest.approx(0.42 * s.spec.lambda_s, rel=1e-12)
+        assert ds.attrs["area_fraction"] == pytest.approx(ref.area_fraction, abs=1e-12)
 
 
 def test_cli_missing_file(tmp_path):

@@ -8,7 +8,12 @@ import numpy as np
 import xarray as xr
 
 from roughflow.contact import DEFAULT_TOL, METHODS, MODELS, Adhesion, ContactResult, solve
-from roughflow.contact.adhesion import adhesion_summary
+from roughflow.contact.adhesion import (
+    PAPER_RANGE_OVER_LAMBDA_S,
+    PAPER_SURFACE_ENERGY_RATIO,
+    adhesion_for,
+    adhesion_summary,
+)
 from roughflow.errors import InputError
 from roughflow.io import LENGTH_UNITS, grid_coords, read_surface, write_dataset
 from roughflow.surface import Surface
@@ -40,27 +45,40 @@ def register(sub: argparse._SubParsersAction) -> None:
                    help="target relative contact area of the bearing model, in [0, 1]")
     p.add_argument("--method", choices=METHODS, default=None,
                    help="cg: constrained conjugate gradients (Polonsky-Keer); gfmd: "
-                        "mass-weighted GFMD with FIRE (default: cg, or gfmd when adhesive)")
+                        "mass-weighted GFMD with FIRE (default: gfmd, the faster one; "
+                        "docs/contact.md)")
     p.add_argument("--tol", type=float, default=DEFAULT_TOL,
                    help=f"residual: largest gap error in units of the rms height ({DEFAULT_TOL:g})")
     p.add_argument("--max-iter", type=int, default=None,
                    help="iteration cap; not converging by then is an error (exit 3)")
     p.add_argument("--surface-energy", type=float, default=None,
-                   help="adhesive model: surface energy gamma_s (units E* L)")
+                   help="adhesive model: surface energy gamma_s (units E* L); without "
+                        "--surface-energy and --range: the paper's adhesive case, gamma_s = "
+                        f"{PAPER_SURFACE_ENERGY_RATIO} v_ela^full and rho = "
+                        f"{PAPER_RANGE_OVER_LAMBDA_S} lambda_s (needs a surface file written "
+                        "by roughflow surface, which records lambda_s)")
     p.add_argument("--range", type=float, default=None, dest="adhesion_range",
                    help="adhesive model: range rho of the cosine attraction (units L)")
     add_output(p)
     p.set_defaults(func=run)
 
 
-def _adhesion(args: argparse.Namespace) -> Adhesion | None:
+def _adhesion(args: argparse.Namespace, surface) -> Adhesion | None:
     given = (args.surface_energy, args.adhesion_range)
     if args.model != "adhesive":
         if any(v is not None for v in given):
             raise InputError("--surface-energy and --range are only for --model adhesive")
         return None
+    if all(v is None for v in given):
+        if surface.spec is None:
+            raise InputError(f"{args.surface} records no lambda_s (not written by roughflow "
+                             "surface): give --surface-energy and --range")
+        return adhesion_for(surface.heights, surface.lx, surface.ly,
+                            gamma_over_v_full=PAPER_SURFACE_ENERGY_RATIO,
+                            range=PAPER_RANGE_OVER_LAMBDA_S * surface.spec.lambda_s)
     if any(v is None for v in given):
-        raise InputError("--model adhesive needs --surface-energy and --range")
+        raise InputError("--model adhesive needs both --surface-energy and --range "
+                         "(or neither, for the paper's adhesive case)")
     return Adhesion(surface_energy=args.surface_energy, range=args.adhesion_range)
 
 
@@ -95,10 +113,10 @@ def result_to_dataset(surface: Surface, result: ContactResult,
 
 
 def run(args: argparse.Namespace) -> None:
-    adhesion = _adhesion(args)
     if args.model == "bearing" and args.pressure is not None:
         raise InputError("--model bearing takes --area-fraction, not --pressure")
     surface = read_surface(args.surface)
+    adhesion = _adhesion(args, surface)
     result = solve(
         surface, args.pressure, model=args.model, method=args.method,
         area_fraction=args.area_fraction, tol=args.tol, max_iter=args.max_iter,
