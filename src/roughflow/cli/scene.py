@@ -105,13 +105,13 @@ def job_from_args(args: argparse.Namespace):
     if args.kind == "threshold":
         return ThresholdJob(surface=surface, model=args.model, seeds=tuple(args.seeds),
                             tol=args.tol, contact_tol=args.contact_tol)
+    rho = args.range_over_lambda_s
+    if rho is None and args.tabor is None:
+        rho = PAPER_RANGE_OVER_LAMBDA_S
     return LadderJob(surface=surface, model=args.model, seeds=tuple(args.seeds),
                      area_fractions=tuple(args.area_fractions), a_c_star=args.a_c_star,
                      a_c_star_alt=args.a_c_star_alt, tabor=args.tabor,
-                     surface_energy_ratio=args.surface_energy_ratio,
-                     range_over_lambda_s=(
-                         None if args.tabor is not None else PAPER_RANGE_OVER_LAMBDA_S
-                         if args.range_over_lambda_s is None else args.range_over_lambda_s))
+                     surface_energy_ratio=args.surface_energy_ratio, range_over_lambda_s=rho)
 
 
 def run(args: argparse.Namespace) -> None:

@@ -13,7 +13,6 @@ from __future__ import annotations
 import logging
 import math
 import time
-from dataclasses import replace
 
 import numpy as np
 import xarray as xr
@@ -67,34 +66,42 @@ class PressureLadder:
         return max(p, p1 * 1.02 if p1 > 0 else p1 + 1e-3)
 
 
-def _adhesion(surface: Surface, job: LadderJob):
+def _adhesion(surface: Surface, job: LadderJob, lambda_s: float):
     """The job's adhesion on this surface: gamma_s = ratio x v_ela^full of the surface, and
     rho = range_over_lambda_s x lambda_s (or from the Tabor parameter)."""
     from roughflow.contact.adhesion import adhesion_for
 
-    rho = (None if job.range_over_lambda_s is None else
-           job.range_over_lambda_s * job.surface.spec(0).lambda_s)
+    rho = None if job.range_over_lambda_s is None else job.range_over_lambda_s * lambda_s
     return adhesion_for(surface.heights, surface.lx, surface.ly, tabor=job.tabor, range=rho,
                         gamma_over_v_full=job.surface_energy_ratio)
 
 
-def _contact_ladder(surface: Surface, job: LadderJob, threads: int | None):
-    """Yield (target, ContactResult) along the job's area ladder.
+def _adhesion_attrs(surface: Surface, adhesion, lambda_s: float, job: LadderJob) -> dict:
+    """Dataset attributes of the adhesion (of the job's first seed)."""
+    from roughflow.contact.adhesion import tabor_parameter
+
+    return {"surface_energy_ratio": job.surface_energy_ratio,
+            "range_over_lambda_s": adhesion.range / lambda_s,
+            "tabor": tabor_parameter(surface.heights, surface.lx, surface.ly, adhesion),
+            "adhesion_surface_energy": adhesion.surface_energy,
+            "adhesion_range": adhesion.range, "adhesion_repulsion": adhesion.repulsion}
+
+
+def _contact_ladder(surface: Surface, job: LadderJob, threads: int | None, adhesion=None):
+    """Yield (target, ContactResult, corrected area) along the job's area ladder.
 
     The targets are met in the perimeter-corrected area for the elastic model (the
     continuum estimate, :func:`_corrected_area`), in the cell count otherwise."""
     from roughflow import contact
 
+    lx, ly = surface.lx, surface.ly
     kw = {} if threads is None else {"threads": threads}
     if job.model == "bearing":
         for a in job.area_fractions:
-            yield a, contact.solve(surface, model="bearing", area_fraction=a)
+            res = contact.solve(surface, model="bearing", area_fraction=a)
+            yield a, res, _corrected_area(res, job.model, lx, ly)
         return
-    adhesion = None
-    if job.model == "adhesive":
-        adhesion = _adhesion(surface, job)
-        log.info("adhesion: surface energy %.4g, range %.4g", adhesion.surface_energy,
-                 adhesion.range)
+    if adhesion is not None:
         kw["adhesion"] = adhesion
     ladder = PressureLadder(job.model)
     prev = None
@@ -106,10 +113,10 @@ def _contact_ladder(surface: Surface, job: LadderJob, threads: int | None):
         if p > 0 and res.area_fraction == 0:
             log.warning("%s contact at p = %.4g has no contact at all (%d iterations): check "
                         "the contact solver", job.model, p, res.iterations)
-        ladder.add(res.pressure, _corrected_area(res, job.model, surface.lx, surface.ly)
-                   if job.model == "elastic" else res.area_fraction)
+        a_cont = _corrected_area(res, job.model, lx, ly)
+        ladder.add(res.pressure, res.area_fraction if math.isnan(a_cont) else a_cont)
         prev = res
-        yield a, res
+        yield a, res, a_cont
 
 
 def _theory(gap: np.ndarray, contact: np.ndarray, a_c: float, mean_gap: float,
@@ -125,23 +132,24 @@ def _theory(gap: np.ndarray, contact: np.ndarray, a_c: float, mean_gap: float,
     from roughflow import theory
 
     shift = max(float(np.mean(contact)) - a_c, 0.0)
-    job = replace(job, a_c_star=min(job.a_c_star + shift, 0.999),
-                  a_c_star_alt=None if job.a_c_star_alt is None else
-                  min(job.a_c_star_alt + shift, 0.999))
+
+    def on_grid(a_c_star: float) -> float:
+        return min(a_c_star + shift, 0.999)
+
     s = theory.local_conductivity(gap, contact=contact).ravel()
     out = {"sigma_emt": np.full((len(EMT_FORMS), 2), np.nan), "gamma_tilde": np.nan}
-    iso = theory.bruggeman(s, a_c_star=job.a_c_star)
+    iso = theory.bruggeman(s, a_c_star=on_grid(job.a_c_star))
     out["sigma_emt"][0] = iso.sigma
     out["emt_residual"] = float(iso.residual)
     if job.a_c_star_alt is not None:
-        out["sigma_emt"][1] = theory.bruggeman(s, a_c_star=job.a_c_star_alt).sigma
+        out["sigma_emt"][1] = theory.bruggeman(s, a_c_star=on_grid(job.a_c_star_alt)).sigma
     for k, form in ((2, "corrected"), (3, "persson")):
-        r = theory.bruggeman_anisotropic(s, a_c_star=job.a_c_star, gamma=job.surface.gamma,
-                                         form=form)
+        r = theory.bruggeman_anisotropic(s, a_c_star=on_grid(job.a_c_star),
+                                         gamma=job.surface.gamma, form=form)
         out["sigma_emt"][k] = (r.sigma_x, r.sigma_y)
         if form == "corrected":
             out["gamma_tilde"] = float(r.gamma_tilde)
-    cf = theory.closed_form(mean_gap, a_c, a_c_star=job.a_c_star - shift, kind=job.model)
+    cf = theory.closed_form(mean_gap, a_c, a_c_star=job.a_c_star, kind=job.model)
     out["sigma_closed_form"] = float(np.asarray(cf))
     return out
 
@@ -173,6 +181,7 @@ def run_ladder(job: LadderJob, *, threads: int | None = None) -> xr.Dataset:
     r["sigma_emt"] = np.full((ns, nk, len(EMT_FORMS), 2), np.nan)
     r["sigma_ref"] = np.full((ns, 2), np.nan)
     r["wall_time"] = np.zeros(ns)
+    adhesion_attrs = {}
     for i, seed in enumerate(job.seeds):
         t0 = time.perf_counter()
         spec = p.spec(seed)
@@ -183,9 +192,16 @@ def run_ladder(job: LadderJob, *, threads: int | None = None) -> xr.Dataset:
         gap0 = surface.heights.max() - surface.heights
         r["sigma_ref"][i] = flow.conductance(gap0, None, lx=lx, ly=ly)
         log.info("seed %d: sigma_ref = (%.4g, %.4g)", seed, *r["sigma_ref"][i])
-        for k, (target, c) in enumerate(_contact_ladder(surface, job, threads)):
+        adhesion = _adhesion(surface, job, spec.lambda_s) if job.model == "adhesive" else None
+        if adhesion is not None:
+            log.info("adhesion: surface energy %.4g, range %.4g", adhesion.surface_energy,
+                     adhesion.range)
+            if i == 0:
+                adhesion_attrs = _adhesion_attrs(surface, adhesion, spec.lambda_s, job)
+        for k, (target, c, a_cont) in enumerate(
+                _contact_ladder(surface, job, threads, adhesion)):
             r["area_fraction"][i, k] = c.area_fraction
-            r["area_fraction_corrected"][i, k] = a_cont = _corrected_area(c, job.model, lx, ly)
+            r["area_fraction_corrected"][i, k] = a_cont
             r["pressure"][i, k] = c.pressure
             r["mean_gap"][i, k] = c.mean_gap
             r["contact_residual"][i, k] = c.residual
@@ -259,15 +275,5 @@ def run_ladder(job: LadderJob, *, threads: int | None = None) -> xr.Dataset:
         "emt_forms": "isotropic: Eq. 5-6 with a_c_star_theory; isotropic_alt: the same with "
                      "a_c_star_alt; anisotropic_corrected: Eq. 9; anisotropic_persson: Eq. 7-8",
     })
-    if job.model == "adhesive":
-        from roughflow.contact.adhesion import adhesion_summary
-
-        spec = p.spec(job.seeds[0])
-        s0 = generate(spec)
-        adh = _adhesion(s0, job)
-        summary = adhesion_summary(s0.heights, s0.lx, s0.ly, adh)
-        ds.attrs.update(surface_energy_ratio=job.surface_energy_ratio,
-                        range_over_lambda_s=adh.range / spec.lambda_s,
-                        tabor=summary["tabor"], adhesion_surface_energy=adh.surface_energy,
-                        adhesion_range=adh.range, adhesion_repulsion=adh.repulsion)
+    ds.attrs.update(adhesion_attrs)
     return no_fill_on_coords(ds)

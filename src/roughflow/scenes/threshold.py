@@ -65,8 +65,7 @@ def run_threshold(job: ThresholdJob, *, threads: int | None = None) -> xr.Datase
             log.info("seed %d bisection step %d: %s", seed, k + 1,
                      ", ".join(f"{n} {v:.5g}" for n, v in zip(
                          ("p", "a_c", "iterations", "residual"), step, strict=False)))
-            if len(step) > 3:
-                residual[i] = max(residual[i], float(step[3]))
+            residual[i] = max(residual[i], float(step[3]))
         for ax in (0, 1):
             r = _per_axis(res, ax)
             if not getattr(r, "bracketed", True):
