@@ -1,10 +1,30 @@
-"""The result of a contact solve (shared by every model and method)."""
+"""Results of contact solves: the raw output of one method and the public result."""
 
 from __future__ import annotations
 
 from dataclasses import dataclass
 
 import numpy as np
+
+
+@dataclass(frozen=True, eq=False)
+class SolverOutput:
+    """What a contact method (``gfmd``, ``polonsky_keer``) returns; ``solve`` wraps it.
+
+    pressure: local contact pressure (negative values are adhesive tension);
+    gap: interfacial separation >= 0; contact: boolean contact mask;
+    separation: mean plane of the elastic body relative to the surface's mean plane;
+    iterations, residual, converged: the method's diagnostics (residual in units of the
+    rms height, see ``roughflow.contact.solve``).
+    """
+
+    pressure: np.ndarray
+    gap: np.ndarray
+    contact: np.ndarray
+    separation: float
+    iterations: int
+    residual: float
+    converged: bool
 
 
 @dataclass(frozen=True, eq=False)

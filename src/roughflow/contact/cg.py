@@ -13,6 +13,7 @@ import numpy as np
 from roughflow import fft
 
 from ._linalg import dot as _dot
+from ._result import SolverOutput
 from .elastic import compliance
 
 
@@ -32,10 +33,10 @@ def polonsky_keer(
     max_iter: int,
     p0: np.ndarray | None = None,
     threads: int | None = None,
-) -> tuple[np.ndarray, np.ndarray, float, int, float, bool]:
+) -> SolverOutput:
     """Solve the frictionless periodic contact under mean pressure ``load``.
 
-    Returns ``(pressure, gap, separation, iterations, residual, converged)``. The residual
+    Returns a :class:`SolverOutput` (contact where the pressure is positive). The residual
     is max(max |g - gbar| on the contact set, max overlap off it) / rms(h), where g is
     the gap up to a constant computed from the current pressure: it bounds the local gap
     error in units of the rms height.
@@ -99,4 +100,5 @@ def polonsky_keer(
             p *= load / mp
     gap = np.where(p > 0, 0.0, np.maximum(g, 0.0))
     separation = -gbar  # mean plane of the elastic body relative to mean(h) = 0
-    return p, gap, separation, it, residual, residual <= tol
+    return SolverOutput(pressure=p, gap=gap, contact=p > 0, separation=separation,
+                        iterations=it, residual=residual, converged=residual <= tol)

@@ -117,10 +117,9 @@ def solve(
         p0 = None
         if init is not None and init.model != "bearing":
             p0 = init.contact_pressure
-        p, gap, sep, it, res, ok = polonsky_keer(
+        out = polonsky_keer(
             heights, lx, ly, load, tol=tol, max_iter=int(max_iter), p0=p0, threads=threads
         )
-        contact = p > 0
     else:
         from .gfmd import gfmd
 
@@ -131,26 +130,26 @@ def solve(
             # acts from the first step; a flat start floats at zero load
             init = solve(surface, max(load, 1e-2), method="gfmd", tol=1e-4, threads=threads)
         u0 = heights + init.gap if init is not None else None
-        p, gap, contact, sep, it, res, ok = gfmd(
+        out = gfmd(
             heights, lx, ly, load, tol=tol, max_iter=int(max_iter), u0=u0,
             adhesion=adhesion if model == "adhesive" else None, threads=threads,
         )
-    if not ok:
+    if not out.converged:
         raise ConvergenceError(
             f"contact solve ({model}, {method}) did not reach tol={tol:g} within "
-            f"max_iter={max_iter}", residual=float(res), iterations=int(it),
+            f"max_iter={max_iter}", residual=float(out.residual), iterations=int(out.iterations),
         )
     return ContactResult(
-        gap=gap,
-        contact_pressure=p,
-        contact=contact,
-        area_fraction=float(contact.mean()),
-        mean_gap=float(gap.mean()),
+        gap=out.gap,
+        contact_pressure=out.pressure,
+        contact=out.contact,
+        area_fraction=float(out.contact.mean()),
+        mean_gap=float(out.gap.mean()),
         pressure=float(load),
-        iterations=int(it),
-        residual=float(res),
+        iterations=int(out.iterations),
+        residual=float(out.residual),
         converged=True,
         model=model,
         method=method,
-        separation=float(sep),
+        separation=float(out.separation),
     )
