@@ -1,4 +1,4 @@
-"""Self-describing netCDF datasets: writing atomically, reading surfaces back.
+"""netCDF files: writing any dataset atomically, and the surface file format.
 
 Every variable carries ``units`` and ``long_name``; parameters are attributes
 or coordinates. Files are written to a temporary name in the same folder and
@@ -14,10 +14,9 @@ from pathlib import Path
 import numpy as np
 import xarray as xr
 
+from roughflow.datasets.units import LENGTH_UNITS, grid_coords
 from roughflow.errors import InputError
 from roughflow.surface import Surface, SurfaceSpec
-
-LENGTH_UNITS = "L (cell side; dimensionless)"
 
 
 def _attr_value(v):
@@ -51,16 +50,6 @@ def write_dataset(ds: xr.Dataset, path: str | os.PathLike) -> Path:
             os.unlink(tmp)
         raise
     return path
-
-
-def grid_coords(nx: int, ny: int, lx: float, ly: float) -> dict:
-    """Cell-centre coordinates x, y with units."""
-    x = (np.arange(nx) + 0.5) * lx / nx
-    y = (np.arange(ny) + 0.5) * ly / ny
-    return {
-        "x": ("x", x, {"units": LENGTH_UNITS, "long_name": "position along x (axis 0)"}),
-        "y": ("y", y, {"units": LENGTH_UNITS, "long_name": "position along y (axis 1)"}),
-    }
 
 
 def surface_to_dataset(surface: Surface) -> xr.Dataset:

@@ -6,8 +6,8 @@ Fourier amplitudes are deterministic, |h~(q)| = sqrt(C(q_P)), phases uniform on
     q_P = sqrt(gamma q_x^2 + q_y^2 / gamma),
 
 so gamma > 1 stretches the surface along x (axis 0). The spectrum (Eq. 2, with the
-exponent corrected as in ``shared/docs/physics.md`` Sect. 2: the 2D spectrum of
-a self-affine surface falls as q^(-2(1+H)))
+exponent corrected as in docs/physics.md Sect. 2: the 2D spectrum of a self-affine
+surface falls as q^(-2(1+H)))
 
     C(q) ~ Theta(q_s - q) / (1 + (q/q_r)^2)^(1+H)          (rolloff="smooth")
     C(q) ~ Theta(q_s - q) min(1, (q/q_r)^(-2(1+H)))        (rolloff="plateau")
@@ -25,10 +25,16 @@ from dataclasses import asdict, dataclass
 
 import numpy as np
 
-from roughflow import fft
+from roughflow import defaults, fft
+from roughflow.defaults import ROLLOFF_FORMS
 from roughflow.errors import InputError, require_finite, require_positive
 
-ROLLOFF_FORMS = ("smooth", "plateau")
+
+def paper_l_over_lambda_r(gamma: float) -> float:
+    """The paper's default size L / lambda_r = 4 max(sqrt(gamma), 1/sqrt(gamma)): four
+    roll-off wavelengths in the easy direction."""
+    s = math.sqrt(gamma)
+    return defaults.PAPER_SIZE_FACTOR * max(s, 1.0 / s)
 
 
 @dataclass(frozen=True)
@@ -105,12 +111,12 @@ class SurfaceSpec:
     def from_sweep(
         cls,
         *,
-        gamma: float = 1.0,
-        hurst: float = 0.8,
+        gamma: float = defaults.GAMMA,
+        hurst: float = defaults.HURST,
         l_over_lambda_r: float | None = None,
-        eps_f: float = 1 / 16,
-        points_per_lambda_s: float = 8.0,
-        aspect: float = 1.0,
+        eps_f: float = defaults.EPS_F,
+        points_per_lambda_s: float = defaults.POINTS_PER_LAMBDA_S,
+        aspect: float = defaults.ASPECT,
         seed: int = 0,
         rolloff: str = "smooth",
         area: float = 1.0,
@@ -135,7 +141,7 @@ class SurfaceSpec:
             raise InputError(f"eps_f = lambda_s/lambda_r must be <= 1, got {eps_f!r}")
         sg = math.sqrt(gamma)
         if l_over_lambda_r is None:
-            l_over_lambda_r = 4 * max(sg, 1 / sg)
+            l_over_lambda_r = paper_l_over_lambda_r(gamma)
         l_over_lambda_r = require_positive("l_over_lambda_r", l_over_lambda_r)
         length = math.sqrt(area)
         lx, ly = length * math.sqrt(aspect), length / math.sqrt(aspect)

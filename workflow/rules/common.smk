@@ -14,8 +14,9 @@ SCHEMA = Path(workflow.basedir) / "workflow" / "schemas" / "config.schema.yaml"
 def _validate_config(config):
     """JSON-schema validation with a message naming the key and the value.
 
-    jsonschema's best match gives the path of the offending key; snakemake's validate
-    then fills in the schema's defaults.
+    jsonschema's best match gives the path of the offending key. The schema's defaults are
+    documentation only (tests/test_defaults.py keeps them equal to roughflow's): missing
+    keys are filled by roughflow.scenes.study_defaults, the one source.
     """
     import jsonschema
     import yaml
@@ -27,18 +28,14 @@ def _validate_config(config):
     if error is not None:
         key = ".".join(str(p) for p in error.absolute_path) or "<top level>"
         raise WorkflowError(f"invalid config: key {key!r} = {error.instance!r}: {error.message}")
-    validate(config, "../schemas/config.schema.yaml")
+    validate(config, "../schemas/config.schema.yaml", set_default=False)
 
 
 _validate_config(config)
 
+from roughflow.defaults import FLOW_STUDIES, THRESHOLD_STUDIES  # noqa: E402
 from roughflow.errors import InputError  # noqa: E402
-from roughflow.scenes import (  # noqa: E402
-    FLOW_STUDIES,
-    THRESHOLD_STUDIES,
-    expand_study,
-    grid_points,
-)
+from roughflow.scenes import expand_study, grid_points, study_defaults  # noqa: E402
 from roughflow.scenes.jobs import estimated_seconds  # noqa: E402
 
 RESULTS = config.get("results", "results")
@@ -72,6 +69,15 @@ wildcard_constraints:
     study="|".join(STUDIES),
     kind="threshold|ladder",
     job=r"[A-Za-z0-9_.+\-]+",
+
+
+def study_option(study, key):
+    """A study's option with its default (roughflow.scenes.study_defaults)."""
+    defaults = study_defaults(study)[key]
+    given = STUDIES[study].get(key)
+    if isinstance(defaults, dict):
+        return {**defaults, **(given or {})}
+    return defaults if given is None else given
 
 
 def job_of(wildcards):

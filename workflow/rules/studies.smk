@@ -28,8 +28,8 @@ rule fit:
     output:
         f"{RESULTS}/{{study}}/fit.nc",
     params:
-        bootstrap=lambda wc: STUDIES[wc.study].get("fit", {}).get("bootstrap", 200),
-        nu=lambda wc: STUDIES[wc.study].get("fit", {}).get("nu", 4 / 3),
+        bootstrap=lambda wc: study_option(wc.study, "fit")["bootstrap"],
+        nu=lambda wc: study_option(wc.study, "fit")["nu"],
     log:
         f"{RESULTS}/logs/{{study}}/fit.log",
     benchmark:

@@ -19,6 +19,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from roughflow.defaults import FLOW_TOL
 from roughflow.errors import InputError, require_field, require_positive
 from roughflow.percolation import spanning_cells
 
@@ -107,13 +108,14 @@ def _solve_flux_balanced(matrix, rhs, cells, act, faces: Faces, *, tol: float, m
     while the flux imbalance |Q_in - Q_out| / Q exceeds ``tol`` and the residual still falls.
 
     Near a_c* the flux through the last constriction is many decades below ||b|| (which
-    the well-connected reservoir cells dominate), so the first criterion alone left
-    |Q_in - Q_out| / Q = 2e-4 with RS-AMG and a negative outlet flux with SA-AMG (issue 8
-    stress test). Each refinement round tightens the relative tolerance by the missing
-    factor and restarts from the last iterate, down to the float64 floor (the reservoir
-    fluxes are differences 1 - p of order Q / T, so their round-off is eps T / Q). sigma
-    comes from the dissipation, whose error is quadratic in the pressure error, and is
-    unaffected. Returns (solution, pressure with 0 in inactive cells, Q, |Q_in - Q_out|/Q).
+    the well-connected reservoir cells dominate), so the first criterion alone can leave
+    |Q_in - Q_out| / Q = 2e-4 with RS-AMG and a negative outlet flux with SA-AMG
+    (tests/test_stress_pipeline.py). Each refinement round tightens the relative tolerance
+    by the missing factor and restarts from the last iterate, down to the float64 floor
+    (the reservoir fluxes are differences 1 - p of order Q / T, so their round-off is
+    eps T / Q). sigma comes from the dissipation, whose error is quadratic in the pressure
+    error, and is unaffected. Returns (solution, pressure with 0 in inactive cells, Q,
+    |Q_in - Q_out|/Q).
     """
     sol = solve_spd(matrix, rhs, tol=tol, method=method)
     for round_ in range(rounds + 1):
@@ -141,7 +143,7 @@ def solve(
     lx: float = 1.0,
     ly: float | None = None,
     eta: float = 1.0,
-    tol: float = 1e-8,
+    tol: float = FLOW_TOL,
     method: str | None = None,
 ) -> FlowResult:
     """Reynolds flow along ``axis`` (0/"x" or 1/"y") through the gap field ``gap[ix, iy]``.
@@ -218,7 +220,7 @@ def conductance(
     lx: float = 1.0,
     ly: float | None = None,
     eta: float = 1.0,
-    tol: float = 1e-8,
+    tol: float = FLOW_TOL,
     method: str | None = None,
 ) -> float | tuple[float, float]:
     """Effective conductance along ``axis``, or ``(sigma_x, sigma_y)`` when ``axis`` is None."""

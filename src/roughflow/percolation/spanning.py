@@ -5,7 +5,7 @@ along ``axis`` the boundaries along ``axis`` are open (reservoirs) and the cell 
 across it; a cluster percolates when it touches both the first and the last slab along
 ``axis``. Contact cells connect through 8 neighbours, which makes the two phases exactly
 dual on the square grid: fluid spans x  <=>  no contact cluster winds around y on the same
-cylinder (open in x, periodic in y), and vice versa (physics notes Sect. 4).
+cylinder (open in x, periodic in y), and vice versa (docs/physics.md Sect. 4).
 """
 
 from __future__ import annotations
