@@ -1,7 +1,7 @@
 """Searches that drive contact solves: the load for a target contact area, and the critical
 contact area a_c* at which fluid percolation stops.
 
-- :func:`threshold` (:mod:`.threshold`): a_c* along x and y from one shared, warm-started
+- :func:`threshold` (:mod:`.critical`): a_c* along x and y from one shared, warm-started
   sequence of contact solves (exact single pass for the bearing model).
 - :class:`LoadSearch`, :func:`load_for_area` (:mod:`.load`): loads for target areas on one
   surface, from the contact law (:mod:`roughflow.contact.law`) and the solved states.
@@ -10,8 +10,7 @@ This layer sits above ``contact`` and ``percolation``, which depend on neither i
 each other.
 """
 
-from .load import AreaSolve, LoadSearch, Point, load_for_area, warm_start
-from .threshold import (
+from .critical import (
     SearchOptions,
     SolveRecord,
     Threshold,
@@ -19,6 +18,7 @@ from .threshold import (
     first_pressure,
     threshold,
 )
+from .load import AreaSolve, LoadSearch, Point, load_for_area, warm_start
 
 __all__ = [
     "AreaSolve",
