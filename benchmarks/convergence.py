@@ -122,7 +122,7 @@ def threshold_record(surf: Surface, *, tol: float, contact_tol: float,
             continue
         rm = contact.solve(surf, 0.5 * (th[ax].p_lo + th[ax].p_hi), tol=contact_tol, init=rm)
         rec[f"a_mid_{ax}"] = rm.area_fraction
-        rec[f"perim_{ax}"] = accuracy.perimeter_term(rm.contact, surf.lx, surf.ly)
+        rec[f"perim_{ax}"] = accuracy.perimeter_term(rm.contact)
         rec.update({f"{k}_{ax}": v for k, v in _faces(rm.contact).items()})
     rec["time_mid"] = (time.perf_counter() - t0) / 2
     rec["perim_mid"] = 0.5 * (rec["perim_0"] + rec["perim_1"])
@@ -166,7 +166,7 @@ def phase_resolution(args) -> None:
                 _append(out, dict(
                     kind="fixed", **base, target=target, p_fixed=p,
                     a_fixed=r.area_fraction, gap_fixed=r.mean_gap,
-                    perim_fixed=accuracy.perimeter_term(r.contact, surf.lx, surf.ly),
+                    perim_fixed=accuracy.perimeter_term(r.contact),
                     **{f"{k}_fixed": v for k, v in _faces(r.contact).items()},
                     contact_tol=args.contact_tol, time_contact=time.perf_counter() - t0))
             continue
@@ -187,9 +187,9 @@ def phase_resolution(args) -> None:
                 kind="sigma", **base, target=target,
                 p_fixed=first.pressure, a_fixed=first.area_fraction,
                 gap_fixed=first.mean_gap,
-                perim_fixed=accuracy.perimeter_term(first.contact, surf.lx, surf.ly),
+                perim_fixed=accuracy.perimeter_term(first.contact),
                 **{f"{k}_fixed": v for k, v in _faces(first.contact).items()},
-                a=a, perim=accuracy.perimeter_term(r.contact, surf.lx, surf.ly),
+                a=a, perim=accuracy.perimeter_term(r.contact),
                 sigma_raw=sig, sigma=math.exp(ln_sig_t), mean_gap=r.mean_gap,
                 n_contact_solves=ns, time_contact=t_c, time_flow=t_f,
                 flow_residual=fr.residual, flux_imbalance=fr.flux_imbalance,

@@ -443,8 +443,7 @@ def threshold(
                 order = (np.argsort(-open_first, axis=None) if open_first is not None
                          else open_first_order(r.gap, r.contact, pressure))
                 return predicted_thresholds(order, shape, axes)
-        perimeter = (perimeter_term(r.contact, surface.lx, surface.ly) if model == "elastic"
-                     else float("nan"))
+        perimeter = perimeter_term(r.contact) if model == "elastic" else float("nan")
         return _Sample(load=float(load), area=float(r.area_fraction), spans=spans, state=r,
                        predictor=predictor, perimeter=perimeter)
 
