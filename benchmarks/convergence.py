@@ -268,6 +268,18 @@ def _md_table(header: list[str], rows: list[list]) -> str:
     return "\n".join(lines)
 
 
+def _write(outdir: Path, stem: str, md: list[str], csv_rows: list[str], fig, png: str) -> None:
+    """Save the figure, the markdown tables and the CSV of one report; print the tables."""
+    import matplotlib.pyplot as plt
+
+    fig.tight_layout()
+    fig.savefig(outdir / png, dpi=120)
+    plt.close(fig)
+    (outdir / f"{stem}.md").write_text("\n".join(md))
+    (outdir / f"{stem}.csv").write_text("\n".join(csv_rows) + "\n")
+    print("\n".join(md))
+
+
 def _fit_c(sig: list[dict], ppls: list[int], exclude_seed=None) -> float:
     pts = [r for r in sig if r["ppl"] in ppls and r["seed"] != exclude_seed]
     if len({r["ppl"] for r in pts}) < 2:
@@ -600,12 +612,7 @@ def report(args) -> None:
         axs[2].set_ylabel("rms |a_c* - a_c*(ref)|")
         axs[2].set_title("bisection tolerance (labels: tol)")
         axs[2].legend(fontsize=7)
-    fig.tight_layout()
-    fig.savefig(outdir / "convergence_tolerances.png", dpi=120)
-    plt.close(fig)
-    (outdir / "convergence.md").write_text("\n".join(md))
-    (outdir / "convergence.csv").write_text("\n".join(csv_rows) + "\n")
-    print("\n".join(md))
+    _write(outdir, "convergence", md, csv_rows, fig, "convergence_tolerances.png")
 
 
 # ---------------------------------------------------------------------------------------
@@ -647,6 +654,16 @@ def _fit_form(pts: list[dict], form: str, exclude_seed=None) -> accuracy.Perimet
     return accuracy.fit_perimeter_constant(
         [(r["gamma"], r["seed"], r["target"]) for r in pts], [r["a_fixed"] for r in pts],
         [_face_term(r, "_fixed", form) for r in pts])
+
+
+def _jackknife_c(pts: list[dict], form: str) -> float:
+    """Leave-one-seed-out (jackknife) standard error of the fitted constant."""
+    seeds = sorted({(r["gamma"], r["seed"]) for r in pts})
+    if len(seeds) < 3:
+        return float("nan")
+    cs = np.array([_fit_form([r for r in pts if (r["gamma"], r["seed"]) != gs], form).c
+                   for gs in seeds])
+    return float(np.sqrt((len(cs) - 1) / len(cs) * np.sum((cs - cs.mean()) ** 2)))
 
 
 def _direction(gamma: float, ax: int) -> str:
@@ -691,23 +708,23 @@ def report_anisotropic(args) -> None:
         ppls = sorted({r["ppl"] for r in thr})
         seeds = sorted(s for s in {r["seed"] for r in thr}
                        if all(any(r["seed"] == s and r["ppl"] == p for r in thr) for p in ppls))
-        if len(ppls) < 2:
+        fit_ppls = [p for p in ppls if p >= args.fit_min_ppl]
+        if len(fit_ppls) < 2 or not seeds:  # nothing complete yet
             continue
         f0, f1 = ppls[-2], ppls[-1]
-        fit_ppls = [p for p in ppls if p >= args.fit_min_ppl]
         pts = [r for r in fixed if r["ppl"] in fit_ppls and r["seed"] in seeds]
         fixed_all += pts
         cfit = {}
         for form in FORMS:
             f = _fit_form(pts, form)
             cfit[form] = f
-            rows_fit.append([g, form, f.c, f.rms, f.n])
+            rows_fit.append([g, form, f.c, _jackknife_c(pts, form), f.rms, f.n])
         tx_ty = np.mean([r["tx_fixed"] / r["ty_fixed"] for r in pts])
         cxy, rms_xy = _lstsq_groups([(r["seed"], r["target"]) for r in pts],
                                     np.array([r["a_fixed"] for r in pts]),
                                     np.array([[r["tx_fixed"], r["ty_fixed"]] for r in pts]))
         rows_fit.append([g, f"pixel, c_x and c_y (tx/ty = {tx_ty:.2f}: nearly collinear)",
-                         f"{cxy[0]:.4f} / {cxy[1]:.4f}", rms_xy, len(pts)])
+                         f"{cxy[0]:.4f} / {cxy[1]:.4f}", "", rms_xy, len(pts)])
         # fixed-load areas against resolution
         for target in sorted({r["target"] for r in fixed}):
             for p in ppls:
@@ -733,6 +750,16 @@ def report_anisotropic(args) -> None:
                                                     rr[f1][f"a_star_{ax}"], ratio=f1 / f0)
         for ax in (0, 1):
             d = _direction(g, ax)
+            # the constant that would remove the first-order error of a_c* itself, fitted
+            # on this direction's thresholds at the two finest grids (at 4 points per
+            # lambda_s the percolation jitter, sd ~0.014, swamps it); jackknife over seeds
+            tp = [dict(q, gamma=g, target=None, a_fixed=q[f"a_star_{ax}"],
+                       tx_fixed=q[f"tx_{ax}"], ty_fixed=q[f"ty_{ax}"])
+                  for q in thr if q["ppl"] in (f0, f1) and q["seed"] in seeds]
+            if len(seeds) > 2:
+                ft = _fit_form(tp, "pixel")
+                rows_fit.append([g, f"pixel, fitted on a_c* {d} (ppl {f0}, {f1})", ft.c,
+                                 _jackknife_c(tp, "pixel"), ft.rms, ft.n])
             curves = {k: [] for k in ("raw", *FORMS, "pixel, c fitted")}
             for p in ppls:
                 e = {k: [] for k in curves}
@@ -771,15 +798,16 @@ def report_anisotropic(args) -> None:
     if len({r["gamma"] for r in fixed_all}) > 1:
         for form in FORMS:
             f = _fit_form(fixed_all, form)
-            rows_fit.append(["pooled", form, f.c, f.rms, f.n])
+            rows_fit.append(["pooled", form, f.c, _jackknife_c(fixed_all, form), f.rms, f.n])
         cxy, rms_xy = _lstsq_groups([(r["gamma"], r["seed"], r["target"]) for r in fixed_all],
                                     np.array([r["a_fixed"] for r in fixed_all]),
                                     np.array([[r["tx_fixed"], r["ty_fixed"]]
                                               for r in fixed_all]))
-        rows_fit.append(["pooled", "pixel, c_x and c_y", f"{cxy[0]:.4f} / {cxy[1]:.4f}", rms_xy,
-                         len(fixed_all)])
+        rows_fit.append(["pooled", "pixel, c_x and c_y", f"{cxy[0]:.4f} / {cxy[1]:.4f}", "",
+                         rms_xy, len(fixed_all)])
     md.append(f"## Perimeter constant fitted on fixed-load areas (ppl >= {args.fit_min_ppl})\n")
-    md.append(_md_table(["gamma", "face weighting", "c", "rms residual", "points"], rows_fit)
+    md.append(_md_table(["gamma", "face weighting", "c", "jackknife SE over seeds",
+                         "rms residual", "points"], rows_fit)
               + "\n")
     md.append(f"## Fixed-load contact area error (mean over seeds; corrections with c = {c0})\n")
     md.append(_md_table(["gamma", "a_c target (law)", "ppl", "raw", "geometric", "pixel"],
@@ -788,12 +816,7 @@ def report_anisotropic(args) -> None:
               "weighting; pixel with c fitted on the other seeds of this gamma)\n")
     md.append(_md_table(["gamma", "direction", "variant", "ppl", "bias", "SE of bias",
                          "sd over seeds", "seeds"], rows_thr) + "\n")
-    fig.tight_layout()
-    fig.savefig(outdir / "convergence_anisotropic.png", dpi=120)
-    plt.close(fig)
-    (outdir / "convergence_anisotropic.md").write_text("\n".join(md))
-    (outdir / "convergence_anisotropic.csv").write_text("\n".join(csv) + "\n")
-    print("\n".join(md))
+    _write(outdir, "convergence_anisotropic", md, csv, fig, "convergence_anisotropic.png")
 
 
 def main(argv=None) -> int:
