@@ -9,14 +9,15 @@ from __future__ import annotations
 
 import os
 import tempfile
+from dataclasses import fields
 from pathlib import Path
 
 import numpy as np
 import xarray as xr
 
-from roughflow.datasets.units import LENGTH_UNITS, grid_coords
+from roughflow.datasets.units import LENGTH_UNITS, REF_LENGTH, REFERENCE_ATTRS, grid_coords
 from roughflow.errors import InputError
-from roughflow.surface import Surface, SurfaceSpec
+from roughflow.surface import ScanInfo, Surface, SurfaceSpec
 
 
 def _attr_value(v):
@@ -68,7 +69,18 @@ def surface_to_dataset(surface: Surface) -> xr.Dataset:
     )
     if surface.spec is not None:
         ds.attrs.update({f"spec_{k}": v for k, v in surface.spec.as_attrs().items()})
+    ds.attrs.update(scan_attrs(surface))
     return ds
+
+
+def scan_attrs(surface: Surface) -> dict:
+    """A scan's :class:`ScanInfo` as ``scan_*`` attributes plus the reference length in
+    metres (empty for a generated surface)."""
+    if surface.scan is None:
+        return {}
+    out = {f"scan_{k}": v for k, v in surface.scan.as_attrs().items()}
+    out[REFERENCE_ATTRS[REF_LENGTH][0]] = surface.scan.length_scale
+    return out
 
 
 def surface_from_dataset(ds: xr.Dataset) -> Surface:
@@ -84,13 +96,27 @@ def surface_from_dataset(ds: xr.Dataset) -> Surface:
         for k in ("lx", "ly", "hurst", "gamma", "lambda_r", "lambda_s", "rms_slope"):
             kw[k] = float(kw[k])
         spec = SurfaceSpec(**kw)
-    return Surface(heights=heights, lx=float(ds.attrs["lx"]), ly=float(ds.attrs["ly"]), spec=spec)
+    scan = None
+    if "scan_source" in ds.attrs:
+        kw = {f.name: ds.attrs[f"scan_{f.name}"] for f in fields(ScanInfo)}
+        for k in ("length_scale", "rms_gradient"):
+            kw[k] = float(kw[k])
+        kw["filled"] = int(kw["filled"])
+        kw["periodic"] = bool(int(kw["periodic"]))
+        scan = ScanInfo(**{k: v if not isinstance(v, np.str_) else str(v) for k, v in kw.items()})
+    return Surface(heights=heights, lx=float(ds.attrs["lx"]), ly=float(ds.attrs["ly"]), spec=spec,
+                   scan=scan)
 
 
 def read_surface(path: str | os.PathLike) -> Surface:
-    """Read a surface file written by ``roughflow surface``."""
+    """Read a surface file written by ``roughflow surface`` or ``roughflow import``."""
     path = Path(path)
     if not path.exists():
         raise InputError(f"surface file {str(path)!r} does not exist")
-    with xr.open_dataset(path) as ds:
-        return surface_from_dataset(ds.load())
+    try:
+        with xr.open_dataset(path) as ds:
+            ds.load()
+    except (OSError, ValueError) as exc:
+        raise InputError(f"cannot read {str(path)!r} as a netCDF surface file ({exc}); a "
+                         "measured scan is read with `roughflow import`") from None
+    return surface_from_dataset(ds)

@@ -15,6 +15,7 @@ import xarray as xr
 
 from .units import (
     DIMENSIONLESS,
+    FLUID_PRESSURE_UNITS,
     FLUX_UNITS,
     LENGTH_UNITS,
     PRESSURE_UNITS,
@@ -137,8 +138,9 @@ def flow_dataset(results: Mapping[int, FlowResult], contact: np.ndarray, *, lx: 
             "units": SIGMA_UNITS,
             "long_name": f"effective conductance along {a}, Q L_{a} / (L_across dp) (Eq. 4)"})
         out[f"pressure_{a}"] = (("x", "y"), r.pressure, {
-            "units": "dp (inlet 1, outlet 0)",
-            "long_name": f"fluid pressure for flow along {a}; NaN where no flow"})
+            "units": FLUID_PRESSURE_UNITS,
+            "long_name": f"fluid pressure for flow along {a} as a fraction of the pressure drop "
+                         "(inlet 1, outlet 0); NaN where no flow"})
         for comp, field in (("x", r.flux_x), ("y", r.flux_y)):
             out[f"flux_{comp}_{a}"] = (("x", "y"), field, {
                 "units": FLUX_UNITS,
