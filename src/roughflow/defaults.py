@@ -96,8 +96,10 @@ WINDOW_MARGIN = 0.125
 THRESHOLD_STUDIES = ("threshold_vs_gamma", "threshold_vs_size", "threshold_vs_hurst")
 #: Studies with a pressure ladder and flow solves (paper Fig. 5-7).
 FLOW_STUDIES = ("flow_isotropic", "flow_anisotropic")
+#: Leak curves of measured scans in physical units (docs/measured.md); not a paper figure.
+MEASURED_STUDY = "measured"
 #: Every study, one figure each (channels: paper Fig. 1).
-STUDIES = ("channels", *THRESHOLD_STUDIES, *FLOW_STUDIES)
+STUDIES = ("channels", *THRESHOLD_STUDIES, *FLOW_STUDIES, MEASURED_STUDY)
 #: L / lambda_r of a flow study when none is given (the paper's Fig. 5).
 FLOW_L_OVER_LAMBDA_R = 16.0
 #: The channels scene (paper Fig. 1): H = 0.8, gamma = 4, lambda_r = 0.25, lambda_s = 0.025

@@ -15,7 +15,8 @@ from pathlib import Path
 import numpy as np
 import xarray as xr
 
-from roughflow.datasets.units import LENGTH_UNITS, REF_LENGTH, REFERENCE_ATTRS, grid_coords
+from roughflow.datasets.results import spec_attrs
+from roughflow.datasets.units import LENGTH_UNITS, grid_coords
 from roughflow.errors import InputError
 from roughflow.surface import ScanInfo, Surface, SurfaceSpec
 
@@ -67,20 +68,8 @@ def surface_to_dataset(surface: Surface) -> xr.Dataset:
         coords=grid_coords(nx, ny, surface.lx, surface.ly),
         attrs={"lx": surface.lx, "ly": surface.ly, "title": "roughflow surface"},
     )
-    if surface.spec is not None:
-        ds.attrs.update({f"spec_{k}": v for k, v in surface.spec.as_attrs().items()})
-    ds.attrs.update(scan_attrs(surface))
+    ds.attrs.update(spec_attrs(surface))
     return ds
-
-
-def scan_attrs(surface: Surface) -> dict:
-    """A scan's :class:`ScanInfo` as ``scan_*`` attributes plus the reference length in
-    metres (empty for a generated surface)."""
-    if surface.scan is None:
-        return {}
-    out = {f"scan_{k}": v for k, v in surface.scan.as_attrs().items()}
-    out[REFERENCE_ATTRS[REF_LENGTH][0]] = surface.scan.length_scale
-    return out
 
 
 def surface_from_dataset(ds: xr.Dataset) -> Surface:

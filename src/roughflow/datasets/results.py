@@ -19,6 +19,8 @@ from .units import (
     FLUX_UNITS,
     LENGTH_UNITS,
     PRESSURE_UNITS,
+    REF_LENGTH,
+    REFERENCE_ATTRS,
     SIGMA_UNITS,
     grid_coords,
 )
@@ -36,9 +38,18 @@ AXIS_COORD = ("axis", list(AXIS_NAMES), {"long_name": "flow / percolation direct
 
 
 def spec_attrs(surface: Surface) -> dict:
-    """The surface's generation parameters as ``spec_*`` attributes (empty if it has none)."""
+    """The surface's generation parameters as ``spec_*`` attributes, or for an imported
+    scan its provenance as ``scan_*`` attributes plus the reference length in metres
+    (empty for a bare height map)."""
+    out = {}
     spec = getattr(surface, "spec", None)
-    return {} if spec is None else {f"spec_{k}": v for k, v in spec.as_attrs().items()}
+    if spec is not None:
+        out.update({f"spec_{k}": v for k, v in spec.as_attrs().items()})
+    scan = getattr(surface, "scan", None)
+    if scan is not None:
+        out.update({f"scan_{k}": v for k, v in scan.as_attrs().items()})
+        out[REFERENCE_ATTRS[REF_LENGTH][0]] = scan.length_scale
+    return out
 
 
 def contact_dataset(surface: Surface, result: ContactResult,
