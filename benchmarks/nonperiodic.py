@@ -73,8 +73,9 @@ def summary(rows: list[dict], pressures: list[float]) -> str:
         if not rs:
             continue
         da = np.array([r["d_area"] for r in rs])
-        per_p.append(f"| {m} | " + " | ".join(f"{da[:, k].mean():+.4f} +- {da[:, k].std(ddof=1):.4f}"
-                                              for k in range(len(pressures))) + " |")
+        cells = [f"{da[:, k].mean():+.4f} +- {da[:, k].std(ddof=1):.4f}"
+                 for k in range(len(pressures))]
+        per_p.append(f"| {m} | " + " | ".join(cells) + " |")
     return "\n".join(lines + per_p) + "\n"
 
 

@@ -130,10 +130,12 @@ def test_flow_datasets_are_physical(test_run):
 
 @pytest.mark.slow
 def test_measured_study_gives_leak_curves_in_physical_units(test_run):
+    from roughflow.defaults import BOUNDARY
+
     wd, _ = test_run
     cfg = yaml.safe_load((ROOT / "config" / "test.yaml").read_text())["studies"]["measured"]
     with xr.open_dataset(wd / "results" / "measured" / "dataset.nc") as ds:
-        assert list(ds["scan"].values) == ["afm"] and ds.attrs["boundary"] == "mirror"
+        assert list(ds["scan"].values) == ["afm"] and ds.attrs["boundary"] == BOUNDARY
         # "1MPa:100GPa:6": six log-spaced nominal pressures, in Pa
         np.testing.assert_allclose(ds["pressure"].values, np.geomspace(1e6, 1e11, 6),
                                    rtol=1e-12)

@@ -87,7 +87,7 @@ SCAN_FILL = "none"
 BOUNDARY_METHODS = ("mirror", "pad", "window", "periodic")
 #: The default for non-periodic scans: the smallest effect on a_c, a_c* and sigma measured on
 #: windows cut from periodic surfaces (benchmarks/nonperiodic.py, docs/measured.md).
-BOUNDARY = "mirror"
+BOUNDARY = "window"
 #: The "window" method drops this fraction of the scan at each side.
 WINDOW_MARGIN = 0.125
 

@@ -52,9 +52,9 @@ def detrend(heights: np.ndarray, lx: float, ly: float, mode: str,
 
 def fill_missing(heights: np.ndarray, missing: np.ndarray, method: str) -> np.ndarray:
     """``heights`` with the ``missing`` points filled: ``"harmonic"`` solves Laplace's
-    equation on them with the defined neighbours as boundary values (non-periodic; smooth;
-    exact for a plane inside the scan, zero normal slope at its edges); ``"min"`` sets them to the lowest defined height (open channels: a
-    conservative choice for leakage)."""
+    equation on them with the defined neighbours as boundary values (non-periodic, smooth;
+    exact for a plane inside the scan, zero normal slope at its edges); ``"min"`` sets them
+    to the lowest defined height (open channels: a conservative choice for leakage)."""
     if method not in FILL_METHODS or method == "none":
         raise InputError(f"fill must be one of {FILL_METHODS[1:]}, got {method!r}")
     h = np.array(heights, dtype=np.float64)
@@ -153,10 +153,17 @@ def _open(path: Path):
         raise InputError("reading scans needs SurfaceTopography: pip install "
                          "'roughflow[topography]'") from None
     try:
-        return open_topography(str(path))
+        reader = open_topography(str(path))
     except Exception as exc:  # the readers raise many types for files they cannot read
         raise InputError(f"{str(path)!r} is not a topography that SurfaceTopography can read "
                          f"({type(exc).__name__}: {exc})") from None
+    # the NASA SRTM reader has no header to check: it takes any file of 2 n^2 bytes (a
+    # 32-byte text file reads as a 4 x 4 map), so it is trusted only for .hgt files
+    if type(reader).__name__ == "HGTReader" and path.suffix.lower() != ".hgt":
+        raise InputError(f"{str(path)!r} is not a topography that SurfaceTopography can read "
+                         "(only the header-less NASA SRTM reader took it; rename it to .hgt "
+                         "if it is one)")
+    return reader
 
 
 def _channel(reader, channel):
