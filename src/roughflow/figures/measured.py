@@ -35,7 +35,8 @@ def draw(ds: xr.Dataset, fit=None) -> plt.Figure:
             hi = float(d["sealing_pressure"].sel(axis=axis))
             if np.isfinite(lo) and np.isfinite(hi):
                 ax_q.axvspan(lo, hi, color=AXIS_COLOR[axis], alpha=0.25)
-                ax_q.axvline(hi, color=AXIS_COLOR[axis], ls=style, lw=0.8)
+                ax_q.axvline(hi, color=AXIS_COLOR[axis], ls=style, lw=0.8,
+                             label=f"{scan}: sealed along {axis} from {hi:.3g} Pa")
         ax_a.plot(p, d["area_fraction"].values, "-", marker=marker, ms=4, color="k",
                   label=str(scan))
     ax_q.set_xscale("log")
