@@ -30,6 +30,7 @@ report: "workflow/report/workflow.rst"
 include: "workflow/rules/common.smk"
 include: "workflow/rules/scenes.smk"
 include: "workflow/rules/studies.smk"
+include: "workflow/rules/measured.smk"
 include: "workflow/rules/accuracy.smk"
 
 

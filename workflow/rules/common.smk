@@ -33,7 +33,7 @@ def _validate_config(config):
 
 _validate_config(config)
 
-from roughflow.defaults import FLOW_STUDIES, THRESHOLD_STUDIES  # noqa: E402
+from roughflow.defaults import FLOW_STUDIES, MEASURED_STUDY, THRESHOLD_STUDIES  # noqa: E402
 from roughflow.errors import InputError  # noqa: E402
 from roughflow.scenes import expand_study, grid_points, study_defaults  # noqa: E402
 from roughflow.scenes.jobs import estimated_seconds  # noqa: E402
@@ -58,6 +58,7 @@ for _study, _jobs in JOBS.items():
 
 THRESHOLD_NAMES = [s for s in STUDIES if s in THRESHOLD_STUDIES]
 FLOW_NAMES = [s for s in STUDIES if s in FLOW_STUDIES]
+MEASURED_NAMES = [s for s in STUDIES if s == MEASURED_STUDY]
 
 
 def _alternatives(names):
@@ -69,6 +70,7 @@ wildcard_constraints:
     study="|".join(STUDIES),
     kind="threshold|ladder",
     job=r"[A-Za-z0-9_.+\-]+",
+    scan=r"[A-Za-z0-9_.\-]+",
 
 
 def study_option(study, key):
