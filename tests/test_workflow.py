@@ -51,11 +51,9 @@ def job_counts(output: str) -> dict[str, int]:
 
 
 @pytest.fixture(scope="module")
-def test_run(tmp_path_factory):
-    wd = copy_workflow(tmp_path_factory.mktemp("wf"))
-    first = snakemake(wd, "--configfile", "config/test.yaml", "--cores", "2")
-    assert first.returncode == 0, first.stdout[-3000:] + first.stderr[-3000:]
-    return wd, first
+def test_run(local_test_run):
+    # the session's one local run of config/test.yaml (tests/conftest.py)
+    return local_test_run
 
 
 @pytest.mark.slow
