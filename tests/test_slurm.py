@@ -88,16 +88,17 @@ def _alive(pid: int) -> bool:
     return True
 
 
-def _lock():
-    fh = LOCK.open("w")
+def _lock() -> int:
+    # read-only: flock needs no write access, so any user may wait on root's lock file
+    fd = os.open(LOCK, os.O_RDONLY | os.O_CREAT, 0o644)
     deadline = time.monotonic() + LOCK_WAIT_S
     while True:
         try:
-            fcntl.flock(fh, fcntl.LOCK_EX | fcntl.LOCK_NB)
-            return fh
+            fcntl.flock(fd, fcntl.LOCK_EX | fcntl.LOCK_NB)
+            return fd
         except BlockingIOError:
             if time.monotonic() > deadline:
-                fh.close()
+                os.close(fd)
                 pytest.fail(f"another test session held {LOCK} for {LOCK_WAIT_S} s")
             time.sleep(2)
 
@@ -131,7 +132,7 @@ def cluster():
         left = {name: pid for name, pid in pids.items() if _alive(pid)}
         if not left:
             shutil.rmtree(state, ignore_errors=True)
-        lock.close()
+        os.close(lock)
         assert stop.returncode == 0 and not left, (left, stop.stderr)
 
 
@@ -202,10 +203,12 @@ def megabytes(reqmem: str) -> int:
 
 
 @pytest.fixture(scope="module")
-def runs(cluster, local_test_run, tmp_path_factory):
+def runs(cluster, request, tmp_path_factory):
     """config/test.yaml through SLURM, the session's local run of it (tests/conftest.py) and
     the plan of a local dry run (the resources the Snakefile computes for each job)."""
-    local, _ = local_test_run
+    # asked for once the cluster is up: a session fixture named as an argument would run
+    # first, also where the cluster test is then skipped
+    local, _ = request.getfixturevalue("local_test_run")
     dry = copy_workflow(tmp_path_factory.mktemp("plan"))
     plan = run_snakemake(dry, cluster.env, "--configfile", "config/test.yaml", "-n")
     assert plan.returncode == 0, plan.stderr[-3000:]
