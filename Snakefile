@@ -34,6 +34,16 @@ include: "workflow/rules/measured.smk"
 include: "workflow/rules/accuracy.smk"
 
 
+# On a cluster (profiles/slurm) these run on the submitting host instead of through the
+# queue: they read the finished netCDF files, take seconds and under 1 GB each, and a
+# queued job would cost a scheduler round trip (and a queue wait) per study.
+localrules:
+    all,
+    aggregate,
+    fit,
+    figure,
+
+
 rule all:
     input:
         study_targets(),

@@ -52,11 +52,9 @@ def job_counts(output: str) -> dict[str, int]:
 
 
 @pytest.fixture(scope="module")
-def test_run(tmp_path_factory):
-    wd = copy_workflow(tmp_path_factory.mktemp("wf"))
-    first = snakemake(wd, "--configfile", "config/test.yaml", "--cores", "2")
-    assert first.returncode == 0, first.stdout[-3000:] + first.stderr[-3000:]
-    return wd, first
+def test_run(local_test_run):
+    # the session's one local run of config/test.yaml (tests/conftest.py)
+    return local_test_run
 
 
 @pytest.mark.slow
@@ -313,3 +311,19 @@ def test_killed_job_leaves_no_trusted_output(tmp_path):
     dry = snakemake(wd, "--configfile", "config/kill.yaml", "-n")
     assert dry.returncode == 0, dry.stderr
     assert job_counts(dry.stdout).get("scene") == 1
+
+
+def test_cluster_profile_settings_take_effect(monkeypatch):
+    # Snakemake loads profiles/default (the workflow profile) on top of --profile, key by key:
+    # nothing in it may replace a setting of the cluster profile
+    from snakemake.cli import parse_args
+
+    monkeypatch.chdir(ROOT)
+    _, args = parse_args(["--profile", "profiles/slurm", "-n"])
+    assert args.executor == "slurm"
+    assert (args.keep_going, args.latency_wait, args.retries) == (True, 60, 1)
+    assert args.slurm_status_command == "squeue"
+    # CPUs per job come from each rule's threads, not from a default resource
+    assert "cpus_per_task" not in args.default_resources.keys()
+    _, local = parse_args(["-n"])
+    assert (local.executor, local.keep_going, local.retries) == (None, False, 0)

@@ -96,14 +96,21 @@ def job_args(wildcards):
     return " ".join(job_of(wildcards).cli_args())
 
 
-def runtime_min(wildcards):
+# Both scale with Snakemake's attempt (1, then 2 for the profile's one retry): a job that
+# SLURM ended for its time limit (TIMEOUT) or memory (OUT_OF_MEMORY) would only fail again
+# with the same request.
+
+
+def runtime_min(wildcards, attempt=1):
     # three times the cost model of roughflow.scenes.jobs.estimated_seconds (minutes)
-    return max(2, math.ceil(3 * estimated_seconds(job_of(wildcards)) / 60))
+    return attempt * max(2, math.ceil(3 * estimated_seconds(job_of(wildcards)) / 60))
 
 
-def mem_mb(wildcards):
-    # ~40 float64 fields of the grid (surface, gap, pressure, FFT buffers, AMG hierarchy)
-    return 500 + math.ceil(grid_points(job_of(wildcards)) * 8 * 40 / 1e6)
+def mem_mb(wildcards, attempt=1):
+    # ~40 float64 fields of the grid (surface, gap, pressure, FFT buffers, AMG hierarchy);
+    # the 500 MB base holds the interpreters (under SLURM two snakemake processes and
+    # roughflow's: 375 MB peak in the job's memory cgroup for a config/test.yaml job)
+    return attempt * (500 + math.ceil(grid_points(job_of(wildcards)) * 8 * 40 / 1e6))
 
 
 def jobs_of(study):
