@@ -3,18 +3,16 @@ multi-threaded OpenBLAS on tiny vectors was measured 100x slower than numpy's su
 and a non-interactive matplotlib backend."""
 
 import os
-import shutil
 import subprocess
 import sys
 from pathlib import Path
 
 import pytest
+from workflow_copy import copy_workflow
 
 for var, value in (("ROUGHFLOW_FFT_THREADS", "1"), ("OPENBLAS_NUM_THREADS", "1"),
                    ("OMP_NUM_THREADS", "1"), ("MPLBACKEND", "Agg")):
     os.environ.setdefault(var, value)
-
-ROOT = Path(__file__).resolve().parents[1]
 
 
 @pytest.fixture(scope="session")
@@ -25,12 +23,7 @@ def local_test_run(tmp_path_factory):
     snakemake = Path(sys.executable).with_name("snakemake")
     if not snakemake.exists():
         pytest.skip("snakemake not installed")
-    wd = tmp_path_factory.mktemp("wf")
-    for name in ("Snakefile", "workflow", "config", "profiles"):
-        if (ROOT / name).is_dir():
-            shutil.copytree(ROOT / name, wd / name)
-        else:
-            shutil.copy(ROOT / name, wd / name)
+    wd = copy_workflow(tmp_path_factory.mktemp("wf"))
     env = {**os.environ, "ROUGHFLOW_FFT_THREADS": "1", "MPLBACKEND": "Agg"}
     run = subprocess.run([str(snakemake), "--configfile", "config/test.yaml", "--cores", "2"],
                          cwd=wd, env=env, capture_output=True, text=True, timeout=600)

@@ -32,6 +32,7 @@ import numpy as np
 import pytest
 import xarray as xr
 import yaml
+from workflow_copy import copy_workflow
 
 ROOT = Path(__file__).resolve().parents[1]
 SCRIPT = ROOT / "tests" / "cluster" / "local_slurm.sh"
@@ -134,16 +135,6 @@ def cluster():
             shutil.rmtree(state, ignore_errors=True)
         os.close(lock)
         assert stop.returncode == 0 and not left, (left, stop.stderr)
-
-
-def copy_workflow(dest: Path) -> Path:
-    for name in ("Snakefile", "workflow", "config", "profiles"):
-        src = ROOT / name
-        if src.is_dir():
-            shutil.copytree(src, dest / name)
-        else:
-            shutil.copy(src, dest / name)
-    return dest
 
 
 def write_overlay(wd: Path) -> list[str]:

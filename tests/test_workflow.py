@@ -8,7 +8,6 @@ from __future__ import annotations
 
 import os
 import re
-import shutil
 import signal
 import subprocess
 import sys
@@ -19,6 +18,7 @@ import numpy as np
 import pytest
 import xarray as xr
 import yaml
+from workflow_copy import copy_workflow
 
 ROOT = Path(__file__).resolve().parents[1]
 SNAKEMAKE = Path(sys.executable).with_name("snakemake")
@@ -26,17 +26,6 @@ STUDIES = ("channels", "threshold_vs_gamma", "threshold_vs_size", "threshold_vs_
            "flow_isotropic", "flow_anisotropic", "measured")
 
 pytestmark = pytest.mark.skipif(not SNAKEMAKE.exists(), reason="snakemake not installed")
-
-
-def copy_workflow(dest: Path) -> Path:
-    # tests/data: the scan of the measured study in config/test.yaml
-    for name in ("Snakefile", "workflow", "config", "profiles", "tests/data"):
-        src = ROOT / name
-        if src.is_dir():
-            shutil.copytree(src, dest / name)
-        else:
-            shutil.copy(src, dest / name)
-    return dest
 
 
 def snakemake(cwd: Path, *args: str, timeout: int = 600) -> subprocess.CompletedProcess:
