@@ -39,7 +39,7 @@ SCRIPT = ROOT / "tests" / "cluster" / "local_slurm.sh"
 SNAKEMAKE = Path(sys.executable).with_name("snakemake")
 ACCOUNT, PARTITION = "rftest", "rfdebug"
 # the rules that must not go through the queue (localrules in the Snakefile)
-LOCAL_RULES = {"all", "aggregate", "fit", "figure"}
+LOCAL_RULES = {"all", "aggregate", "fit", "figure", "import_scan"}
 # per-run bookkeeping, not results: a SLURM run and a local run legitimately differ here
 IGNORED_VARIABLES = {"wall_time"}
 PROVENANCE_ATTRS = re.compile(r"^(provenance|history|created|date|host|user|command|version"
@@ -225,7 +225,7 @@ def test_every_cluster_job_went_through_sbatch_with_its_resources(runs):
     remote = [b for b in blocks.values() if not b["local"]]
     # the SLURM run planned the same jobs as the local dry run
     assert sorted(b["output"] for b in blocks.values()) == sorted(plan)
-    assert {b["rule"] for b in remote} == {"scene", "channels"}
+    assert {b["rule"] for b in remote} == {"scene", "channels", "leak"}
     assert len(remote) == sum(1 for b in plan.values() if b["rule"] not in LOCAL_RULES)
     for b in remote:
         # one sbatch each (no retry needed), recorded by slurmdbd under the test account
@@ -249,7 +249,7 @@ def test_aggregation_fits_and_figures_run_locally(runs):
     assert all(b["local"] for b in blocks if b["rule"] in LOCAL_RULES)
     assert not [b for b in blocks if b["local"] and b.get("slurm")]
     assert not [row for row in runs["sacct"]
-                if re.match(r"rule_(aggregate|fit|figure|all)\b", row["Comment"])]
+                if re.match(r"rule_(aggregate|fit|figure|all|import_scan)\b", row["Comment"])]
     for study in ("channels", "threshold_vs_gamma", "flow_isotropic"):
         assert (runs["slurm"] / "results" / study / "figure.png").stat().st_size > 5000
 
