@@ -15,7 +15,7 @@ from roughflow.scenes import study_defaults
 
 SCHEMA = Path(__file__).resolve().parents[1] / "workflow" / "schemas" / "config.schema.yaml"
 STUDY_SCHEMA = {"channels": "channels", "threshold_vs_gamma": "threshold_study",
-                "flow_isotropic": "flow_study"}
+                "flow_isotropic": "flow_study", "measured": "measured_study"}
 
 
 def _schema_defaults(node: dict) -> dict:

@@ -72,13 +72,34 @@ FLOW_TOL = 1e-8
 #: + CG, smoothed aggregation + CG, sparse direct, plain CG.
 FLOW_METHODS = ("auto", "rs", "sa", "direct", "cg")
 
+# --- measured scans and leak questions (docs/measured.md) ---------------------------------
+#: Detrending of an imported scan: none, plane (mean and tilt) or curvature (plane plus a
+#: quadratic), fitted to the defined points.
+DETREND_MODES = ("none", "plane", "curvature")
+SCAN_DETREND = "plane"
+#: Missing points of a scan: refuse the scan (none), Laplace interpolation from the defined
+#: neighbours (harmonic), or the lowest defined height (min: open, so conservative for leaks).
+FILL_METHODS = ("none", "harmonic", "min")
+SCAN_FILL = "none"
+#: How a non-periodic scan meets the periodic solvers (roughflow.boundary): mirror-tiled,
+#: padded by a flat region far below it, an interior window of the scan solved as periodic,
+#: or the scan taken as periodic.
+BOUNDARY_METHODS = ("mirror", "pad", "window", "periodic")
+#: The default for non-periodic scans: the smallest effect on a_c, a_c* and sigma measured on
+#: windows cut from periodic surfaces (benchmarks/nonperiodic.py, docs/measured.md).
+BOUNDARY = "window"
+#: The "window" method drops this fraction of the scan at each side.
+WINDOW_MARGIN = 0.125
+
 # --- the sweep workflow (config/config.yaml) ----------------------------------------------
 #: Studies that compute thresholds only (paper Fig. 2-4).
 THRESHOLD_STUDIES = ("threshold_vs_gamma", "threshold_vs_size", "threshold_vs_hurst")
 #: Studies with a pressure ladder and flow solves (paper Fig. 5-7).
 FLOW_STUDIES = ("flow_isotropic", "flow_anisotropic")
+#: Leak curves of measured scans in physical units (docs/measured.md); not a paper figure.
+MEASURED_STUDY = "measured"
 #: Every study, one figure each (channels: paper Fig. 1).
-STUDIES = ("channels", *THRESHOLD_STUDIES, *FLOW_STUDIES)
+STUDIES = ("channels", *THRESHOLD_STUDIES, *FLOW_STUDIES, MEASURED_STUDY)
 #: L / lambda_r of a flow study when none is given (the paper's Fig. 5).
 FLOW_L_OVER_LAMBDA_R = 16.0
 #: The channels scene (paper Fig. 1): H = 0.8, gamma = 4, lambda_r = 0.25, lambda_s = 0.025

@@ -20,6 +20,7 @@ import xarray as xr
 from scipy.optimize import least_squares
 
 from roughflow.datasets.sweep import threshold_values
+from roughflow.datasets.units import DIMENSIONLESS
 from roughflow.defaults import FIT_BOOTSTRAP, NU_PERCOLATION
 from roughflow.errors import InputError
 
@@ -259,7 +260,7 @@ def fit_dataset(ds: xr.Dataset, *, n_boot: int = FIT_BOOTSTRAP, nu: float = NU_P
         "n_points": "points in the fit",
         "nu_at_bound": "1 where a free nu stopped at its bound (nu not determined by the data)",
     }
-    data = {k: (dims, v, {"units": "1", "long_name": meta[k]}) for k, v in out.items()}
+    data = {k: (dims, v, {"units": DIMENSIONLESS, "long_name": meta[k]}) for k, v in out.items()}
     res = xr.Dataset(data, coords={"group": list(groups), "fit": list(fits),
                                    "nu_mode": list(modes)},
                      attrs={"title": "finite-size-scaling fits a_c*(eps) = a_c* + A eps^(1/nu)",

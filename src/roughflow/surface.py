@@ -169,14 +169,51 @@ def fft_friendly(n: int) -> int:
         m += 1
 
 
+@dataclass(frozen=True)
+class ScanInfo:
+    """Where an imported (measured) surface came from and how it was prepared.
+
+    ``length_scale``: the reference length L in metres (sqrt(lx ly) of the scan as
+    imported; heights and lengths of the :class:`Surface` are in units of L).
+    ``rms_gradient``: rms gradient of the imported heights (finite differences, the scan
+    being non-periodic); the scan keeps it, so its dimensionless pressures are in E*, not
+    E* gbar. ``detrend``, ``fill``: the choices of :func:`from_scan`; ``filled``: the
+    number of missing points filled; ``crop``: the grid window kept ("none" or
+    "i0:i1,j0:j1"); ``periodic``: whether the surface is periodic (a scan is not; the
+    contact and flow stages then use :mod:`roughflow.boundary`).
+    """
+
+    source: str
+    reader: str
+    channel: str
+    length_scale: float
+    rms_gradient: float
+    detrend: str
+    fill: str
+    filled: int
+    crop: str = "none"
+    periodic: bool = False
+
+    def as_attrs(self) -> dict:
+        """Fields as a flat dict (for netCDF attributes, prefixed ``scan_``)."""
+        return asdict(self)
+
+
 @dataclass(frozen=True, eq=False)
 class Surface:
-    """Heights ``heights[ix, iy]`` (float64) of a periodic cell of size ``lx`` x ``ly``."""
+    """Heights ``heights[ix, iy]`` (float64) of a cell of size ``lx`` x ``ly``: periodic
+    (generated, ``spec``) or an imported scan (``scan``, usually not periodic)."""
 
     heights: np.ndarray
     lx: float
     ly: float
     spec: SurfaceSpec | None = None
+    scan: ScanInfo | None = None
+
+    @property
+    def periodic(self) -> bool:
+        """False for a non-periodic (measured) scan; True otherwise."""
+        return self.scan is None or bool(self.scan.periodic)
 
     @property
     def shape(self) -> tuple[int, int]:
@@ -203,6 +240,14 @@ class Surface:
         return cls(heights=h, lx=lx, ly=ly)
 
 
+def from_scan(path, **options) -> Surface:
+    """Read a measured topography (every format SurfaceTopography reads; the optional
+    extra ``topography``). See :func:`roughflow.scan.read_scan` for the options."""
+    from roughflow.scan import read_scan
+
+    return read_scan(path, **options)
+
+
 def spectrum(q: np.ndarray, spec: SurfaceSpec) -> np.ndarray:
     """Unnormalised C(q) of Eq. (2) (corrected exponent), zero at q = 0 and beyond q_s."""
     qr = 2 * np.pi / spec.lambda_r
@@ -221,9 +266,15 @@ def peklenik_wavenumber(qx: np.ndarray, qy: np.ndarray, gamma: float) -> np.ndar
     return np.sqrt(gamma * qx * qx + qy * qy / gamma)
 
 
-def rms_gradient(heights: np.ndarray, lx: float, ly: float) -> float:
-    """Spectral rms gradient sqrt(<|grad h|^2>) of a periodic height map."""
+def rms_gradient(heights: np.ndarray, lx: float, ly: float, *, periodic: bool = True) -> float:
+    """Rms gradient sqrt(<|grad h|^2>) of a height map: spectral for a periodic map, from
+    forward differences inside the map for a non-periodic one (a scan's wrap-around step
+    would dominate the spectral value)."""
     nx, ny = heights.shape
+    if not periodic:
+        gx = np.diff(heights, axis=0) * (nx / lx)
+        gy = np.diff(heights, axis=1) * (ny / ly)
+        return float(np.sqrt(np.mean(gx * gx) + np.mean(gy * gy)))
     c = fft.rfft2(heights)
     qx, qy = fft.wavevectors(nx, ny, lx, ly)
     w = fft.rfft_weights(ny)

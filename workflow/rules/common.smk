@@ -33,7 +33,7 @@ def _validate_config(config):
 
 _validate_config(config)
 
-from roughflow.defaults import FLOW_STUDIES, THRESHOLD_STUDIES  # noqa: E402
+from roughflow.defaults import FLOW_STUDIES, MEASURED_STUDY, THRESHOLD_STUDIES  # noqa: E402
 from roughflow.errors import InputError  # noqa: E402
 from roughflow.scenes import expand_study, grid_points, study_defaults  # noqa: E402
 from roughflow.scenes.jobs import estimated_seconds  # noqa: E402
@@ -58,6 +58,7 @@ for _study, _jobs in JOBS.items():
 
 THRESHOLD_NAMES = [s for s in STUDIES if s in THRESHOLD_STUDIES]
 FLOW_NAMES = [s for s in STUDIES if s in FLOW_STUDIES]
+MEASURED_NAMES = [s for s in STUDIES if s == MEASURED_STUDY]
 
 
 def _alternatives(names):
@@ -69,6 +70,7 @@ wildcard_constraints:
     study="|".join(STUDIES),
     kind="threshold|ladder",
     job=r"[A-Za-z0-9_.+\-]+",
+    scan=r"[A-Za-z0-9_.\-]+",
 
 
 def study_option(study, key):
@@ -94,14 +96,21 @@ def job_args(wildcards):
     return " ".join(job_of(wildcards).cli_args())
 
 
-def runtime_min(wildcards):
+# Both scale with Snakemake's attempt (1, then 2 for the profile's one retry): a job that
+# SLURM ended for its time limit (TIMEOUT) or memory (OUT_OF_MEMORY) would only fail again
+# with the same request.
+
+
+def runtime_min(wildcards, attempt=1):
     # three times the cost model of roughflow.scenes.jobs.estimated_seconds (minutes)
-    return max(2, math.ceil(3 * estimated_seconds(job_of(wildcards)) / 60))
+    return attempt * max(2, math.ceil(3 * estimated_seconds(job_of(wildcards)) / 60))
 
 
-def mem_mb(wildcards):
-    # ~40 float64 fields of the grid (surface, gap, pressure, FFT buffers, AMG hierarchy)
-    return 500 + math.ceil(grid_points(job_of(wildcards)) * 8 * 40 / 1e6)
+def mem_mb(wildcards, attempt=1):
+    # ~40 float64 fields of the grid (surface, gap, pressure, FFT buffers, AMG hierarchy);
+    # the 500 MB base holds the interpreters (under SLURM two snakemake processes and
+    # roughflow's: 375 MB peak in the job's memory cgroup for a config/test.yaml job)
+    return attempt * (500 + math.ceil(grid_points(job_of(wildcards)) * 8 * 40 / 1e6))
 
 
 def jobs_of(study):

@@ -12,7 +12,7 @@ rule aggregate:
     benchmark:
         f"{RESULTS}/benchmarks/workflow/{{study}}/aggregate.tsv"
     wildcard_constraints:
-        study=_alternatives(THRESHOLD_NAMES + FLOW_NAMES),
+        study=_alternatives(THRESHOLD_NAMES + FLOW_NAMES + MEASURED_NAMES),
     threads: 1
     resources:
         mem_mb=1000,

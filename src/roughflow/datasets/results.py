@@ -15,9 +15,12 @@ import xarray as xr
 
 from .units import (
     DIMENSIONLESS,
+    FLUID_PRESSURE_UNITS,
     FLUX_UNITS,
     LENGTH_UNITS,
     PRESSURE_UNITS,
+    REF_LENGTH,
+    REFERENCE_ATTRS,
     SIGMA_UNITS,
     grid_coords,
 )
@@ -35,9 +38,18 @@ AXIS_COORD = ("axis", list(AXIS_NAMES), {"long_name": "flow / percolation direct
 
 
 def spec_attrs(surface: Surface) -> dict:
-    """The surface's generation parameters as ``spec_*`` attributes (empty if it has none)."""
+    """The surface's generation parameters as ``spec_*`` attributes, or for an imported
+    scan its provenance as ``scan_*`` attributes plus the reference length in metres
+    (empty for a bare height map)."""
+    out = {}
     spec = getattr(surface, "spec", None)
-    return {} if spec is None else {f"spec_{k}": v for k, v in spec.as_attrs().items()}
+    if spec is not None:
+        out.update({f"spec_{k}": v for k, v in spec.as_attrs().items()})
+    scan = getattr(surface, "scan", None)
+    if scan is not None:
+        out.update({f"scan_{k}": v for k, v in scan.as_attrs().items()})
+        out[REFERENCE_ATTRS[REF_LENGTH][0]] = scan.length_scale
+    return out
 
 
 def contact_dataset(surface: Surface, result: ContactResult,
@@ -137,8 +149,9 @@ def flow_dataset(results: Mapping[int, FlowResult], contact: np.ndarray, *, lx: 
             "units": SIGMA_UNITS,
             "long_name": f"effective conductance along {a}, Q L_{a} / (L_across dp) (Eq. 4)"})
         out[f"pressure_{a}"] = (("x", "y"), r.pressure, {
-            "units": "dp (inlet 1, outlet 0)",
-            "long_name": f"fluid pressure for flow along {a}; NaN where no flow"})
+            "units": FLUID_PRESSURE_UNITS,
+            "long_name": f"fluid pressure for flow along {a} as a fraction of the pressure drop "
+                         "(inlet 1, outlet 0); NaN where no flow"})
         for comp, field in (("x", r.flux_x), ("y", r.flux_y)):
             out[f"flux_{comp}_{a}"] = (("x", "y"), field, {
                 "units": FLUX_UNITS,

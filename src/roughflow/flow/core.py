@@ -145,6 +145,7 @@ def solve(
     eta: float = 1.0,
     tol: float = FLOW_TOL,
     method: str | None = None,
+    periodic: bool = True,
 ) -> FlowResult:
     """Reynolds flow along ``axis`` (0/"x" or 1/"y") through the gap field ``gap[ix, iy]``.
 
@@ -153,7 +154,9 @@ def solve(
     until |Q_in - Q_out| / Q <= ``tol``); ``method``: None/"auto"
     (direct up to 70k unknowns, else "rs"), "rs", "sa", "direct" or "cg" (see
     :mod:`roughflow.flow.linsolve`). A gap whose open cells (u > 0) do not connect
-    the two reservoirs gives sigma = 0 without a solve. Raises ``InputError`` for
+    the two reservoirs gives sigma = 0 without a solve. ``periodic``: the cell is periodic
+    across the flow (default), or closed by walls there (False: a non-periodic scan).
+    Raises ``InputError`` for
     bad input and ``ConvergenceError`` if the solver misses ``tol``.
     """
     g = check_gap(gap)
@@ -168,7 +171,7 @@ def solve(
     hx, hy = lx / nx, ly / ny
     sigma_local = g**3 / (12.0 * eta)
     open_mask = sigma_local > 0  # a gap so small that u^3 underflows is closed
-    active = spanning_cells(open_mask, ax)
+    active = spanning_cells(open_mask, ax, periodic=periodic)
 
     nan = np.full(g.shape, np.nan)
     zeros = np.zeros(g.shape)
@@ -181,7 +184,7 @@ def solve(
     else:
         s, act, h_flow, h_across, l_flow, l_across = sigma_local.T, active.T, hy, hx, ly, lx
     s = np.where(act, s, 0.0)
-    faces = face_transmissibilities(s, h_flow, h_across)
+    faces = face_transmissibilities(s, h_flow, h_across, periodic=periodic)
     matrix, rhs, cells = assemble(faces, act)
     sol, q, dissipation, imbalance = _solve_flux_balanced(
         matrix, rhs, cells, act, faces, tol=tol, method=method
@@ -222,9 +225,10 @@ def conductance(
     eta: float = 1.0,
     tol: float = FLOW_TOL,
     method: str | None = None,
+    periodic: bool = True,
 ) -> float | tuple[float, float]:
     """Effective conductance along ``axis``, or ``(sigma_x, sigma_y)`` when ``axis`` is None."""
-    kw = dict(lx=lx, ly=ly, eta=eta, tol=tol, method=method)
+    kw = dict(lx=lx, ly=ly, eta=eta, tol=tol, method=method, periodic=periodic)
     if axis is None:
         return solve(gap, 0, **kw).sigma, solve(gap, 1, **kw).sigma
     return solve(gap, axis, **kw).sigma

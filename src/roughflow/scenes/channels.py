@@ -16,7 +16,7 @@ import numpy as np
 import xarray as xr
 
 from roughflow import contact
-from roughflow.datasets.units import LENGTH_UNITS
+from roughflow.datasets.units import DIMENSIONLESS, LENGTH_UNITS
 from roughflow.percolation import contact_percolates, percolates, spanning_cells
 from roughflow.search import LoadSearch
 from roughflow.surface import Surface, generate
@@ -78,7 +78,8 @@ def run_channels(job: ChannelsJob, *, threads: int | None = None) -> xr.Dataset:
         data[f"gap_{name}"] = (dims, res.gap, {"units": LENGTH_UNITS,
                                               "long_name": f"gap of the {name} contact"})
         data[f"phase_{name}"] = (dims, phase, {
-            "units": "1", "long_name": "0 contact, 1 fluid percolating along x, 2 other fluid",
+            "units": DIMENSIONLESS,
+            "long_name": "0 contact, 1 fluid percolating along x, 2 other fluid",
             "flag_values": np.array(list(CLASSES), dtype=np.int8),
             "flag_meanings": "contact percolating_fluid non_percolating_fluid"})
         attrs.update({

@@ -13,7 +13,10 @@ from __future__ import annotations
 import hashlib
 import itertools
 import math
+import re
+import shlex
 from dataclasses import dataclass, field, fields
+from pathlib import Path
 
 from roughflow import defaults
 from roughflow.datasets.sweep import rnd
@@ -238,11 +241,94 @@ class ChannelsJob:
                 "--seeds", str(self.seed)]
 
 
-Job = ThresholdJob | LadderJob | ChannelsJob
+#: Quantities of a leak question (``roughflow leak`` options), as unit strings; their kind.
+LEAK_QUANTITIES = {"modulus": "pressure", "fluid_pressure": "pressure",
+                   "viscosity": "viscosity", "seal_width": "length", "seal_length": "length"}
+#: Import options of one scan in the measured study (``roughflow import`` options).
+SCAN_KEYS = ("size", "unit", "height_unit", "detrend", "fill", "crop", "channel")
+
+
+@dataclass(frozen=True)
+class LeakJob:
+    """One scan of the measured study: ``roughflow import`` then ``roughflow leak``.
+
+    ``name`` labels the scan (file names, the ``scan`` coordinate); ``file`` is the scan;
+    the import options (:data:`SCAN_KEYS`) apply where the file does not say; the leak
+    question is given as unit strings (:data:`LEAK_QUANTITIES`, ``pressures`` as
+    "LO:HI:N" or a list). Every quantity is parsed on construction (InputError naming the
+    key), so a bad config stops the workflow before any job.
+    """
+
+    name: str
+    file: str
+    modulus: str
+    pressures: str
+    fluid_pressure: str
+    viscosity: str
+    seal_width: str
+    seal_length: str
+    size: str | None = None
+    unit: str | None = None
+    height_unit: str | None = None
+    detrend: str = defaults.SCAN_DETREND
+    fill: str = defaults.SCAN_FILL
+    crop: str | None = None
+    channel: str | None = None
+    boundary: str = defaults.BOUNDARY
+    kind: str = field(default="leak", init=False)
+
+    def __post_init__(self) -> None:
+        from roughflow.units import parse_quantity, parse_range
+
+        if not _NAME.fullmatch(str(self.name)):
+            raise InputError(f"scan name must be letters, digits, '.', '_' or '-', got "
+                             f"{self.name!r}")
+        for key, kind in LEAK_QUANTITIES.items():
+            parse_quantity(getattr(self, key), kind, key)
+        parse_range(self.pressures, "pressure", "pressures")
+        if self.size is not None:
+            for part in str(self.size).split(","):
+                try:
+                    float(part)
+                except ValueError:
+                    parse_quantity(part, "length", "size")
+        for key, choices in (("detrend", defaults.DETREND_MODES),
+                             ("fill", defaults.FILL_METHODS),
+                             ("boundary", defaults.BOUNDARY_METHODS)):
+            if getattr(self, key) not in choices:
+                raise InputError(f"{key} must be one of {choices}, got {getattr(self, key)!r}")
+
+    @property
+    def job_id(self) -> str:
+        return self.name
+
+    def import_args(self) -> list[str]:
+        """``roughflow import`` options (after the scan file)."""
+        args = ["--detrend", self.detrend, "--fill", self.fill]
+        for key in ("size", "unit", "height_unit", "crop", "channel"):
+            value = getattr(self, key)
+            if value is not None:
+                args += [f"--{key.replace('_', '-')}", shlex.quote(str(value))]
+        return args
+
+    def cli_args(self) -> list[str]:
+        """``roughflow leak`` options (after the surface file)."""
+        args = ["--pressures", shlex.quote(str(self.pressures)), "--boundary", self.boundary,
+                "--name", self.name]
+        for key in LEAK_QUANTITIES:
+            args += [f"--{key.replace('_', '-')}", shlex.quote(str(getattr(self, key)))]
+        return args
+
+
+_NAME = re.compile(r"[A-Za-z0-9_.\-]+")
+
+Job = ThresholdJob | LadderJob | ChannelsJob | LeakJob
 
 
 def grid_points(job: Job) -> int:
     """Grid points of one surface of the job (for memory and runtime estimates)."""
+    if isinstance(job, LeakJob):
+        raise InputError("a leak job's grid is that of its scan (known after the import)")
     if isinstance(job, ChannelsJob):
         spec = job.surfaces()[1].spec(job.seed)
     else:
@@ -258,6 +344,8 @@ def study_defaults(name: str) -> dict:
     """The value of every optional key of a study block when the config leaves it out."""
     if name == "channels":
         return {f.name: f.default for f in fields(ChannelsJob) if f.init}
+    if name == defaults.MEASURED_STUDY:
+        return {key: field_default(LeakJob, key) for key in ("detrend", "fill", "boundary")}
     common = {
         "gamma": [defaults.GAMMA], "hurst": [defaults.HURST], "eps_f": [defaults.EPS_F],
         "model": ["elastic"], "seeds_per_job": 1,
@@ -293,6 +381,8 @@ def expand_study(name: str, block: dict) -> dict[str, Job]:
     study, key and value before any job runs.
     """
     block = {**study_defaults(name), **block}
+    if name == defaults.MEASURED_STUDY:
+        return _expand_measured(block)
     if name == "channels":
         job = ChannelsJob(**block)
         for p in job.surfaces():
@@ -327,6 +417,27 @@ def expand_study(name: str, block: dict) -> dict[str, Job]:
                         area_tol=float(s["area_tol"]), **_adhesion_args(s["adhesion"]),
                     )
                 jobs.setdefault(job.job_id, job)
+    return jobs
+
+
+def _expand_measured(block: dict) -> dict[str, Job]:
+    """One :class:`LeakJob` per scan; a scan entry's keys override the study's."""
+    study = defaults.MEASURED_STUDY
+    shared = {k: v for k, v in block.items() if k != "scans"}
+    jobs: dict[str, Job] = {}
+    for entry in block["scans"]:
+        args = {**shared, **entry}
+        name = args.get("name") or Path(str(args["file"])).stem
+        args["name"] = name
+        if not Path(str(args["file"])).is_file():
+            raise InputError(f"config studies.{study}, scan {name!r}: file {args['file']!r} "
+                             f"does not exist (paths are relative to {Path.cwd()})")
+        if name in jobs:
+            raise InputError(f"config studies.{study}: two scans are named {name!r}")
+        try:
+            jobs[name] = LeakJob(**args)
+        except InputError as exc:
+            raise InputError(f"config studies.{study}, scan {name!r}: {exc}") from None
     return jobs
 
 

@@ -110,6 +110,12 @@ class SearchOptions:
     exact_bearing: the bearing model's exact sweep; False bisects in the area (validation).
     on_unbracketed: ``"raise"`` :class:`ThresholdNotBracketed`, or ``"nan"``: return a
         result with ``bracketed=False`` and a NaN ``a_c_star``.
+    observe: maps a solved state to the state whose contact area and percolation count
+        (e.g. the window of a non-periodic scan inside its solver cell,
+        :meth:`roughflow.boundary.Embedding.observe`); default the solved state itself.
+        Warm starts keep using the solved states. Elastic and adhesive models only.
+    periodic: the observed state is periodic across the flow (default), or closed by
+        walls there (False: a non-periodic scan); see :func:`roughflow.percolation.percolates`.
     """
 
     strategy: str = "predict"
@@ -121,6 +127,8 @@ class SearchOptions:
     warm_start: bool = True
     exact_bearing: bool = True
     on_unbracketed: str = "raise"
+    observe: Callable[[ContactResult], ContactResult] | None = None
+    periodic: bool = True
 
     def __post_init__(self) -> None:
         if self.strategy not in STRATEGIES:
@@ -430,24 +438,31 @@ def threshold(
     if model == "adhesive" and adhesion is None:
         raise InputError("model='adhesive' needs adhesion=Adhesion(surface_energy=, range=)")
     heights = surface.heights
-    shape = heights.shape
     law = ContactLaw(model)
 
     def sample(r: ContactResult, load: float, open_first: np.ndarray | None,
                pressure: np.ndarray | None) -> _Sample:
-        opn = ~r.contact
-        spans = {ax: percolates(opn, ax) for ax in axes}
+        seen = r if opts.observe is None else opts.observe(r)
+        if seen is not r:
+            pressure = seen.contact_pressure
+        opn = ~seen.contact
+        spans = {ax: percolates(opn, ax, periodic=opts.periodic) for ax in axes}
         predictor = None
         if opts.strategy == "predict":
             def predictor() -> dict[int, float]:
+                # periodic union-find even with walls: the prediction only aims the solves
                 order = (np.argsort(-open_first, axis=None) if open_first is not None
-                         else open_first_order(r.gap, r.contact, pressure))
-                return predicted_thresholds(order, shape, axes)
-        perimeter = perimeter_term(r.contact) if model == "elastic" else float("nan")
-        return _Sample(load=float(load), area=float(r.area_fraction), spans=spans, state=r,
+                         else open_first_order(seen.gap, seen.contact, pressure))
+                return predicted_thresholds(order, seen.contact.shape, axes)
+        # faces per observed cell: independent of the cell size, so a window needs no scaling
+        perimeter = perimeter_term(seen.contact) if model == "elastic" else float("nan")
+        return _Sample(load=float(load), area=float(seen.area_fraction), spans=spans, state=r,
                        predictor=predictor, perimeter=perimeter)
 
     if model == "bearing":
+        if opts.observe is not None or not opts.periodic:
+            raise InputError("observe= and periodic=False are for the elastic and adhesive "
+                             "models (the bearing model has no solver cell)")
         if opts.exact_bearing:
             res = _bearing_exact(np.asarray(heights, dtype=np.float64), axes, tol,
                                  opts.on_unbracketed)
