@@ -4,7 +4,7 @@ from __future__ import annotations
 
 import argparse
 
-from ._common import add_output
+from ._common import add_input, add_output
 
 
 def register(sub: argparse._SubParsersAction) -> None:
@@ -12,7 +12,8 @@ def register(sub: argparse._SubParsersAction) -> None:
         "aggregate", help="combine per-job netCDF files into one study dataset",
         description="Combine per-job datasets by their coordinates (outer join): missing jobs "
                     "stay NaN, integer variables keep the fill value -1.")
-    p.add_argument("inputs", nargs="+", metavar="JOB.nc", help="per-job datasets")
+    add_input(p, "inputs", kinds=("threshold_job", "ladder_job"), what="job file", nargs="+",
+              metavar="JOB.nc", help="per-job datasets (roughflow scene threshold or ladder)")
     p.add_argument("--study", default=None, help="study name stored as an attribute")
     add_output(p)
     p.set_defaults(func=run)
@@ -21,4 +22,5 @@ def register(sub: argparse._SubParsersAction) -> None:
 def run(args: argparse.Namespace) -> None:
     from roughflow.aggregate import aggregate
 
-    aggregate(args.inputs, args.output, study=args.study)
+    aggregate(args.data["inputs"], args.output, study=args.study,
+              sources=[repr(p) for p in args.inputs])

@@ -13,7 +13,7 @@ from roughflow.defaults import (
 )
 from roughflow.errors import InputError
 
-from ._common import add_output
+from ._common import add_input, add_output
 
 
 def register(sub: argparse._SubParsersAction) -> None:
@@ -28,7 +28,8 @@ def register(sub: argparse._SubParsersAction) -> None:
             "with every scalar of the result and every surface parameter as attributes."
         ),
     )
-    p.add_argument("surface", metavar="SURFACE.nc", help="surface file ('roughflow surface')")
+    add_input(p, "surface", kinds="surface", what="surface file", metavar="SURFACE.nc",
+              help="surface file ('roughflow surface')")
     p.add_argument("--pressure", type=float, default=None,
                    help="mean applied pressure in units of E* gbar (elastic, adhesive)")
     p.add_argument("--model", choices=MODELS, default="elastic",
@@ -81,11 +82,11 @@ def _adhesion(args: argparse.Namespace, surface):
 def run(args: argparse.Namespace) -> None:
     from roughflow.contact import solve
     from roughflow.datasets import contact_dataset
-    from roughflow.io import read_surface, write_dataset
+    from roughflow.io import surface_from_dataset, write_dataset
 
     if args.model == "bearing" and args.pressure is not None:
         raise InputError("--model bearing takes --area-fraction, not --pressure")
-    surface = read_surface(args.surface)
+    surface = surface_from_dataset(args.data["surface"])
     adhesion = _adhesion(args, surface)
     result = solve(
         surface, args.pressure, model=args.model, method=args.method,

@@ -8,9 +8,8 @@ import logging
 import numpy as np
 
 from roughflow.defaults import FLOW_METHODS, FLOW_TOL
-from roughflow.errors import InputError
 
-from ._common import add_output, axis_arg
+from ._common import add_input, add_output, axis_arg
 
 log = logging.getLogger(__name__)
 
@@ -27,7 +26,8 @@ def register(sub: argparse._SubParsersAction) -> None:
             "the pressure and the flux fields. sigma = 0 when the gap does not percolate."
         ),
     )
-    p.add_argument("input", metavar="CONTACT.nc", help="contact file with a gap(x, y) variable")
+    add_input(p, "input", kinds="contact", what="contact file", metavar="CONTACT.nc",
+              help="contact file with a gap(x, y) variable (roughflow contact)")
     p.add_argument("--axis", type=axis_arg, default=None, metavar="{x,y,both}",
                    help="flow direction(s): x, y or both (both)")
     p.add_argument("--eta", type=float, default=1.0, help="viscosity eta (1)")
@@ -36,31 +36,21 @@ def register(sub: argparse._SubParsersAction) -> None:
     p.add_argument("--method", choices=FLOW_METHODS, default="auto",
                    help="linear solver: auto (direct for small systems, else rs), rs "
                         "(Ruge-Stueben AMG + CG), sa (smoothed aggregation + CG), direct, cg")
-    p.add_argument("--plot", metavar="FILE.png", default=None,
-                   help="also draw the flux magnitude over the contact map (one panel per axis)")
+    add_output(p, "--plot", dest="plot", required=False, suffixes=(".png", ".pdf", ".svg"),
+               metavar="FILE.png",
+               help="also draw the flux magnitude over the contact map (one panel per axis)")
     add_output(p)
     p.set_defaults(func=run)
 
 
-def _read_gap(path: str):
-    import xarray as xr
+def _read_gap(ds):
+    """gap, contact mask and cell lengths of a contact dataset (kind checked on reading)."""
+    from roughflow.errors import require_positive
 
-    try:
-        with xr.open_dataset(path) as ds:
-            ds.load()
-    except (OSError, ValueError) as exc:
-        raise InputError(f"cannot read {path!r}: {exc}") from None
-    if "gap" not in ds:
-        raise InputError(f"{path!r} has no 'gap' variable (variables: {list(ds.data_vars)})")
-    if ds["gap"].dims != ("x", "y"):
-        raise InputError(f"gap in {path!r} must have dims ('x', 'y'), got {ds['gap'].dims}")
-    try:
-        lx, ly = float(ds.attrs["lx"]), float(ds.attrs["ly"])
-    except KeyError as exc:
-        raise InputError(f"{path!r} lacks the attribute {exc.args[0]!r}") from None
+    lx, ly = require_positive("lx", ds.attrs["lx"]), require_positive("ly", ds.attrs["ly"])
     gap = ds["gap"].values.astype(np.float64)
     contact = ds["contact"].values.astype(bool) if "contact" in ds else gap <= 0
-    return ds, gap, contact, lx, ly
+    return gap, contact, lx, ly
 
 
 def run(args: argparse.Namespace) -> None:
@@ -68,7 +58,8 @@ def run(args: argparse.Namespace) -> None:
     from roughflow.flow import solve
     from roughflow.io import write_dataset
 
-    ds_in, gap, contact, lx, ly = _read_gap(args.input)
+    ds_in = args.data["input"]
+    gap, contact, lx, ly = _read_gap(ds_in)
     axes = (0, 1) if args.axis is None else (args.axis,)
     results = {}
     for ax in axes:

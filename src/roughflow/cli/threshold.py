@@ -15,7 +15,7 @@ from roughflow.defaults import (
 )
 from roughflow.errors import InputError
 
-from ._common import add_output, axis_arg
+from ._common import add_input, add_output, axis_arg
 
 
 def register(sub: argparse._SubParsersAction) -> None:
@@ -32,7 +32,8 @@ def register(sub: argparse._SubParsersAction) -> None:
         ),
     )
     p_min, p_max = THRESHOLD_PRESSURE_RANGE
-    p.add_argument("surface", help="surface file written by 'roughflow surface'")
+    add_input(p, "surface", kinds="surface", what="surface file", metavar="SURFACE.nc",
+              help="surface file written by 'roughflow surface'")
     p.add_argument("--axis", type=axis_arg, default=None, metavar="{x,y,both}",
                    help="flow direction: x, y or both (both: one shared sequence of solves)")
     p.add_argument("--model", choices=MODELS, default="elastic", help="contact model (elastic)")
@@ -66,7 +67,7 @@ def register(sub: argparse._SubParsersAction) -> None:
 
 def run(args: argparse.Namespace) -> None:
     from roughflow.datasets import threshold_dataset
-    from roughflow.io import read_surface, write_dataset
+    from roughflow.io import surface_from_dataset, write_dataset
     from roughflow.search import SearchOptions, threshold
 
     adhesion = None
@@ -82,7 +83,7 @@ def run(args: argparse.Namespace) -> None:
         strategy=args.strategy, pressure_range=(args.p_min, args.p_max),
         first_pressure=args.p_guess, contact_tol=args.contact_tol, method=args.method,
         on_unbracketed="nan" if args.allow_unbracketed else "raise")
-    surface = read_surface(args.surface)
+    surface = surface_from_dataset(args.data["surface"])
     res = threshold(surface, args.axis, model=args.model, tol=args.tol, adhesion=adhesion,
                     options=options)
     if args.axis is not None:

@@ -25,8 +25,17 @@ def caption(study: str) -> str:
     return module(study).CAPTION
 
 
-def make_figure(study: str, dataset, output: str | os.PathLike, fit=None) -> str:
-    """Draw ``study`` from ``dataset`` (xr.Dataset or path) into PNG + PDF; returns caption."""
+def make_figure(study: str, dataset, output: str | os.PathLike, fit=None, *,
+                source: str = "the dataset") -> str:
+    """Draw ``study`` from ``dataset`` (xr.Dataset or path) into ``output`` (a .png file) and
+    the PDF next to it; returns the caption. The dataset must be of the study's kind
+    (:data:`roughflow.datasets.kinds.STUDY_KINDS`); ``source`` names it in messages."""
+    from roughflow.datasets.kinds import STUDY_KINDS, check_kind
+
+    out = Path(output)
+    if out.suffix.lower() != ".png":
+        raise InputError(f"the figure is written as PNG (and a PDF next to it): {str(out)!r} "
+                         "must end in .png")
     import matplotlib
 
     matplotlib.use("Agg")
@@ -35,10 +44,12 @@ def make_figure(study: str, dataset, output: str | os.PathLike, fit=None) -> str
     from roughflow.aggregate import load
 
     mod = module(study)
-    ds = load(dataset) if isinstance(dataset, (str, os.PathLike)) else dataset
-    fit_ds = load(fit) if isinstance(fit, (str, os.PathLike)) else fit
-    fig = mod.draw(ds, fit=fit_ds)
-    out = Path(output)
+    if isinstance(dataset, (str, os.PathLike)):
+        source = f"study dataset {str(dataset)!r}"
+        dataset = load(dataset)
+    check_kind(dataset, STUDY_KINDS[study], source)
+    fit_ds = load(fit, "fit") if isinstance(fit, (str, os.PathLike)) else fit
+    fig = mod.draw(dataset, fit=fit_ds)
     out.parent.mkdir(parents=True, exist_ok=True)
     for path in (out.with_suffix(".png"), out.with_suffix(".pdf")):
         tmp = path.with_name(path.stem + ".part" + path.suffix)
