@@ -35,15 +35,25 @@ _validate_config(config)
 
 from roughflow.defaults import FLOW_STUDIES, THRESHOLD_STUDIES  # noqa: E402
 from roughflow.errors import InputError  # noqa: E402
-from roughflow.scenes import expand_study, grid_points, study_defaults  # noqa: E402
-from roughflow.scenes.jobs import estimated_seconds  # noqa: E402
+from roughflow.resources import total_bytes  # noqa: E402
+from roughflow.scenes import estimated_memory, expand_study, study_defaults  # noqa: E402
+from roughflow.scenes.jobs import check_plan_memory, estimated_seconds  # noqa: E402
 
 RESULTS = config.get("results", "results")
 # the roughflow of the Python that runs snakemake (no PATH lookup needed)
 RF = f"{sys.executable} -m roughflow"
 STUDIES = config["studies"]
+# The memory a job may need: the config's max_mem_mb (the nodes of a cluster), else the
+# memory of this machine. A job above it is refused at planning, before any job runs.
+if config.get("max_mem_mb") is not None:
+    _MEM_LIMIT = (int(config["max_mem_mb"]) * 10**6, f"max_mem_mb = {config['max_mem_mb']}")
+else:
+    _MEM_LIMIT = (total_bytes(), "the memory of this machine; set max_mem_mb in the config "
+                                 "for a cluster")
 try:
     JOBS = {name: expand_study(name, block) for name, block in STUDIES.items()}
+    if _MEM_LIMIT[0] is not None:
+        check_plan_memory(JOBS, *_MEM_LIMIT)
 except InputError as exc:
     raise WorkflowError(f"invalid config: {exc}") from None
 
@@ -100,8 +110,9 @@ def runtime_min(wildcards):
 
 
 def mem_mb(wildcards):
-    # ~40 float64 fields of the grid (surface, gap, pressure, FFT buffers, AMG hierarchy)
-    return 500 + math.ceil(grid_points(job_of(wildcards)) * 8 * 40 / 1e6)
+    # the one memory estimate of a job (roughflow.resources, calibrated by
+    # benchmarks/bench_memory.py), also used for the refusals
+    return math.ceil(estimated_memory(job_of(wildcards)) / 1e6)
 
 
 def jobs_of(study):
