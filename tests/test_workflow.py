@@ -129,6 +129,23 @@ def test_flow_datasets_are_physical(test_run):
 
 
 @pytest.mark.slow
+def test_outputs_record_their_provenance(test_run):
+    # issue 18: job files their parameters, study datasets (and the fit) the study's config
+    import json
+
+    wd, _ = test_run
+    cfg = yaml.safe_load((ROOT / "config" / "test.yaml").read_text())["studies"]
+    job = sorted((wd / "results" / "jobs" / "threshold").glob("*.nc"))[0]
+    with xr.open_dataset(job) as ds:
+        assert ds.attrs["job_parameters"].startswith("threshold --gamma")
+        assert "-v scene threshold" in ds.attrs["command"]
+    for name in ("dataset", "fit"):
+        with xr.open_dataset(wd / "results" / "threshold_vs_size" / f"{name}.nc") as ds:
+            assert json.loads(ds.attrs["study_config"]) == cfg["threshold_vs_size"]
+            assert ds.attrs["roughflow_version"] and ds.attrs["history"]
+
+
+@pytest.mark.slow
 def test_second_invocation_does_nothing(test_run):
     wd, _ = test_run
     again = snakemake(wd, "--configfile", "config/test.yaml", "--cores", "2")

@@ -25,6 +25,7 @@ from roughflow.datasets.kinds import check_kind
 from roughflow.datasets.sweep import INT_FILL, PARAM_DIMS
 from roughflow.errors import InputError
 from roughflow.io import read_dataset, write_dataset
+from roughflow.provenance import Provenance
 
 log = logging.getLogger(__name__)
 JOB_KINDS = ("threshold_job", "ladder_job")
@@ -127,9 +128,11 @@ def combine(datasets: Sequence[xr.Dataset], sources: Sequence[str] | None = None
 
 
 def aggregate(inputs: Sequence[str | os.PathLike | xr.Dataset], output: str | os.PathLike,
-              *, study: str | None = None, sources: Sequence[str] | None = None) -> xr.Dataset:
+              *, study: str | None = None, sources: Sequence[str] | None = None,
+              provenance: Provenance | None = None) -> xr.Dataset:
     """Load (paths) or take (datasets) the job datasets, combine them and atomically write
-    the study dataset; returns it. ``sources`` name the inputs in messages."""
+    the study dataset (with ``provenance``); returns it. ``sources`` name the inputs in
+    messages."""
     if sources is None:
         sources = [repr(str(p)) if not isinstance(p, xr.Dataset) else f"dataset {i}"
                    for i, p in enumerate(inputs)]
@@ -138,7 +141,7 @@ def aggregate(inputs: Sequence[str | os.PathLike | xr.Dataset], output: str | os
     if study is not None:
         out.attrs["study"] = study
     out.attrs["title"] = f"roughflow study {study or ''}".strip()
-    write_dataset(out, output)
+    write_dataset(out, output, provenance=provenance)
     log.info("aggregated %d datasets into %s (%s)", len(datasets), output,
              dict(out.sizes))
     return out

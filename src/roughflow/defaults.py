@@ -34,6 +34,8 @@ PAPER_SIZE_FACTOR = 4.0
 CONTACT_METHODS = ("gfmd", "cg")
 #: Residual of a single contact solve: largest gap error over the rms height.
 CONTACT_TOL = 1e-6
+#: Solver steps between two DEBUG progress lines of a contact solve (roughflow -vv).
+SOLVER_LOG_EVERY = 20
 #: Loosest contact tolerance accepted: a gap error of 1 % of the rms height (a looser one
 #: returns the starting state after zero iterations as "converged").
 CONTACT_TOL_MAX = 1e-2

@@ -3,8 +3,7 @@
 from __future__ import annotations
 
 import math
-
-import numpy as np
+from numbers import Integral
 
 
 class InputError(ValueError):
@@ -52,7 +51,7 @@ def require_int(name: str, value, *, minimum: int | None = None,
                 maximum: int | None = None) -> int:
     """Return ``value`` as an int, or raise :class:`InputError` naming it if it is not an
     integer (bools and floats are refused) or lies outside [``minimum``, ``maximum``]."""
-    if isinstance(value, bool) or not isinstance(value, (int, np.integer)):
+    if isinstance(value, bool) or not isinstance(value, Integral):
         raise InputError(f"{name} must be an integer, got {value!r}")
     v = int(value)
     if minimum is not None and v < minimum:
@@ -74,8 +73,11 @@ def require_seeds(name: str, seeds) -> tuple[int, ...]:
     return out
 
 
-def require_field(name: str, array, *, ndim: int = 2) -> np.ndarray:
-    """Return ``array`` as float64, or raise if it has the wrong rank or non-finite values."""
+def require_field(name: str, array, *, ndim: int = 2):
+    """Return ``array`` as a float64 numpy array, or raise if it has the wrong rank or
+    non-finite values."""
+    import numpy as np
+
     a = np.asarray(array, dtype=np.float64)
     if a.ndim != ndim:
         raise InputError(f"{name} must be a {ndim}D array, got shape {a.shape}")

@@ -16,7 +16,6 @@ import os
 from functools import lru_cache
 
 import numpy as np
-import pyfftw
 
 from roughflow.errors import InputError, require_int
 
@@ -61,6 +60,8 @@ class RealFFT2:
     """
 
     def __init__(self, shape: tuple[int, int], threads: int):
+        import pyfftw  # here, not at import: it loads scipy.fft (1 s in python -X importtime)
+
         nx, ny = shape
         self.shape = (int(nx), int(ny))
         self.spectral_shape = (int(nx), int(ny) // 2 + 1)

@@ -1,8 +1,9 @@
-"""netCDF files: writing any dataset atomically, and the surface file format.
+"""netCDF files: reading and writing any dataset, and the surface file format.
 
 Every variable carries ``units`` and ``long_name``; parameters are attributes
 or coordinates. Files are written to a temporary name in the same folder and
-renamed into place, so an interrupted job never leaves a file that looks valid.
+renamed into place, so an interrupted job never leaves a file that looks valid, and every
+file gets its provenance attributes (:mod:`roughflow.provenance`).
 """
 
 from __future__ import annotations
@@ -16,6 +17,7 @@ import xarray as xr
 
 from roughflow.datasets.units import LENGTH_UNITS, grid_coords
 from roughflow.errors import InputError, require_field, require_positive
+from roughflow.provenance import PROVENANCE_ATTRS, Provenance
 from roughflow.surface import Surface, SurfaceSpec
 
 
@@ -50,13 +52,17 @@ def publish(tmp: str | os.PathLike, path: str | os.PathLike) -> None:
     os.replace(tmp, path)
 
 
-def write_dataset(ds: xr.Dataset, path: str | os.PathLike) -> Path:
+def write_dataset(ds: xr.Dataset, path: str | os.PathLike, *,
+                  provenance: Provenance | None = None) -> Path:
     """Write ``ds`` to ``path`` atomically (temporary file + rename), with the permissions
-    of a newly created file."""
+    of a newly created file and the attributes of ``provenance`` (default: the Python
+    API's, :class:`~roughflow.provenance.Provenance`) in place of any it carried."""
     path = Path(path)
     path.parent.mkdir(parents=True, exist_ok=True)
     ds = ds.copy()
-    ds.attrs = clean_attrs(ds.attrs)
+    attrs = {k: v for k, v in ds.attrs.items() if k not in PROVENANCE_ATTRS}
+    attrs.update((provenance or Provenance()).attrs())
+    ds.attrs = clean_attrs(attrs)
     for name in ds.variables:
         ds[name].attrs = clean_attrs(ds[name].attrs)
     fd, tmp = tempfile.mkstemp(suffix=".nc.part", dir=path.parent)

@@ -1,5 +1,6 @@
 # Config validation and job planning (runs before any job starts).
 
+import json
 import math
 import sys
 from pathlib import Path

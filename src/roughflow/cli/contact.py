@@ -3,6 +3,8 @@
 from __future__ import annotations
 
 import argparse
+import logging
+import time
 
 from roughflow.defaults import (
     ADHESION_RANGE_OVER_LAMBDA_S,
@@ -14,6 +16,8 @@ from roughflow.defaults import (
 from roughflow.errors import InputError
 
 from ._common import add_input, add_output
+
+log = logging.getLogger(__name__)
 
 
 def register(sub: argparse._SubParsersAction) -> None:
@@ -88,9 +92,17 @@ def run(args: argparse.Namespace) -> None:
         raise InputError("--model bearing takes --area-fraction, not --pressure")
     surface = surface_from_dataset(args.data["surface"])
     adhesion = _adhesion(args, surface)
+    t0 = time.perf_counter()
     result = solve(
         surface, args.pressure, model=args.model, method=args.method,
         area_fraction=args.area_fraction, tol=args.tol, max_iter=args.max_iter,
         adhesion=adhesion,
     )
-    write_dataset(contact_dataset(surface, result, adhesion), args.output)
+    log.info("%s contact (%s) on %d x %d: p = %.6g -> a_c = %.5f (%d iterations, residual "
+             "%.1e, %.2f s)", result.model, result.method, *surface.shape, result.pressure,
+             result.area_fraction, result.iterations, result.residual,
+             time.perf_counter() - t0)
+    methods = ["bearing"] if result.model == "bearing" else [result.method]
+    methods += ["adhesion"] if result.model == "adhesive" else []
+    write_dataset(contact_dataset(surface, result, adhesion), args.output,
+                  provenance=args.provenance.using(*methods))

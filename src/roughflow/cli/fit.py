@@ -27,8 +27,13 @@ def register(sub: argparse._SubParsersAction) -> None:
 
 
 def run(args: argparse.Namespace) -> None:
+    from dataclasses import replace
+
     from roughflow.fits import fit_dataset
     from roughflow.io import write_dataset
 
-    res = fit_dataset(args.data["dataset"], n_boot=args.bootstrap, nu=args.nu, seed=args.seed)
-    write_dataset(res, args.output)
+    ds = args.data["dataset"]
+    res = fit_dataset(ds, n_boot=args.bootstrap, nu=args.nu, seed=args.seed)
+    provenance = replace(args.provenance.using("scaling"),
+                         study_config=str(ds.attrs.get("study_config", "")))
+    write_dataset(res, args.output, provenance=provenance)

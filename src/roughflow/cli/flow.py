@@ -4,12 +4,14 @@ from __future__ import annotations
 
 import argparse
 import logging
-
-import numpy as np
+from typing import TYPE_CHECKING
 
 from roughflow.defaults import FLOW_METHODS, FLOW_TOL
 
 from ._common import add_input, add_output, axis_arg
+
+if TYPE_CHECKING:  # numpy is imported when the command runs, not for --help
+    import numpy as np
 
 log = logging.getLogger(__name__)
 
@@ -48,6 +50,8 @@ def _read_gap(ds):
     from roughflow.errors import require_positive
 
     lx, ly = require_positive("lx", ds.attrs["lx"]), require_positive("ly", ds.attrs["ly"])
+    import numpy as np
+
     gap = ds["gap"].values.astype(np.float64)
     contact = ds["contact"].values.astype(bool) if "contact" in ds else gap <= 0
     return gap, contact, lx, ly
@@ -57,6 +61,7 @@ def run(args: argparse.Namespace) -> None:
     from roughflow.datasets import flow_dataset
     from roughflow.flow import solve
     from roughflow.io import write_dataset
+    from roughflow.provenance import PROVENANCE_ATTRS
 
     ds_in = args.data["input"]
     gap, contact, lx, ly = _read_gap(ds_in)
@@ -71,24 +76,23 @@ def run(args: argparse.Namespace) -> None:
     out = flow_dataset(results, contact, lx=lx, ly=ly, eta=args.eta, tol=args.tol)
     out.attrs["source"] = str(args.input)
     for k, v in ds_in.attrs.items():
-        if k not in ("title", "lx", "ly"):
+        # the contact's provenance continues in this file's history and references
+        if k not in ("title", "lx", "ly", *PROVENANCE_ATTRS):
             out.attrs[f"contact_{k}"] = v
-    write_dataset(out, args.output)
+    write_dataset(out, args.output, provenance=args.provenance.using("reynolds"))
     if args.plot:
         _plot(results, contact, args.plot)
 
 
 def _plot(results: dict, contact: np.ndarray, path: str) -> None:
-    import matplotlib
-
-    matplotlib.use("Agg")
-    import matplotlib.pyplot as plt
+    # a Figure without pyplot: no backend is selected or switched (savefig renders with Agg)
+    from matplotlib.figure import Figure
 
     from roughflow.flow import plot_flux
 
-    fig, axes = plt.subplots(1, len(results), figsize=(5 * len(results), 4.2), squeeze=False)
+    fig = Figure(figsize=(5 * len(results), 4.2))
+    axes = fig.subplots(1, len(results), squeeze=False)
     for ax, r in zip(axes[0], results.values(), strict=True):
         plot_flux(r, contact, ax=ax)
     fig.tight_layout()
     fig.savefig(path, dpi=120)
-    plt.close(fig)

@@ -17,14 +17,16 @@ from __future__ import annotations
 import argparse
 import sys
 from pathlib import Path
-
-import numpy as np
+from typing import TYPE_CHECKING
 
 from roughflow import defaults
 from roughflow.defaults import A_C_STAR_PAPER, MODELS
 from roughflow.errors import InputError
 
 from ._common import add_input, add_output, add_surface_options
+
+if TYPE_CHECKING:  # numpy is imported when a command runs, not for --help
+    import numpy as np
 
 DEFAULT_PRESSURES = "0.002,0.005,0.01,0.02,0.05,0.1,0.15,0.2,0.25"
 
@@ -75,6 +77,8 @@ def register(sub: argparse._SubParsersAction) -> None:
 
 
 def _parse_pressures(text: str) -> np.ndarray:
+    import numpy as np
+
     try:
         values = [float(v) for v in text.split(",") if v.strip()]
     except ValueError:
@@ -163,7 +167,7 @@ def _run_persson(args: argparse.Namespace, src, *, source: str) -> None:
     spec = src if not hasattr(src, "heights") else getattr(src, "spec", None)
     if spec is not None:
         ds.attrs.update({f"spec_{k}": v for k, v in spec.as_attrs().items()})
-    write_dataset(ds, args.output)
+    write_dataset(ds, args.output, provenance=args.provenance.using("persson", "closed_form"))
 
 
 def _cell(ds, nx: int, ny: int) -> tuple[float, float]:
@@ -186,6 +190,8 @@ def _read_flow(path: str, fl, masks: np.ndarray | None, gap_shape) -> dict[str, 
     """sigma_x, sigma_y of a ``roughflow flow`` file (variables or attributes), checked to
     belong to the gap fields: a flow file holds one field, whose contact map must equal the
     gap file's (else the comparison would be with another gap's conductance)."""
+    import numpy as np
+
     n = gap_shape[0]
     contact = np.asarray(fl["contact"].transpose("x", "y").values, dtype=bool)
     if n != 1 or contact.shape != tuple(gap_shape[1:]):
@@ -241,6 +247,7 @@ def _columns(t) -> dict[str, float]:
 
 
 def _run_gap(args: argparse.Namespace, ds) -> None:
+    import numpy as np
     import xarray as xr
 
     from roughflow.datasets.units import DIMENSIONLESS, LENGTH_UNITS, SIGMA_UNITS
@@ -317,4 +324,5 @@ def _run_gap(args: argparse.Namespace, ds) -> None:
                "peklenik_source": args.peklenik, "gamma": gamma},
     )
     res.attrs.update({k: v for k, v in ds.attrs.items() if k.startswith("spec_")})
-    write_dataset(res, args.output)
+    methods = ("bruggeman", "closed_form", *(("reynolds",) if reynolds else ()))
+    write_dataset(res, args.output, provenance=args.provenance.using(*methods))

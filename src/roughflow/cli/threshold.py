@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import argparse
+import logging
 
 from roughflow.defaults import (
     A_C_STAR_PAPER,
@@ -16,6 +17,8 @@ from roughflow.defaults import (
 from roughflow.errors import InputError
 
 from ._common import add_input, add_output, axis_arg
+
+log = logging.getLogger(__name__)
 
 
 def register(sub: argparse._SubParsersAction) -> None:
@@ -88,6 +91,11 @@ def run(args: argparse.Namespace) -> None:
                     options=options)
     if args.axis is not None:
         res = {args.axis: res}
+    for ax, r in res.items():
+        log.info("a_c*(%s) = %.4f in [%.4f, %.4f] after %d contact solves", "xy"[ax],
+                 r.a_c_star, r.a_lo, r.a_hi, r.n_solves)
     ds = threshold_dataset(res, surface)
     ds.attrs["surface_file"] = str(args.surface)
-    write_dataset(ds, args.output)
+    methods = ["percolation", "bearing" if args.model == "bearing" else args.method or "gfmd"]
+    methods += {"elastic": ["perimeter"], "adhesive": ["adhesion"]}.get(args.model, [])
+    write_dataset(ds, args.output, provenance=args.provenance.using(*methods))

@@ -2,7 +2,9 @@
 
 ``make_figure(study, dataset, output, fit=None)`` writes ``output`` (PNG) and the PDF
 next to it and returns the caption. Every module has ``CAPTION`` and
-``draw(ds, fit=None) -> matplotlib.figure.Figure``.
+``draw(ds, fit=None) -> matplotlib.figure.Figure``. The figures are made without pyplot,
+so the library never selects or switches a matplotlib backend: in a notebook the returned
+Figure displays inline, and ``fig.savefig`` renders with Agg or the PDF backend.
 """
 
 from __future__ import annotations
@@ -30,19 +32,13 @@ def make_figure(study: str, dataset, output: str | os.PathLike, fit=None, *,
     """Draw ``study`` from ``dataset`` (xr.Dataset or path) into ``output`` (a .png file) and
     the PDF next to it; returns the caption. The dataset must be of the study's kind
     (:data:`roughflow.datasets.kinds.STUDY_KINDS`); ``source`` names it in messages."""
+    from roughflow.aggregate import load
     from roughflow.datasets.kinds import STUDY_KINDS, check_kind
 
     out = Path(output)
     if out.suffix.lower() != ".png":
         raise InputError(f"the figure is written as PNG (and a PDF next to it): {str(out)!r} "
                          "must end in .png")
-    import matplotlib
-
-    matplotlib.use("Agg")
-    import matplotlib.pyplot as plt
-
-    from roughflow.aggregate import load
-
     mod = module(study)
     if isinstance(dataset, (str, os.PathLike)):
         source = f"study dataset {str(dataset)!r}"
@@ -55,5 +51,4 @@ def make_figure(study: str, dataset, output: str | os.PathLike, fit=None, *,
         tmp = path.with_name(path.stem + ".part" + path.suffix)
         fig.savefig(tmp, dpi=150)
         os.replace(tmp, path)
-    plt.close(fig)
     return mod.CAPTION

@@ -20,13 +20,15 @@ from .jobs import (
     estimated_memory,
     expand_study,
     grid_points,
+    job_methods,
     study_defaults,
 )
 
 _RUNNERS = {"run_threshold": "threshold", "run_ladder": "ladder", "run_channels": "channels"}
 
 __all__ = ["ChannelsJob", "LadderJob", "SurfaceParams", "ThresholdJob", "check_job_memory",
-           "estimated_memory", "expand_study", "grid_points", "run", "study_defaults", *_RUNNERS]
+           "estimated_memory", "expand_study", "grid_points", "job_methods", "run",
+           "study_defaults", *_RUNNERS]
 
 
 def __getattr__(name: str):
@@ -43,6 +45,8 @@ def run(job, *, threads: int | None = None):
     check_threads(threads)
     check_job_memory(job)
     ds = __getattr__(f"run_{job.kind}")(job, threads=threads)
+    # provenance: the job's parameters (`roughflow scene` arguments)
+    ds.attrs["job_parameters"] = " ".join(job.cli_args())
     if hasattr(job, "settings"):
         # what jobs stacked along seed must share (checked by roughflow.aggregate)
         ds.attrs["job_settings"] = " ".join(job.settings())

@@ -449,6 +449,20 @@ def check_collisions(study: str, jobs) -> None:
         seen.setdefault(job.key, []).append(job)
 
 
+def job_methods(job: Job) -> tuple[str, ...]:
+    """The methods a job uses (names of :data:`roughflow.citation.METHODS`)."""
+    contact = ("bearing",) if job.model == "bearing" else ("gfmd",)
+    if job.model == "adhesive":
+        contact += ("adhesion",)
+    corrected = ("perimeter",) if job.model == "elastic" else ()
+    if isinstance(job, ThresholdJob):
+        return ("surface", *contact, "percolation", *corrected)
+    if isinstance(job, LadderJob):
+        return ("surface", *contact, "percolation", "reynolds", "bruggeman", "closed_form",
+                *corrected)
+    return ("surface", *contact, "percolation")
+
+
 #: The task of :mod:`roughflow.resources` whose memory model covers each job kind.
 MEMORY_TASKS = {"threshold": "threshold", "ladder": "ladder", "channels": "channels"}
 
