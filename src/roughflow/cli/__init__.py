@@ -94,13 +94,13 @@ def main(argv: list[str] | None = None) -> int:
     try:
         check_outputs(args)
         read_inputs(args)
-        inputs = [d for v in args.data.values() if v is not None
-                  for d in (v if isinstance(v, list) else [v])]
-        # a derived file continues its input's history (CF); aggregates list their jobs
-        single = [d for v in args.data.values() if v is not None and not isinstance(v, list)
-                  for d in [v]]
+        given = [v for v in args.data.values() if v is not None]
+        single = [v for v in given if not isinstance(v, list)]
+        listed = [d for v in given if isinstance(v, list) for d in v]
+        # a derived file continues its input's history (CF; an aggregate lists its jobs
+        # instead) and cites what its inputs cite
         args.provenance = replace(provenance, history=input_history(*single),
-                                  references=input_references(*inputs))
+                                  references=input_references(*single, *listed))
         args.func(args)
     except InputError as exc:
         parser.exit(2, f"{name}: error: {exc}\n")
