@@ -30,11 +30,13 @@ so the load imbalance |mean f_eff| / min(p, k_min rms(h)) enters the maximum as 
 
 from __future__ import annotations
 
+import logging
 import math
 
 import numpy as np
 
 from roughflow import fft
+from roughflow.defaults import SOLVER_LOG_EVERY
 
 from . import _kernels as _k
 from ._linalg import dot
@@ -58,6 +60,8 @@ F_ALPHA = 0.97
 # because the repulsion stiffens the contact points beyond the elastic frequency.
 ADHESIVE_DT0 = 0.2
 Z_MASS = 3.0  # q = 0 mass z k_min: 3 gave the fewest steps cold and warm (1, 3, 10, 30, 100 tried)
+
+log = logging.getLogger(__name__)
 
 
 def gfmd(
@@ -154,6 +158,10 @@ def gfmd(
 
     dt, alpha, n_pos = (ADHESIVE_DT0 if soft else DT0), ALPHA0, 0
     it = 0
+    # progress at DEBUG every SOLVER_LOG_EVERY steps, at the residual checks (the level is
+    # read once: the loop itself pays one comparison per check)
+    debug = log.isEnabledFor(logging.DEBUG)
+    next_log = SOLVER_LOG_EVERY
     res = forces(True)
     while res > tol and it < max_iter:
         it += 1
@@ -177,6 +185,10 @@ def gfmd(
         r = forces(check)
         if check:
             res = r
+            if debug and it >= next_log:
+                next_log += SOLVER_LOG_EVERY
+                log.debug("gfmd step %d: residual %.3e (tol %.1e), dt %.3g, contact %.4f", it,
+                          res, tol, dt, float(np.count_nonzero(active)) / size)
     separation = float(u.mean())
     g = np.subtract(u, h, out=f).reshape(shape)
     if not soft:
