@@ -30,7 +30,19 @@ report: "workflow/report/workflow.rst"
 include: "workflow/rules/common.smk"
 include: "workflow/rules/scenes.smk"
 include: "workflow/rules/studies.smk"
+include: "workflow/rules/measured.smk"
 include: "workflow/rules/accuracy.smk"
+
+
+# On a cluster (profiles/slurm) these run on the submitting host instead of through the
+# queue: they read finished netCDF files (or convert a scan), take seconds and under 1 GB
+# each, and a queued job would cost a scheduler round trip (and a queue wait) each.
+localrules:
+    all,
+    aggregate,
+    fit,
+    figure,
+    import_scan,
 
 
 rule all:

@@ -38,8 +38,8 @@ os.environ.setdefault("ROUGHFLOW_FFT_THREADS", "1")
 
 from roughflow.contact import solve  # noqa: E402
 from roughflow.fft import plan as fft_plan  # noqa: E402
-from roughflow.percolation import label, percolates, spanning_cells, threshold  # noqa: E402
-from roughflow.percolation.critical import first_guess_pressure  # noqa: E402
+from roughflow.percolation import label, percolates, spanning_cells  # noqa: E402
+from roughflow.search import SearchOptions, first_pressure, threshold  # noqa: E402
 from roughflow.surface import SurfaceSpec, generate  # noqa: E402
 
 OUT = Path(__file__).resolve().parents[1] / "results" / "benchmarks"
@@ -90,13 +90,13 @@ def bench_labelling(n: int, repeats: int, tamaas_max: int, bearing_max: int) -> 
 def bench_threshold(n: int, seed: int, naive: bool) -> dict:
     spec = SurfaceSpec.from_sweep(l_over_lambda_r=4, points_per_lambda_s=n / 64, seed=seed)
     s = generate(spec)
-    p0 = first_guess_pressure()
+    p0 = first_pressure()
     fft_plan(s.shape)  # plan the FFTs outside the timing (plans are cached per shape)
     t0 = time.perf_counter()
     cold = solve(s, p0, tol=CONTACT_TOL)
     t_cold = time.perf_counter() - t0
     t0 = time.perf_counter()
-    pair = threshold(s, contact_tol=CONTACT_TOL)
+    pair = threshold(s, options=SearchOptions(contact_tol=CONTACT_TOL))
     t_pair = time.perf_counter() - t0
     row = {
         "n": spec.nx, "seed": seed, "cold_s": t_cold, "cold_iter": cold.iterations,
@@ -107,8 +107,8 @@ def bench_threshold(n: int, seed: int, naive: bool) -> dict:
     }
     if naive:
         t0 = time.perf_counter()
-        res = [threshold(s, ax, strategy="bisect", warm_start=False, contact_tol=CONTACT_TOL)
-               for ax in (0, 1)]
+        naive = SearchOptions(strategy="bisect", warm_start=False, contact_tol=CONTACT_TOL)
+        res = [threshold(s, ax, options=naive) for ax in (0, 1)]
         row["naive_s"] = time.perf_counter() - t0
         row["naive_solves"] = sum(r.n_solves for r in res)
         row["naive_iter"] = sum(step[2] for r in res for step in r.solves)

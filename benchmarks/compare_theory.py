@@ -35,8 +35,8 @@ DEFAULT_PRESSURES = "0.02,0.04,0.06,0.08,0.1,0.12,0.14,0.16,0.18"
 
 
 def sample_threshold(surface) -> float:
-    """Mean of the x and y fluid-percolation thresholds of this sample (roughflow.percolation)."""
-    from roughflow.percolation import threshold
+    """Mean of the x and y fluid-percolation thresholds of this sample (roughflow.search)."""
+    from roughflow.search import threshold
 
     th = threshold(surface, axis=None, model="elastic", tol=2e-3)
     return 0.5 * (th[0].a_c_star + th[1].a_c_star)

@@ -1,13 +1,13 @@
-"""Convergence studies: numerical error against wall time for a_c* and sigma (issue 8).
+"""Convergence studies: numerical error against wall time for a_c* and sigma.
 
 Phases (each appends JSON lines under ``--out``; ``report`` turns them into tables + PNGs):
 
 - ``resolution``: per seed, one surface generated at the finest resolution and sampled at
   every coarser one (the spectrum is band-limited below q_s, so ``h[::k, ::k]`` is the same
   continuum surface on a coarser grid: a resolution study on one physical surface).
-  For each points_per_lambda_s: a_c* along x and y (``percolation.threshold``), one extra
+  For each points_per_lambda_s: a_c* along x and y (``search.threshold``), one extra
   contact solve at the threshold for the contact-line length, and sigma_x at a_c = 0.2 and
-  0.35 (pressure found by a secant in erfinv(a_c), then one flow solve). The first solve of
+  0.35 (pressure found by the shared load search, then one flow solve). The first solve of
   each target is at a fixed pressure (the same at every resolution): those points fit the
   perimeter constant c of :func:`roughflow.accuracy.perimeter_corrected_area`.
 - ``tol``: at the default resolution, a_c*, a_c, mean gap and sigma against the contact
@@ -35,17 +35,15 @@ import numpy as np
 
 os.environ.setdefault("ROUGHFLOW_FFT_THREADS", "1")
 
-from scipy.special import erfinv  # noqa: E402
-
-from roughflow import accuracy, contact, flow, percolation  # noqa: E402
+from roughflow import accuracy, contact, flow  # noqa: E402
 from roughflow.errors import ConvergenceError  # noqa: E402
+from roughflow.search import LoadSearch, SearchOptions, threshold  # noqa: E402
 from roughflow.surface import Surface, SurfaceSpec, generate  # noqa: E402
 
 TARGETS = (0.2, 0.35)
-#: d ln sigma / d a_c ~ -beta / (a_c* - a_c), beta = 69/20 (physics.md 5): used only to
+#: d ln sigma / d a_c ~ -beta / (a_c* - a_c), beta = 69/20 (docs/physics.md Sect. 5): used only to
 #: move sigma by the last few 1e-4 of contact area onto the exact target
 BETA, A_STAR = 69 / 20, 0.42
-P_OF_A = 1 / math.sqrt(math.pi)  # p ~ erfinv(a) / sqrt(pi) (simulated small-load slope 2)
 
 
 def _append(path: Path, rec: dict) -> None:
@@ -67,24 +65,16 @@ def _surface(seed: int, ppl: int, ppl_max: int, cache: dict) -> Surface:
 
 
 def _hit_area(surf: Surface, target: float, *, tol_a: float, ctol: float, init=None):
-    """Contact solves until |a_c - target| < tol_a; returns (first, last, n_solves)."""
-    p = float(erfinv(target)) * P_OF_A
-    pts = []
-    r = first = None
-    for _ in range(8):
-        r = contact.solve(surf, p, tol=ctol, init=init)
-        init = r
-        first = first or r
-        pts.append((p, float(erfinv(r.area_fraction))))
-        if abs(r.area_fraction - target) < tol_a:
-            break
-        z = float(erfinv(target))
-        if len(pts) == 1:
-            p = p * z / pts[0][1]
-        else:
-            (p0, z0), (p1, z1) = pts[-2], pts[-1]
-            p = p1 + (z - z1) * (p1 - p0) / (z1 - z0) if z1 != z0 else p1 * z / z1
-    return first, r, len(pts)
+    """Contact solves until |a_c - target| <= tol_a (the shared load search, whose first load
+    is the contact law's, the same at every resolution); returns (first, last, n_solves)."""
+    solves = []
+
+    def solve(p, warm):
+        solves.append(contact.solve(surf, p, tol=ctol, init=init if warm is None else warm))
+        return solves[-1]
+
+    found = LoadSearch(solve, contact.ContactLaw()).solve_for(target, tol_a, max_solves=8)
+    return solves[0], found.result, found.solves
 
 
 def phase_resolution(args) -> None:
@@ -96,8 +86,8 @@ def phase_resolution(args) -> None:
             surf = _surface(seed, ppl, ppl_max, cache)
             n = surf.shape[0]
             t0 = time.perf_counter()
-            th = percolation.threshold(surf, axis=None, tol=args.bisect_tol,
-                                       contact_tol=args.threshold_contact_tol)
+            th = threshold(surf, axis=None, tol=args.bisect_tol,
+                           options=SearchOptions(contact_tol=args.threshold_contact_tol))
             t_th = time.perf_counter() - t0
             p_mid = 0.25 * (th[0].p_lo + th[0].p_hi + th[1].p_lo + th[1].p_hi)
             t0 = time.perf_counter()
@@ -146,7 +136,7 @@ def phase_tol(args) -> None:
         surf = generate(spec)
         # contact tolerance at fixed load (a_c ~ 0.35 and ~ 0.2), cold solves
         for target in TARGETS:
-            p = float(erfinv(target)) * P_OF_A
+            p = contact.ContactLaw().control(target)
             for ctol in args.contact_tols:
                 t0 = time.perf_counter()
                 r = contact.solve(surf, p, tol=ctol)
@@ -162,8 +152,8 @@ def phase_tol(args) -> None:
         for ctol in args.threshold_contact_tols:
             t0 = time.perf_counter()
             try:
-                th = percolation.threshold(surf, axis=None, tol=args.threshold_bisect_tol,
-                                           contact_tol=ctol, max_solves=80)
+                th = threshold(surf, axis=None, tol=args.threshold_bisect_tol,
+                               options=SearchOptions(contact_tol=ctol, max_solves=80))
             except ConvergenceError as e:  # a loose contact tol makes a(p) jump
                 _append(out, dict(kind="threshold_contact_tol_failed", seed=seed, ppl=ppl,
                                   contact_tol=ctol, bisect_tol=args.threshold_bisect_tol,
@@ -176,8 +166,8 @@ def phase_tol(args) -> None:
         for btol in args.bisect_tols:
             t0 = time.perf_counter()
             try:
-                th = percolation.threshold(surf, axis=None, tol=btol, max_solves=80,
-                                           contact_tol=args.threshold_contact_tol)
+                th = threshold(surf, axis=None, tol=btol, options=SearchOptions(
+                    max_solves=80, contact_tol=args.threshold_contact_tol))
             except ConvergenceError as e:
                 _append(out, dict(kind="bisect_tol_failed", seed=seed, ppl=ppl,
                                   bisect_tol=btol, error=str(e)))

@@ -1,4 +1,4 @@
-"""Where does the time of a default sweep scene go? (issue 8, profile)
+"""Where does the time of a default sweep scene go? (profile)
 
 Profiles one threshold scene (default config: gamma = 1, H = 0.8, L/lambda_r = 4,
 eps_f = 1/16, 4 points per lambda_s, bisection tol 0.004, 4 seeds) and one ladder scene
@@ -34,7 +34,7 @@ STAGES = (
     ("labelling", ("roughflow/percolation/", "scipy/ndimage")),
     ("flow", ("roughflow/flow/", "pyamg/", "scipy/sparse")),
     ("theory", ("roughflow/theory/",)),
-    ("I/O", ("xarray/", "netCDF4", "h5netcdf", "roughflow/io.py", "roughflow/scenes/_data.py")),
+    ("I/O", ("xarray/", "netCDF4", "h5netcdf", "roughflow/io.py", "roughflow/datasets/")),
     ("fft", ("roughflow/fft.py", "pyfftw")),
 )
 
@@ -91,11 +91,13 @@ def compare_tolerances(seeds, ppl: float, repeats: int = 3) -> list[tuple]:
     """
     import numpy as np
 
-    from roughflow.percolation import threshold
+    from roughflow.search import SearchOptions, threshold
     from roughflow.surface import SurfaceSpec, generate
 
-    settings = {"current (tol 0.004, contact tol 1e-5)": dict(tol=0.004, contact_tol=1e-5),
-                "recommended (tol 0.008, contact tol 1e-4)": dict(tol=0.008, contact_tol=1e-4)}
+    settings = {
+        "tol 0.004, contact tol 1e-5": dict(tol=0.004, options=SearchOptions(contact_tol=1e-5)),
+        "tol 0.008, contact tol 1e-4": dict(tol=0.008, options=SearchOptions(contact_tol=1e-4)),
+    }
     surfs = [generate(SurfaceSpec.from_sweep(points_per_lambda_s=ppl, seed=s)) for s in seeds]
     times = {k: [] for k in settings}
     values = {k: [] for k in settings}

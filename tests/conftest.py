@@ -3,7 +3,29 @@ multi-threaded OpenBLAS on tiny vectors was measured 100x slower than numpy's su
 and a non-interactive matplotlib backend."""
 
 import os
+import subprocess
+import sys
+from pathlib import Path
+
+import pytest
+from workflow_copy import copy_workflow
 
 for var, value in (("ROUGHFLOW_FFT_THREADS", "1"), ("OPENBLAS_NUM_THREADS", "1"),
                    ("OMP_NUM_THREADS", "1"), ("MPLBACKEND", "Agg")):
     os.environ.setdefault(var, value)
+
+
+@pytest.fixture(scope="session")
+def local_test_run(tmp_path_factory):
+    """config/test.yaml run once per session on this machine (default profile, 2 cores) in a
+    temporary copy of the workflow: the results tests/test_workflow.py checks and
+    tests/test_slurm.py compares the SLURM run with. Returns (workdir, CompletedProcess)."""
+    snakemake = Path(sys.executable).with_name("snakemake")
+    if not snakemake.exists():
+        pytest.skip("snakemake not installed")
+    wd = copy_workflow(tmp_path_factory.mktemp("wf"))
+    env = {**os.environ, "ROUGHFLOW_FFT_THREADS": "1", "MPLBACKEND": "Agg"}
+    run = subprocess.run([str(snakemake), "--configfile", "config/test.yaml", "--cores", "2"],
+                         cwd=wd, env=env, capture_output=True, text=True, timeout=600)
+    assert run.returncode == 0, run.stdout[-3000:] + run.stderr[-3000:]
+    return wd, run

@@ -88,7 +88,7 @@ def _band_limited(seed: int, ppl_max: int = 16) -> Surface:
 def test_perimeter_correction_removes_first_order_bias_of_elastic_contact():
     """Elastic contact area at fixed load on one surface at 4, 8 and 16 points per lambda_s.
 
-    The raw area converges to first order (error halves with the spacing, issue 8 and
+    The raw area converges to first order (error halves with the spacing,
     docs/accuracy.md); the corrected one with the measured constant PERIMETER_C must be at
     least 3x closer to the extrapolated continuum value at 4 points per lambda_s.
     """

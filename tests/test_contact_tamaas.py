@@ -38,7 +38,7 @@ def test_matches_tamaas(spec_kw, pressure, method):
     traction, gap = _tamaas(s.heights, s.lx, s.ly, pressure)
     ours = solve(s, pressure, method=method, tol=1e-8)
     a_tm = float((traction > 0).mean())
-    # The issue asks for 1e-3 relative; both codes solve the identical discrete problem to
+    # Target agreement 1e-3 relative; both codes solve the identical discrete problem to
     # tight tolerances (measured agreement ~1e-12), so 1e-3 is a loose, safe bound.
     assert ours.area_fraction == pytest.approx(a_tm, rel=1e-3)
     assert ours.mean_gap == pytest.approx(float(np.maximum(gap, 0).mean()), rel=1e-3)

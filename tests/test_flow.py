@@ -1,4 +1,4 @@
-"""Validation of the Reynolds flow solver (issue 5) against exact results."""
+"""Validation of the Reynolds flow solver against exact results."""
 
 from __future__ import annotations
 

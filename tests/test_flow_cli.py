@@ -11,8 +11,9 @@ import pytest  # noqa: E402
 import xarray as xr  # noqa: E402
 
 from roughflow.cli import main  # noqa: E402
+from roughflow.datasets.units import grid_coords  # noqa: E402
 from roughflow.flow import conductance, plot_flux, solve  # noqa: E402
-from roughflow.io import grid_coords, write_dataset  # noqa: E402
+from roughflow.io import write_dataset  # noqa: E402
 
 
 def write_contact(path, gap, lx=1.0, ly=1.0):

@@ -1,5 +1,5 @@
 """Labelling and spanning on hand-made masks with known answers, against a brute-force
-flood fill, and the 4/8 duality on random masks (physics notes Sect. 4)."""
+flood fill, and the 4/8 duality on random masks (docs/physics.md Sect. 4)."""
 
 from __future__ import annotations
 

@@ -174,7 +174,7 @@ def test_transposition_swaps_flow_and_percolation(seed, n, closed):
     open_mask = g > 0
     assert percolates(open_mask.T, 0) == percolates(open_mask, 1)
     assert percolates(open_mask.T, 1) == percolates(open_mask, 0)
-    # duality (physics.md 4): fluid spans x exactly when no 8-connected contact cluster
+    # duality (docs/physics.md Sect. 4): fluid spans x exactly when no 8-connected contact cluster
     # spans y
     for ax in (0, 1):
         assert percolates(open_mask, ax) != contact_percolates(~open_mask, 1 - ax)

@@ -7,11 +7,11 @@ import pytest
 import xarray as xr
 
 from roughflow.aggregate import aggregate, combine, load
-from roughflow.cli import main
-from roughflow.cli.scene import build_parser_for_tests
+from roughflow.cli import build_parser, main
 from roughflow.errors import InputError
 from roughflow.io import write_dataset
 from roughflow.scenes import (
+    ChannelsJob,
     LadderJob,
     SurfaceParams,
     ThresholdJob,
@@ -46,22 +46,41 @@ def test_expand_study_names_unresolvable_sizes():
         expand_study("threshold_vs_gamma", block)
 
 
-def test_cli_arguments_round_trip():
-    job = LadderJob(surface=SurfaceParams(gamma=2.0, l_over_lambda_r=8.0, eps_f=1 / 32),
-                    model="adhesive", seeds=(3, 4), area_fractions=(0.1, 0.2),
-                    a_c_star=0.41, a_c_star_alt=0.5, tabor=1.5,
-                    range_over_lambda_s=None)
-    args = build_parser_for_tests().parse_args(["scene", *job.cli_args(), "-o", "x.nc"])
+@pytest.mark.parametrize("job", [
+    LadderJob(surface=SurfaceParams(gamma=2.0, l_over_lambda_r=8.0, eps_f=1 / 32),
+              model="adhesive", seeds=(3, 4), area_fractions=(0.1, 0.2), a_c_star=0.41,
+              a_c_star_alt=0.5, area_tol=0.01, tabor=1.5, range_over_lambda_s=None),
+    LadderJob(surface=SurfaceParams(aspect=0.5), model="bearing", area_fractions=(0.3,)),
+    LadderJob(surface=SurfaceParams()),
+    ThresholdJob(surface=TINY, model="bearing", seeds=(0, 1), tol=0.01),
+    ThresholdJob(surface=SurfaceParams()),
+    ChannelsJob(),
+    ChannelsJob(gamma=2.0, hurst=0.3, l_over_lambda_r=8.0, eps_f=0.05, area_fraction=0.3,
+                model="bearing", seed=7, points_per_lambda_s=3.0),
+])
+def test_cli_arguments_round_trip(job):
+    # jobs.cli_args() is written by hand next to the argparse of cli/scene.py: every field
+    # must survive the trip through the real parser
     from roughflow.cli.scene import job_from_args
 
+    args = build_parser().parse_args(["scene", *job.cli_args(), "-o", "x.nc"])
     assert job_from_args(args) == job
-    t = ThresholdJob(surface=TINY, model="bearing", seeds=(0, 1), tol=0.01)
-    args = build_parser_for_tests().parse_args(["scene", *t.cli_args(), "-o", "x.nc"])
-    assert job_from_args(args) == t
 
 
-def test_threshold_scene_matches_percolation_stage():
-    from roughflow.percolation import threshold
+def test_scene_cli_defaults_are_the_job_defaults():
+    from roughflow.cli.scene import job_from_args
+
+    for argv, job in (
+        (["scene", "threshold", "-o", "x.nc"], ThresholdJob(surface=SurfaceParams())),
+        (["scene", "ladder", "--area-fractions", "0.1", "-o", "x.nc"],
+         LadderJob(surface=SurfaceParams(), area_fractions=(0.1,))),
+        (["scene", "channels", "-o", "x.nc"], ChannelsJob()),
+    ):
+        assert job_from_args(build_parser().parse_args(argv)) == job
+
+
+def test_threshold_scene_matches_search():
+    from roughflow.search import threshold
 
     job = ThresholdJob(surface=TINY, model="bearing", seeds=(0, 1), tol=0.01)
     ds = run_threshold(job)
@@ -78,7 +97,7 @@ def test_threshold_scene_matches_percolation_stage():
 def test_elastic_threshold_scene_brackets():
     ds = run_threshold(ThresholdJob(surface=TINY, model="elastic", seeds=(0,), tol=0.01))
     lo, hi = ds["a_lo"].values.ravel(), ds["a_hi"].values.ravel()
-    # the bisection stops when the bracket is below tol; the threshold lies inside it
+    # the search stops when the bracket is below tol; the threshold lies inside it
     assert np.all(hi - lo <= 0.01 + 1e-12)
     a = ds["a_c_star"].values.ravel()
     assert np.all((lo <= a) & (a <= hi)) and np.all((a > 0.05) & (a < 0.95))

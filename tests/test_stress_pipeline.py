@@ -18,7 +18,7 @@ import math
 import numpy as np
 import pytest
 
-from roughflow import contact, flow, percolation
+from roughflow import contact, flow, search
 from roughflow.errors import ConvergenceError, InputError
 from roughflow.percolation import percolates
 from roughflow.surface import Surface, SurfaceSpec, generate
@@ -73,7 +73,7 @@ def test_extreme_peklenik_pipeline(gamma):
                                   points_per_lambda_s=2, seed=3)
     surf = generate(spec)
     assert min(surf.shape) >= 32 and max(surf.shape) <= 512
-    th = percolation.threshold(surf, axis=None, tol=4e-3)
+    th = search.threshold(surf, axis=None, tol=4e-3)
     easy, hard = (0, 1) if gamma > 1 else (1, 0)
     for ax in (0, 1):
         t = th[ax]
@@ -99,7 +99,7 @@ def test_extreme_peklenik_pipeline(gamma):
 def test_extreme_hurst_pipeline(hurst):
     spec = SurfaceSpec.from_sweep(hurst=hurst, points_per_lambda_s=2, seed=5)
     surf = generate(spec)
-    th = percolation.threshold(surf, axis=None, tol=4e-3)
+    th = search.threshold(surf, axis=None, tol=4e-3)
     for ax in (0, 1):
         assert th[ax].bracketed and 0.2 < th[ax].a_c_star < 0.7
     p = 0.8 * min(th[0].p_lo, th[1].p_lo)
@@ -127,7 +127,7 @@ def test_handful_of_contact_points():
     n_contact = int(r.contact.sum())
     assert 1 <= n_contact and r.area_fraction < 0.005
     # small-load law a_c ~ kappa p with kappa about 2 in simulations (Persson 1.6,
-    # physics.md 6); a coarse grid over-counts the few tiny spots, so the band is wide
+    # docs/physics.md Sect. 6); a coarse grid over-counts the few tiny spots, so the band is wide
     assert 1.0 < r.area_fraction / p < 4.0
     for ax in (0, 1):
         fr = flow.solve(r.gap, ax)
@@ -167,7 +167,7 @@ def test_near_full_contact():
 
 def test_flow_at_last_percolating_bisection_step():
     surf = _default_surface(4)
-    th = percolation.threshold(surf, axis=0, tol=1e-3)
+    th = search.threshold(surf, axis=0, tol=1e-3)
     r = contact.solve(surf, th.p_lo, tol=1e-8)
     _check_contact(r, th.p_lo)
     assert percolates(~r.contact, 0), "the a_lo state of the threshold must percolate"
@@ -197,7 +197,7 @@ def test_flux_balance_of_amg_at_threshold(method):
     refines until the fluxes balance (down to round-off); 1e-4 is the bound asked of
     the pressure/flux fields, sigma itself agrees to 1e-8 (test above)."""
     surf = _default_surface(4)
-    th = percolation.threshold(surf, axis=0, tol=1e-3)
+    th = search.threshold(surf, axis=0, tol=1e-3)
     r = contact.solve(surf, th.p_lo, tol=1e-8)
     fr = flow.solve(r.gap, 0, method=method)
     assert fr.residual <= 1e-8
@@ -249,7 +249,7 @@ def test_bit_for_bit_reproducible_contact_and_flow():
         surf = generate(spec)
         r = contact.solve(surf, 0.15, threads=1)
         f = flow.solve(r.gap, 0, method="rs")
-        th = percolation.threshold(surf, axis=None, tol=2e-3, threads=1)
+        th = search.threshold(surf, axis=None, tol=2e-3, threads=1)
         runs.append((r, f, th))
     (r0, f0, t0), (r1, f1, t1) = runs
     assert np.array_equal(r0.gap, r1.gap)
@@ -293,12 +293,14 @@ def test_nonconvergence_raises():
         contact.solve(surf, 0.2, tol=1e-12, max_iter=3)
     assert exc.value.residual > 1e-12 and math.isfinite(exc.value.residual)
     with pytest.raises(ConvergenceError):
-        percolation.threshold(surf, axis=0, tol=1e-6, max_solves=3)
+        search.threshold(surf, axis=0, tol=1e-6, options=search.SearchOptions(max_solves=3))
 
 
 def test_unbracketed_threshold_is_reported():
     surf = _default_surface(0)
     with pytest.raises(InputError, match="span"):
-        percolation.threshold(surf, axis=0, p_range=(1e-4, 1e-2))
-    t = percolation.threshold(surf, axis=0, p_range=(1e-4, 1e-2), on_unbracketed="nan")
+        search.threshold(surf, axis=0,
+                         options=search.SearchOptions(pressure_range=(1e-4, 1e-2)))
+    t = search.threshold(surf, axis=0, options=search.SearchOptions(
+        pressure_range=(1e-4, 1e-2), on_unbracketed="nan"))
     assert not t.bracketed and math.isnan(t.a_c_star) and t.message

@@ -1,4 +1,4 @@
-"""Random-phase surfaces (paper Eq. 1-2, exponent corrected per physics.md Sect. 2)."""
+"""Random-phase surfaces (paper Eq. 1-2, exponent corrected per docs/physics.md Sect. 2)."""
 
 from __future__ import annotations
 

@@ -38,7 +38,7 @@ def _with_contact(sigma: np.ndarray, a_c: float) -> tuple[np.ndarray, np.ndarray
 
 
 def test_effective_dimension_eq6():
-    # D = 1/(1 - a_c*) = 1.709 for a_c* = 0.415 (physics notes Sect. 6)
+    # D = 1/(1 - a_c*) = 1.709 for a_c* = 0.415 (docs/physics.md Sect. 6)
     assert effective_dimension(0.415) == pytest.approx(1.7094, abs=1e-4)
     assert effective_dimension(0.5) == 2.0
 

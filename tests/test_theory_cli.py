@@ -7,7 +7,8 @@ import pytest
 import xarray as xr
 
 from roughflow.cli import main
-from roughflow.io import grid_coords, write_dataset
+from roughflow.datasets.units import PRESSURE_UNITS, grid_coords
+from roughflow.io import write_dataset
 from roughflow.surface import SurfaceSpec, generate
 from roughflow.theory import bruggeman, bruggeman_anisotropic, closed_form, predict_conductance
 
@@ -69,7 +70,7 @@ def test_spec_form(tmp_path, capsys):
     with xr.open_dataset(out) as ds:
         np.testing.assert_allclose(ds["mean_gap"].values, ref.mean_gap, rtol=1e-12)
         np.testing.assert_allclose(ds["sigma"].values, ref.sigma, rtol=1e-12)
-        assert ds["pressure"].attrs["units"] == "E* gbar"
+        assert ds["pressure"].attrs["units"] == PRESSURE_UNITS
 
 
 def test_surface_file_form(tmp_path, capsys):

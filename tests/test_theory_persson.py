@@ -75,7 +75,7 @@ def test_closed_form_bad_input():
 
 
 def test_persson_area_small_load_slope():
-    # a_c = erf(sqrt(2) p/(E* gbar)) -> sqrt(8/pi) p/(E* gbar) = 1.596 p (physics notes 6);
+    # a_c = erf(sqrt(2) p/(E* gbar)) -> sqrt(8/pi) p/(E* gbar) = 1.596 p (docs/physics.md Sect. 6);
     # erf(x) = 2x/sqrt(pi) (1 - x^2/3 + ...), so at p = 1e-6 the relative error is 1e-12.
     p = 1e-6
     assert persson_area(p) / p == pytest.approx(math.sqrt(8 / math.pi), rel=1e-10)
@@ -149,7 +149,7 @@ def test_mean_gap_is_the_energy_integral():
 
 def test_elastic_energy_at_full_contact():
     # U_el -> (E*/4) sum_q |q| |h_q|^2: energy of flattening the surface completely
-    # (physics notes 3.1), computed from the generated heights' own FFT.
+    # (docs/physics.md Sect. 3.1), computed from the generated heights' own FFT.
     h = generate(SMALL).heights
     c = fft.rfft2(h) / h.size
     qx, qy = fft.wavevectors(*h.shape, 1.0, 1.0)

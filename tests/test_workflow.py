@@ -8,7 +8,6 @@ from __future__ import annotations
 
 import os
 import re
-import shutil
 import signal
 import subprocess
 import sys
@@ -19,23 +18,14 @@ import numpy as np
 import pytest
 import xarray as xr
 import yaml
+from workflow_copy import copy_workflow
 
 ROOT = Path(__file__).resolve().parents[1]
 SNAKEMAKE = Path(sys.executable).with_name("snakemake")
 STUDIES = ("channels", "threshold_vs_gamma", "threshold_vs_size", "threshold_vs_hurst",
-           "flow_isotropic", "flow_anisotropic")
+           "flow_isotropic", "flow_anisotropic", "measured")
 
 pytestmark = pytest.mark.skipif(not SNAKEMAKE.exists(), reason="snakemake not installed")
-
-
-def copy_workflow(dest: Path) -> Path:
-    for name in ("Snakefile", "workflow", "config", "profiles"):
-        src = ROOT / name
-        if src.is_dir():
-            shutil.copytree(src, dest / name)
-        else:
-            shutil.copy(src, dest / name)
-    return dest
 
 
 def snakemake(cwd: Path, *args: str, timeout: int = 600) -> subprocess.CompletedProcess:
@@ -51,11 +41,9 @@ def job_counts(output: str) -> dict[str, int]:
 
 
 @pytest.fixture(scope="module")
-def test_run(tmp_path_factory):
-    wd = copy_workflow(tmp_path_factory.mktemp("wf"))
-    first = snakemake(wd, "--configfile", "config/test.yaml", "--cores", "2")
-    assert first.returncode == 0, first.stdout[-3000:] + first.stderr[-3000:]
-    return wd, first
+def test_run(local_test_run):
+    # the session's one local run of config/test.yaml (tests/conftest.py)
+    return local_test_run
 
 
 @pytest.mark.slow
@@ -128,6 +116,54 @@ def test_flow_datasets_are_physical(test_run):
 
 
 @pytest.mark.slow
+def test_measured_study_gives_leak_curves_in_physical_units(test_run):
+    from roughflow.defaults import BOUNDARY
+
+    wd, _ = test_run
+    cfg = yaml.safe_load((ROOT / "config" / "test.yaml").read_text())["studies"]["measured"]
+    with xr.open_dataset(wd / "results" / "measured" / "dataset.nc") as ds:
+        assert list(ds["scan"].values) == ["afm"] and ds.attrs["boundary"] == BOUNDARY
+        # "1MPa:100GPa:6": six log-spaced nominal pressures, in Pa
+        np.testing.assert_allclose(ds["pressure"].values, np.geomspace(1e6, 1e11, 6),
+                                   rtol=1e-12)
+        d = ds.isel(scan=0)
+        q, perc = d["leak_rate"], d["percolating"]
+        assert ((q > 0) == (perc == 1)).all() and (q >= 0).all()
+        assert (d["area_fraction"].diff("pressure") >= 0).all()
+        assert (q.diff("pressure") <= 0).all()  # pressing harder never opens the seal more
+        # the sealing bracket agrees with the curve: leaking below it, sealed above it
+        for axis in ("x", "y"):
+            lo = float(d["sealing_pressure_lo"].sel(axis=axis))
+            hi = float(d["sealing_pressure"].sel(axis=axis))
+            assert 0 < lo < hi, (axis, lo, hi)
+            p = d["pressure"]
+            assert (perc.sel(axis=axis).where(p <= lo, 1) == 1).all()
+            assert (perc.sel(axis=axis).where(p >= hi, 0) == 0).all()
+        assert float(d["modulus"]) == 200e9 and cfg["modulus"] == "200GPa"
+    table = (wd / "results" / "measured" / "afm.txt").read_text()
+    assert "sealing pressure along x" in table and "sealing pressure along y" in table
+
+
+@pytest.mark.slow
+def test_every_units_attribute_parses(test_run):
+    from roughflow.units import registry
+
+    wd, _ = test_run
+    files = sorted((wd / "results").rglob("*.nc"))
+    kinds = set()
+    for path in files:
+        with xr.open_dataset(path) as ds:
+            kinds.add(ds.attrs.get("title", path.parent.name))
+            ureg = registry(ds.attrs)
+            for name, v in ds.variables.items():
+                if "units" in v.attrs:
+                    ureg.parse_units(v.attrs["units"])  # raises if it does not parse
+                elif v.dtype.kind == "f" and name not in ds.dims:
+                    pytest.fail(f"{path.name}: float variable {name} has no units")
+    assert len(kinds) >= 6, kinds
+
+
+@pytest.mark.slow
 def test_second_invocation_does_nothing(test_run):
     wd, _ = test_run
     again = snakemake(wd, "--configfile", "config/test.yaml", "--cores", "2")
@@ -153,6 +189,7 @@ def test_figure_style_change_does_not_rerun_simulations(test_run):
     dry = snakemake(wd, "--configfile", "config/test.yaml", "-n", "--forcerun", "figure")
     counts = job_counts(dry.stdout)
     assert counts.get("figure") == len(STUDIES) and "scene" not in counts
+    assert "leak" not in counts and "import_scan" not in counts
 
 
 def test_only_requested_targets_run(tmp_path):
@@ -199,6 +236,18 @@ BAD = {
                     ["studies.threshold_vs_size.seeds", "[]"]),
     "unknown study": (lambda c: c["studies"].update(fig9={"seeds": [0]}),
                       ["studies", "fig9"]),
+    "unit that does not parse": (lambda c: c["studies"]["measured"].update(modulus="200 GPx"),
+                                 ["studies.measured", "modulus", "200 GPx"]),
+    "not a pressure": (lambda c: c["studies"]["measured"].update(fluid_pressure="2mm"),
+                       ["studies.measured", "fluid_pressure", "not a pressure"]),
+    "pressure range in the wrong order": (
+        lambda c: c["studies"]["measured"].update(pressures="1GPa:1MPa:5"),
+        ["studies.measured", "pressures", "wrong order"]),
+    "missing scan file": (
+        lambda c: c["studies"]["measured"]["scans"][0].update(file="tests/data/nope.npy"),
+        ["studies.measured", "nope.npy", "does not exist"]),
+    "zero seal width": (lambda c: c["studies"]["measured"].update(seal_width="0mm"),
+                        ["studies.measured", "seal_width", "0mm"]),
 }
 
 
@@ -251,3 +300,19 @@ def test_killed_job_leaves_no_trusted_output(tmp_path):
     dry = snakemake(wd, "--configfile", "config/kill.yaml", "-n")
     assert dry.returncode == 0, dry.stderr
     assert job_counts(dry.stdout).get("scene") == 1
+
+
+def test_cluster_profile_settings_take_effect(monkeypatch):
+    # Snakemake loads profiles/default (the workflow profile) on top of --profile, key by key:
+    # nothing in it may replace a setting of the cluster profile
+    from snakemake.cli import parse_args
+
+    monkeypatch.chdir(ROOT)
+    _, args = parse_args(["--profile", "profiles/slurm", "-n"])
+    assert args.executor == "slurm"
+    assert (args.keep_going, args.latency_wait, args.retries) == (True, 60, 1)
+    assert args.slurm_status_command == "squeue"
+    # CPUs per job come from each rule's threads, not from a default resource
+    assert "cpus_per_task" not in args.default_resources.keys()
+    _, local = parse_args(["-n"])
+    assert (local.executor, local.keep_going, local.retries) == (None, False, 0)

@@ -19,11 +19,13 @@ import numpy as np
 import xarray as xr
 from scipy.optimize import least_squares
 
+from roughflow.datasets.sweep import threshold_values
+from roughflow.datasets.units import DIMENSIONLESS
+from roughflow.defaults import FIT_BOOTSTRAP, NU_PERCOLATION
 from roughflow.errors import InputError
 
 log = logging.getLogger(__name__)
 
-NU_PERCOLATION = 4.0 / 3.0
 NU_BOUNDS = (0.3, 6.0)
 
 
@@ -102,7 +104,7 @@ def fit_scaling(data: dict[str, tuple], *, nu: float | None = NU_PERCOLATION) ->
 
 
 def bootstrap_fit(eps: dict[str, np.ndarray], a_seed: dict[str, np.ndarray], *,
-                  nu: float | None = NU_PERCOLATION, n_boot: int = 200,
+                  nu: float | None = NU_PERCOLATION, n_boot: int = FIT_BOOTSTRAP,
                   rng: np.random.Generator | int | None = 0) -> ScalingFit:
     """Fit the seed means, with bootstrap errors over seeds.
 
@@ -169,7 +171,6 @@ def threshold_points(ds: xr.Dataset, group: str) -> tuple[dict, dict]:
     ``group`` "anisotropic" takes every gamma != 1, "isotropic" gamma == 1 (its x and y
     thresholds are one direction, "both"). Points are the (gamma, eps_t) pairs with data.
     """
-    from roughflow.scenes._data import threshold_values
 
     a = threshold_values(ds)
     for dim in ("model", "hurst", "eps_f"):
@@ -198,7 +199,7 @@ def threshold_points(ds: xr.Dataset, group: str) -> tuple[dict, dict]:
             {d: np.stack(v, axis=1) for d, v in aseed.items()})
 
 
-def fit_dataset(ds: xr.Dataset, *, n_boot: int = 200, nu: float = NU_PERCOLATION,
+def fit_dataset(ds: xr.Dataset, *, n_boot: int = FIT_BOOTSTRAP, nu: float = NU_PERCOLATION,
                 seed: int = 0) -> xr.Dataset:
     """Every fit of Fig. 3 as a dataset over (group, fit, nu_mode).
 
@@ -259,7 +260,7 @@ def fit_dataset(ds: xr.Dataset, *, n_boot: int = 200, nu: float = NU_PERCOLATION
         "n_points": "points in the fit",
         "nu_at_bound": "1 where a free nu stopped at its bound (nu not determined by the data)",
     }
-    data = {k: (dims, v, {"units": "1", "long_name": meta[k]}) for k, v in out.items()}
+    data = {k: (dims, v, {"units": DIMENSIONLESS, "long_name": meta[k]}) for k, v in out.items()}
     res = xr.Dataset(data, coords={"group": list(groups), "fit": list(fits),
                                    "nu_mode": list(modes)},
                      attrs={"title": "finite-size-scaling fits a_c*(eps) = a_c* + A eps^(1/nu)",

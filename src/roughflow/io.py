@@ -1,4 +1,4 @@
-"""Self-describing netCDF datasets: writing atomically, reading surfaces back.
+"""netCDF files: writing any dataset atomically, and the surface file format.
 
 Every variable carries ``units`` and ``long_name``; parameters are attributes
 or coordinates. Files are written to a temporary name in the same folder and
@@ -9,15 +9,16 @@ from __future__ import annotations
 
 import os
 import tempfile
+from dataclasses import fields
 from pathlib import Path
 
 import numpy as np
 import xarray as xr
 
+from roughflow.datasets.results import spec_attrs
+from roughflow.datasets.units import LENGTH_UNITS, grid_coords
 from roughflow.errors import InputError
-from roughflow.surface import Surface, SurfaceSpec
-
-LENGTH_UNITS = "L (cell side; dimensionless)"
+from roughflow.surface import ScanInfo, Surface, SurfaceSpec
 
 
 def _attr_value(v):
@@ -53,16 +54,6 @@ def write_dataset(ds: xr.Dataset, path: str | os.PathLike) -> Path:
     return path
 
 
-def grid_coords(nx: int, ny: int, lx: float, ly: float) -> dict:
-    """Cell-centre coordinates x, y with units."""
-    x = (np.arange(nx) + 0.5) * lx / nx
-    y = (np.arange(ny) + 0.5) * ly / ny
-    return {
-        "x": ("x", x, {"units": LENGTH_UNITS, "long_name": "position along x (axis 0)"}),
-        "y": ("y", y, {"units": LENGTH_UNITS, "long_name": "position along y (axis 1)"}),
-    }
-
-
 def surface_to_dataset(surface: Surface) -> xr.Dataset:
     """Dataset with ``heights(x, y)`` and every spec parameter as an attribute."""
     nx, ny = surface.shape
@@ -77,8 +68,7 @@ def surface_to_dataset(surface: Surface) -> xr.Dataset:
         coords=grid_coords(nx, ny, surface.lx, surface.ly),
         attrs={"lx": surface.lx, "ly": surface.ly, "title": "roughflow surface"},
     )
-    if surface.spec is not None:
-        ds.attrs.update({f"spec_{k}": v for k, v in surface.spec.as_attrs().items()})
+    ds.attrs.update(spec_attrs(surface))
     return ds
 
 
@@ -95,13 +85,27 @@ def surface_from_dataset(ds: xr.Dataset) -> Surface:
         for k in ("lx", "ly", "hurst", "gamma", "lambda_r", "lambda_s", "rms_slope"):
             kw[k] = float(kw[k])
         spec = SurfaceSpec(**kw)
-    return Surface(heights=heights, lx=float(ds.attrs["lx"]), ly=float(ds.attrs["ly"]), spec=spec)
+    scan = None
+    if "scan_source" in ds.attrs:
+        kw = {f.name: ds.attrs[f"scan_{f.name}"] for f in fields(ScanInfo)}
+        for k in ("length_scale", "rms_gradient"):
+            kw[k] = float(kw[k])
+        kw["filled"] = int(kw["filled"])
+        kw["periodic"] = bool(int(kw["periodic"]))
+        scan = ScanInfo(**{k: v if not isinstance(v, np.str_) else str(v) for k, v in kw.items()})
+    return Surface(heights=heights, lx=float(ds.attrs["lx"]), ly=float(ds.attrs["ly"]), spec=spec,
+                   scan=scan)
 
 
 def read_surface(path: str | os.PathLike) -> Surface:
-    """Read a surface file written by ``roughflow surface``."""
+    """Read a surface file written by ``roughflow surface`` or ``roughflow import``."""
     path = Path(path)
     if not path.exists():
         raise InputError(f"surface file {str(path)!r} does not exist")
-    with xr.open_dataset(path) as ds:
-        return surface_from_dataset(ds.load())
+    try:
+        with xr.open_dataset(path) as ds:
+            ds.load()
+    except (OSError, ValueError) as exc:
+        raise InputError(f"cannot read {str(path)!r} as a netCDF surface file ({exc}); a "
+                         "measured scan is read with `roughflow import`") from None
+    return surface_from_dataset(ds)

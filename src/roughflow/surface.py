@@ -6,8 +6,8 @@ Fourier amplitudes are deterministic, |h~(q)| = sqrt(C(q_P)), phases uniform on
     q_P = sqrt(gamma q_x^2 + q_y^2 / gamma),
 
 so gamma > 1 stretches the surface along x (axis 0). The spectrum (Eq. 2, with the
-exponent corrected as in ``shared/docs/physics.md`` Sect. 2: the 2D spectrum of
-a self-affine surface falls as q^(-2(1+H)))
+exponent corrected as in docs/physics.md Sect. 2: the 2D spectrum of a self-affine
+surface falls as q^(-2(1+H)))
 
     C(q) ~ Theta(q_s - q) / (1 + (q/q_r)^2)^(1+H)          (rolloff="smooth")
     C(q) ~ Theta(q_s - q) min(1, (q/q_r)^(-2(1+H)))        (rolloff="plateau")
@@ -25,10 +25,16 @@ from dataclasses import asdict, dataclass
 
 import numpy as np
 
-from roughflow import fft
+from roughflow import defaults, fft
+from roughflow.defaults import ROLLOFF_FORMS
 from roughflow.errors import InputError, require_finite, require_positive
 
-ROLLOFF_FORMS = ("smooth", "plateau")
+
+def paper_l_over_lambda_r(gamma: float) -> float:
+    """The paper's default size L / lambda_r = 4 max(sqrt(gamma), 1/sqrt(gamma)): four
+    roll-off wavelengths in the easy direction."""
+    s = math.sqrt(gamma)
+    return defaults.PAPER_SIZE_FACTOR * max(s, 1.0 / s)
 
 
 @dataclass(frozen=True)
@@ -105,12 +111,12 @@ class SurfaceSpec:
     def from_sweep(
         cls,
         *,
-        gamma: float = 1.0,
-        hurst: float = 0.8,
+        gamma: float = defaults.GAMMA,
+        hurst: float = defaults.HURST,
         l_over_lambda_r: float | None = None,
-        eps_f: float = 1 / 16,
-        points_per_lambda_s: float = 8.0,
-        aspect: float = 1.0,
+        eps_f: float = defaults.EPS_F,
+        points_per_lambda_s: float = defaults.POINTS_PER_LAMBDA_S,
+        aspect: float = defaults.ASPECT,
         seed: int = 0,
         rolloff: str = "smooth",
         area: float = 1.0,
@@ -135,7 +141,7 @@ class SurfaceSpec:
             raise InputError(f"eps_f = lambda_s/lambda_r must be <= 1, got {eps_f!r}")
         sg = math.sqrt(gamma)
         if l_over_lambda_r is None:
-            l_over_lambda_r = 4 * max(sg, 1 / sg)
+            l_over_lambda_r = paper_l_over_lambda_r(gamma)
         l_over_lambda_r = require_positive("l_over_lambda_r", l_over_lambda_r)
         length = math.sqrt(area)
         lx, ly = length * math.sqrt(aspect), length / math.sqrt(aspect)
@@ -163,14 +169,51 @@ def fft_friendly(n: int) -> int:
         m += 1
 
 
+@dataclass(frozen=True)
+class ScanInfo:
+    """Where an imported (measured) surface came from and how it was prepared.
+
+    ``length_scale``: the reference length L in metres (sqrt(lx ly) of the scan as
+    imported; heights and lengths of the :class:`Surface` are in units of L).
+    ``rms_gradient``: rms gradient of the imported heights (finite differences, the scan
+    being non-periodic); the scan keeps it, so its dimensionless pressures are in E*, not
+    E* gbar. ``detrend``, ``fill``: the choices of :func:`from_scan`; ``filled``: the
+    number of missing points filled; ``crop``: the grid window kept ("none" or
+    "i0:i1,j0:j1"); ``periodic``: whether the surface is periodic (a scan is not; the
+    contact and flow stages then use :mod:`roughflow.boundary`).
+    """
+
+    source: str
+    reader: str
+    channel: str
+    length_scale: float
+    rms_gradient: float
+    detrend: str
+    fill: str
+    filled: int
+    crop: str = "none"
+    periodic: bool = False
+
+    def as_attrs(self) -> dict:
+        """Fields as a flat dict (for netCDF attributes, prefixed ``scan_``)."""
+        return asdict(self)
+
+
 @dataclass(frozen=True, eq=False)
 class Surface:
-    """Heights ``heights[ix, iy]`` (float64) of a periodic cell of size ``lx`` x ``ly``."""
+    """Heights ``heights[ix, iy]`` (float64) of a cell of size ``lx`` x ``ly``: periodic
+    (generated, ``spec``) or an imported scan (``scan``, usually not periodic)."""
 
     heights: np.ndarray
     lx: float
     ly: float
     spec: SurfaceSpec | None = None
+    scan: ScanInfo | None = None
+
+    @property
+    def periodic(self) -> bool:
+        """False for a non-periodic (measured) scan; True otherwise."""
+        return self.scan is None or bool(self.scan.periodic)
 
     @property
     def shape(self) -> tuple[int, int]:
@@ -197,6 +240,14 @@ class Surface:
         return cls(heights=h, lx=lx, ly=ly)
 
 
+def from_scan(path, **options) -> Surface:
+    """Read a measured topography (every format SurfaceTopography reads; the optional
+    extra ``topography``). See :func:`roughflow.scan.read_scan` for the options."""
+    from roughflow.scan import read_scan
+
+    return read_scan(path, **options)
+
+
 def spectrum(q: np.ndarray, spec: SurfaceSpec) -> np.ndarray:
     """Unnormalised C(q) of Eq. (2) (corrected exponent), zero at q = 0 and beyond q_s."""
     qr = 2 * np.pi / spec.lambda_r
@@ -215,9 +266,15 @@ def peklenik_wavenumber(qx: np.ndarray, qy: np.ndarray, gamma: float) -> np.ndar
     return np.sqrt(gamma * qx * qx + qy * qy / gamma)
 
 
-def rms_gradient(heights: np.ndarray, lx: float, ly: float) -> float:
-    """Spectral rms gradient sqrt(<|grad h|^2>) of a periodic height map."""
+def rms_gradient(heights: np.ndarray, lx: float, ly: float, *, periodic: bool = True) -> float:
+    """Rms gradient sqrt(<|grad h|^2>) of a height map: spectral for a periodic map, from
+    forward differences inside the map for a non-periodic one (a scan's wrap-around step
+    would dominate the spectral value)."""
     nx, ny = heights.shape
+    if not periodic:
+        gx = np.diff(heights, axis=0) * (nx / lx)
+        gy = np.diff(heights, axis=1) * (ny / ly)
+        return float(np.sqrt(np.mean(gx * gx) + np.mean(gy * gy)))
     c = fft.rfft2(heights)
     qx, qy = fft.wavevectors(nx, ny, lx, ly)
     w = fft.rfft_weights(ny)

@@ -14,8 +14,9 @@ SCHEMA = Path(workflow.basedir) / "workflow" / "schemas" / "config.schema.yaml"
 def _validate_config(config):
     """JSON-schema validation with a message naming the key and the value.
 
-    jsonschema's best match gives the path of the offending key; snakemake's validate
-    then fills in the schema's defaults.
+    jsonschema's best match gives the path of the offending key. The schema's defaults are
+    documentation only (tests/test_defaults.py keeps them equal to roughflow's): missing
+    keys are filled by roughflow.scenes.study_defaults, the one source.
     """
     import jsonschema
     import yaml
@@ -27,18 +28,14 @@ def _validate_config(config):
     if error is not None:
         key = ".".join(str(p) for p in error.absolute_path) or "<top level>"
         raise WorkflowError(f"invalid config: key {key!r} = {error.instance!r}: {error.message}")
-    validate(config, "../schemas/config.schema.yaml")
+    validate(config, "../schemas/config.schema.yaml", set_default=False)
 
 
 _validate_config(config)
 
+from roughflow.defaults import FLOW_STUDIES, MEASURED_STUDY, THRESHOLD_STUDIES  # noqa: E402
 from roughflow.errors import InputError  # noqa: E402
-from roughflow.scenes import (  # noqa: E402
-    FLOW_STUDIES,
-    THRESHOLD_STUDIES,
-    expand_study,
-    grid_points,
-)
+from roughflow.scenes import expand_study, grid_points, study_defaults  # noqa: E402
 from roughflow.scenes.jobs import estimated_seconds  # noqa: E402
 
 RESULTS = config.get("results", "results")
@@ -61,6 +58,7 @@ for _study, _jobs in JOBS.items():
 
 THRESHOLD_NAMES = [s for s in STUDIES if s in THRESHOLD_STUDIES]
 FLOW_NAMES = [s for s in STUDIES if s in FLOW_STUDIES]
+MEASURED_NAMES = [s for s in STUDIES if s == MEASURED_STUDY]
 
 
 def _alternatives(names):
@@ -72,6 +70,16 @@ wildcard_constraints:
     study="|".join(STUDIES),
     kind="threshold|ladder",
     job=r"[A-Za-z0-9_.+\-]+",
+    scan=r"[A-Za-z0-9_.\-]+",
+
+
+def study_option(study, key):
+    """A study's option with its default (roughflow.scenes.study_defaults)."""
+    defaults = study_defaults(study)[key]
+    given = STUDIES[study].get(key)
+    if isinstance(defaults, dict):
+        return {**defaults, **(given or {})}
+    return defaults if given is None else given
 
 
 def job_of(wildcards):
@@ -88,14 +96,21 @@ def job_args(wildcards):
     return " ".join(job_of(wildcards).cli_args())
 
 
-def runtime_min(wildcards):
+# Both scale with Snakemake's attempt (1, then 2 for the profile's one retry): a job that
+# SLURM ended for its time limit (TIMEOUT) or memory (OUT_OF_MEMORY) would only fail again
+# with the same request.
+
+
+def runtime_min(wildcards, attempt=1):
     # three times the cost model of roughflow.scenes.jobs.estimated_seconds (minutes)
-    return max(2, math.ceil(3 * estimated_seconds(job_of(wildcards)) / 60))
+    return attempt * max(2, math.ceil(3 * estimated_seconds(job_of(wildcards)) / 60))
 
 
-def mem_mb(wildcards):
-    # ~40 float64 fields of the grid (surface, gap, pressure, FFT buffers, AMG hierarchy)
-    return 500 + math.ceil(grid_points(job_of(wildcards)) * 8 * 40 / 1e6)
+def mem_mb(wildcards, attempt=1):
+    # ~40 float64 fields of the grid (surface, gap, pressure, FFT buffers, AMG hierarchy);
+    # the 500 MB base holds the interpreters (under SLURM two snakemake processes and
+    # roughflow's: 375 MB peak in the job's memory cgroup for a config/test.yaml job)
+    return attempt * (500 + math.ceil(grid_points(job_of(wildcards)) * 8 * 40 / 1e6))
 
 
 def jobs_of(study):

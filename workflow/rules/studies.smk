@@ -12,7 +12,7 @@ rule aggregate:
     benchmark:
         f"{RESULTS}/benchmarks/workflow/{{study}}/aggregate.tsv"
     wildcard_constraints:
-        study=_alternatives(THRESHOLD_NAMES + FLOW_NAMES),
+        study=_alternatives(THRESHOLD_NAMES + FLOW_NAMES + MEASURED_NAMES),
     threads: 1
     resources:
         mem_mb=1000,
@@ -28,8 +28,8 @@ rule fit:
     output:
         f"{RESULTS}/{{study}}/fit.nc",
     params:
-        bootstrap=lambda wc: STUDIES[wc.study].get("fit", {}).get("bootstrap", 200),
-        nu=lambda wc: STUDIES[wc.study].get("fit", {}).get("nu", 4 / 3),
+        bootstrap=lambda wc: study_option(wc.study, "fit")["bootstrap"],
+        nu=lambda wc: study_option(wc.study, "fit")["nu"],
     log:
         f"{RESULTS}/logs/{{study}}/fit.log",
     benchmark:

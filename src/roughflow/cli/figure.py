@@ -4,10 +4,9 @@ from __future__ import annotations
 
 import argparse
 
-from ._common import add_output
+from roughflow.defaults import STUDIES
 
-STUDIES = ("channels", "threshold_vs_gamma", "threshold_vs_size", "threshold_vs_hurst",
-           "flow_isotropic", "flow_anisotropic")
+from ._common import add_output
 
 
 def register(sub: argparse._SubParsersAction) -> None:

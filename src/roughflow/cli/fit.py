@@ -4,6 +4,8 @@ from __future__ import annotations
 
 import argparse
 
+from roughflow.defaults import FIT_BOOTSTRAP, NU_PERCOLATION
+
 from ._common import add_output
 
 
@@ -14,9 +16,10 @@ def register(sub: argparse._SubParsersAction) -> None:
                     "direction and jointly (shared a_c*), with nu fixed and free, bootstrap "
                     "errors over seeds. Writes a netCDF dataset over (group, fit, nu_mode).")
     p.add_argument("dataset", metavar="DATASET.nc", help="aggregated threshold dataset")
-    p.add_argument("--bootstrap", type=int, default=200,
-                   help="bootstrap resamples over seeds (200; 0 = none)")
-    p.add_argument("--nu", type=float, default=4 / 3, help="fixed exponent nu (4/3)")
+    p.add_argument("--bootstrap", type=int, default=FIT_BOOTSTRAP,
+                   help=f"bootstrap resamples over seeds ({FIT_BOOTSTRAP}; 0 = none)")
+    p.add_argument("--nu", type=float, default=NU_PERCOLATION,
+                   help="fixed exponent nu (4/3, 2D percolation)")
     p.add_argument("--seed", type=int, default=0, help="seed of the bootstrap (0)")
     add_output(p)
     p.set_defaults(func=run)

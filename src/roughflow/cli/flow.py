@@ -7,15 +7,12 @@ import logging
 
 import numpy as np
 
+from roughflow.defaults import FLOW_METHODS, FLOW_TOL
 from roughflow.errors import InputError
-from roughflow.flow.linsolve import METHODS
 
 from ._common import add_output, axis_arg
 
 log = logging.getLogger(__name__)
-
-SIGMA_UNITS = "u^3 / eta (L^3 / eta; dimensionless with eta = 1)"
-FLUX_UNITS = "volume flow per unit width per unit pressure drop (dimensionless)"
 
 
 def register(sub: argparse._SubParsersAction) -> None:
@@ -34,9 +31,9 @@ def register(sub: argparse._SubParsersAction) -> None:
     p.add_argument("--axis", type=axis_arg, default=None, metavar="{x,y,both}",
                    help="flow direction(s): x, y or both (both)")
     p.add_argument("--eta", type=float, default=1.0, help="viscosity eta (1)")
-    p.add_argument("--tol", type=float, default=1e-8,
-                   help="relative residual of the linear solve (1e-8)")
-    p.add_argument("--method", choices=METHODS, default="auto",
+    p.add_argument("--tol", type=float, default=FLOW_TOL,
+                   help=f"relative residual of the linear solve ({FLOW_TOL:g})")
+    p.add_argument("--method", choices=FLOW_METHODS, default="auto",
                    help="linear solver: auto (direct for small systems, else rs), rs "
                         "(Ruge-Stueben AMG + CG), sa (smoothed aggregation + CG), direct, cg")
     p.add_argument("--plot", metavar="FILE.png", default=None,
@@ -67,8 +64,7 @@ def _read_gap(path: str):
 
 
 def run(args: argparse.Namespace) -> None:
-    import xarray as xr
-
+    from roughflow.datasets import flow_dataset
     from roughflow.flow import solve
     from roughflow.io import write_dataset
 
@@ -81,33 +77,11 @@ def run(args: argparse.Namespace) -> None:
         log.info("sigma_%s = %.6e (%s, %d iterations, residual %.1e)", "xy"[ax],
                  results[ax].sigma, results[ax].method, results[ax].iterations,
                  results[ax].residual)
-
-    coords = {k: ds_in.coords[k] for k in ("x", "y") if k in ds_in.coords}
-    out = xr.Dataset(coords=coords)
-    out["contact"] = (("x", "y"), contact.astype(np.int8),
-                      {"units": "1", "long_name": "contact mask (1 = contact)"})
-    attrs = {"title": "roughflow flow", "source": str(args.input), "lx": lx, "ly": ly,
-             "eta": args.eta, "tol": args.tol}
+    out = flow_dataset(results, contact, lx=lx, ly=ly, eta=args.eta, tol=args.tol)
+    out.attrs["source"] = str(args.input)
     for k, v in ds_in.attrs.items():
         if k not in ("title", "lx", "ly"):
-            attrs[f"contact_{k}"] = v
-    for ax, r in results.items():
-        a = "xy"[ax]
-        out[f"sigma_{a}"] = ((), r.sigma, {
-            "units": SIGMA_UNITS,
-            "long_name": f"effective conductance along {a}, Q L_{a} / (L_across dp) (Eq. 4)"})
-        out[f"pressure_{a}"] = (("x", "y"), r.pressure, {
-            "units": "dp (inlet 1, outlet 0)",
-            "long_name": f"fluid pressure for flow along {a}; NaN where no flow"})
-        for comp, field in (("x", r.flux_x), ("y", r.flux_y)):
-            out[f"flux_{comp}_{a}"] = (("x", "y"), field, {
-                "units": FLUX_UNITS,
-                "long_name": f"{comp} component of the flux density for flow along {a}"})
-        attrs.update({f"sigma_{a}": r.sigma, f"residual_{a}": r.residual,
-                      f"flux_imbalance_{a}": r.flux_imbalance, f"iterations_{a}": r.iterations,
-                      f"percolating_{a}": r.percolating, f"method_{a}": r.method,
-                      f"sigma_flux_{a}": r.sigma_flux})
-    out.attrs = attrs
+            out.attrs[f"contact_{k}"] = v
     write_dataset(out, args.output)
     if args.plot:
         _plot(results, contact, args.plot)

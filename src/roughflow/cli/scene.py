@@ -1,4 +1,9 @@
-"""``roughflow scene``: run one job of the sweep workflow and write its netCDF dataset."""
+"""``roughflow scene``: run one job of the sweep workflow and write its netCDF dataset.
+
+The options mirror the job dataclasses of :mod:`roughflow.scenes.jobs` (``cli_args`` of a
+job parses back into the same job; tests/test_scene.py checks the round trip), and their
+defaults come from :mod:`roughflow.defaults`.
+"""
 
 from __future__ import annotations
 
@@ -6,27 +11,21 @@ import argparse
 import logging
 import time
 
-from roughflow.contact.adhesion import PAPER_RANGE_OVER_LAMBDA_S, PAPER_SURFACE_ENERGY_RATIO
-from roughflow.io import write_dataset
+from roughflow import defaults
+from roughflow.defaults import ADHESION_RANGE_OVER_LAMBDA_S, ADHESION_SURFACE_ENERGY_RATIO
 
-from ._common import add_output
+from ._common import add_output, add_surface_options
 
 log = logging.getLogger(__name__)
 
 
-def _surface_options(p: argparse.ArgumentParser, *, lists: bool = True) -> None:
+def _surface_options(p: argparse.ArgumentParser, **overrides) -> None:
     g = p.add_argument_group("surface (unit-area cell; lengths in units of L)")
-    g.add_argument("--gamma", type=float, default=1.0,
-                   help="Peklenik number; > 1 stretches along x (1)")
-    g.add_argument("--hurst", type=float, default=0.8, help="Hurst exponent in (0, 1] (0.8)")
-    g.add_argument("--l-over-lambda-r", type=float, default=None,
-                   help="L / lambda_r (default: the paper's 4 max(sqrt(gamma), 1/sqrt(gamma)))")
-    g.add_argument("--eps-f", type=float, default=1 / 16, help="lambda_s / lambda_r (1/16)")
-    g.add_argument("--points-per-lambda-s", type=float, default=8.0,
-                   help="grid points per shortest wavelength (8)")
-    g.add_argument("--aspect", type=float, default=1.0, help="lx / ly of the cell (1)")
-    p.add_argument("--seeds", type=int, nargs="+", default=[0], metavar="SEED",
-                   help="surface seeds handled by this job (0)")
+    add_surface_options(g, ("--gamma", "--hurst", "--l-over-lambda-r", "--eps-f",
+                            "--points-per-lambda-s", "--aspect"), **overrides)
+    seeds = overrides.get("seeds", [0])
+    p.add_argument("--seeds", type=int, nargs="+", default=seeds, metavar="SEED",
+                   help=f"surface seeds handled by this job ({' '.join(map(str, seeds))})")
     p.add_argument("--threads", type=int, default=None,
                    help="FFT threads (default: env ROUGHFLOW_FFT_THREADS or 1)")
     add_output(p)
@@ -41,52 +40,62 @@ def register(sub: argparse._SubParsersAction) -> None:
     kinds = p.add_subparsers(dest="kind", metavar="KIND", required=True)
 
     t = kinds.add_parser("threshold", help="percolation thresholds a_c*(x), a_c*(y), no flow",
-                         description="Contact bisection (elastic) or height-ordered pass "
-                                     "(bearing) to the fluid percolation threshold along x and "
-                                     "y, for each seed.")
+                         description="Threshold search (elastic: warm-started contact solves; "
+                                     "bearing: one height-ordered pass) to the fluid "
+                                     "percolation threshold along x and y, for each seed.")
     _surface_options(t)
-    t.add_argument("--model", choices=("elastic", "adhesive", "bearing"), default="elastic",
+    t.add_argument("--model", choices=("elastic", "bearing"), default="elastic",
                    help="contact model (elastic)")
-    t.add_argument("--tol", type=float, default=2e-3,
-                   help="bisection tolerance on the contact area (0.002)")
-    t.add_argument("--contact-tol", type=float, default=1e-4,
-                   help="tolerance of each contact solve, gap error / rms height (1e-4; "
-                        "docs/accuracy.md: changes a_c* by < 4e-5)")
+    t.add_argument("--tol", type=float, default=defaults.THRESHOLD_TOL,
+                   help="largest a_hi - a_lo of the threshold bracket "
+                        f"({defaults.THRESHOLD_TOL:g})")
+    t.add_argument("--contact-tol", type=float, default=defaults.THRESHOLD_CONTACT_TOL,
+                   help="tolerance of each contact solve, gap error / rms height "
+                        f"({defaults.THRESHOLD_CONTACT_TOL:g}; docs/accuracy.md: changes a_c* "
+                        "by < 4e-5)")
     t.set_defaults(func=run)
 
     ld = kinds.add_parser("ladder", help="contact ladder + Reynolds flow + theory",
-                          description="Contact along an increasing area ladder (warm-started "
-                                      "loads), full Reynolds conductance along x and y where "
-                                      "the fluid percolates, Bruggeman and closed forms.")
+                          description="Contact at each target area of an increasing ladder "
+                                      "(warm-started load search), full Reynolds conductance "
+                                      "along x and y where the fluid percolates, Bruggeman and "
+                                      "closed forms.")
     _surface_options(ld)
-    ld.add_argument("--model", choices=("elastic", "adhesive", "bearing"), default="elastic",
+    ld.add_argument("--model", choices=defaults.MODELS, default="elastic",
                     help="contact model (elastic)")
     ld.add_argument("--area-fractions", type=float, nargs="+", required=True, metavar="A",
-                    help="target contact areas, increasing")
-    ld.add_argument("--a-c-star", type=float, default=0.4,
-                    help="a_c* of the theory lines (0.4)")
+                    help="target contact areas, increasing, each in (0, 1)")
+    ld.add_argument("--area-tol", type=float, default=defaults.LADDER_AREA_TOL,
+                    help="largest |a_c - target| of a step (the perimeter-corrected a_c for "
+                         f"the elastic model) ({defaults.LADDER_AREA_TOL:g})")
+    theory_stars = ", ".join(f"{k} {v:g}" for k, v in defaults.A_C_STAR_THEORY.items())
+    ld.add_argument("--a-c-star", type=float, default=None,
+                    help=f"a_c* of the theory lines (default per model: {theory_stars})")
     ld.add_argument("--a-c-star-alt", type=float, default=None,
                     help="a second a_c* for the isotropic Bruggeman line (none)")
-    ld.add_argument("--surface-energy-ratio", type=float, default=PAPER_SURFACE_ENERGY_RATIO,
+    ld.add_argument("--surface-energy-ratio", type=float, default=ADHESION_SURFACE_ENERGY_RATIO,
                     help="gamma_s / v_ela^full of the adhesive model "
-                         f"({PAPER_SURFACE_ENERGY_RATIO}, the paper's case)")
+                         f"({ADHESION_SURFACE_ENERGY_RATIO}, the paper's case)")
     rng = ld.add_mutually_exclusive_group()
     rng.add_argument("--range-over-lambda-s", type=float, default=None,
                      help="interaction range rho / lambda_s of the adhesive model "
-                          f"({PAPER_RANGE_OVER_LAMBDA_S}, the paper's case)")
+                          f"({ADHESION_RANGE_OVER_LAMBDA_S}, the paper's case)")
     rng.add_argument("--tabor", type=float, default=None,
                      help="Tabor parameter instead of the range (sets rho from R_c)")
     ld.set_defaults(func=run)
 
+    ch = defaults.CHANNELS
     c = kinds.add_parser("channels", help="Fig. 1: isotropic 0.5 x 2 cell vs stretched cell",
                          description="Isotropic rectangular cell (lx/ly = 1/gamma) and the "
                                      "gamma-stretched square cell from the same phases, pressed "
                                      "to the target contact area; heights, gap, phase maps.")
-    _surface_options(c)
-    c.set_defaults(gamma=4.0, eps_f=0.1, l_over_lambda_r=4.0, seeds=[1])
-    c.add_argument("--area-fraction", type=float, default=0.4, help="target a_c (0.4)")
-    c.add_argument("--model", choices=("elastic", "bearing"), default="elastic",
-                   help="contact model (elastic)")
+    _surface_options(c, gamma=ch["gamma"], hurst=ch["hurst"], eps_f=ch["eps_f"],
+                     l_over_lambda_r=ch["l_over_lambda_r"], seeds=[ch["seed"]],
+                     points_per_lambda_s=ch["points_per_lambda_s"])
+    c.add_argument("--area-fraction", type=float, default=ch["area_fraction"],
+                   help=f"target a_c ({ch['area_fraction']:g})")
+    c.add_argument("--model", choices=("elastic", "bearing"), default=ch["model"],
+                   help=f"contact model ({ch['model']})")
     c.set_defaults(func=run)
 
 
@@ -107,14 +116,15 @@ def job_from_args(args: argparse.Namespace):
                             tol=args.tol, contact_tol=args.contact_tol)
     rho = args.range_over_lambda_s
     if rho is None and args.tabor is None:
-        rho = PAPER_RANGE_OVER_LAMBDA_S
+        rho = ADHESION_RANGE_OVER_LAMBDA_S
     return LadderJob(surface=surface, model=args.model, seeds=tuple(args.seeds),
                      area_fractions=tuple(args.area_fractions), a_c_star=args.a_c_star,
-                     a_c_star_alt=args.a_c_star_alt, tabor=args.tabor,
+                     a_c_star_alt=args.a_c_star_alt, area_tol=args.area_tol, tabor=args.tabor,
                      surface_energy_ratio=args.surface_energy_ratio, range_over_lambda_s=rho)
 
 
 def run(args: argparse.Namespace) -> None:
+    from roughflow.io import write_dataset
     from roughflow.scenes import run as run_job
 
     job = job_from_args(args)
@@ -123,10 +133,3 @@ def run(args: argparse.Namespace) -> None:
     ds = run_job(job, threads=args.threads)
     write_dataset(ds, args.output)
     log.info("wrote %s in %.1f s", args.output, time.perf_counter() - t0)
-
-
-def build_parser_for_tests() -> argparse.ArgumentParser:
-    """The full ``roughflow`` parser (used by tests to round-trip job arguments)."""
-    from roughflow.cli import build_parser
-
-    return build_parser()

@@ -4,10 +4,9 @@ from __future__ import annotations
 
 import argparse
 
-from roughflow.io import surface_to_dataset, write_dataset
-from roughflow.surface import ROLLOFF_FORMS, SurfaceSpec, generate
+from roughflow.errors import InputError
 
-from ._common import add_output
+from ._common import add_output, add_surface_options
 
 
 def register(sub: argparse._SubParsersAction) -> None:
@@ -22,13 +21,9 @@ def register(sub: argparse._SubParsersAction) -> None:
             "the cell side L; heights are normalised to the rms gradient."
         ),
     )
-    p.add_argument("--hurst", type=float, default=0.8, help="Hurst exponent H in (0, 1] (0.8)")
-    p.add_argument("--gamma", type=float, default=1.0,
-                   help="Peklenik number; > 1 stretches along x (1)")
+    add_surface_options(p, ("--hurst", "--gamma", "--rolloff"))
     p.add_argument("--seed", type=int, default=0, help="random seed of the phases (0)")
     p.add_argument("--rms-slope", type=float, default=1.0, help="rms gradient (1)")
-    p.add_argument("--rolloff", choices=ROLLOFF_FORMS, default="smooth",
-                   help="roll-off form of the spectrum (smooth, as in the paper)")
     g = p.add_argument_group("explicit grid (all four needed; lx, ly default to 1)")
     g.add_argument("--nx", type=int, help="grid points along x")
     g.add_argument("--ny", type=int, help="grid points along y")
@@ -37,26 +32,19 @@ def register(sub: argparse._SubParsersAction) -> None:
     g.add_argument("--lambda-r", type=float, help="roll-off wavelength")
     g.add_argument("--lambda-s", type=float, help="short-wavelength cutoff")
     s = p.add_argument_group("sweep numbers (used when --nx is not given)")
-    s.add_argument("--l-over-lambda-r", type=float, default=None,
-                   help="L / lambda_r (default 4 max(sqrt(gamma), 1/sqrt(gamma)))")
-    s.add_argument("--eps-f", type=float, default=1 / 16,
-                   help="lambda_s / lambda_r (1/16)")
-    s.add_argument("--points-per-lambda-s", type=float, default=8.0,
-                   help="grid points per shortest wavelength (8)")
-    s.add_argument("--aspect", type=float, default=1.0,
-                   help="lx / ly of a unit-area cell (1)")
+    add_surface_options(s, ("--l-over-lambda-r", "--eps-f", "--points-per-lambda-s", "--aspect"))
     add_output(p)
     p.set_defaults(func=run)
 
 
-def spec_from_args(args: argparse.Namespace) -> SurfaceSpec:
+def spec_from_args(args: argparse.Namespace):
+    from roughflow.surface import SurfaceSpec
+
     explicit = (args.nx, args.ny, args.lambda_r, args.lambda_s)
     if any(v is not None for v in explicit):
         names = ("--nx", "--ny", "--lambda-r", "--lambda-s")
         missing = [n for n, v in zip(names, explicit, strict=True) if v is None]
         if missing:
-            from roughflow.errors import InputError
-
             raise InputError(f"an explicit grid needs {', '.join(missing)} as well")
         return SurfaceSpec(
             nx=args.nx, ny=args.ny, lx=args.lx, ly=args.ly, hurst=args.hurst,
@@ -76,5 +64,8 @@ def spec_from_args(args: argparse.Namespace) -> SurfaceSpec:
 
 
 def run(args: argparse.Namespace) -> None:
+    from roughflow.io import surface_to_dataset, write_dataset
+    from roughflow.surface import generate
+
     spec = spec_from_args(args)
     write_dataset(surface_to_dataset(generate(spec)), args.output)

@@ -15,29 +15,17 @@ A table goes to stdout; ``-o out.nc`` also writes a self-describing dataset.
 from __future__ import annotations
 
 import argparse
-import math
 import sys
 from pathlib import Path
 
 import numpy as np
-import xarray as xr
 
+from roughflow import defaults
+from roughflow.defaults import A_C_STAR_PAPER, MODELS
 from roughflow.errors import InputError
-from roughflow.io import surface_from_dataset, write_dataset
-from roughflow.surface import ROLLOFF_FORMS, SurfaceSpec
-from roughflow.theory import (
-    DEFAULT_ENERGY_FACTOR,
-    KINDS,
-    bruggeman,
-    bruggeman_anisotropic,
-    closed_form,
-    conductivity_peklenik,
-    local_conductivity,
-    noncontact_decomposition,
-    predict_conductance,
-)
 
-SIGMA_UNITS = "L^3/eta (gap^3/(12 eta); L = cell side)"
+from ._common import add_surface_options
+
 DEFAULT_PRESSURES = "0.002,0.005,0.01,0.02,0.05,0.1,0.15,0.2,0.25"
 
 
@@ -55,9 +43,10 @@ def register(sub: argparse._SubParsersAction) -> None:
     )
     p.add_argument("file", nargs="?", default=None,
                    help="netCDF file with 'gap' (result) or 'heights' (surface); optional")
-    p.add_argument("--a-c-star", type=float, default=0.415,
-                   help="percolation threshold a_c* in (0, 1) (0.415, the paper's elastic value)")
-    p.add_argument("--kind", choices=KINDS, default=None,
+    p.add_argument("--a-c-star", type=float, default=A_C_STAR_PAPER,
+                   help=f"percolation threshold a_c* in (0, 1) ({A_C_STAR_PAPER}, the paper's "
+                        "large-system elastic value)")
+    p.add_argument("--kind", choices=MODELS, default=None,
                    help="closed-form kind of Eq. 16 (default: the file's 'model' attribute "
                         "when it is one of these, else elastic)")
     p.add_argument("--eta", type=float, default=1.0, help="viscosity (1)")
@@ -74,17 +63,11 @@ def register(sub: argparse._SubParsersAction) -> None:
     s = p.add_argument_group("Persson theory (surface file or spec)")
     s.add_argument("--pressures", default=DEFAULT_PRESSURES,
                    help=f"comma-separated pressures in E* gbar ({DEFAULT_PRESSURES})")
-    s.add_argument("--energy-factor", type=float, default=DEFAULT_ENERGY_FACTOR,
-                   help=f"correction factor of the elastic energy ({DEFAULT_ENERGY_FACTOR})")
-    s.add_argument("--hurst", type=float, default=0.8, help="Hurst exponent (0.8)")
-    s.add_argument("--l-over-lambda-r", type=float, default=None,
-                   help="L / lambda_r (default 4 max(sqrt(gamma), 1/sqrt(gamma)))")
-    s.add_argument("--eps-f", type=float, default=1 / 16, help="lambda_s / lambda_r (1/16)")
-    s.add_argument("--points-per-lambda-s", type=float, default=8.0,
-                   help="grid points per shortest wavelength (8)")
-    s.add_argument("--aspect", type=float, default=1.0, help="lx / ly of the cell (1)")
-    s.add_argument("--rolloff", choices=ROLLOFF_FORMS, default="smooth",
-                   help="roll-off form of the spectrum (smooth)")
+    s.add_argument("--energy-factor", type=float, default=None,
+                   help="correction factor of the elastic energy (default: "
+                        "roughflow.theory.DEFAULT_ENERGY_FACTOR, docs/theory.md)")
+    add_surface_options(s, ("--hurst", "--l-over-lambda-r", "--eps-f", "--points-per-lambda-s",
+                            "--aspect", "--rolloff"))
     p.add_argument("-o", "--output", default=None, metavar="FILE.nc",
                    help="also write the results to this netCDF file")
     p.set_defaults(func=run)
@@ -101,6 +84,10 @@ def _parse_pressures(text: str) -> np.ndarray:
 
 
 def run(args: argparse.Namespace) -> None:
+    import xarray as xr
+
+    from roughflow.io import surface_from_dataset
+
     if args.file is None:
         _run_persson(args, _spec_from_args(args), source="spec from options")
         return
@@ -119,9 +106,11 @@ def run(args: argparse.Namespace) -> None:
         raise InputError(f"{str(path)!r} has neither 'gap' nor 'heights'")
 
 
-def _spec_from_args(args: argparse.Namespace) -> SurfaceSpec:
+def _spec_from_args(args: argparse.Namespace):
+    from roughflow.surface import SurfaceSpec
+
     return SurfaceSpec.from_sweep(
-        gamma=1.0 if args.gamma is None else args.gamma, hurst=args.hurst,
+        gamma=defaults.GAMMA if args.gamma is None else args.gamma, hurst=args.hurst,
         l_over_lambda_r=args.l_over_lambda_r, eps_f=args.eps_f,
         points_per_lambda_s=args.points_per_lambda_s, aspect=args.aspect, rolloff=args.rolloff,
     )
@@ -131,15 +120,22 @@ def _kind(args: argparse.Namespace, attrs: dict) -> str:
     if args.kind is not None:
         return args.kind
     model = str(attrs.get("model", "elastic"))
-    return model if model in KINDS else "elastic"
+    return model if model in MODELS else "elastic"
 
 
 def _run_persson(args: argparse.Namespace, src, *, source: str) -> None:
+    import xarray as xr
+
+    from roughflow.datasets.units import DIMENSIONLESS, LENGTH_UNITS, PRESSURE_UNITS, SIGMA_UNITS
+    from roughflow.io import write_dataset
+    from roughflow.theory import DEFAULT_ENERGY_FACTOR, predict_conductance
+
     pressures = _parse_pressures(args.pressures)
     kind = args.kind or "elastic"
+    energy_factor = DEFAULT_ENERGY_FACTOR if args.energy_factor is None else args.energy_factor
     pred = predict_conductance(
         src, pressures, a_c_star=args.a_c_star, kind=kind, eta=args.eta,
-        energy_factor=args.energy_factor,
+        energy_factor=energy_factor,
     )
     out = sys.stdout
     out.write(f"# Persson theory + Eq. 16 ({kind}, a_c* = {args.a_c_star}) from {source}\n")
@@ -149,34 +145,30 @@ def _run_persson(args: argparse.Namespace, src, *, source: str) -> None:
         out.write(f"{p_:12.5g} {a:10.5f} {u:12.5g} {sg:12.5g}\n")
     if args.output is None:
         return
-    p_attrs = {"units": "E* gbar", "long_name": "applied mean pressure"}
+    p_attrs = {"units": PRESSURE_UNITS, "long_name": "applied mean pressure"}
     ds = xr.Dataset(
         {
             "area_fraction": ("pressure", pred.area_fraction, {
-                "units": "1",
+                "units": DIMENSIONLESS,
                 "long_name": "Persson relative contact area erf(sqrt(2) p/(E* gbar))"}),
             "mean_gap": ("pressure", pred.mean_gap, {
-                "units": "L", "long_name": "Persson mean gap (Yang & Persson 2008)"}),
+                "units": LENGTH_UNITS, "long_name": "Persson mean gap (Yang & Persson 2008)"}),
             "sigma": ("pressure", pred.sigma, {
                 "units": SIGMA_UNITS, "long_name": f"closed-form conductance, Eq. 16 ({kind})"}),
         },
         coords={"pressure": ("pressure", pred.pressure, p_attrs)},
         attrs={
             "title": "roughflow theory: Persson prediction", "source": source, "kind": kind,
-            "a_c_star": args.a_c_star, "eta": args.eta, "energy_factor": args.energy_factor,
+            "a_c_star": args.a_c_star, "eta": args.eta, "energy_factor": energy_factor,
         },
     )
-    _add_spec_attrs(ds, src)
+    spec = src if not hasattr(src, "heights") else getattr(src, "spec", None)
+    if spec is not None:
+        ds.attrs.update({f"spec_{k}": v for k, v in spec.as_attrs().items()})
     write_dataset(ds, args.output)
 
 
-def _add_spec_attrs(ds: xr.Dataset, src) -> None:
-    spec = src if isinstance(src, SurfaceSpec) else getattr(src, "spec", None)
-    if spec is not None:
-        ds.attrs.update({f"spec_{k}": v for k, v in spec.as_attrs().items()})
-
-
-def _cell(ds: xr.Dataset, nx: int, ny: int) -> tuple[float, float]:
+def _cell(ds, nx: int, ny: int) -> tuple[float, float]:
     if "lx" in ds.attrs:
         lx = float(ds.attrs["lx"])
     elif "x" in ds.coords and ds.sizes["x"] > 1:
@@ -194,6 +186,8 @@ def _cell(ds: xr.Dataset, nx: int, ny: int) -> tuple[float, float]:
 
 def _read_flow(path: str, n: int) -> dict[str, list[float]]:
     """sigma_x, sigma_y of a ``roughflow flow`` file (variables or attributes)."""
+    import xarray as xr
+
     if not Path(path).exists():
         raise InputError(f"flow file {path!r} does not exist")
     with xr.open_dataset(path) as fl:
@@ -213,7 +207,44 @@ def _read_flow(path: str, n: int) -> dict[str, list[float]]:
     return out
 
 
-def _run_gap(args: argparse.Namespace, ds: xr.Dataset) -> None:
+#: Output columns of a gap file: name -> (units key, long_name).
+_GAP_COLUMNS = {
+    "area_fraction": ("1", "relative contact area (fraction of sigma = 0 cells)"),
+    "mean_gap": ("L", "mean gap over the cell"),
+    "sigma_bruggeman": ("sigma", "isotropic Bruggeman conductance, Eq. 5-6"),
+    "sigma_nc": ("sigma", "non-contact conductivity, Eq. 15"),
+    "peklenik": ("1", "Peklenik number used in Eq. 7-9"),
+    "sigma_x_corrected": ("sigma", "anisotropic Bruggeman sigma_x, corrected Eq. 9"),
+    "sigma_y_corrected": ("sigma", "anisotropic Bruggeman sigma_y, corrected Eq. 9"),
+    "gamma_tilde_corrected": ("1", "gamma sqrt(sigma_y/sigma_x), corrected Eq. 9"),
+    "sigma_x_persson": ("sigma", "anisotropic Bruggeman sigma_x, Persson Eq. 7"),
+    "sigma_y_persson": ("sigma", "anisotropic Bruggeman sigma_y, Persson Eq. 7"),
+    "gamma_tilde_persson": ("1", "gamma sqrt(sigma_y/sigma_x), Persson Eq. 7"),
+    "sigma_closed_form": ("sigma", "closed-form conductance, Eq. 16"),
+    "residual": ("1", "largest relative residual of the self-consistent equations"),
+}
+
+
+def _columns(t) -> dict[str, float]:
+    """One row of the gap table from a :class:`roughflow.theory.GapTheory`."""
+    return {
+        "area_fraction": t.area_fraction, "mean_gap": t.mean_gap,
+        "sigma_bruggeman": t.sigma_isotropic, "sigma_nc": t.sigma_nc, "peklenik": t.peklenik,
+        "sigma_x_corrected": t.corrected.sigma_x, "sigma_y_corrected": t.corrected.sigma_y,
+        "gamma_tilde_corrected": t.corrected.gamma_tilde,
+        "sigma_x_persson": t.persson.sigma_x, "sigma_y_persson": t.persson.sigma_y,
+        "gamma_tilde_persson": t.persson.gamma_tilde,
+        "sigma_closed_form": t.sigma_closed_form, "residual": t.residual,
+    }
+
+
+def _run_gap(args: argparse.Namespace, ds) -> None:
+    import xarray as xr
+
+    from roughflow.datasets.units import DIMENSIONLESS, LENGTH_UNITS, SIGMA_UNITS
+    from roughflow.io import write_dataset
+    from roughflow.theory import conductivity_peklenik, gap_theory
+
     gap = ds["gap"]
     if gap.ndim < 2 or gap.ndim > 3:
         raise InputError(f"'gap' must have 2 or 3 dimensions (…, x, y), got {gap.dims}")
@@ -228,36 +259,17 @@ def _run_gap(args: argparse.Namespace, ds: xr.Dataset) -> None:
     lx, ly = _cell(ds, nx, ny)
     gamma = args.gamma
     if gamma is None:
-        gamma = float(ds.attrs.get("spec_gamma", 1.0))
+        gamma = float(ds.attrs.get("spec_gamma", defaults.GAMMA))
     kind = _kind(args, ds.attrs)
     a_star = args.a_c_star
-    cols: dict[str, list[float]] = {k: [] for k in (
-        "area_fraction", "mean_gap", "sigma_bruggeman", "sigma_nc", "peklenik",
-        "sigma_x_corrected", "sigma_y_corrected", "gamma_tilde_corrected",
-        "sigma_x_persson", "sigma_y_persson", "gamma_tilde_persson", "sigma_closed_form",
-        "residual")}
+    cols: dict[str, list[float]] = {k: [] for k in _GAP_COLUMNS}
     for i, u in enumerate(fields):
         mask = None if masks is None else masks[i]
-        sig = local_conductivity(u, args.eta, contact=mask)
-        iso = bruggeman(sig, a_c_star=a_star)
-        ac = iso.a_c
         g = (conductivity_peklenik(u, lx, ly, contact=mask, eta=args.eta)
              if args.peklenik == "conductivity" else gamma)
-        cor = bruggeman_anisotropic(sig, a_c_star=a_star, gamma=g, form="corrected")
-        per = bruggeman_anisotropic(sig, a_c_star=a_star, gamma=g, form="persson")
-        nc = (noncontact_decomposition(sig, a_c_star=a_star).sigma_nc
-              if 0 < (sig > 0).mean() and ac <= a_star else math.nan)
-        ubar = float(u.mean())
-        for k, v in (
-            ("area_fraction", ac), ("mean_gap", ubar), ("sigma_bruggeman", iso.sigma),
-            ("sigma_nc", nc), ("peklenik", g),
-            ("sigma_x_corrected", cor.sigma_x), ("sigma_y_corrected", cor.sigma_y),
-            ("gamma_tilde_corrected", cor.gamma_tilde),
-            ("sigma_x_persson", per.sigma_x), ("sigma_y_persson", per.sigma_y),
-            ("gamma_tilde_persson", per.gamma_tilde),
-            ("sigma_closed_form", closed_form(ubar, ac, a_c_star=a_star, kind=kind, eta=args.eta)),
-            ("residual", max(iso.residual, cor.residual, per.residual)),
-        ):
+        t = gap_theory(u, a_c_star=a_star, contact=mask, gamma=g, kind=kind, eta=args.eta,
+                       noncontact=True)
+        for k, v in _columns(t).items():
             cols[k].append(float(v))
     reynolds = _read_flow(args.flow, fields.shape[0]) if args.flow else {}
     cols.update(reynolds)
@@ -279,25 +291,15 @@ def _run_gap(args: argparse.Namespace, ds: xr.Dataset) -> None:
     dim = lead[0] if lead else "sample"
     coords = {}
     if lead and dim in ds.coords:
-        attrs = {"units": "1", "long_name": dim, **dict(ds[dim].attrs)}
+        attrs = {"units": DIMENSIONLESS, "long_name": dim, **dict(ds[dim].attrs)}
         coords[dim] = (dim, ds[dim].values, attrs)
     else:
-        coords[dim] = (dim, np.arange(fields.shape[0]), {"units": "1", "long_name": "sample"})
-    meta = {
-        "area_fraction": ("1", "relative contact area (fraction of sigma = 0 cells)"),
-        "mean_gap": ("L", "mean gap over the cell"),
-        "sigma_bruggeman": (SIGMA_UNITS, "isotropic Bruggeman conductance, Eq. 5-6"),
-        "sigma_nc": (SIGMA_UNITS, "non-contact conductivity, Eq. 15"),
-        "peklenik": ("1", f"Peklenik number used in Eq. 7-9 ({args.peklenik})"),
-        "sigma_x_corrected": (SIGMA_UNITS, "anisotropic Bruggeman sigma_x, corrected Eq. 9"),
-        "sigma_y_corrected": (SIGMA_UNITS, "anisotropic Bruggeman sigma_y, corrected Eq. 9"),
-        "gamma_tilde_corrected": ("1", "gamma sqrt(sigma_y/sigma_x), corrected Eq. 9"),
-        "sigma_x_persson": (SIGMA_UNITS, "anisotropic Bruggeman sigma_x, Persson Eq. 7"),
-        "sigma_y_persson": (SIGMA_UNITS, "anisotropic Bruggeman sigma_y, Persson Eq. 7"),
-        "gamma_tilde_persson": ("1", "gamma sqrt(sigma_y/sigma_x), Persson Eq. 7"),
-        "sigma_closed_form": (SIGMA_UNITS, f"closed-form conductance, Eq. 16 ({kind})"),
-        "residual": ("1", "largest relative residual of the self-consistent equations"),
-    }
+        coords[dim] = (dim, np.arange(fields.shape[0]),
+                       {"units": DIMENSIONLESS, "long_name": "sample"})
+    units = {"1": DIMENSIONLESS, "L": LENGTH_UNITS, "sigma": SIGMA_UNITS}
+    meta = {k: (units[u], ln) for k, (u, ln) in _GAP_COLUMNS.items()}
+    meta["peklenik"] = (DIMENSIONLESS, f"Peklenik number used in Eq. 7-9 ({args.peklenik})")
+    meta["sigma_closed_form"] = (SIGMA_UNITS, f"closed-form conductance, Eq. 16 ({kind})")
     for ax in ("x", "y") if reynolds else ():
         meta[f"sigma_{ax}_reynolds"] = (SIGMA_UNITS, f"full Reynolds conductance along {ax} "
                                         f"(from {Path(args.flow).name})")

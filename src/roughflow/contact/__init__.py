@@ -1,19 +1,21 @@
 """Elastic contact of a rigid rough surface with a flat elastic half-space (paper Sect. 2.2).
 
 ``solve`` is the entry point; ``ContactResult`` holds the gap field and the scalars;
-``Adhesion`` parameterises the short-range adhesive model (physics.md 3.3).
+``Adhesion`` parameterises the short-range adhesive model (docs/physics.md Sect. 3.3);
+``ContactLaw`` is the small-load law a_c(p) that load searches start from.
 """
 
 from ._result import ContactResult
 from .adhesion import Adhesion, adhesion_summary, tabor_parameter
 from .elastic import full_contact_energy
-from .solve import DEFAULT_TOL, METHODS, MODELS, solve
+from .law import ContactLaw
+from .solve import METHODS, MODELS, solve
 
 __all__ = [
-    "DEFAULT_TOL",
     "METHODS",
     "MODELS",
     "Adhesion",
+    "ContactLaw",
     "ContactResult",
     "adhesion_summary",
     "full_contact_energy",

@@ -1,4 +1,4 @@
-"""Short-range adhesion (physics.md 3.3): harmonic repulsion plus cosine attraction.
+"""Short-range adhesion (docs/physics.md Sect. 3.3): harmonic repulsion plus cosine attraction.
 
 Potential per unit area of the gap g (surface energy gamma_s, range rho):
     v(g) = -gamma_s + kappa g^2 / 2                  for g < 0,   kappa = pi^2 gamma_s/(2 rho^2)
@@ -12,8 +12,8 @@ replaces it by a hard wall (gap >= 0), the kappa -> infinity limit. Contact mean
 
 The paper's adhesive case (Sect. 3.3: about 1 % contact at zero load, 10 % (40 %) contact at
 1/8 (1/4) of the non-adhesive load of 10 % (40 %)) is reproduced by the harmonic model with
-gamma_s / v_ela^full = :data:`PAPER_SURFACE_ENERGY_RATIO` and rho =
-:data:`PAPER_RANGE_OVER_LAMBDA_S` lambda_s, calibrated on the surface of the paper's Fig. 5
+gamma_s / v_ela^full = ``roughflow.defaults.ADHESION_SURFACE_ENERGY_RATIO`` and rho =
+``ADHESION_RANGE_OVER_LAMBDA_S`` lambda_s, calibrated on the surface of the paper's Fig. 5
 (H = 0.8, L/lambda_r = 16, eps_f = 1/16): contact [0.012, 0.096, 0.417] at 4 points per
 lambda_s, [0.012, 0.089, 0.394] at 2 (docs/contact.md, "Adhesion"). On a smaller cell
 (L/lambda_r = 4) the same targets need 0.06 and 0.35 instead. The paper's nominal
@@ -30,14 +30,9 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from roughflow.errors import require_positive
+from roughflow.errors import InputError, require_positive
 
 from .elastic import full_contact_energy
-
-#: gamma_s / v_ela^full that reproduces the paper's adhesive case (with the range below)
-PAPER_SURFACE_ENERGY_RATIO = 0.1
-#: interaction range rho / lambda_s that reproduces the paper's adhesive case
-PAPER_RANGE_OVER_LAMBDA_S = 0.42
 
 
 @dataclass(frozen=True)
@@ -53,8 +48,6 @@ class Adhesion:
         require_positive("surface_energy", self.surface_energy)
         require_positive("range", self.range)
         if self.repulsion not in ("hard", "harmonic"):
-            from roughflow.errors import InputError
-
             raise InputError(f"repulsion must be 'hard' or 'harmonic', got {self.repulsion!r}")
 
     @property
@@ -88,7 +81,7 @@ class Adhesion:
 
 
 def curvature_radius(heights: np.ndarray, lx: float, ly: float) -> float:
-    """R_c = 1/kappa_bar with kappa_bar^2 = <(laplacian h)^2>/4 (physics.md 3.3 [check])."""
+    """R_c = 1/kappa_bar with kappa_bar^2 = <(laplacian h)^2>/4 (docs/physics.md Sect. 3.3)."""
     from roughflow import fft
 
     nx, ny = heights.shape
@@ -123,11 +116,9 @@ def adhesion_for(heights: np.ndarray, lx: float, ly: float, *,
     """Adhesion with gamma_s / v_ela^full = ``gamma_over_v_full`` on this surface and either a
     target Tabor parameter ``tabor`` or an explicit ``range`` rho (units of L).
 
-    The paper's case: ``gamma_over_v_full=PAPER_SURFACE_ENERGY_RATIO``,
-    ``range=PAPER_RANGE_OVER_LAMBDA_S * lambda_s``.
+    The paper's case: ``gamma_over_v_full=ADHESION_SURFACE_ENERGY_RATIO``,
+    ``range=ADHESION_RANGE_OVER_LAMBDA_S * lambda_s``.
     """
-    from roughflow.errors import InputError
-
     if (tabor is None) == (range is None):
         raise InputError(f"give exactly one of tabor= and range=, got tabor={tabor!r}, "
                          f"range={range!r}")

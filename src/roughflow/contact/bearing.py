@@ -1,4 +1,4 @@
-"""Bearing-area (overlap) model, physics.md 3.4: no elasticity, gap = max(d - h, 0)."""
+"""Bearing-area (overlap) model, docs/physics.md Sect. 3.4: no elasticity, gap = max(d - h, 0)."""
 
 from __future__ import annotations
 

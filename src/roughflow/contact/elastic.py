@@ -1,4 +1,6 @@
-"""Fourier stiffness of a periodic elastic half-space, shared by every solver (physics.md 3.1).
+"""Fourier stiffness of a periodic elastic half-space, shared by every solver.
+
+See docs/physics.md Sect. 3.1.
 
 Each Fourier mode of the surface displacement has stiffness k(q) = |q| E*/2 per unit
 area, so the pressure needed to hold a displacement u is p~(q) = (|q| E*/2) u~(q), and
@@ -47,7 +49,7 @@ def compliance(shape: tuple[int, int], lx: float, ly: float, e_star: float = 1.0
 def full_contact_energy(heights: np.ndarray, lx: float, ly: float, e_star: float = 1.0) -> float:
     """v_ela^full: elastic energy per unit area to flatten ``heights`` completely.
 
-    v = (1/4) E* sum_q |q| |h~(q)|^2 with h~ = FFT(h)/N (physics.md 3.3).
+    v = (1/4) E* sum_q |q| |h~(q)|^2 with h~ = FFT(h)/N (docs/physics.md Sect. 3.3).
     """
     nx, ny = heights.shape
     c = fft.rfft2(heights) / (nx * ny)

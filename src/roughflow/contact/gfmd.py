@@ -1,4 +1,4 @@
-"""Green's function molecular dynamics with mass weighting (physics.md 3.2).
+"""Green's function molecular dynamics with mass weighting (docs/physics.md Sect. 3.2).
 
 The elastic surface height u(r) (gap = u - h) relaxes under the force per unit area
 
@@ -304,7 +304,8 @@ def _fire(
     # mean-force (load) imbalance is measured against the pressure k_min rms(h) that moves
     # the longest wave by the rms height (G f has no q = 0 part), or against the load
     # itself when that is smaller: at small loads a_c ~ p, so the load must hold to tol
-    # relative (issue 8 stress test: 0.35 % load error at p = 1e-5 before)
+    # relative (with k_min rms(h) alone, the load at p = 1e-5 was 0.35 % off when the solve
+    # reported convergence)
     load_scale = kmin * hscale
     if adhesion is None and load > 0:
         load_scale = min(load_scale, load)

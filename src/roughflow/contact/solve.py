@@ -6,16 +6,25 @@ import math
 
 import numpy as np
 
-from roughflow.errors import ConvergenceError, InputError, require_field, require_positive
+from roughflow.defaults import CONTACT_METHODS, CONTACT_TOL, MODELS
+from roughflow.errors import (
+    ConvergenceError,
+    InputError,
+    require_field,
+    require_finite,
+    require_positive,
+)
 from roughflow.surface import Surface
 
 from ._result import ContactResult
 from .adhesion import Adhesion
 from .bearing import solve_bearing
 
-MODELS = ("elastic", "adhesive", "bearing")
-METHODS = ("cg", "gfmd")
-DEFAULT_TOL = 1e-6
+METHODS = CONTACT_METHODS
+# The repulsive state an adhesive solve starts from: a small load (so that the attraction
+# acts from the first step) and a loose tolerance (it is only a starting point).
+_ADHESIVE_START_LOAD = 1e-2
+_ADHESIVE_START_TOL = 1e-4
 _DEFAULT_MAX_ITER = {"cg": 20000, "gfmd": 50000}
 
 
@@ -26,7 +35,7 @@ def solve(
     model: str = "elastic",
     method: str | None = None,
     area_fraction: float | None = None,
-    tol: float = DEFAULT_TOL,
+    tol: float = CONTACT_TOL,
     max_iter: int | None = None,
     init: ContactResult | None = None,
     adhesion: Adhesion | None = None,
@@ -39,7 +48,7 @@ def solve(
 
     model:
       ``"elastic"`` (hard-wall repulsion), ``"adhesive"`` (``adhesion=Adhesion(...)``,
-      physics.md 3.3; ``pressure`` may be 0 or negative) or ``"bearing"`` (overlap model,
+      docs/physics.md Sect. 3.3; ``pressure`` may be 0 or negative) or ``"bearing"`` (overlap model,
       ``area_fraction=a``: contact at the top fraction a of heights, gap = max(d - h, 0),
       no elasticity; ``pressure`` is ignored).
     method:
@@ -91,8 +100,6 @@ def solve(
         if adhesion is not None:
             raise InputError("adhesion= is only for model='adhesive'")
     else:
-        from roughflow.errors import require_finite
-
         load = require_finite("pressure", pressure)
         if not isinstance(adhesion, Adhesion):
             raise InputError(f"model='adhesive' needs adhesion=Adhesion(...), got {adhesion!r}")
@@ -128,7 +135,8 @@ def solve(
         if init is None and model == "adhesive":
             # start from the repulsive contact (at least a small load) so that the attraction
             # acts from the first step; a flat start floats at zero load
-            init = solve(surface, max(load, 1e-2), method="gfmd", tol=1e-4, threads=threads)
+            init = solve(surface, max(load, _ADHESIVE_START_LOAD), method="gfmd",
+                         tol=_ADHESIVE_START_TOL, threads=threads)
         u0 = heights + init.gap if init is not None else None
         out = gfmd(
             heights, lx, ly, load, tol=tol, max_iter=int(max_iter), u0=u0,

@@ -11,10 +11,8 @@ import importlib
 import os
 from pathlib import Path
 
+from roughflow.defaults import STUDIES
 from roughflow.errors import InputError
-
-STUDIES = ("channels", "threshold_vs_gamma", "threshold_vs_size", "threshold_vs_hurst",
-           "flow_isotropic", "flow_anisotropic")
 
 
 def module(study: str):

@@ -5,6 +5,8 @@ from __future__ import annotations
 import numpy as np
 import xarray as xr
 
+from roughflow.defaults import A_C_STAR_PAPER
+
 from ._style import AXIS_COLOR, seed_stats
 
 
@@ -34,5 +36,5 @@ def format_gamma_axis(ax, gammas) -> None:
     ax.minorticks_off()
     ax.set_xlabel("Peklenik number gamma")
     ax.set_ylabel("critical contact area a_c*")
-    ax.axhline(0.415, color="gray", lw=0.6, ls=":")
+    ax.axhline(A_C_STAR_PAPER, color="gray", lw=0.6, ls=":")
     ax.grid(alpha=0.3)

@@ -5,7 +5,7 @@ from __future__ import annotations
 import matplotlib.pyplot as plt
 import xarray as xr
 
-from roughflow.scenes._data import area_values
+from roughflow.datasets.sweep import area_values
 
 from ._flow import curve, ladder, points, sigma_ref
 from ._style import EASY, HARD

@@ -6,7 +6,8 @@ import matplotlib.pyplot as plt
 import numpy as np
 import xarray as xr
 
-from roughflow.scenes._data import area_values
+from roughflow.datasets.sweep import area_values
+from roughflow.defaults import MODELS
 
 from ._flow import curve, ladder, points, sigma_ref
 
@@ -26,7 +27,7 @@ TITLES = {"elastic": "elastic, non-adhesive", "adhesive": "short-range adhesion"
 
 
 def draw(ds: xr.Dataset, fit=None) -> plt.Figure:
-    models = [m for m in ("elastic", "adhesive", "bearing") if m in ds["model"].values]
+    models = [m for m in MODELS if m in ds["model"].values]
     fig, axes = plt.subplots(1, len(models), figsize=(4.6 * len(models), 4.2),
                              constrained_layout=True, squeeze=False)
     for ax, model, tag in zip(axes[0], models, "abc", strict=False):

@@ -6,7 +6,7 @@ import matplotlib.pyplot as plt
 import numpy as np
 import xarray as xr
 
-from roughflow.scenes._data import threshold_values
+from roughflow.datasets.sweep import threshold_values
 
 from ._threshold import format_gamma_axis, plot_vs_gamma
 

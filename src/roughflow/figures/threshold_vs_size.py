@@ -6,8 +6,8 @@ import matplotlib.pyplot as plt
 import numpy as np
 import xarray as xr
 
+from roughflow.datasets.sweep import threshold_values
 from roughflow.fits import scaling
-from roughflow.scenes._data import threshold_values
 
 from ._style import EASY, HARD, seed_stats
 

@@ -10,7 +10,7 @@ outlet (after the last row), imposed at the outer cell faces, i.e. half a cell
 from the first/last cell centres; the boundary transmissibility is the cell's own
 sigma times h_across / (h_flow / 2). With this choice a uniform gap u0 gives
 sigma_eff = u0^3 / (12 eta) exactly, on any grid. The direction across the flow
-is periodic.
+is periodic, or closed by walls (no flux through the seam) for a non-periodic scan.
 
 Only the cells passed in ``active`` (those connected to both reservoirs) become
 unknowns; every face touching another cell has zero transmissibility anyway.
@@ -52,10 +52,12 @@ def harmonic_mean(a: np.ndarray, b: np.ndarray) -> np.ndarray:
     return 2.0 * a * ratio
 
 
-def face_transmissibilities(sigma: np.ndarray, h_flow: float, h_across: float) -> Faces:
+def face_transmissibilities(sigma: np.ndarray, h_flow: float, h_across: float, *,
+                            periodic: bool = True) -> Faces:
     """Transmissibilities for local conductivities ``sigma`` (n0, n1), flow along axis 0.
 
-    ``sigma`` must already be zero outside the cells that carry flow.
+    ``sigma`` must already be zero outside the cells that carry flow. ``periodic=False``
+    closes the seam across the flow (faces between column n1 - 1 and column 0).
     """
     n1 = sigma.shape[1]
     r_along = h_across / h_flow
@@ -65,6 +67,8 @@ def face_transmissibilities(sigma: np.ndarray, h_flow: float, h_across: float) -
         t_across = harmonic_mean(sigma, np.roll(sigma, -1, axis=1)) * r_across
     else:
         t_across = np.zeros_like(sigma)  # a cell's face with itself carries nothing
+    if not periodic:
+        t_across[:, -1] = 0.0
     t_in = sigma[0] * (2.0 * r_along)
     t_out = sigma[-1] * (2.0 * r_along)
     return Faces(t_along, t_across, t_in, t_out)

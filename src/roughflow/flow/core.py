@@ -19,6 +19,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from roughflow.defaults import FLOW_TOL
 from roughflow.errors import InputError, require_field, require_positive
 from roughflow.percolation import spanning_cells
 
@@ -107,13 +108,14 @@ def _solve_flux_balanced(matrix, rhs, cells, act, faces: Faces, *, tol: float, m
     while the flux imbalance |Q_in - Q_out| / Q exceeds ``tol`` and the residual still falls.
 
     Near a_c* the flux through the last constriction is many decades below ||b|| (which
-    the well-connected reservoir cells dominate), so the first criterion alone left
-    |Q_in - Q_out| / Q = 2e-4 with RS-AMG and a negative outlet flux with SA-AMG (issue 8
-    stress test). Each refinement round tightens the relative tolerance by the missing
-    factor and restarts from the last iterate, down to the float64 floor (the reservoir
-    fluxes are differences 1 - p of order Q / T, so their round-off is eps T / Q). sigma
-    comes from the dissipation, whose error is quadratic in the pressure error, and is
-    unaffected. Returns (solution, pressure with 0 in inactive cells, Q, |Q_in - Q_out|/Q).
+    the well-connected reservoir cells dominate), so the first criterion alone can leave
+    |Q_in - Q_out| / Q = 2e-4 with RS-AMG and a negative outlet flux with SA-AMG
+    (tests/test_stress_pipeline.py). Each refinement round tightens the relative tolerance
+    by the missing factor and restarts from the last iterate, down to the float64 floor
+    (the reservoir fluxes are differences 1 - p of order Q / T, so their round-off is
+    eps T / Q). sigma comes from the dissipation, whose error is quadratic in the pressure
+    error, and is unaffected. Returns (solution, pressure with 0 in inactive cells, Q,
+    |Q_in - Q_out|/Q).
     """
     sol = solve_spd(matrix, rhs, tol=tol, method=method)
     for round_ in range(rounds + 1):
@@ -141,8 +143,9 @@ def solve(
     lx: float = 1.0,
     ly: float | None = None,
     eta: float = 1.0,
-    tol: float = 1e-8,
+    tol: float = FLOW_TOL,
     method: str | None = None,
+    periodic: bool = True,
 ) -> FlowResult:
     """Reynolds flow along ``axis`` (0/"x" or 1/"y") through the gap field ``gap[ix, iy]``.
 
@@ -151,7 +154,9 @@ def solve(
     until |Q_in - Q_out| / Q <= ``tol``); ``method``: None/"auto"
     (direct up to 70k unknowns, else "rs"), "rs", "sa", "direct" or "cg" (see
     :mod:`roughflow.flow.linsolve`). A gap whose open cells (u > 0) do not connect
-    the two reservoirs gives sigma = 0 without a solve. Raises ``InputError`` for
+    the two reservoirs gives sigma = 0 without a solve. ``periodic``: the cell is periodic
+    across the flow (default), or closed by walls there (False: a non-periodic scan).
+    Raises ``InputError`` for
     bad input and ``ConvergenceError`` if the solver misses ``tol``.
     """
     g = check_gap(gap)
@@ -166,7 +171,7 @@ def solve(
     hx, hy = lx / nx, ly / ny
     sigma_local = g**3 / (12.0 * eta)
     open_mask = sigma_local > 0  # a gap so small that u^3 underflows is closed
-    active = spanning_cells(open_mask, ax)
+    active = spanning_cells(open_mask, ax, periodic=periodic)
 
     nan = np.full(g.shape, np.nan)
     zeros = np.zeros(g.shape)
@@ -179,7 +184,7 @@ def solve(
     else:
         s, act, h_flow, h_across, l_flow, l_across = sigma_local.T, active.T, hy, hx, ly, lx
     s = np.where(act, s, 0.0)
-    faces = face_transmissibilities(s, h_flow, h_across)
+    faces = face_transmissibilities(s, h_flow, h_across, periodic=periodic)
     matrix, rhs, cells = assemble(faces, act)
     sol, q, dissipation, imbalance = _solve_flux_balanced(
         matrix, rhs, cells, act, faces, tol=tol, method=method
@@ -218,11 +223,12 @@ def conductance(
     lx: float = 1.0,
     ly: float | None = None,
     eta: float = 1.0,
-    tol: float = 1e-8,
+    tol: float = FLOW_TOL,
     method: str | None = None,
+    periodic: bool = True,
 ) -> float | tuple[float, float]:
     """Effective conductance along ``axis``, or ``(sigma_x, sigma_y)`` when ``axis`` is None."""
-    kw = dict(lx=lx, ly=ly, eta=eta, tol=tol, method=method)
+    kw = dict(lx=lx, ly=ly, eta=eta, tol=tol, method=method, periodic=periodic)
     if axis is None:
         return solve(gap, 0, **kw).sigma, solve(gap, 1, **kw).sigma
     return solve(gap, axis, **kw).sigma

@@ -1,9 +1,9 @@
 """Sparse SPD solvers for the Reynolds system: AMG-preconditioned CG or a direct solve.
 
-The relative residual is ||b - A x|| / ||b|| of the unscaled system. (A symmetric
-diagonal scaling D^-1/2 A D^-1/2 was tried: it changes the classical strength of
-connection and made RS-AMG need ~160 instead of ~8 CG iterations on bearing gaps
-at n = 512, for no gain in the accuracy of sigma.) Since sigma is computed from
+The relative residual is ||b - A x|| / ||b|| of the unscaled system. The system is not
+diagonally scaled: D^-1/2 A D^-1/2 changes the classical strength of connection, and
+RS-AMG then needs about 160 instead of about 8 CG iterations on bearing gaps at n = 512,
+for no gain in the accuracy of sigma. Since sigma is computed from
 the dissipation, its relative error is of order (residual)^2 times the condition
 factor: at 1e-8 it is about 1e-11 on bearing gaps.
 
@@ -26,9 +26,9 @@ import numpy as np
 import scipy.sparse as sp
 import scipy.sparse.linalg as spla
 
+from roughflow.defaults import FLOW_METHODS as METHODS
 from roughflow.errors import ConvergenceError, InputError
 
-METHODS = ("auto", "rs", "sa", "direct", "cg")
 #: below this many unknowns ``"auto"`` uses the direct solver (measured crossover)
 DIRECT_MAX_UNKNOWNS = 70_000
 MAX_ITER_AMG = 500

@@ -1,10 +1,13 @@
-"""Percolation of fluid channels and contact patches (paper Sect. 2.2 and 3.2).
+"""Percolation of fluid channels and contact patches on a grid (paper Sect. 2.2 and 3.2).
+
+Pure topology on boolean and float arrays; no contact solves (the threshold search that
+drives them is :mod:`roughflow.search`).
 
 - :func:`label`: periodic cluster labelling (4- or 8-connected).
 - :func:`percolates`, :func:`spanning_cells`: does the fluid span along an axis, and which
   cells carry flow; :func:`contact_percolates`: the dual statement for contact (8-connected).
-- :func:`threshold`: critical contact area a_c* per direction (elastic/adhesive: bisection
-  in pressure with warm-started contact solves; bearing: exact union-find sweep).
+- :func:`critical_open_count`, :func:`bearing_bracket`, :func:`predicted_thresholds`:
+  exact spanning thresholds of a growing open set (one union-find pass).
 - :mod:`.clusters`: cluster-size statistics and the percolating-channel map (Fig. 1 b, c).
 """
 
@@ -16,24 +19,31 @@ from .clusters import (
     percolation_map,
     size_distribution,
 )
-from .critical import Threshold, ThresholdNotBracketed, threshold
-from .labels import label
+from .labels import check_axis, label
 from .spanning import contact_percolates, percolates, spanning_cells
-from .sweep import critical_open_count
+from .sweep import (
+    BearingBracket,
+    bearing_bracket,
+    critical_open_count,
+    open_first_order,
+    predicted_thresholds,
+)
 
 __all__ = [
+    "BearingBracket",
     "ClusterStats",
-    "Threshold",
-    "ThresholdNotBracketed",
+    "bearing_bracket",
+    "check_axis",
     "cluster_sizes",
     "cluster_stats",
-    "fisher_exponent",
     "contact_percolates",
     "critical_open_count",
+    "fisher_exponent",
     "label",
+    "open_first_order",
     "percolates",
     "percolation_map",
+    "predicted_thresholds",
     "size_distribution",
     "spanning_cells",
-    "threshold",
 ]

@@ -5,7 +5,7 @@ along ``axis`` the boundaries along ``axis`` are open (reservoirs) and the cell 
 across it; a cluster percolates when it touches both the first and the last slab along
 ``axis``. Contact cells connect through 8 neighbours, which makes the two phases exactly
 dual on the square grid: fluid spans x  <=>  no contact cluster winds around y on the same
-cylinder (open in x, periodic in y), and vice versa (physics notes Sect. 4).
+cylinder (open in x, periodic in y), and vice versa (docs/physics.md Sect. 4).
 """
 
 from __future__ import annotations
@@ -16,22 +16,26 @@ from scipy import ndimage
 from .labels import _STRUCTURES, check_axis, check_connectivity, check_mask, label_raw
 
 
-def _periodic_across(axis: int) -> tuple[bool, bool]:
-    return (False, True) if axis == 0 else (True, False)
+def _periodic_across(axis: int, periodic: bool = True) -> tuple[bool, bool]:
+    """Seams of a cell open along ``axis``: periodic across it, or walls (``periodic``
+    False, a non-periodic scan)."""
+    return (False, periodic) if axis == 0 else (periodic, False)
 
 
-def _spanning_labels(open_mask: np.ndarray, axis: int, connectivity: int):
-    raw, lut, _ = label_raw(open_mask, _periodic_across(axis), connectivity)
+def _spanning_labels(open_mask: np.ndarray, axis: int, connectivity: int,
+                     periodic: bool = True):
+    raw, lut, _ = label_raw(open_mask, _periodic_across(axis, periodic), connectivity)
     first = lut[raw.take(0, axis=axis)]
     last = lut[raw.take(-1, axis=axis)]
     common = np.intersect1d(first[first > 0], last[last > 0])
     return raw, lut, common
 
 
-def percolates(open_mask, axis: int, *, connectivity: int = 4) -> bool:
+def percolates(open_mask, axis: int, *, connectivity: int = 4, periodic: bool = True) -> bool:
     """True when a cluster of open (True) cells connects the two ends along ``axis``.
 
-    ``axis`` 0 = x, 1 = y; open boundaries along ``axis``, periodic across it;
+    ``axis`` 0 = x, 1 = y; open boundaries along ``axis``, periodic across it (closed
+    walls across it with ``periodic=False``, for non-periodic scans);
     ``connectivity`` 4 (fluid, default) or 8.
     """
     m = check_mask("open_mask", open_mask)
@@ -39,10 +43,11 @@ def percolates(open_mask, axis: int, *, connectivity: int = 4) -> bool:
     conn = check_connectivity(connectivity)
     if not (m.take(0, axis=ax).any() and m.take(-1, axis=ax).any()):
         return False
-    return _spanning_labels(m, ax, conn)[2].size > 0
+    return _spanning_labels(m, ax, conn, bool(periodic))[2].size > 0
 
 
-def spanning_cells(open_mask, axis: int, *, connectivity: int = 4) -> np.ndarray:
+def spanning_cells(open_mask, axis: int, *, connectivity: int = 4,
+                   periodic: bool = True) -> np.ndarray:
     """Bool mask of the open cells in clusters that touch both ends along ``axis``.
 
     These are the cells that can carry flow along ``axis`` (the rest are dead ends or
@@ -51,7 +56,7 @@ def spanning_cells(open_mask, axis: int, *, connectivity: int = 4) -> np.ndarray
     m = check_mask("open_mask", open_mask)
     ax = check_axis(axis)
     conn = check_connectivity(connectivity)
-    raw, lut, common = _spanning_labels(m, ax, conn)
+    raw, lut, common = _spanning_labels(m, ax, conn, bool(periodic))
     if common.size == 0:
         return np.zeros(m.shape, dtype=bool)
     good_raw = np.isin(lut, common)

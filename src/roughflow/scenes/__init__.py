@@ -5,34 +5,34 @@
 - :func:`run_channels`: the two surfaces of Fig. 1 and their fluid channels.
 
 Jobs are frozen dataclasses (:mod:`roughflow.scenes.jobs`); a config study expands into
-jobs with :func:`expand_study`. The stage modules (contact, percolation, flow, theory) are
-imported inside the runners, so planning jobs needs none of them.
+jobs with :func:`expand_study`. The runners are imported on first use, so planning jobs
+(the workflow's job graph, cost estimates) does not load the solvers.
 """
 
-from .channels import run_channels
+from importlib import import_module
+
 from .jobs import (
-    FLOW_STUDIES,
-    PARAM_DIMS,
-    STUDIES,
-    THRESHOLD_STUDIES,
     ChannelsJob,
     LadderJob,
     SurfaceParams,
     ThresholdJob,
     expand_study,
     grid_points,
+    study_defaults,
 )
-from .ladder import run_ladder
-from .threshold import run_threshold
 
-__all__ = [
-    "FLOW_STUDIES", "PARAM_DIMS", "STUDIES", "THRESHOLD_STUDIES", "ChannelsJob", "LadderJob",
-    "SurfaceParams", "ThresholdJob", "expand_study", "grid_points", "run_channels",
-    "run_ladder", "run_threshold",
-]
+_RUNNERS = {"run_threshold": "threshold", "run_ladder": "ladder", "run_channels": "channels"}
+
+__all__ = ["ChannelsJob", "LadderJob", "SurfaceParams", "ThresholdJob", "expand_study",
+           "grid_points", "run", "study_defaults", *_RUNNERS]
+
+
+def __getattr__(name: str):
+    if name in _RUNNERS:
+        return getattr(import_module(f"{__name__}.{_RUNNERS[name]}"), name)
+    raise AttributeError(f"module {__name__!r} has no attribute {name!r}")
 
 
 def run(job, *, threads: int | None = None):
     """Run any job and return its dataset."""
-    return {"threshold": run_threshold, "ladder": run_ladder,
-            "channels": run_channels}[job.kind](job, threads=threads)
+    return __getattr__(f"run_{job.kind}")(job, threads=threads)

@@ -3,8 +3,9 @@
 A study block of the workflow config (``config/config.yaml``) expands into jobs with
 :func:`expand_study`; every job knows its id (used as the file name), the arguments of
 ``roughflow scene <kind>`` that run it, its grid size (for resource estimates) and the
-dataset coordinates it fills. Floats are rounded to 12 significant digits so that values
-computed in different jobs combine onto one coordinate.
+dataset coordinates it fills. Defaults come from :mod:`roughflow.defaults` and the job
+dataclasses; :func:`study_defaults` gives those of a study block (the workflow schema is
+tested against it).
 """
 
 from __future__ import annotations
@@ -12,23 +13,18 @@ from __future__ import annotations
 import hashlib
 import itertools
 import math
-from dataclasses import dataclass, field
+import re
+import shlex
+from dataclasses import dataclass, field, fields
+from pathlib import Path
 
-from roughflow.contact.adhesion import PAPER_RANGE_OVER_LAMBDA_S, PAPER_SURFACE_ENERGY_RATIO
+from roughflow import defaults
+from roughflow.datasets.sweep import rnd
+from roughflow.defaults import FLOW_STUDIES, STUDIES, THRESHOLD_STUDIES
 from roughflow.errors import InputError
-from roughflow.surface import SurfaceSpec
+from roughflow.surface import SurfaceSpec, paper_l_over_lambda_r
 
-THRESHOLD_STUDIES = ("threshold_vs_gamma", "threshold_vs_size", "threshold_vs_hurst")
-FLOW_STUDIES = ("flow_isotropic", "flow_anisotropic")
-STUDIES = ("channels", *THRESHOLD_STUDIES, *FLOW_STUDIES)
 SWEEP_KEYS = ("model", "gamma", "hurst", "l_over_lambda_r", "eps_f", "points_per_lambda_s")
-# Dimensions of every per-job dataset (length 1 in a job, filled by the aggregation).
-PARAM_DIMS = ("model", "gamma", "hurst", "eps_t", "eps_f")
-
-
-def rnd(v: float) -> float:
-    """``v`` rounded to 12 significant digits (stable coordinate values across jobs)."""
-    return float(f"{float(v):.12g}")
 
 
 def fmt(v: float) -> str:
@@ -36,10 +32,12 @@ def fmt(v: float) -> str:
     return f"{float(v):.6g}"
 
 
-def default_l_over_lambda_r(gamma: float) -> float:
-    """The paper's default system size 4 max(sqrt(gamma), 1/sqrt(gamma))."""
-    s = math.sqrt(gamma)
-    return 4.0 * max(s, 1.0 / s)
+def field_default(cls, name: str):
+    """The default of dataclass field ``name`` of ``cls`` (for argparse and schema checks)."""
+    for f in fields(cls):
+        if f.name == name:
+            return f.default
+    raise KeyError(f"{cls.__name__} has no field {name!r}")
 
 
 @dataclass(frozen=True)
@@ -50,18 +48,18 @@ class SurfaceParams:
     direction over L: max(sqrt(gamma), 1/sqrt(gamma)) / (L / lambda_r).
     """
 
-    gamma: float = 1.0
-    hurst: float = 0.8
+    gamma: float = defaults.GAMMA
+    hurst: float = defaults.HURST
     l_over_lambda_r: float | None = None
-    eps_f: float = 1 / 16
-    points_per_lambda_s: float = 8.0
-    aspect: float = 1.0
+    eps_f: float = defaults.EPS_F
+    points_per_lambda_s: float = defaults.POINTS_PER_LAMBDA_S
+    aspect: float = defaults.ASPECT
 
     @property
     def size(self) -> float:
         """L / lambda_r actually used."""
         if self.l_over_lambda_r is None:
-            return default_l_over_lambda_r(self.gamma)
+            return paper_l_over_lambda_r(self.gamma)
         return float(self.l_over_lambda_r)
 
     @property
@@ -100,14 +98,22 @@ def _seed_tag(seeds: tuple[int, ...]) -> str:
 
 @dataclass(frozen=True)
 class ThresholdJob:
-    """Percolation thresholds a_c*(x), a_c*(y) of ``seeds`` (contact bisection, no flow)."""
+    """Percolation thresholds a_c*(x), a_c*(y) of ``seeds`` (threshold search, no flow)."""
 
     surface: SurfaceParams
     model: str = "elastic"
     seeds: tuple[int, ...] = (0,)
-    tol: float = 2e-3
-    contact_tol: float = 1e-4
+    tol: float = defaults.THRESHOLD_TOL
+    contact_tol: float = defaults.THRESHOLD_CONTACT_TOL
     kind: str = field(default="threshold", init=False)
+
+    def __post_init__(self) -> None:
+        if self.model not in defaults.MODELS:
+            raise InputError(f"model must be one of {defaults.MODELS}, got {self.model!r}")
+        if self.model == "adhesive":
+            raise InputError("threshold jobs take the elastic or bearing model, got 'adhesive' "
+                             "(the threshold scene has no adhesion options; use "
+                             "`roughflow threshold --model adhesive` on a surface file)")
 
     @property
     def job_id(self) -> str:
@@ -124,14 +130,14 @@ def _adhesion_args(adh: dict) -> dict:
     """LadderJob keywords from a config ``adhesion`` block (a Tabor parameter replaces the
     default range)."""
     out = {"surface_energy_ratio": float(adh.get("surface_energy_ratio",
-                                                 PAPER_SURFACE_ENERGY_RATIO))}
+                                                 defaults.ADHESION_SURFACE_ENERGY_RATIO))}
     if adh.get("tabor") is not None:
         if adh.get("range_over_lambda_s") is not None:
             raise InputError("adhesion: give range_over_lambda_s or tabor, not both "
                              f"(got {adh!r})")
         return {**out, "tabor": float(adh["tabor"]), "range_over_lambda_s": None}
     return {**out, "range_over_lambda_s": float(adh.get("range_over_lambda_s",
-                                                        PAPER_RANGE_OVER_LAMBDA_S))}
+                                                        defaults.ADHESION_RANGE_OVER_LAMBDA_S))}
 
 
 @dataclass(frozen=True)
@@ -142,16 +148,32 @@ class LadderJob:
     model: str = "elastic"
     seeds: tuple[int, ...] = (0,)
     area_fractions: tuple[float, ...] = (0.1, 0.2, 0.3)
-    a_c_star: float = 0.4
+    a_c_star: float | None = None  # None: the model's defaults.A_C_STAR_THEORY
     a_c_star_alt: float | None = None
+    area_tol: float = defaults.LADDER_AREA_TOL
     # adhesive model: gamma_s / v_ela^full and either the range rho / lambda_s or the Tabor
     # parameter (the defaults reproduce the paper's adhesive case, contact.adhesion)
-    surface_energy_ratio: float = PAPER_SURFACE_ENERGY_RATIO
-    range_over_lambda_s: float | None = PAPER_RANGE_OVER_LAMBDA_S
+    surface_energy_ratio: float = defaults.ADHESION_SURFACE_ENERGY_RATIO
+    range_over_lambda_s: float | None = defaults.ADHESION_RANGE_OVER_LAMBDA_S
     tabor: float | None = None
     kind: str = field(default="ladder", init=False)
 
     def __post_init__(self) -> None:
+        if self.model not in defaults.MODELS:
+            raise InputError(f"model must be one of {defaults.MODELS}, got {self.model!r}")
+        if self.a_c_star is None:
+            object.__setattr__(self, "a_c_star", defaults.A_C_STAR_THEORY[self.model])
+        a = self.area_fractions
+        if not a or any(not (isinstance(v, (int, float)) and 0 < v < 1) for v in a):
+            raise InputError(f"area_fractions must be contact areas in (0, 1), got {a!r}")
+        if list(a) != sorted(set(a)):
+            raise InputError(f"area_fractions must increase strictly, got {a!r}")
+        for name in ("a_c_star", "a_c_star_alt"):
+            value = getattr(self, name)
+            if value is not None and not 0 < value < 1:
+                raise InputError(f"{name} must lie in (0, 1), got {value!r}")
+        if not (math.isfinite(self.area_tol) and 0 < self.area_tol < 1):
+            raise InputError(f"area_tol must lie in (0, 1), got {self.area_tol!r}")
         if self.model == "adhesive" and (self.tabor is None) == (self.range_over_lambda_s is None):
             raise InputError("adhesion needs exactly one of range_over_lambda_s and tabor, got "
                              f"range_over_lambda_s={self.range_over_lambda_s!r}, "
@@ -171,7 +193,8 @@ class LadderJob:
         args = [self.kind, *self.surface.cli_args(), "--model", self.model,
                 "--seeds", *[str(s) for s in self.seeds],
                 "--area-fractions", *[repr(float(a)) for a in self.area_fractions],
-                "--a-c-star", repr(float(self.a_c_star))]
+                "--a-c-star", repr(float(self.a_c_star)),
+                "--area-tol", repr(float(self.area_tol))]
         if self.a_c_star_alt is not None:
             args += ["--a-c-star-alt", repr(float(self.a_c_star_alt))]
         if self.model == "adhesive":
@@ -185,14 +208,14 @@ class LadderJob:
 class ChannelsJob:
     """Fig. 1: an isotropic 0.5 x 2 cell and its gamma-stretched square version at a_c."""
 
-    gamma: float = 4.0
-    hurst: float = 0.8
-    l_over_lambda_r: float = 4.0
-    eps_f: float = 0.1
-    area_fraction: float = 0.4
-    model: str = "elastic"
-    seed: int = 1
-    points_per_lambda_s: float = 8.0
+    gamma: float = defaults.CHANNELS["gamma"]
+    hurst: float = defaults.CHANNELS["hurst"]
+    l_over_lambda_r: float = defaults.CHANNELS["l_over_lambda_r"]
+    eps_f: float = defaults.CHANNELS["eps_f"]
+    area_fraction: float = defaults.CHANNELS["area_fraction"]
+    model: str = defaults.CHANNELS["model"]
+    seed: int = defaults.CHANNELS["seed"]
+    points_per_lambda_s: float = defaults.CHANNELS["points_per_lambda_s"]
     kind: str = field(default="channels", init=False)
 
     @property
@@ -218,11 +241,94 @@ class ChannelsJob:
                 "--seeds", str(self.seed)]
 
 
-Job = ThresholdJob | LadderJob | ChannelsJob
+#: Quantities of a leak question (``roughflow leak`` options), as unit strings; their kind.
+LEAK_QUANTITIES = {"modulus": "pressure", "fluid_pressure": "pressure",
+                   "viscosity": "viscosity", "seal_width": "length", "seal_length": "length"}
+#: Import options of one scan in the measured study (``roughflow import`` options).
+SCAN_KEYS = ("size", "unit", "height_unit", "detrend", "fill", "crop", "channel")
+
+
+@dataclass(frozen=True)
+class LeakJob:
+    """One scan of the measured study: ``roughflow import`` then ``roughflow leak``.
+
+    ``name`` labels the scan (file names, the ``scan`` coordinate); ``file`` is the scan;
+    the import options (:data:`SCAN_KEYS`) apply where the file does not say; the leak
+    question is given as unit strings (:data:`LEAK_QUANTITIES`, ``pressures`` as
+    "LO:HI:N" or a list). Every quantity is parsed on construction (InputError naming the
+    key), so a bad config stops the workflow before any job.
+    """
+
+    name: str
+    file: str
+    modulus: str
+    pressures: str
+    fluid_pressure: str
+    viscosity: str
+    seal_width: str
+    seal_length: str
+    size: str | None = None
+    unit: str | None = None
+    height_unit: str | None = None
+    detrend: str = defaults.SCAN_DETREND
+    fill: str = defaults.SCAN_FILL
+    crop: str | None = None
+    channel: str | None = None
+    boundary: str = defaults.BOUNDARY
+    kind: str = field(default="leak", init=False)
+
+    def __post_init__(self) -> None:
+        from roughflow.units import parse_quantity, parse_range
+
+        if not _NAME.fullmatch(str(self.name)):
+            raise InputError(f"scan name must be letters, digits, '.', '_' or '-', got "
+                             f"{self.name!r}")
+        for key, kind in LEAK_QUANTITIES.items():
+            parse_quantity(getattr(self, key), kind, key)
+        parse_range(self.pressures, "pressure", "pressures")
+        if self.size is not None:
+            for part in str(self.size).split(","):
+                try:
+                    float(part)
+                except ValueError:
+                    parse_quantity(part, "length", "size")
+        for key, choices in (("detrend", defaults.DETREND_MODES),
+                             ("fill", defaults.FILL_METHODS),
+                             ("boundary", defaults.BOUNDARY_METHODS)):
+            if getattr(self, key) not in choices:
+                raise InputError(f"{key} must be one of {choices}, got {getattr(self, key)!r}")
+
+    @property
+    def job_id(self) -> str:
+        return self.name
+
+    def import_args(self) -> list[str]:
+        """``roughflow import`` options (after the scan file)."""
+        args = ["--detrend", self.detrend, "--fill", self.fill]
+        for key in ("size", "unit", "height_unit", "crop", "channel"):
+            value = getattr(self, key)
+            if value is not None:
+                args += [f"--{key.replace('_', '-')}", shlex.quote(str(value))]
+        return args
+
+    def cli_args(self) -> list[str]:
+        """``roughflow leak`` options (after the surface file)."""
+        args = ["--pressures", shlex.quote(str(self.pressures)), "--boundary", self.boundary,
+                "--name", self.name]
+        for key in LEAK_QUANTITIES:
+            args += [f"--{key.replace('_', '-')}", shlex.quote(str(getattr(self, key)))]
+        return args
+
+
+_NAME = re.compile(r"[A-Za-z0-9_.\-]+")
+
+Job = ThresholdJob | LadderJob | ChannelsJob | LeakJob
 
 
 def grid_points(job: Job) -> int:
     """Grid points of one surface of the job (for memory and runtime estimates)."""
+    if isinstance(job, LeakJob):
+        raise InputError("a leak job's grid is that of its scan (known after the import)")
     if isinstance(job, ChannelsJob):
         spec = job.surfaces()[1].spec(job.seed)
     else:
@@ -234,6 +340,32 @@ def _as_list(v) -> list:
     return list(v) if isinstance(v, (list, tuple)) else [v]
 
 
+def study_defaults(name: str) -> dict:
+    """The value of every optional key of a study block when the config leaves it out."""
+    if name == "channels":
+        return {f.name: f.default for f in fields(ChannelsJob) if f.init}
+    if name == defaults.MEASURED_STUDY:
+        return {key: field_default(LeakJob, key) for key in ("detrend", "fill", "boundary")}
+    common = {
+        "gamma": [defaults.GAMMA], "hurst": [defaults.HURST], "eps_f": [defaults.EPS_F],
+        "model": ["elastic"], "seeds_per_job": 1,
+        "points_per_lambda_s": defaults.POINTS_PER_LAMBDA_S,
+    }
+    if name in THRESHOLD_STUDIES:
+        return {**common, "l_over_lambda_r": [None],
+                "tol": field_default(ThresholdJob, "tol"),
+                "contact_tol": field_default(ThresholdJob, "contact_tol"),
+                "fit": {"bootstrap": defaults.FIT_BOOTSTRAP, "nu": defaults.NU_PERCOLATION}}
+    if name in FLOW_STUDIES:
+        return {**common, "l_over_lambda_r": [defaults.FLOW_L_OVER_LAMBDA_R],
+                "a_c_star": dict(defaults.A_C_STAR_THEORY),
+                "a_c_star_alt": defaults.A_C_STAR_ALT,
+                "area_tol": field_default(LadderJob, "area_tol"),
+                "adhesion": {"surface_energy_ratio": defaults.ADHESION_SURFACE_ENERGY_RATIO,
+                             "range_over_lambda_s": defaults.ADHESION_RANGE_OVER_LAMBDA_S}}
+    raise InputError(f"unknown study {name!r}; known studies: {', '.join(STUDIES)}")
+
+
 def _series(block: dict) -> list[dict]:
     base = {k: v for k, v in block.items() if k != "series"}
     series = block.get("series") or [{}]
@@ -243,50 +375,69 @@ def _series(block: dict) -> list[dict]:
 def expand_study(name: str, block: dict) -> dict[str, Job]:
     """Jobs of one study block (already validated against the schema), keyed by job id.
 
-    List keys expand as a Cartesian product per series; seeds are grouped into
-    ``seeds_per_job`` per job. Every surface spec is built here, so an unresolvable size
-    raises :class:`InputError` naming the study, key and value before any job runs.
+    Keys the block leaves out take :func:`study_defaults`. List keys expand as a Cartesian
+    product per series; seeds are grouped into ``seeds_per_job`` per job. Every surface
+    spec is built here, so an unresolvable size raises :class:`InputError` naming the
+    study, key and value before any job runs.
     """
-    if name not in STUDIES:
-        raise InputError(f"unknown study {name!r}; known studies: {', '.join(STUDIES)}")
+    block = {**study_defaults(name), **block}
+    if name == defaults.MEASURED_STUDY:
+        return _expand_measured(block)
     if name == "channels":
-        job = ChannelsJob(**{k: block[k] for k in block})
+        job = ChannelsJob(**block)
         for p in job.surfaces():
             _check_spec(name, p, job.seed)
         return {job.job_id: job}
     jobs: dict[str, Job] = {}
     for s in _series(block):
         seeds = [int(v) for v in _as_list(s["seeds"])]
-        per = int(s.get("seeds_per_job", 1))
+        per = int(s["seeds_per_job"])
         groups = [tuple(seeds[i:i + per]) for i in range(0, len(seeds), per)]
-        ppl = float(s.get("points_per_lambda_s", 8))
+        ppl = float(s["points_per_lambda_s"])
         for model, gamma, hurst, size, eps_f in itertools.product(
-            _as_list(s.get("model", "elastic")), _as_list(s.get("gamma", 1.0)),
-            _as_list(s.get("hurst", 0.8)), _as_list(s.get("l_over_lambda_r", None)),
-            _as_list(s.get("eps_f", 1 / 16)),
+            _as_list(s["model"]), _as_list(s["gamma"]), _as_list(s["hurst"]),
+            _as_list(s["l_over_lambda_r"]), _as_list(s["eps_f"]),
         ):
-            size = default_l_over_lambda_r(float(gamma)) if size is None else float(size)
+            size = paper_l_over_lambda_r(float(gamma)) if size is None else float(size)
             p = SurfaceParams(gamma=float(gamma), hurst=float(hurst), l_over_lambda_r=size,
                               eps_f=float(eps_f), points_per_lambda_s=ppl)
             _check_spec(name, p, seeds[0])
             for g in groups:
                 if name in THRESHOLD_STUDIES:
-                    job = ThresholdJob(surface=p, model=model, seeds=g,
-                                       tol=float(s.get("tol", 2e-3)),
-                                       contact_tol=float(s.get("contact_tol", 1e-4)))
+                    job = ThresholdJob(surface=p, model=model, seeds=g, tol=float(s["tol"]),
+                                       contact_tol=float(s["contact_tol"]))
                 else:
-                    stars = s.get("a_c_star") or {}
-                    default = {"elastic": 0.4, "adhesive": 0.4, "bearing": 0.5}[model]
-                    adh = s.get("adhesion") or {}
-                    alt = s.get("a_c_star_alt", None)
+                    stars = {**defaults.A_C_STAR_THEORY, **s["a_c_star"]}
+                    alt = s["a_c_star_alt"]
                     job = LadderJob(
                         surface=p, model=model, seeds=g,
                         area_fractions=tuple(sorted(float(a) for a in s["area_fraction"])),
-                        a_c_star=float(stars.get(model, default)),
+                        a_c_star=float(stars[model]),
                         a_c_star_alt=None if alt is None else float(alt),
-                        **_adhesion_args(adh),
+                        area_tol=float(s["area_tol"]), **_adhesion_args(s["adhesion"]),
                     )
                 jobs.setdefault(job.job_id, job)
+    return jobs
+
+
+def _expand_measured(block: dict) -> dict[str, Job]:
+    """One :class:`LeakJob` per scan; a scan entry's keys override the study's."""
+    study = defaults.MEASURED_STUDY
+    shared = {k: v for k, v in block.items() if k != "scans"}
+    jobs: dict[str, Job] = {}
+    for entry in block["scans"]:
+        args = {**shared, **entry}
+        name = args.get("name") or Path(str(args["file"])).stem
+        args["name"] = name
+        if not Path(str(args["file"])).is_file():
+            raise InputError(f"config studies.{study}, scan {name!r}: file {args['file']!r} "
+                             f"does not exist (paths are relative to {Path.cwd()})")
+        if name in jobs:
+            raise InputError(f"config studies.{study}: two scans are named {name!r}")
+        try:
+            jobs[name] = LeakJob(**args)
+        except InputError as exc:
+            raise InputError(f"config studies.{study}, scan {name!r}: {exc}") from None
     return jobs
 
 
@@ -302,11 +453,12 @@ def _check_spec(study: str, p: SurfaceParams, seed: int) -> None:
 
 
 # Cost model (CPU seconds on one core of the development machine), calibrated with single
-# runs of `roughflow scene` (see docs/workflow.md): an elastic threshold bisection costs
-# about 2.4 s per seed at N = 256^2 grid points and grows like N^1.5 (the CG iterations
-# grow with resolution and anisotropy); a Reynolds solve about 1 s at 256^2, like N^1.1;
-# one warm-started contact solve of a ladder about 0.3 s at 128 x 256, like N^1.25.
-# A rough guide for resource requests and core-hour estimates, not a benchmark.
+# runs of `roughflow scene` (see docs/workflow.md): an elastic threshold search costs
+# about 2.4 s per seed at N = 256^2 grid points and grows like N^1.5 (FFTs of N log N
+# times a GFMD step count that grows with the bandwidth lambda_r / lambda_s); a Reynolds
+# solve about 1 s at 256^2, like N^1.1; one warm-started contact solve of a ladder about
+# 0.3 s at 128 x 256, like N^1.25. A rough guide for resource requests and core-hour
+# estimates, not a benchmark.
 def estimated_seconds(job: Job) -> float:
     """Estimated CPU seconds of ``job`` (plus ~3 s start-up per job)."""
     n = grid_points(job)

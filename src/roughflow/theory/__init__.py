@@ -5,7 +5,8 @@
 * ``closed_form`` (Eq. 16: elastic, adhesive, bearing);
 * ``persson_area``, ``persson_mean_gap``, ``persson_elastic_energy``,
   ``predict_conductance`` (Persson theory from the height spectrum);
-* ``conductivity_peklenik`` (anisotropy of the local conductivity).
+* ``conductivity_peklenik`` (anisotropy of the local conductivity);
+* ``gap_theory``: all of the above that a single gap field determines, in one call.
 
 Units: E* = 1, lengths in L, eta = 1, conductivities u^3/(12 eta) in L^3/eta.
 See ``docs/theory.md``.
@@ -24,6 +25,7 @@ from .effective_medium import (
     local_conductivity,
     noncontact_decomposition,
 )
+from .gap import GapTheory, gap_theory
 from .peklenik import (
     autocorrelation,
     conductivity_peklenik,
@@ -47,6 +49,7 @@ __all__ = [
     "EXPONENTS",
     "FORMS",
     "KINDS",
+    "GapTheory",
     "AnisotropicResult",
     "BruggemanResult",
     "DiscreteSpectrum",
@@ -62,6 +65,7 @@ __all__ = [
     "criticality_factor",
     "discrete_spectrum",
     "effective_dimension",
+    "gap_theory",
     "local_conductivity",
     "noncontact_decomposition",
     "peklenik_number",

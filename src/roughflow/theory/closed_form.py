@@ -12,11 +12,13 @@ from __future__ import annotations
 
 import numpy as np
 
+from roughflow.defaults import MODELS
 from roughflow.errors import InputError, require_positive
 
 from .effective_medium import _check_a_c_star
 
-KINDS = ("elastic", "adhesive", "bearing")
+#: Eq. 16 has one closed form per contact model.
+KINDS = MODELS
 #: critical exponent beta of sigma ~ Da'^beta near a_c* (bearing: 1 with a log correction)
 EXPONENTS = {"elastic": 69.0 / 20.0, "adhesive": 1.0, "bearing": 1.0}
 

@@ -1,14 +1,39 @@
-"""Helpers to build the self-describing per-job datasets."""
+"""Layout of the sweep's per-job datasets, and the values that analyses read from them.
+
+Every job dataset has the length-1 parameter dimensions :data:`PARAM_DIMS` (filled by the
+aggregation over jobs) followed by the job's own dimensions (seed, axis, step, ...).
+Parameter values are rounded to 12 significant digits (:func:`rnd`), so that values
+computed in different jobs land on one coordinate.
+"""
 
 from __future__ import annotations
+
+from typing import TYPE_CHECKING
 
 import numpy as np
 import xarray as xr
 
-from .jobs import PARAM_DIMS, SurfaceParams, rnd
+from .results import AXIS_COORD
+from .units import DIMENSIONLESS
 
-AXIS_COORD = ("axis", ["x", "y"], {"long_name": "flow / percolation direction (x = axis 0)"})
+if TYPE_CHECKING:
+    from roughflow.scenes.jobs import SurfaceParams
+
+#: Dimensions of every per-job dataset (length 1 in a job, filled by the aggregation).
+PARAM_DIMS = ("model", "gamma", "hurst", "eps_t", "eps_f")
+#: Fill value of integer variables (NaN cannot be stored in an integer).
 INT_FILL = -1
+#: The perimeter constant is calibrated on 4 to 16 points per lambda_s (docs/accuracy.md).
+CORRECTION_MIN_POINTS = 4.0
+
+__all__ = ["AXIS_COORD", "CORRECTION_MIN_POINTS", "INT_FILL", "PARAM_DIMS", "area_values",
+           "expand", "no_fill_on_coords", "param_coords", "rnd", "surface_vars",
+           "threshold_values", "var"]
+
+
+def rnd(v: float) -> float:
+    """``v`` rounded to 12 significant digits (stable coordinate values across jobs)."""
+    return float(f"{float(v):.12g}")
 
 
 def param_coords(p: SurfaceParams, model: str) -> dict:
@@ -16,13 +41,15 @@ def param_coords(p: SurfaceParams, model: str) -> dict:
     return {
         "model": ("model", [model], {"long_name": "contact model"}),
         "gamma": ("gamma", [rnd(p.gamma)],
-                  {"units": "1", "long_name": "Peklenik number (> 1: stretched along x)"}),
-        "hurst": ("hurst", [rnd(p.hurst)], {"units": "1", "long_name": "Hurst exponent H"}),
+                  {"units": DIMENSIONLESS,
+                   "long_name": "Peklenik number (> 1: stretched along x)"}),
+        "hurst": ("hurst", [rnd(p.hurst)],
+                  {"units": DIMENSIONLESS, "long_name": "Hurst exponent H"}),
         "eps_t": ("eps_t", [p.eps_t], {
-            "units": "1",
+            "units": DIMENSIONLESS,
             "long_name": "eps_t = max(sqrt(gamma), 1/sqrt(gamma)) lambda_r / L"}),
         "eps_f": ("eps_f", [rnd(p.eps_f)],
-                  {"units": "1", "long_name": "eps_f = lambda_s / lambda_r"}),
+                  {"units": DIMENSIONLESS, "long_name": "eps_f = lambda_s / lambda_r"}),
     }
 
 
@@ -34,6 +61,7 @@ def expand(values, extra_dims: tuple[str, ...]) -> tuple[tuple[str, ...], np.nda
 
 def var(values, extra_dims: tuple[str, ...], units: str, long_name: str,
         **attrs) -> xr.Variable:
+    """A job variable over PARAM_DIMS + ``extra_dims``; integers get the fill value -1."""
     dims, a = expand(values, extra_dims)
     v = xr.Variable(dims, a, {"units": units, "long_name": long_name, **attrs})
     if np.issubdtype(a.dtype, np.integer) or a.dtype == bool:
@@ -46,10 +74,11 @@ def surface_vars(p: SurfaceParams, seed: int) -> dict:
     """Grid and size of the job's surfaces (parameters that are not dimensions)."""
     spec = p.spec(seed)
     return {
-        "l_over_lambda_r": var(rnd(p.size), (), "1", "L / lambda_r (L: side of the unit cell)"),
-        "nx": var(np.int32(spec.nx), (), "1", "grid points along x"),
-        "ny": var(np.int32(spec.ny), (), "1", "grid points along y"),
-        "points_per_lambda_s": var(float(p.points_per_lambda_s), (), "1",
+        "l_over_lambda_r": var(rnd(p.size), (), DIMENSIONLESS,
+                               "L / lambda_r (L: side of the unit cell)"),
+        "nx": var(np.int32(spec.nx), (), DIMENSIONLESS, "grid points along x"),
+        "ny": var(np.int32(spec.ny), (), DIMENSIONLESS, "grid points along y"),
+        "points_per_lambda_s": var(float(p.points_per_lambda_s), (), DIMENSIONLESS,
                                    "grid points per shortest wavelength"),
     }
 
@@ -62,11 +91,7 @@ def no_fill_on_coords(ds: xr.Dataset) -> xr.Dataset:
     return ds
 
 
-#: the perimeter constant is calibrated on 4 to 16 points per lambda_s (docs/accuracy.md)
-CORRECTION_MIN_POINTS = 4.0
-
-
-def threshold_values(ds):
+def threshold_values(ds: xr.Dataset) -> xr.DataArray:
     """The a_c* to analyse: perimeter-corrected (first-order grid bias of the elastic
     contact area removed, docs/accuracy.md) where the grid has at least
     :data:`CORRECTION_MIN_POINTS` points per lambda_s, the range the constant is calibrated
@@ -80,7 +105,7 @@ def threshold_values(ds):
     return xr.where(fine & corrected.notnull(), corrected, raw).transpose(*raw.dims)
 
 
-def area_values(ds):
+def area_values(ds: xr.Dataset) -> xr.DataArray:
     """The contact area to plot sigma against: the perimeter-corrected ``a_c`` where the
     ladder stored one (elastic; the fixed-load correction is calibrated from 2 points per
     lambda_s up, error +0.004 at 2 points, docs/accuracy.md), the raw ``a_c`` elsewhere."""

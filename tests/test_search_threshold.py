@@ -1,5 +1,5 @@
 """Critical contact area a_c*: exact bearing sweep, bisection, elastic bracket (paper Sect.
-2.2 and 3.2; physics notes Sect. 4)."""
+2.2 and 3.2; docs/physics.md Sect. 4)."""
 
 from __future__ import annotations
 
@@ -9,13 +9,8 @@ import numpy as np
 import pytest
 
 from roughflow.errors import InputError
-from roughflow.percolation import (
-    Threshold,
-    ThresholdNotBracketed,
-    critical_open_count,
-    percolates,
-    threshold,
-)
+from roughflow.percolation import bearing_bracket, critical_open_count, percolates
+from roughflow.search import SearchOptions, Threshold, ThresholdNotBracketed, threshold
 from roughflow.surface import Surface, SurfaceSpec, generate
 
 os.environ.setdefault("ROUGHFLOW_FFT_THREADS", "1")
@@ -61,6 +56,9 @@ def test_bearing_bracket_is_one_cell_and_correct():
             assert t.a_hi - t.a_lo == pytest.approx(1 / h.size)
             assert percolates(_bearing_open(h, t.a_lo), axis)
             assert not percolates(_bearing_open(h, t.a_hi), axis)
+            # the search's result is the percolation layer's exact bracket
+            b = bearing_bracket(h, axis)
+            assert (b.a_lo, b.a_hi, b.tied) == (t.a_lo, t.a_hi, 1)
 
 
 def test_bearing_exact_sweep_agrees_with_plain_bisection():
@@ -69,8 +67,10 @@ def test_bearing_exact_sweep_agrees_with_plain_bisection():
     # within tol.
     s = _surface(seed=4)
     exact = threshold(s, model="bearing")
-    bis = threshold(s, model="bearing", exact_bearing=False, strategy="bisect", tol=2e-3)
-    pred = threshold(s, model="bearing", exact_bearing=False, strategy="predict", tol=2e-3)
+    bis = threshold(s, model="bearing", tol=2e-3,
+                    options=SearchOptions(exact_bearing=False, strategy="bisect"))
+    pred = threshold(s, model="bearing", tol=2e-3,
+                     options=SearchOptions(exact_bearing=False, strategy="predict"))
     for axis in (0, 1):
         for other in (bis[axis], pred[axis]):
             assert other.a_hi - other.a_lo <= 2e-3
@@ -81,8 +81,8 @@ def test_bearing_exact_sweep_agrees_with_plain_bisection():
 
 
 def test_bearing_mean_threshold_is_one_half():
-    # Self-duality of level sets of an isotropic random field: a_c* = 1/2 (physics notes
-    # 3.4). 10 seeds at L/lambda_r = 16, 512^2 (2 points per lambda_s). Measured spread of a
+    # Self-duality of level sets of an isotropic random field: a_c* = 1/2 (docs/physics.md
+    # Sect. 3.4). 10 seeds at L/lambda_r = 16, 512^2 (2 points per lambda_s). Measured spread of a
     # single-axis value 0.03 at this size (0.015 at L/lambda_r = 32); the tolerance is three
     # standard errors of the seed means, computed from the data, and must itself be small.
     vals = []
@@ -103,7 +103,7 @@ def test_bearing_ties_give_an_honest_bracket():
     flat = Surface.from_array(h)
     with pytest.raises(ThresholdNotBracketed, match="share the critical height"):
         threshold(flat, axis=0, model="bearing")
-    t = threshold(flat, axis=0, model="bearing", on_unbracketed="nan")
+    t = threshold(flat, axis=0, model="bearing", options=SearchOptions(on_unbracketed="nan"))
     assert not t.bracketed and np.isnan(t.a_c_star)
     assert t.a_hi - t.a_lo > 2e-3
     # the bracket is still true: all cells below the tie level open -> no span, tie open -> span
@@ -128,10 +128,11 @@ def test_elastic_bracket_is_verified_by_fresh_cold_solves(elastic_pair):
         assert isinstance(t, Threshold) and t.bracketed
         assert 0 < t.a_hi - t.a_lo <= 2e-3
         assert t.p_lo < t.p_hi
-        assert t.n_solves <= 12  # target of the issue for one (x, y) pair
+        assert t.n_solves <= 12  # the search's target for one (x, y) pair
         lo, hi = solve(s, t.p_lo, tol=1e-8), solve(s, t.p_hi, tol=1e-8)
         assert percolates(~lo.contact, axis) and not percolates(~hi.contact, axis)
-        # contact masks of the 1e-5 solves used by threshold() agree with 1e-8 solves
+        # contact masks of the 1e-4 solves used by threshold() agree with 1e-8 solves
+        # (docs/accuracy.md: a_c* moves by < 4e-5 between contact tolerances 1e-4 and 1e-8)
         assert abs(lo.area_fraction - t.a_lo) <= 1e-4
         assert abs(hi.area_fraction - t.a_hi) <= 1e-4
 
@@ -139,7 +140,7 @@ def test_elastic_bracket_is_verified_by_fresh_cold_solves(elastic_pair):
 def test_elastic_single_axis_and_bisection_agree_with_joint_call(elastic_pair):
     s, res = elastic_pair
     for axis in (0, 1):
-        one = threshold(s, axis, strategy="bisect", warm_start=False)
+        one = threshold(s, axis, options=SearchOptions(strategy="bisect", warm_start=False))
         # both are brackets of the same sharp event in a(p): they must overlap
         assert one.a_lo < res[axis].a_hi and res[axis].a_lo < one.a_hi
         assert abs(one.a_c_star - res[axis].a_c_star) <= 2e-3
@@ -148,12 +149,13 @@ def test_elastic_single_axis_and_bisection_agree_with_joint_call(elastic_pair):
 def test_elastic_unbracketed_pressure_range():
     s = _surface(seed=0, l_over_lambda_r=2)  # 64 x 64
     with pytest.raises(ThresholdNotBracketed, match="still spans"):
-        threshold(s, 0, p_range=(1e-4, 1e-2))
-    t = threshold(s, 0, p_range=(1e-4, 1e-2), on_unbracketed="nan")
+        threshold(s, 0, options=SearchOptions(pressure_range=(1e-4, 1e-2)))
+    t = threshold(s, 0, options=SearchOptions(pressure_range=(1e-4, 1e-2),
+                                              on_unbracketed="nan"))
     assert not t.bracketed and np.isnan(t.a_c_star) and np.isnan(t.a_hi)
     assert t.a_lo < 0.05  # the highest pressure tried gave a small, spanning contact
     with pytest.raises(ThresholdNotBracketed, match="does not span"):
-        threshold(s, 1, p_range=(3.0, 4.0))
+        threshold(s, 1, options=SearchOptions(pressure_range=(3.0, 4.0)))
 
 
 # ---- bad input -----------------------------------------------------------------------
@@ -161,14 +163,23 @@ def test_elastic_unbracketed_pressure_range():
 @pytest.mark.parametrize(("kwargs", "match"), [
     ({"tol": 0.0}, "tol"), ({"tol": -1e-3}, "tol"), ({"tol": 1.5}, "tol"),
     ({"axis": 2}, "axis"), ({"axis": "x"}, "axis"), ({"model": "plastic"}, "model"),
-    ({"strategy": "guess"}, "strategy"), ({"p_range": (0.5, 0.1)}, "p_range"),
-    ({"p_range": (-1.0, 1.0)}, "p_range"), ({"model": "adhesive"}, "adhesion"),
-    ({"on_unbracketed": "ignore"}, "on_unbracketed"), ({"max_solves": 1}, "max_solves"),
+    ({"model": "adhesive"}, "adhesion"), ({"options": {"tol": 1}}, "options"),
+    ({"options": SearchOptions(pressure_range=(-1.0, 1.0))}, "pressure_range"),
 ])
 def test_bad_arguments_raise_before_work(kwargs, match):
     s = Surface.from_array(np.random.default_rng(0).standard_normal((8, 8)))
     with pytest.raises(InputError, match=match):
         threshold(s, **kwargs)
+
+
+@pytest.mark.parametrize(("kwargs", "match"), [
+    ({"strategy": "guess"}, "strategy"), ({"pressure_range": (0.5, 0.1)}, "pressure_range"),
+    ({"on_unbracketed": "ignore"}, "on_unbracketed"), ({"max_solves": 1}, "max_solves"),
+    ({"contact_tol": 0.0}, "contact_tol"), ({"first_pressure": float("nan")}, "first_pressure"),
+])
+def test_bad_options_raise_on_construction(kwargs, match):
+    with pytest.raises(InputError, match=match):
+        SearchOptions(**kwargs)
 
 
 def test_surface_must_be_a_surface():
@@ -181,7 +192,7 @@ def test_surface_must_be_a_surface():
 @pytest.mark.slow
 def test_elastic_mean_threshold_gamma_1():
     # Paper: a_c* = 0.415 +- 0.01 in the large-system limit, "about 0.4" at its default
-    # size L/lambda_r = 4 (gamma = 1, H = 0.8, eps_f = 1/16); the issue asks for a mean in
+    # size L/lambda_r = 4 (gamma = 1, H = 0.8, eps_f = 1/16); the target is a mean in
     # 0.40-0.43. CI affords 10 seeds at 256^2 (4 points per lambda_s). The single-axis
     # spread is 0.03 at this size, so the 10-seed mean carries a standard error of about
     # 0.006, computed from the data; the band is widened by two of them. (Larger runs in

@@ -1,0 +1,119 @@
+"""``roughflow leak``: will this seal leak, and how much? (physical units)"""
+
+from __future__ import annotations
+
+import argparse
+from pathlib import Path
+
+from roughflow.defaults import BOUNDARY, BOUNDARY_METHODS, CONTACT_TOL, THRESHOLD_TOL
+from roughflow.errors import InputError
+
+from ._common import add_output
+
+
+def register(sub: argparse._SubParsersAction) -> None:
+    p = sub.add_parser(
+        "leak",
+        help="leak rate and sealing pressure of a surface in physical units",
+        description=(
+            "Press the rough surface of SURFACE.nc (from `roughflow import`, or a generated "
+            "one with --length-scale) onto a flat elastic counterface of contact modulus "
+            "--modulus at each nominal pressure of --pressures; print and write the relative "
+            "contact area, whether the fluid percolates along x and y, the conductances "
+            "sigma_x, sigma_y and the leak rates Q = sigma l dp / w for a seal of width w "
+            "(--seal-width, along the flow) and length l (--seal-length, across it) under the "
+            "fluid pressure drop dp (--fluid-pressure) with viscosity --viscosity, and the "
+            "sealing pressure along each axis (where the fluid stops percolating). "
+            "Quantities take units: 200GPa, 1mPa.s, 2mm; --pressures LO:HI:N gives N "
+            "logarithmically spaced values. The fluid pressure is taken small against the "
+            "contact pressure (it does not push the surfaces apart)."
+        ),
+    )
+    p.add_argument("surface", metavar="SURFACE.nc", help="surface file (roughflow import)")
+    p.add_argument("--modulus", required=True, help="contact modulus E*, e.g. 200GPa")
+    p.add_argument("--pressures", required=True, metavar="LO:HI:N",
+                   help="nominal contact pressures: LO:HI:N (log-spaced) or A,B,C")
+    p.add_argument("--fluid-pressure", required=True, help="pressure drop across the seal")
+    p.add_argument("--viscosity", required=True, help="fluid viscosity, e.g. 1mPa.s")
+    p.add_argument("--seal-width", required=True, help="seal width w along the flow, e.g. 2mm")
+    p.add_argument("--seal-length", required=True,
+                   help="seal length l across the flow (e.g. the circumference), e.g. 60mm")
+    p.add_argument("--length-scale", default=None,
+                   help="physical size of the cell side L, for a surface file without one "
+                        "(a generated surface)")
+    p.add_argument("--boundary", choices=BOUNDARY_METHODS, default=None,
+                   help=f"non-periodic treatment (default: {BOUNDARY} for a scan, periodic "
+                        "for a periodic surface; docs/measured.md)")
+    p.add_argument("--name", default=None, help="label of the surface (default: file stem)")
+    p.add_argument("--contact-tol", type=float, default=CONTACT_TOL,
+                   help=f"residual of each contact solve, gap error / rms height "
+                        f"({CONTACT_TOL:g})")
+    p.add_argument("--threshold-tol", type=float, default=THRESHOLD_TOL,
+                   help=f"width of the sealing bracket in contact area ({THRESHOLD_TOL:g})")
+    p.add_argument("--threads", type=int, default=None,
+                   help="FFT threads (default: env ROUGHFLOW_FFT_THREADS or 1)")
+    add_output(p)
+    p.set_defaults(func=run)
+
+
+def run(args: argparse.Namespace) -> None:
+    from roughflow.datasets import leak_dataset
+    from roughflow.io import read_surface, write_dataset
+    from roughflow.leak import check_pressures, leak_curve
+    from roughflow.units import Scales, parse_quantity, parse_range
+
+    # every quantity is checked before the surface is read and before any solve
+    modulus = parse_quantity(args.modulus, "pressure", "--modulus")
+    pressures = parse_range(args.pressures, "pressure", "--pressures")
+    fluid = parse_quantity(args.fluid_pressure, "pressure", "--fluid-pressure")
+    eta = parse_quantity(args.viscosity, "viscosity", "--viscosity")
+    width = parse_quantity(args.seal_width, "length", "--seal-width")
+    length = parse_quantity(args.seal_length, "length", "--seal-length")
+    given = (None if args.length_scale is None
+             else parse_quantity(args.length_scale, "length", "--length-scale"))
+    surface = read_surface(args.surface)
+    if surface.scan is not None and given is not None:
+        raise InputError(f"{args.surface} already records its length scale "
+                         f"({surface.scan.length_scale:g} m): drop --length-scale")
+    if surface.scan is None and given is None:
+        raise InputError(f"{args.surface} records no physical length (not from roughflow "
+                         "import): give --length-scale, the physical cell side L")
+    scales = Scales(length=surface.scan.length_scale if given is None else given,
+                    modulus=modulus, viscosity=eta)
+    p = check_pressures(scales.pressure_from_si(pressures))
+    curve = leak_curve(surface, p, boundary=args.boundary, contact_tol=args.contact_tol,
+                       threshold_tol=args.threshold_tol, threads=args.threads)
+    name = args.name or Path(args.surface).stem
+    ds = leak_dataset(curve, surface, scales=scales, fluid_pressure=fluid, seal_width=width,
+                      seal_length=length, name=name)
+    ds.attrs["surface_file"] = str(args.surface)
+    write_dataset(ds, args.output)
+    print(format_table(ds))
+
+
+def format_table(ds) -> str:
+    """The leak curve of a (one-scan) leak dataset as a text table."""
+    d = ds.isel(scan=0)
+    lines = [f"{d['scan'].item()}: boundary {ds.attrs['boundary']}, E* = "
+             f"{ds.attrs['ref_pressure_Pa']:.4g} Pa, dp = {ds.attrs['fluid_pressure_Pa']:.4g} "
+             f"Pa, eta = {ds.attrs['ref_viscosity_Pa_s']:.4g} Pa s, seal w = "
+             f"{ds.attrs['seal_width_m']:.4g} m, l = {ds.attrs['seal_length_m']:.4g} m",
+             f"{'p [Pa]':>10} {'a_c':>7} {'perc x':>6} {'perc y':>6} {'sigma_x':>10} "
+             f"{'sigma_y':>10} {'Q_x':>10} {'Q_y':>10}",
+             f"{'':>10} {'':>7} {'':>6} {'':>6} {'m^3/(Pa s)':>10} {'m^3/(Pa s)':>10} "
+             f"{'m^3/s':>10} {'m^3/s':>10}"]
+    for i in range(d.sizes["pressure"]):
+        r = d.isel(pressure=i)
+        c, q, pc = r["conductance"].values, r["leak_rate"].values, r["percolating"].values
+        lines.append(f"{float(r['pressure']):10.4g} {float(r['area_fraction']):7.4f} "
+                     f"{'yes' if pc[0] else 'no':>6} {'yes' if pc[1] else 'no':>6} "
+                     f"{c[0]:10.3e} {c[1]:10.3e} {q[0]:10.3e} {q[1]:10.3e}")
+    for k, a in enumerate(("x", "y")):
+        lo, hi = (float(d[v].values[k]) for v in ("sealing_pressure_lo", "sealing_pressure"))
+        star = float(d["a_c_star"].values[k])
+        lines.append(f"sealing pressure along {a}: between {lo:.4g} Pa and {hi:.4g} Pa "
+                     f"(a_c* = {star:.4f})")
+    msg = ds.attrs.get("sealing_messages", "none")
+    if msg != "none":
+        lines.append(f"note: {msg}")
+    return "\n".join(lines)

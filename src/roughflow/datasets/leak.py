@@ -1,0 +1,145 @@
+"""The dataset of a leak question (``roughflow leak``, the ``measured`` study).
+
+Dimensions ``scan`` (length 1 per file; the aggregation of a study concatenates scans),
+``pressure`` (the nominal contact pressures, coordinate in Pa) and ``axis`` (flow along x
+or y). The dimensionless results keep their reference units (L, E*, eta) with the SI
+values as attributes (:data:`~roughflow.datasets.units.REFERENCE_ATTRS`) and, since those
+differ between scans, also as variables over ``scan``; the physical answers (conductance,
+leak rate, sealing pressure) are stored in SI units as well.
+"""
+
+from __future__ import annotations
+
+from typing import TYPE_CHECKING
+
+import numpy as np
+import xarray as xr
+
+from .results import AXIS_COORD, AXIS_NAMES, spec_attrs
+from .units import (
+    CONDUCTANCE_SI,
+    DIMENSIONLESS,
+    FLOW_RATE_SI,
+    LENGTH_UNITS,
+    METRES,
+    PASCAL,
+    PRESSURE_UNITS,
+    RESIDUAL_UNITS,
+    SIGMA_UNITS,
+)
+
+if TYPE_CHECKING:
+    from roughflow.leak import LeakCurve
+    from roughflow.surface import Surface
+    from roughflow.units import Scales
+
+#: Fill value of the integer variables.
+INT_FILL = -1
+
+
+def _int(dims, values, attrs) -> xr.Variable:
+    v = xr.Variable(dims, np.asarray(values).astype(np.int32), attrs)
+    v.encoding = {"_FillValue": np.int32(INT_FILL), "dtype": "int32"}
+    return v
+
+
+def leak_dataset(curve: LeakCurve, surface: Surface, *, scales: Scales, fluid_pressure: float,
+                 seal_width: float, seal_length: float, name: str) -> xr.Dataset:
+    """The leak curve of ``surface`` in dimensionless and SI units (module docstring).
+
+    ``scales``: L (m), E* (Pa), eta (Pa s); ``fluid_pressure`` (Pa): the pressure drop
+    across the seal; ``seal_width`` (m, along the flow) and ``seal_length`` (m, across it);
+    ``name``: the scan's label (the ``scan`` coordinate).
+    """
+    from roughflow.units import leak_rate
+
+    conductance = scales.conductance_to_si(curve.sigma)
+    rate = leak_rate(conductance, fluid_pressure=fluid_pressure, seal_width=seal_width,
+                     seal_length=seal_length)
+    th = [curve.thresholds.get(a) for a in (0, 1)]
+
+    def thr(field: str) -> np.ndarray:
+        return np.array([[np.nan if t is None else float(getattr(t, field)) for t in th]])
+
+    sp, spa = ("scan", "pressure"), ("scan", "pressure", "axis")
+    sa = ("scan", "axis")
+    data = {
+        "pressure_dimensionless": (sp, curve.pressure[None], {
+            "units": PRESSURE_UNITS, "long_name": "nominal contact pressure in units of E* "
+                                                  "(the solver's pressure)"}),
+        "area_fraction": (sp, curve.area_fraction[None], {
+            "units": DIMENSIONLESS, "long_name": "relative contact area a_c"}),
+        "mean_gap": (sp, curve.mean_gap[None], {
+            "units": LENGTH_UNITS, "long_name": "mean interfacial gap"}),
+        "percolating": _int(spa, curve.percolating[None], {
+            "units": DIMENSIONLESS, "long_name": "1 if the fluid spans the analysed window "
+                                                 "along axis (the seal leaks)"}),
+        "sigma": (spa, curve.sigma[None], {
+            "units": SIGMA_UNITS, "long_name": "effective conductance u^3/(12 eta) along axis "
+                                               "(Eq. 4; 0 where the fluid does not span)"}),
+        "conductance": (spa, conductance[None], {
+            "units": CONDUCTANCE_SI, "long_name": "effective conductance along axis per unit "
+                                                  "width per unit pressure gradient"}),
+        "leak_rate": (spa, rate[None], {
+            "units": FLOW_RATE_SI,
+            "long_name": "volume leak rate Q = conductance * seal_length * fluid_pressure / "
+                         "seal_width for flow along axis"}),
+        "contact_iterations": _int(sp, curve.iterations[None], {
+            "units": DIMENSIONLESS, "long_name": "iterations of the contact solve"}),
+        "contact_residual": (sp, curve.residual[None], {
+            "units": RESIDUAL_UNITS, "long_name": "residual of the contact solve (largest gap "
+                                                  "error / rms height)"}),
+        "a_c_star": (sa, thr("a_c_star"), {
+            "units": DIMENSIONLESS, "long_name": "critical contact area a_c* where the fluid "
+                                                 "stops spanning along axis"}),
+        "sealing_pressure": (sa, scales.pressure_to_si(thr("p_hi")), {
+            "units": PASCAL, "long_name": "sealing pressure along axis: lowest nominal "
+                                          "pressure found sealed (the fluid no longer spans)"}),
+        "sealing_pressure_lo": (sa, scales.pressure_to_si(thr("p_lo")), {
+            "units": PASCAL, "long_name": "highest nominal pressure found leaking along axis "
+                                          "(the seal closes between this and "
+                                          "sealing_pressure)"}),
+        "bracketed": _int(sa, np.array([[0 if t is None else int(t.bracketed) for t in th]]), {
+            "units": DIMENSIONLESS, "long_name": "1 if the sealing search found both sides "
+                                                 "within its pressure range"}),
+        "length_scale": ("scan", [scales.length], {
+            "units": METRES, "long_name": "reference length L (lengths are in units of L)"}),
+        "modulus": ("scan", [scales.modulus], {
+            "units": PASCAL, "long_name": "contact modulus E* (pressures are in units of E*)"}),
+        "rms_gradient": ("scan", [curve.rms_gradient], {
+            "units": DIMENSIONLESS, "long_name": "rms gradient gbar of the surface"}),
+    }
+    coords = {
+        "scan": ("scan", [name], {"long_name": "scan"}),
+        "pressure": ("pressure", scales.pressure_to_si(curve.pressure), {
+            "units": PASCAL, "long_name": "nominal contact pressure"}),
+        "axis": ("axis", list(AXIS_NAMES[:2]), AXIS_COORD[2]),
+    }
+    ds = xr.Dataset(data, coords=coords)
+    ds["pressure"].encoding["_FillValue"] = None
+    messages = " | ".join(t.message for t in th if t is not None and t.message) or "none"
+    ds.attrs = {
+        **spec_attrs(surface), "title": "roughflow leak", "boundary": curve.boundary,
+        "boundary_description": BOUNDARY_TEXT.get(curve.boundary, curve.boundary),
+        **scales.attrs(),
+        "fluid_pressure_Pa": float(fluid_pressure), "seal_width_m": float(seal_width),
+        "seal_length_m": float(seal_length),
+        "pressure_reference": "dimensionless pressures are in units of E*; the surface keeps "
+                              f"its rms gradient gbar = {curve.rms_gradient:.6g}",
+        "window_nx": int(curve.window_shape[0]), "window_ny": int(curve.window_shape[1]),
+        "window_lx": curve.window_lx, "window_ly": curve.window_ly,
+        "lx": surface.lx, "ly": surface.ly, "sealing_messages": messages,
+        **curve.settings,
+    }
+    return ds
+
+
+#: One line per boundary method, for the datasets (roughflow.boundary has the details).
+BOUNDARY_TEXT = {
+    "mirror": "non-periodic scan mirror-tiled to 2x2; the scan's quadrant analysed with walls "
+              "across the flow",
+    "pad": "non-periodic scan padded by a flat region far below it (2x2 cell); the scan "
+           "analysed with walls across the flow",
+    "window": "scan solved as periodic; an interior window analysed with walls across the flow",
+    "periodic": "the surface taken as periodic",
+}

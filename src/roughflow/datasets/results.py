@@ -1,0 +1,164 @@
+"""xarray datasets of single results: a contact solve, a threshold search, a flow solve.
+
+The command line writes these, the scenes build on them, and a notebook can call them
+directly. Every variable has ``units`` and ``long_name``; scalars of the result and the
+surface's parameters are attributes.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Mapping
+from typing import TYPE_CHECKING
+
+import numpy as np
+import xarray as xr
+
+from .units import (
+    DIMENSIONLESS,
+    FLUID_PRESSURE_UNITS,
+    FLUX_UNITS,
+    LENGTH_UNITS,
+    PRESSURE_UNITS,
+    REF_LENGTH,
+    REFERENCE_ATTRS,
+    SIGMA_UNITS,
+    grid_coords,
+)
+
+if TYPE_CHECKING:
+    from roughflow.contact import Adhesion, ContactResult
+    from roughflow.flow import FlowResult
+    from roughflow.search import Threshold
+    from roughflow.surface import Surface
+
+AXIS_NAMES = ("x", "y")
+#: The ``axis`` coordinate of every per-direction variable.
+AXIS_COORD = ("axis", list(AXIS_NAMES), {"long_name": "flow / percolation direction "
+                                                      "(x = axis 0, y = axis 1)"})
+
+
+def spec_attrs(surface: Surface) -> dict:
+    """The surface's generation parameters as ``spec_*`` attributes, or for an imported
+    scan its provenance as ``scan_*`` attributes plus the reference length in metres
+    (empty for a bare height map)."""
+    out = {}
+    spec = getattr(surface, "spec", None)
+    if spec is not None:
+        out.update({f"spec_{k}": v for k, v in spec.as_attrs().items()})
+    scan = getattr(surface, "scan", None)
+    if scan is not None:
+        out.update({f"scan_{k}": v for k, v in scan.as_attrs().items()})
+        out[REFERENCE_ATTRS[REF_LENGTH][0]] = scan.length_scale
+    return out
+
+
+def contact_dataset(surface: Surface, result: ContactResult,
+                    adhesion: Adhesion | None = None) -> xr.Dataset:
+    """Gap, contact mask, contact pressure and heights on (x, y); scalars as attributes."""
+    nx, ny = surface.shape
+    ds = xr.Dataset(
+        {
+            "gap": (("x", "y"), result.gap,
+                    {"units": LENGTH_UNITS, "long_name": "interfacial gap u_g >= 0"}),
+            "contact": (("x", "y"), result.contact.astype(np.int8),
+                        {"units": DIMENSIONLESS, "long_name": "contact mask (1 = in contact)"}),
+            "contact_pressure": (("x", "y"), result.contact_pressure,
+                                 {"units": PRESSURE_UNITS,
+                                  "long_name": "local contact pressure (negative = tension)"}),
+            "heights": (("x", "y"), surface.heights,
+                        {"units": LENGTH_UNITS, "long_name": "height of the rigid rough surface"}),
+        },
+        coords=grid_coords(nx, ny, surface.lx, surface.ly),
+        attrs={"title": "roughflow contact", "lx": surface.lx, "ly": surface.ly,
+               "e_star": 1.0, **result.scalars(), **spec_attrs(surface)},
+    )
+    if adhesion is not None:
+        from roughflow.contact import adhesion_summary
+
+        ds.attrs["surface_energy"] = adhesion.surface_energy
+        ds.attrs["adhesion_range"] = adhesion.range
+        summary = adhesion_summary(surface.heights, surface.lx, surface.ly, adhesion)
+        ds.attrs.update({f"adhesion_{k}": v for k, v in summary.items()})
+    return ds
+
+
+#: Per-axis variables of a threshold: name -> (units, long_name).
+THRESHOLD_FIELDS = {
+    "a_c_star": (DIMENSIONLESS, "percolation threshold a_c* (relative contact area, "
+                                "midpoint of a_lo and a_hi)"),
+    "a_c_star_corrected": (DIMENSIONLESS, "a_c* with the perimeter correction of the contact "
+                                          "area (first-order grid bias removed; elastic "
+                                          "model; docs/accuracy.md)"),
+    "a_lo": (DIMENSIONLESS, "largest contact area at which the fluid still percolates"),
+    "a_hi": (DIMENSIONLESS, "smallest contact area at which the fluid no longer percolates"),
+    "p_lo": (PRESSURE_UNITS, "pressure of a_lo"),
+    "p_hi": (PRESSURE_UNITS, "pressure of a_hi"),
+    "n_solves": (DIMENSIONLESS, "contact solves of the threshold search"),
+    "bracketed": (DIMENSIONLESS, "1 if the threshold was bracketed within the pressure range"),
+}
+
+
+def threshold_dataset(results: Mapping[int, Threshold], surface: Surface | None = None, *,
+                      solve_log: bool = True) -> xr.Dataset:
+    """a_c*, its bracket and its pressures over ``axis`` (the axes in ``results``).
+
+    With ``solve_log`` the contact solves of the search are listed over ``solve``.
+    """
+    axes = sorted(results)
+    r = [results[a] for a in axes]
+    data = {}
+    for name, (units, long_name) in THRESHOLD_FIELDS.items():
+        values = np.asarray([getattr(t, name) for t in r])
+        if values.dtype == bool:
+            values = values.astype(np.int32)
+        data[name] = ("axis", values, {"units": units, "long_name": long_name})
+    ds = xr.Dataset(
+        data,
+        coords={"axis": ("axis", [AXIS_NAMES[a] for a in axes], AXIS_COORD[2])},
+        attrs={"title": "roughflow percolation threshold", "model": r[0].model,
+               "tol": r[0].tol, "n_solves": r[0].n_solves,
+               "messages": " | ".join(t.message for t in r if t.message) or "none"},
+    )
+    if surface is not None:
+        ds.attrs.update({"lx": surface.lx, "ly": surface.ly, **spec_attrs(surface)})
+    if solve_log and r[0].solves:
+        s = np.asarray(r[0].solves, dtype=float)
+        ds["solve_pressure"] = ("solve", s[:, 0], {"units": PRESSURE_UNITS,
+                                                   "long_name": "pressure of each contact solve"})
+        ds["solve_area_fraction"] = ("solve", s[:, 1], {
+            "units": DIMENSIONLESS, "long_name": "contact area of each contact solve"})
+        ds["solve_iterations"] = ("solve", s[:, 2].astype(np.int64), {
+            "units": DIMENSIONLESS, "long_name": "solver iterations of each contact solve"})
+        ds["solve_residual"] = ("solve", s[:, 3], {
+            "units": DIMENSIONLESS,
+            "long_name": "residual of each contact solve (gap error / rms height)"})
+    return ds
+
+
+def flow_dataset(results: Mapping[int, FlowResult], contact: np.ndarray, *, lx: float,
+                 ly: float, eta: float, tol: float) -> xr.Dataset:
+    """sigma per axis, the pressure and flux fields, and the solver diagnostics."""
+    nx, ny = contact.shape
+    out = xr.Dataset(coords=grid_coords(nx, ny, lx, ly))
+    out["contact"] = (("x", "y"), np.asarray(contact).astype(np.int8),
+                      {"units": DIMENSIONLESS, "long_name": "contact mask (1 = contact)"})
+    attrs = {"title": "roughflow flow", "lx": lx, "ly": ly, "eta": eta, "tol": tol}
+    for ax, r in results.items():
+        a = AXIS_NAMES[ax]
+        out[f"sigma_{a}"] = ((), r.sigma, {
+            "units": SIGMA_UNITS,
+            "long_name": f"effective conductance along {a}, Q L_{a} / (L_across dp) (Eq. 4)"})
+        out[f"pressure_{a}"] = (("x", "y"), r.pressure, {
+            "units": FLUID_PRESSURE_UNITS,
+            "long_name": f"fluid pressure for flow along {a} as a fraction of the pressure drop "
+                         "(inlet 1, outlet 0); NaN where no flow"})
+        for comp, field in (("x", r.flux_x), ("y", r.flux_y)):
+            out[f"flux_{comp}_{a}"] = (("x", "y"), field, {
+                "units": FLUX_UNITS,
+                "long_name": f"{comp} component of the flux density for flow along {a}"})
+        attrs.update({f"sigma_{a}": r.sigma, f"residual_{a}": r.residual,
+                      f"flux_imbalance_{a}": r.flux_imbalance, f"iterations_{a}": r.iterations,
+                      f"percolating_{a}": r.percolating, f"method_{a}": r.method,
+                      f"sigma_flux_{a}": r.sigma_flux})
+    out.attrs = attrs
+    return out

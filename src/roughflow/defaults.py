@@ -1,0 +1,114 @@
+"""Default values and fixed names shared by the library, the command line and the workflow.
+
+Each value is written here once; the argparse options, the job dataclasses and the sweep
+expansion read it, and ``tests/test_defaults.py`` checks the workflow schema against it.
+This module imports nothing, so the command line can build its help without the numerical
+stack. Units: E* = 1, rms gradient 1, cell side L = 1, viscosity eta = 1.
+"""
+
+from __future__ import annotations
+
+#: Contact models: hard-wall elastic, elastic with short-range adhesion, bearing area.
+MODELS = ("elastic", "adhesive", "bearing")
+
+# --- surfaces (docs/physics.md Sect. 2) --------------------------------------------------
+#: Peklenik number (> 1 stretches along x).
+GAMMA = 1.0
+#: Hurst exponent H.
+HURST = 0.8
+#: eps_f = lambda_s / lambda_r (the paper's default).
+EPS_F = 1 / 16
+#: Grid points per shortest wavelength lambda_s of a generated surface.
+POINTS_PER_LAMBDA_S = 8.0
+#: lx / ly of a unit-area cell.
+ASPECT = 1.0
+#: Roll-off of the height spectrum: smooth (1 + (q/q_r)^2)^-(1+H), as in the paper, or a
+#: plateau below q_r.
+ROLLOFF_FORMS = ("smooth", "plateau")
+#: L / lambda_r in the easy direction when none is given: the paper's
+#: L / lambda_r = PAPER_SIZE_FACTOR max(sqrt(gamma), 1/sqrt(gamma)).
+PAPER_SIZE_FACTOR = 4.0
+
+# --- contact (docs/contact.md) -------------------------------------------------------------
+#: Contact methods: mass-weighted GFMD with FIRE (the default) and Polonsky-Keer CG.
+CONTACT_METHODS = ("gfmd", "cg")
+#: Residual of a single contact solve: largest gap error over the rms height.
+CONTACT_TOL = 1e-6
+#: The adhesion that reproduces the paper's adhesive case (docs/contact.md "Adhesion"):
+#: surface energy gamma_s / v_ela^full ...
+ADHESION_SURFACE_ENERGY_RATIO = 0.1
+#: ... and interaction range rho / lambda_s.
+ADHESION_RANGE_OVER_LAMBDA_S = 0.42
+
+# --- percolation thresholds (docs/percolation.md) ----------------------------------------
+#: The paper's large-system critical contact area of elastic contacts, 0.415 +- 0.01: the
+#: reference line of the threshold figures and the first target of a threshold search.
+A_C_STAR_PAPER = 0.415
+#: Largest allowed a_hi - a_lo of a threshold bracket.
+THRESHOLD_TOL = 2e-3
+#: Contact-solve tolerance inside a threshold search (docs/accuracy.md: a_c* moves by less
+#: than 4e-5 against a 1e-8 solve).
+THRESHOLD_CONTACT_TOL = 1e-4
+#: Pressures (E* gbar) a threshold search may try.
+THRESHOLD_PRESSURE_RANGE = (1e-4, 4.0)
+#: Cap on the contact solves of one threshold search.
+THRESHOLD_MAX_SOLVES = 40
+#: Threshold search strategies: aimed refinement (default) and plain bisection (reference).
+THRESHOLD_STRATEGIES = ("predict", "bisect")
+
+# --- theory lines of the flow studies (paper Fig. 5-7) ------------------------------------
+#: a_c* of the Bruggeman and closed-form lines per model: the paper draws its Fig. 5 theory
+#: lines with 0.4 for elastic and adhesive contacts; the bearing model's exact threshold is 1/2.
+A_C_STAR_THEORY = {"elastic": 0.4, "adhesive": 0.4, "bearing": 0.5}
+#: The second isotropic Bruggeman line of Fig. 5a.
+A_C_STAR_ALT = 0.5
+#: Largest |a_c - target| of a pressure-ladder step (contact area, absolute).
+LADDER_AREA_TOL = 5e-3
+
+# --- Reynolds flow (docs/flow.md) ----------------------------------------------------------
+#: Relative residual of the linear flow solve.
+FLOW_TOL = 1e-8
+#: Linear solvers of the flow: auto (direct for small systems, else rs), Ruge-Stueben AMG
+#: + CG, smoothed aggregation + CG, sparse direct, plain CG.
+FLOW_METHODS = ("auto", "rs", "sa", "direct", "cg")
+
+# --- measured scans and leak questions (docs/measured.md) ---------------------------------
+#: Detrending of an imported scan: none, plane (mean and tilt) or curvature (plane plus a
+#: quadratic), fitted to the defined points.
+DETREND_MODES = ("none", "plane", "curvature")
+SCAN_DETREND = "plane"
+#: Missing points of a scan: refuse the scan (none), Laplace interpolation from the defined
+#: neighbours (harmonic), or the lowest defined height (min: open, so conservative for leaks).
+FILL_METHODS = ("none", "harmonic", "min")
+SCAN_FILL = "none"
+#: How a non-periodic scan meets the periodic solvers (roughflow.boundary): mirror-tiled,
+#: padded by a flat region far below it, an interior window of the scan solved as periodic,
+#: or the scan taken as periodic.
+BOUNDARY_METHODS = ("mirror", "pad", "window", "periodic")
+#: The default for non-periodic scans: the smallest effect on a_c, a_c* and sigma measured on
+#: windows cut from periodic surfaces (benchmarks/nonperiodic.py, docs/measured.md).
+BOUNDARY = "window"
+#: The "window" method drops this fraction of the scan at each side.
+WINDOW_MARGIN = 0.125
+
+# --- the sweep workflow (config/config.yaml) ----------------------------------------------
+#: Studies that compute thresholds only (paper Fig. 2-4).
+THRESHOLD_STUDIES = ("threshold_vs_gamma", "threshold_vs_size", "threshold_vs_hurst")
+#: Studies with a pressure ladder and flow solves (paper Fig. 5-7).
+FLOW_STUDIES = ("flow_isotropic", "flow_anisotropic")
+#: Leak curves of measured scans in physical units (docs/measured.md); not a paper figure.
+MEASURED_STUDY = "measured"
+#: Every study, one figure each (channels: paper Fig. 1).
+STUDIES = ("channels", *THRESHOLD_STUDIES, *FLOW_STUDIES, MEASURED_STUDY)
+#: L / lambda_r of a flow study when none is given (the paper's Fig. 5).
+FLOW_L_OVER_LAMBDA_R = 16.0
+#: The channels scene (paper Fig. 1): H = 0.8, gamma = 4, lambda_r = 0.25, lambda_s = 0.025
+#: on unit-area cells, pressed to a_c = 0.4.
+CHANNELS = {"gamma": 4.0, "hurst": 0.8, "l_over_lambda_r": 4.0, "eps_f": 0.1,
+            "area_fraction": 0.4, "model": "elastic", "seed": 1, "points_per_lambda_s": 8.0}
+
+# --- finite-size scaling (paper Fig. 3) ----------------------------------------------------
+#: Correlation-length exponent of 2D percolation.
+NU_PERCOLATION = 4 / 3
+#: Bootstrap resamples over seeds for the fit errors.
+FIT_BOOTSTRAP = 200

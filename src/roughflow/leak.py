@@ -1,0 +1,174 @@
+"""The leak question of a surface: contact, percolation and Reynolds flow over a list of
+nominal pressures, and the sealing pressure (paper Sect. 2.2, Eq. 3-4; docs/measured.md).
+
+:func:`leak_curve` works in the dimensionless system (E* = 1, lengths in L, eta = 1;
+pressures in E*, which is E* gbar for generated surfaces with rms gradient 1); the
+physical conversion is :class:`roughflow.units.Scales` and
+:func:`roughflow.units.leak_rate`, and :func:`roughflow.datasets.leak_dataset` writes both.
+
+A non-periodic scan goes through :func:`roughflow.boundary.embed` (default
+:data:`~roughflow.defaults.BOUNDARY`); a periodic surface is analysed as it is. A nominal
+pressure high enough to close every gap is an answer (a_c = 1, no percolation, sigma = 0),
+not a failure.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+import logging
+from dataclasses import dataclass, field
+
+import numpy as np
+
+from roughflow import flow
+from roughflow.boundary import Embedding, embed
+from roughflow.contact import ContactResult, solve
+from roughflow.defaults import (
+    BOUNDARY,
+    CONTACT_TOL,
+    FLOW_TOL,
+    THRESHOLD_CONTACT_TOL,
+    THRESHOLD_PRESSURE_RANGE,
+    THRESHOLD_TOL,
+)
+from roughflow.errors import InputError, require_positive
+from roughflow.percolation import percolates
+from roughflow.search import SearchOptions, Threshold, first_pressure, threshold
+from roughflow.surface import Surface, rms_gradient
+
+log = logging.getLogger(__name__)
+
+
+@dataclass(frozen=True, eq=False)
+class LeakCurve:
+    """Results per nominal pressure (arrays over ``pressure``; ``[:, axis]`` per flow
+    direction, 0 = x, 1 = y) and the sealing thresholds, all dimensionless.
+
+    pressure: nominal contact pressures on the analysed surface (E*).
+    area_fraction, mean_gap: relative contact area and mean gap (L) of the analysed window.
+    percolating: whether the fluid spans the window along each axis.
+    sigma: effective conductance per axis, u^3/(12 eta) in L^3/eta (0 without percolation).
+    iterations, residual: of each contact solve.
+    thresholds: per axis, the percolation threshold search on the same window; its
+        ``p_lo`` / ``p_hi`` are nominal pressures (E*): the fluid spans at ``p_lo`` and not
+        at ``p_hi``, so the seal closes along that axis between them.
+    boundary: the non-periodic treatment (:mod:`roughflow.boundary`).
+    rms_gradient: of the surface (its pressures are in E*; E* gbar only when it is 1).
+    window_lx, window_ly, window_shape: size (L) and grid of the analysed window.
+    """
+
+    pressure: np.ndarray
+    area_fraction: np.ndarray
+    mean_gap: np.ndarray
+    percolating: np.ndarray
+    sigma: np.ndarray
+    iterations: np.ndarray
+    residual: np.ndarray
+    thresholds: dict[int, Threshold]
+    boundary: str
+    rms_gradient: float
+    window_lx: float
+    window_ly: float
+    window_shape: tuple[int, int]
+    settings: dict = field(default_factory=dict)
+
+
+def check_pressures(pressures) -> np.ndarray:
+    """Nominal pressures as a strictly increasing array of positive numbers."""
+    p = np.atleast_1d(np.asarray(pressures, dtype=np.float64))
+    if p.ndim != 1 or p.size == 0:
+        raise InputError(f"pressures must be a non-empty list, got {pressures!r}")
+    for v in p:
+        require_positive("pressure", v)
+    if np.any(np.diff(p) <= 0):
+        raise InputError(f"pressures must increase strictly, got {p.tolist()}")
+    return p
+
+
+def default_boundary(surface: Surface) -> str:
+    """:data:`~roughflow.defaults.BOUNDARY` for a non-periodic scan, ``"periodic"`` else."""
+    return "periodic" if surface.periodic else BOUNDARY
+
+
+def sealing_search(emb: Embedding, *, gbar: float, tol: float = THRESHOLD_TOL,
+                   contact_tol: float = THRESHOLD_CONTACT_TOL,
+                   threads: int | None = None) -> dict[int, Threshold]:
+    """Percolation thresholds of the analysed window along x and y, with the bracketing
+    pressures converted to nominal ones. The search's pressure range and first pressure
+    (:mod:`roughflow.defaults`, in E* gbar) are scaled by the surface's rms gradient
+    ``gbar`` and the embedding's load factor; an unbracketed axis gets NaN and a message."""
+    scale = gbar * emb.load_factor
+    opts = SearchOptions(
+        pressure_range=tuple(scale * p for p in THRESHOLD_PRESSURE_RANGE),
+        first_pressure=scale * first_pressure("elastic"), contact_tol=contact_tol,
+        on_unbracketed="nan", observe=emb.observe, periodic=emb.periodic)
+    res = threshold(emb.surface, None, tol=tol, options=opts, threads=threads)
+    return {ax: dataclasses.replace(t, p_lo=emb.nominal_pressure(t.p_lo),
+                                    p_hi=emb.nominal_pressure(t.p_hi))
+            for ax, t in res.items()}
+
+
+def leak_curve(surface: Surface, pressures, *, boundary: str | None = None,
+               contact_tol: float = CONTACT_TOL, flow_tol: float = FLOW_TOL,
+               threshold_tol: float = THRESHOLD_TOL,
+               threshold_contact_tol: float = THRESHOLD_CONTACT_TOL,
+               sealing: bool = True, threads: int | None = None) -> LeakCurve:
+    """Contact, percolation along x and y, and Reynolds conductances of ``surface`` at each
+    nominal pressure (E*, increasing; each solve warm-starts from the previous one), and
+    the sealing thresholds (:func:`sealing_search`, skipped with ``sealing=False``).
+
+    ``boundary``: :data:`~roughflow.defaults.BOUNDARY_METHODS` (default
+    :func:`default_boundary`). Bad input raises :class:`InputError` before any solve; a
+    contact or flow solve that misses its tolerance raises ``ConvergenceError``.
+    """
+    p = check_pressures(pressures)
+    if not isinstance(surface, Surface):
+        raise InputError(f"surface must be a roughflow Surface, got {type(surface).__name__}")
+    for name, v in (("contact_tol", contact_tol), ("flow_tol", flow_tol),
+                    ("threshold_tol", threshold_tol),
+                    ("threshold_contact_tol", threshold_contact_tol)):
+        require_positive(name, v)
+    method = default_boundary(surface) if boundary is None else boundary
+    emb = embed(surface, method)
+    gbar = (surface.scan.rms_gradient if surface.scan is not None else
+            rms_gradient(surface.heights, surface.lx, surface.ly, periodic=surface.periodic))
+    curve = pressure_curve(emb, p, contact_tol=contact_tol, flow_tol=flow_tol,
+                           threads=threads)
+    thresholds = (sealing_search(emb, gbar=gbar, tol=threshold_tol,
+                                 contact_tol=threshold_contact_tol, threads=threads)
+                  if sealing else {})
+    return LeakCurve(
+        pressure=p, **curve, thresholds=thresholds, boundary=method,
+        rms_gradient=float(gbar), window_lx=emb.lx, window_ly=emb.ly,
+        window_shape=emb.shape,
+        settings={"contact_tol": contact_tol, "flow_tol": flow_tol,
+                  "threshold_tol": threshold_tol,
+                  "threshold_contact_tol": threshold_contact_tol})
+
+
+def pressure_curve(emb: Embedding, pressures: np.ndarray, *, contact_tol: float = CONTACT_TOL,
+                   flow_tol: float = FLOW_TOL, threads: int | None = None) -> dict:
+    """Contact area, mean gap, percolation and conductances of the window of ``emb`` at
+    each nominal pressure (increasing; warm-started solves): the :class:`LeakCurve` fields
+    ``area_fraction``, ``mean_gap``, ``percolating``, ``sigma``, ``iterations``,
+    ``residual``."""
+    n = len(pressures)
+    area, gap, its, res = (np.zeros(n) for _ in range(4))
+    spans = np.zeros((n, 2), dtype=bool)
+    sigma = np.zeros((n, 2))
+    state: ContactResult | None = None
+    for i, pn in enumerate(pressures):
+        state = solve(emb.surface, emb.cell_pressure(pn), tol=contact_tol, init=state,
+                      threads=threads)
+        seen = emb.observe(state)
+        area[i], gap[i] = seen.area_fraction, seen.mean_gap
+        its[i], res[i] = state.iterations, state.residual
+        for ax in (0, 1):
+            spans[i, ax] = percolates(~seen.contact, ax, periodic=emb.periodic)
+            if spans[i, ax]:
+                sigma[i, ax] = flow.solve(seen.gap, ax, lx=emb.lx, ly=emb.ly, tol=flow_tol,
+                                          periodic=emb.periodic).sigma
+        log.info("p = %.4g E*: a_c = %.4f, percolating x %d y %d, sigma = %.3e, %.3e", pn,
+                 area[i], spans[i, 0], spans[i, 1], sigma[i, 0], sigma[i, 1])
+    return {"area_fraction": area, "mean_gap": gap, "percolating": spans, "sigma": sigma,
+            "iterations": its.astype(np.int64), "residual": res}

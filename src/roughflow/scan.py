@@ -1,0 +1,282 @@
+"""Measured topographies: reading scans into dimensionless :class:`~roughflow.surface.Surface`s.
+
+:func:`read_scan` (also :func:`roughflow.surface.from_scan`) reads every format that
+SurfaceTopography reads (the optional extra ``pip install roughflow[topography]``, imported
+here only) and prepares the heights in this order: crop to a grid window, convert to metres,
+detrend (fitted to the defined points), fill missing points (a scan with missing points is
+refused unless a fill is chosen), and scale to the dimensionless system: lengths in units
+of L = sqrt(lx ly) of the scan, whose value in metres is ``ScanInfo.length_scale``. The
+scan keeps its own rms gradient, so its pressures are in units of E* (not E* gbar).
+
+The array helpers (:func:`detrend`, :func:`fill_missing`) work on plain numpy arrays.
+"""
+
+from __future__ import annotations
+
+import math
+import os
+import re
+from pathlib import Path
+
+import numpy as np
+import scipy.sparse as sp
+import scipy.sparse.linalg as spla
+
+from roughflow.defaults import DETREND_MODES, FILL_METHODS, SCAN_DETREND, SCAN_FILL
+from roughflow.errors import InputError
+from roughflow.surface import ScanInfo, Surface, rms_gradient
+
+
+def detrend(heights: np.ndarray, lx: float, ly: float, mode: str,
+            defined: np.ndarray | None = None) -> np.ndarray:
+    """``heights`` minus the least-squares fit of ``mode`` over the ``defined`` points:
+    ``"none"`` (nothing removed), ``"plane"`` (mean and tilt) or ``"curvature"`` (plane
+    plus x^2, xy, y^2). Undefined points get the same correction (their values are
+    whatever they hold)."""
+    if mode not in DETREND_MODES:
+        raise InputError(f"detrend must be one of {DETREND_MODES}, got {mode!r}")
+    if mode == "none":
+        return np.array(heights, dtype=np.float64)
+    nx, ny = heights.shape
+    # coordinates scaled to [-1, 1] keep the normal equations well conditioned
+    x = np.linspace(-1.0, 1.0, nx)[:, None] * np.ones((1, ny))
+    y = np.ones((nx, 1)) * np.linspace(-1.0, 1.0, ny)[None, :]
+    basis = [np.ones_like(x), x, y]
+    if mode == "curvature":
+        basis += [x * x, x * y, y * y]
+    a = np.stack([b.ravel() for b in basis], axis=1)
+    ok = np.ones(heights.size, dtype=bool) if defined is None else defined.ravel()
+    coef, *_ = np.linalg.lstsq(a[ok], heights.ravel()[ok], rcond=None)
+    return heights - (a @ coef).reshape(heights.shape)
+
+
+def fill_missing(heights: np.ndarray, missing: np.ndarray, method: str) -> np.ndarray:
+    """``heights`` with the ``missing`` points filled: ``"harmonic"`` solves Laplace's
+    equation on them with the defined neighbours as boundary values (non-periodic, smooth;
+    exact for a plane inside the scan, zero normal slope at its edges); ``"min"`` sets them
+    to the lowest defined height (open channels: a conservative choice for leakage)."""
+    if method not in FILL_METHODS or method == "none":
+        raise InputError(f"fill must be one of {FILL_METHODS[1:]}, got {method!r}")
+    h = np.array(heights, dtype=np.float64)
+    miss = np.asarray(missing, dtype=bool)
+    if not miss.any():
+        return h
+    if miss.all():
+        raise InputError("every point of the scan is missing: nothing to fill from")
+    if method == "min":
+        h[miss] = h[~miss].min()
+        return h
+    nx, ny = h.shape
+    idx = np.full(h.shape, -1, dtype=np.int64)
+    cells = np.argwhere(miss)
+    idx[miss] = np.arange(len(cells))
+    rows, cols, vals = [], [], []
+    rhs = np.zeros(len(cells))
+    diag = np.zeros(len(cells))
+    for dx, dy in ((1, 0), (-1, 0), (0, 1), (0, -1)):
+        jx, jy = cells[:, 0] + dx, cells[:, 1] + dy
+        inside = (jx >= 0) & (jx < nx) & (jy >= 0) & (jy < ny)
+        k = np.flatnonzero(inside)
+        diag[k] += 1.0
+        nb = idx[jx[k], jy[k]]
+        unknown = nb >= 0
+        rows.append(k[unknown])
+        cols.append(nb[unknown])
+        vals.append(-np.ones(int(unknown.sum())))
+        np.add.at(rhs, k[~unknown], h[jx[k[~unknown]], jy[k[~unknown]]])
+    rows.append(np.arange(len(cells)))
+    cols.append(np.arange(len(cells)))
+    vals.append(diag)
+    m = sp.csr_matrix((np.concatenate(vals), (np.concatenate(rows), np.concatenate(cols))),
+                      shape=(len(cells), len(cells)))
+    # every 4-connected region of missing points borders a defined point (not all are
+    # missing), so the matrix is non-singular
+    h[miss] = spla.spsolve(m.tocsc(), rhs)
+    return h
+
+
+_CROP = re.compile(r"^\s*(\d*)\s*:\s*(\d*)\s*,\s*(\d*)\s*:\s*(\d*)\s*$")
+
+
+def parse_crop(text: str | None, shape: tuple[int, int]) -> tuple[slice, slice] | None:
+    """Grid window "i0:i1,j0:j1" (Python slices, ends may be left out) -> slices."""
+    if text is None or str(text) == "none":
+        return None
+    m = _CROP.match(str(text))
+    if m is None:
+        raise InputError(f"crop must look like 'i0:i1,j0:j1' (grid indices), got {text!r}")
+    v = [int(g) if g else None for g in m.groups()]
+    sx, sy = slice(v[0], v[1]), slice(v[2], v[3])
+    nx = len(range(*sx.indices(shape[0])))
+    ny = len(range(*sy.indices(shape[1])))
+    if nx < 4 or ny < 4:
+        raise InputError(f"crop {text!r} leaves {nx} x {ny} points of the {shape[0]} x "
+                         f"{shape[1]} scan; at least 4 x 4 are needed")
+    return sx, sy
+
+
+def _length_factor(unit, name: str) -> float:
+    """Metres per ``unit`` (a pint-readable length unit such as "nm", "um", "mm")."""
+    from roughflow.units import parse_quantity
+
+    return parse_quantity(f"1 {unit}", "length", name)
+
+
+def _sizes(size, unit: str | None) -> tuple[float, float]:
+    """Physical size (metres) from ``size``: a length or a pair (quantities with units, or
+    numbers in ``unit``)."""
+    from roughflow.units import parse_quantity
+
+    parts = list(size) if isinstance(size, (tuple, list)) else str(size).split(",")
+    if len(parts) == 1:
+        parts = parts * 2
+    if len(parts) != 2:
+        raise InputError(f"size must be one length or two (lx, ly), got {size!r}")
+    out = []
+    for p in parts:
+        try:
+            number = float(p)
+        except (TypeError, ValueError):
+            number = None
+        if number is not None:
+            if unit is None:
+                raise InputError(f"size {size!r} has no unit: give one (e.g. '500nm') or unit=")
+            p = f"{number!r} {unit}"
+        out.append(parse_quantity(p, "length", "size"))
+    return out[0], out[1]
+
+
+def _open(path: Path):
+    try:
+        from SurfaceTopography import open_topography
+    except ImportError:
+        raise InputError("reading scans needs SurfaceTopography: pip install "
+                         "'roughflow[topography]'") from None
+    try:
+        reader = open_topography(str(path))
+    except Exception as exc:  # the readers raise many types for files they cannot read
+        raise InputError(f"{str(path)!r} is not a topography that SurfaceTopography can read "
+                         f"({type(exc).__name__}: {exc})") from None
+    # the NASA SRTM reader has no header to check: it takes any file of 2 n^2 bytes (a
+    # 32-byte text file reads as a 4 x 4 map), so it is trusted only for .hgt files
+    if type(reader).__name__ == "HGTReader" and path.suffix.lower() != ".hgt":
+        raise InputError(f"{str(path)!r} is not a topography that SurfaceTopography can read "
+                         "(only the header-less NASA SRTM reader took it; rename it to .hgt "
+                         "if it is one)")
+    return reader
+
+
+def _channel(reader, channel):
+    channels = reader.channels
+    if channel is None:
+        return reader.default_channel
+    for c in channels:
+        if str(channel) in (c.name, str(c.index)):
+            return c
+    names = ", ".join(f"{c.index}: {c.name}" for c in channels)
+    raise InputError(f"channel {channel!r} not in the scan (channels: {names})")
+
+
+def read_scan(path: str | os.PathLike, *, size=None, unit: str | None = None,
+              height_unit: str | None = None, detrend_mode: str = SCAN_DETREND,
+              fill: str = SCAN_FILL, crop: str | None = None, channel=None,
+              periodic: bool = False) -> Surface:
+    """Read a measured topography into a dimensionless :class:`Surface` with
+    :class:`~roughflow.surface.ScanInfo`.
+
+    size: physical size where the file gives none: one length (square) or two, as
+        quantities ("500nm", ("0.126mm", "0.094mm")) or numbers in ``unit``.
+    unit: length unit of the file's lateral sizes and heights where it gives none.
+    height_unit: unit of the heights where the file gives none and it differs from
+        ``unit``.
+    detrend_mode: ``"none"``, ``"plane"`` or ``"curvature"`` (:func:`detrend`).
+    fill: ``"none"`` (a scan with missing points is refused), ``"harmonic"`` or ``"min"``
+        (:func:`fill_missing`); the number filled is recorded.
+    crop: grid window "i0:i1,j0:j1" kept (e.g. to cut a border of missing points).
+    channel: name or index of the data channel (default: the file's height channel).
+    periodic: the scan is periodic (e.g. a simulated one): no boundary treatment later.
+
+    Every check happens before the heights are processed; bad input raises
+    :class:`InputError` naming the value.
+    """
+    path = Path(path)
+    if not path.is_file():
+        raise InputError(f"scan file {str(path)!r} does not exist")
+    if detrend_mode not in DETREND_MODES:
+        raise InputError(f"detrend must be one of {DETREND_MODES}, got {detrend_mode!r}")
+    if fill not in FILL_METHODS:
+        raise InputError(f"fill must be one of {FILL_METHODS}, got {fill!r}")
+    reader = _open(path)
+    ch = _channel(reader, channel)
+    if ch.dim != 2 or not ch.is_uniform:
+        raise InputError(f"{str(path)!r} channel {ch.name!r} is a {ch.dim}D "
+                         f"{'uniform' if ch.is_uniform else 'non-uniform'} topography; "
+                         "roughflow needs a 2D map on a uniform grid")
+    file_unit, file_size = ch.unit, ch.physical_sizes
+    if file_unit is not None and (unit is not None or height_unit is not None):
+        raise InputError(f"{str(path)!r} already gives its unit ({file_unit}): drop "
+                         f"unit={unit!r} / height_unit={height_unit!r}")
+    if file_size is not None and size is not None:
+        raise InputError(f"{str(path)!r} already gives its size {tuple(file_size)} "
+                         f"{file_unit or ''}: drop size={size!r}")
+    if file_unit is None and unit is None:
+        raise InputError(f"{str(path)!r} does not give its length unit: pass unit= "
+                         "(e.g. 'nm'; CLI --unit)")
+    if file_size is None and size is None:
+        raise InputError(f"{str(path)!r} does not give its physical size: pass size= "
+                         "(e.g. '500nm' or '0.126mm,0.094mm'; CLI --size)")
+    lateral = _length_factor(file_unit or unit, "unit")
+    if file_size is not None:
+        lx_m, ly_m = (float(v) * lateral for v in file_size)
+        if not (math.isfinite(lx_m) and math.isfinite(ly_m) and lx_m > 0 and ly_m > 0):
+            raise InputError(f"{str(path)!r} gives the size {tuple(file_size)}: not positive")
+    else:
+        lx_m, ly_m = _sizes(size, unit)
+    vertical = lateral if height_unit is None else _length_factor(height_unit, "height_unit")
+    window = parse_crop(crop, tuple(ch.nb_grid_pts))
+
+    kw = {} if file_size is not None else {"physical_sizes": tuple(float(v) / lateral for v in
+                                                                   (lx_m, ly_m))}
+    if file_unit is None:
+        kw["unit"] = unit
+    try:
+        topo = ch.topography(**kw)
+        raw = topo.heights()
+    except Exception as exc:
+        raise InputError(f"cannot read the heights of {str(path)!r} "
+                         f"({type(exc).__name__}: {exc})") from None
+    missing = np.ma.getmaskarray(raw) | ~np.isfinite(np.ma.getdata(raw))
+    h = np.array(np.ma.getdata(raw), dtype=np.float64) * vertical
+    nx0, ny0 = h.shape
+    if window is not None:
+        h, missing = h[window], missing[window]
+        lx_m *= h.shape[0] / nx0
+        ly_m *= h.shape[1] / ny0
+    n_missing = int(missing.sum())
+    if n_missing and fill == "none":
+        raise InputError(f"{str(path)!r} has {n_missing} missing points "
+                         f"({100 * n_missing / missing.size:.2g} % of {h.shape[0]} x "
+                         f"{h.shape[1]}): choose a fill ({', '.join(FILL_METHODS[1:])}) "
+                         "or crop them away")
+    if n_missing == missing.size:
+        raise InputError(f"{str(path)!r} has no defined point in the window kept")
+    h[missing] = 0.0
+    h = detrend(h, lx_m, ly_m, detrend_mode, defined=~missing)
+    if n_missing:
+        h = fill_missing(h, missing, fill)
+    if np.ptp(h) == 0:
+        raise InputError(f"{str(path)!r} is flat after detrending ({detrend_mode}): "
+                         "no roughness to analyse")
+    length = math.sqrt(lx_m * ly_m)
+    lx, ly = lx_m / length, ly_m / length
+    h /= length
+    info = ScanInfo(
+        source=str(path), reader=str(reader.name()), channel=str(ch.name),
+        length_scale=length, rms_gradient=rms_gradient(h, lx, ly, periodic=periodic),
+        detrend=detrend_mode, fill=fill, filled=n_missing,
+        crop="none" if window is None else
+        f"{window[0].start or 0}:{window[0].stop or nx0},{window[1].start or 0}:"
+        f"{window[1].stop or ny0}",
+        periodic=bool(periodic))
+    surface = Surface.from_array(h, lx=lx, ly=ly)
+    return Surface(heights=surface.heights, lx=surface.lx, ly=surface.ly, scan=info)

@@ -1,0 +1,35 @@
+"""Searches that drive contact solves: the load for a target contact area, and the critical
+contact area a_c* at which fluid percolation stops.
+
+- :func:`threshold` (:mod:`.critical`): a_c* along x and y from one shared, warm-started
+  sequence of contact solves (exact single pass for the bearing model).
+- :class:`LoadSearch`, :func:`load_for_area` (:mod:`.load`): loads for target areas on one
+  surface, from the contact law (:mod:`roughflow.contact.law`) and the solved states.
+
+This layer sits above ``contact`` and ``percolation``, which depend on neither it nor
+each other.
+"""
+
+from .critical import (
+    SearchOptions,
+    SolveRecord,
+    Threshold,
+    ThresholdNotBracketed,
+    first_pressure,
+    threshold,
+)
+from .load import AreaSolve, LoadSearch, Point, load_for_area, warm_start
+
+__all__ = [
+    "AreaSolve",
+    "LoadSearch",
+    "Point",
+    "SearchOptions",
+    "SolveRecord",
+    "Threshold",
+    "ThresholdNotBracketed",
+    "first_pressure",
+    "load_for_area",
+    "threshold",
+    "warm_start",
+]

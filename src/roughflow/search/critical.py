@@ -1,0 +1,496 @@
+"""Critical contact area a_c* per flow direction (paper Sect. 2.2 and 3.2).
+
+a_c*(axis) is the relative contact area at which the fluid (open cells, 4-connected) stops
+spanning the cell along ``axis`` (open boundaries along it, periodic across).
+
+- Bearing model: exact. Contact is the top fraction of heights, so the open set grows from
+  the lowest cell up; one union-find pass over the cells sorted by height gives the
+  critical number of open cells (:func:`roughflow.percolation.bearing_bracket`). The
+  bracket is one cell (1/N) wide, wider only where heights tie.
+- Elastic and adhesive models: a bracket in pressure refined with warm-started contact
+  solves until the contact areas at its two ends differ by at most ``tol``; both axes come
+  from one shared sequence of solves. Each loop picks the bracket to work on
+  (:func:`_pick`), proposes the contact area to aim at (:func:`_propose`) and asks the
+  load search (:mod:`roughflow.search.load`) for the load that should give it. With the
+  default strategy ``"predict"`` the proposal comes from a first-order prediction of a_c*
+  taken from a solved state: its cells ordered from the most open (largest gap) to the most
+  closed (largest contact pressure) are swept with union-find
+  (:func:`roughflow.percolation.predicted_thresholds`). f(a) = prediction - a is > 0 on every
+  spanning state and < 0 on every blocked one, so once both sides are known the secant root
+  of f lies inside the bracket; the solve aims just past it, and plain bisection takes over
+  after repeated misses. ``strategy="bisect"`` is plain bisection in a_c, the reference.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+import logging
+import math
+from collections.abc import Callable
+from dataclasses import dataclass, field
+from typing import NamedTuple
+
+import numpy as np
+
+from roughflow.accuracy import PERIMETER_C, perimeter_term
+from roughflow.contact import ContactResult, solve
+from roughflow.contact.law import ContactLaw
+from roughflow.defaults import (
+    A_C_STAR_PAPER,
+    MODELS,
+    THRESHOLD_CONTACT_TOL,
+    THRESHOLD_MAX_SOLVES,
+    THRESHOLD_PRESSURE_RANGE,
+    THRESHOLD_STRATEGIES,
+    THRESHOLD_TOL,
+)
+from roughflow.errors import ConvergenceError, InputError, require_positive
+from roughflow.percolation import (
+    bearing_bracket,
+    check_axis,
+    open_first_order,
+    percolates,
+    predicted_thresholds,
+)
+from roughflow.surface import Surface
+
+from .load import load_for_area, timed_solve, warm_start
+
+log = logging.getLogger(__name__)
+
+STRATEGIES = THRESHOLD_STRATEGIES
+
+# Tuning of the target proposal, measured over 20 seeds on 256^2 and 512^2 surfaces
+# (docs/percolation.md): inverse quadratic interpolation and one-sided secant steps did not
+# save solves over these choices.
+#: Consecutive solves on the unintended side of the predicted root before bisecting.
+MISSES_BEFORE_BISECTION = 3
+#: Distance (in units of tol) by which a two-sided target is placed past the predicted root;
+#: it doubles after each miss.
+AIM_OFFSET = 0.3
+#: A two-sided target stays at least this fraction of the bracket away from its ends.
+MIN_BRACKET_STEP = 0.05
+#: One-sided: overshoot the predicted distance to the threshold by this factor (the
+#: first-order predictions are good to a few tens of per cent) ...
+OVERSHOOT = 1.25
+#: ... plus this many tolerances (doubling after each miss).
+ONE_SIDED_OFFSET = 0.5
+#: One-sided step of plain bisection (doubling after each miss), in contact area.
+BISECT_STEP = 0.05
+
+
+class ThresholdNotBracketed(InputError):
+    """The fluid spans (or never spans) over the whole allowed pressure range."""
+
+
+class SolveRecord(NamedTuple):
+    """One contact solve of a threshold search."""
+
+    pressure: float
+    area_fraction: float
+    iterations: int
+    residual: float
+
+
+@dataclass(frozen=True)
+class SearchOptions:
+    """How a threshold search runs (the defaults are the measured choices).
+
+    strategy: ``"predict"`` (aimed refinement) or ``"bisect"`` (plain bisection in a_c, the
+        naive reference; with ``warm_start=False`` and one axis per call it is the cold
+        baseline).
+    pressure_range: pressures (E* gbar) the search may try; a surface whose fluid spans at
+        the top or never spans at the bottom is unbracketed.
+    first_pressure: the first pressure tried; default the contact law's load for
+        :data:`~roughflow.defaults.A_C_STAR_PAPER`.
+    contact_tol: tolerance of each contact solve (largest gap error / rms height).
+    method: contact method passed to :func:`roughflow.contact.solve` (None: its default).
+    max_solves: cap on the contact solves; exceeding it raises :class:`ConvergenceError`.
+    warm_start: start each solve from the solved states around it.
+    exact_bearing: the bearing model's exact sweep; False bisects in the area (validation).
+    on_unbracketed: ``"raise"`` :class:`ThresholdNotBracketed`, or ``"nan"``: return a
+        result with ``bracketed=False`` and a NaN ``a_c_star``.
+    observe: maps a solved state to the state whose contact area and percolation count
+        (e.g. the window of a non-periodic scan inside its solver cell,
+        :meth:`roughflow.boundary.Embedding.observe`); default the solved state itself.
+        Warm starts keep using the solved states. Elastic and adhesive models only.
+    periodic: the observed state is periodic across the flow (default), or closed by
+        walls there (False: a non-periodic scan); see :func:`roughflow.percolation.percolates`.
+    """
+
+    strategy: str = "predict"
+    pressure_range: tuple[float, float] = THRESHOLD_PRESSURE_RANGE
+    first_pressure: float | None = None
+    contact_tol: float = THRESHOLD_CONTACT_TOL
+    method: str | None = None
+    max_solves: int = THRESHOLD_MAX_SOLVES
+    warm_start: bool = True
+    exact_bearing: bool = True
+    on_unbracketed: str = "raise"
+    observe: Callable[[ContactResult], ContactResult] | None = None
+    periodic: bool = True
+
+    def __post_init__(self) -> None:
+        if self.strategy not in STRATEGIES:
+            raise InputError(f"strategy must be one of {STRATEGIES}, got {self.strategy!r}")
+        if self.on_unbracketed not in ("raise", "nan"):
+            raise InputError("on_unbracketed must be 'raise' or 'nan', got "
+                             f"{self.on_unbracketed!r}")
+        n = self.max_solves
+        if isinstance(n, bool) or not isinstance(n, (int, np.integer)) or n < 2:
+            raise InputError(f"max_solves must be an integer >= 2, got {n!r}")
+        try:
+            p_min, p_max = (float(v) for v in self.pressure_range)
+        except (TypeError, ValueError):
+            raise InputError("pressure_range must be a pair (p_min, p_max), got "
+                             f"{self.pressure_range!r}") from None
+        if not (math.isfinite(p_min) and math.isfinite(p_max) and p_min < p_max):
+            raise InputError("pressure_range must be finite with p_min < p_max, got "
+                             f"{self.pressure_range!r}")
+        require_positive("contact_tol", self.contact_tol)
+        if self.first_pressure is not None and not math.isfinite(float(self.first_pressure)):
+            raise InputError(f"first_pressure must be finite, got {self.first_pressure!r}")
+
+
+@dataclass(frozen=True)
+class Threshold:
+    """Critical contact area for fluid flow along ``axis`` (0 = x, 1 = y).
+
+    The fluid spans at ``a_lo`` (pressure ``p_lo``) and does not at ``a_hi`` (``p_hi``);
+    ``a_c_star`` is the midpoint. Pressures are in E* gbar (NaN for the bearing model, which
+    is parameterised by the area itself). ``n_solves`` counts the contact solves of the
+    whole search (shared between the axes when both were asked for); ``solves`` lists them.
+    ``bracketed`` is False when the allowed pressure range did not contain the threshold
+    (only with ``on_unbracketed="nan"``; then ``a_c_star`` is NaN and only the side that
+    was found is set).
+    ``a_c_star_corrected`` removes the first-order grid bias of the elastic contact area
+    (:func:`roughflow.accuracy.perimeter_corrected_area` of both bracketing states;
+    docs/accuracy.md). For the bearing model the cell count of a level set is unbiased and
+    it equals ``a_c_star``; for the adhesive model the constant is not calibrated: NaN.
+    """
+
+    axis: int
+    a_c_star: float
+    a_lo: float
+    a_hi: float
+    p_lo: float
+    p_hi: float
+    n_solves: int
+    model: str
+    tol: float
+    bracketed: bool = True
+    message: str = ""
+    solves: tuple[SolveRecord, ...] = field(default=(), repr=False)
+    a_c_star_corrected: float = float("nan")
+
+    @property
+    def width(self) -> float:
+        return self.a_hi - self.a_lo
+
+
+def first_pressure(model: str = "elastic") -> float:
+    """First pressure of a search: the contact law's load for the paper's a_c*."""
+    return ContactLaw(model).control(A_C_STAR_PAPER)
+
+
+# -------------------------------------------------------------------------------------------
+# solved states and brackets
+# -------------------------------------------------------------------------------------------
+
+@dataclass
+class _Sample:
+    """A solved state: ``load`` (pressure, or area for the bearing model) gave ``area``."""
+
+    load: float
+    area: float
+    spans: dict[int, bool]
+    state: ContactResult | None = None
+    predictor: Callable[[], dict[int, float]] | None = None  # computed on first use
+    perimeter: float = float("nan")
+    _pred: dict[int, float] | None = None
+
+    @property
+    def pred(self) -> dict[int, float]:
+        """Predicted a_c* per axis (first-order union-find sweep of this state)."""
+        if self._pred is None:
+            self._pred = self.predictor() if self.predictor is not None else {}
+        return self._pred
+
+
+def _bracket(samples: list[_Sample], ax: int) -> tuple[_Sample | None, _Sample | None]:
+    """(highest-load spanning state below the blocked one, lowest-load blocked state)."""
+    his = [q for q in samples if not q.spans[ax]]
+    hi = min(his, key=lambda q: q.load) if his else None
+    los = [q for q in samples if q.spans[ax] and (hi is None or q.load < hi.load)]
+    lo = max(los, key=lambda q: q.load) if los else None
+    return lo, hi
+
+
+class _Work(NamedTuple):
+    """An axis still to refine: its bracket width (inf while one side is unknown)."""
+
+    width: float
+    axis: int
+    lo: _Sample | None
+    hi: _Sample | None
+    distance: float = 0.0  # one-sided: predicted distance of a_c* from the known side
+
+
+def _pending(samples: list[_Sample], axes, tol: float, load_range, strategy: str,
+             unbracketed: dict) -> list[_Work]:
+    """Axes whose bracket is still wider than ``tol``; records unbracketable axes."""
+    todo = []
+    for ax in axes:
+        if ax in unbracketed:
+            continue
+        lo, hi = _bracket(samples, ax)
+        if lo is not None and hi is not None:
+            if hi.area - lo.area > tol:
+                todo.append(_Work(hi.area - lo.area, ax, lo, hi))
+        elif lo is None and hi is not None and hi.load <= load_range[0]:
+            unbracketed[ax] = (lo, hi, f"the fluid does not span along axis {ax} even at "
+                               f"the lowest allowed pressure {load_range[0]:g} "
+                               f"(a_c = {hi.area:.4g})")
+        elif hi is None and lo is not None and lo.load >= load_range[1]:
+            unbracketed[ax] = (lo, hi, f"the fluid still spans along axis {ax} at the "
+                               f"highest allowed pressure {load_range[1]:g} "
+                               f"(a_c = {lo.area:.4g})")
+        else:
+            q = lo if lo is not None else hi
+            dist = abs(q.pred[ax] - q.area) if strategy == "predict" else 0.0
+            todo.append(_Work(math.inf, ax, lo, hi, dist))
+    return todo
+
+
+def _pick(todo: list[_Work]) -> _Work:
+    """An open-ended bracket first (the one predicted nearest), else the widest."""
+    open_ended = [w for w in todo if w.width == math.inf]
+    if open_ended:
+        return min(open_ended, key=lambda w: (w.distance, w.axis))
+    return max(todo, key=lambda w: (w.width, -w.axis))
+
+
+def _propose(w: _Work, *, tol: float, misses: int, strategy: str) -> tuple[float, bool | None]:
+    """(target contact area, expected spanning of the new state or None for bisection)."""
+    lo, hi, ax = w.lo, w.hi, w.axis
+    step = 2.0**misses
+    if lo is not None and hi is not None:
+        if strategy == "bisect" or misses >= MISSES_BEFORE_BISECTION:
+            return 0.5 * (lo.area + hi.area), None
+        f_lo, f_hi = lo.pred[ax] - lo.area, hi.pred[ax] - hi.area
+        root = lo.area + f_lo * (hi.area - lo.area) / (f_lo - f_hi)
+        off = AIM_OFFSET * tol * step
+        below, above = root - off, root + off
+        want = hi.area - below < above - lo.area  # True: aim for a new spanning state
+        target = below if want else above
+        margin = MIN_BRACKET_STEP * w.width
+        return min(max(target, lo.area + margin), hi.area - margin), want
+    if hi is None:  # only spanning states so far: go up
+        if strategy == "bisect":
+            target = lo.area + BISECT_STEP * step
+        else:
+            d = max(lo.pred[ax] - lo.area, 0.0)
+            target = lo.area + OVERSHOOT * d + ONE_SIDED_OFFSET * tol * step
+        return min(target, 0.5 * (1.0 + lo.area)), False
+    if strategy == "bisect":  # only blocked states so far: go down
+        target = hi.area - BISECT_STEP * step
+    else:
+        d = max(hi.area - hi.pred[ax], 0.0)
+        target = hi.area - OVERSHOOT * d - ONE_SIDED_OFFSET * tol * step
+    return max(target, 0.5 * hi.area), True
+
+
+def _assemble(samples: list[_Sample], axes, unbracketed: dict, *, model: str, tol: float,
+              on_unbracketed: str, loads_are_pressures: bool) -> dict[int, Threshold]:
+    """One :class:`Threshold` per axis from the solved states."""
+    n = len(samples)
+    records = tuple(SolveRecord(q.load, q.area, getattr(q.state, "iterations", 0),
+                                float(getattr(q.state, "residual", 0.0))) for q in samples)
+    nan = float("nan")
+
+    def pressure(q: _Sample | None) -> float:
+        return q.load if q is not None and loads_are_pressures else nan
+
+    out = {}
+    for ax in axes:
+        if ax in unbracketed:
+            lo, hi, msg = unbracketed[ax]
+            if on_unbracketed == "raise":
+                raise ThresholdNotBracketed(msg + f" after {n} contact solves")
+            out[ax] = Threshold(
+                axis=ax, a_c_star=nan, a_lo=lo.area if lo else nan,
+                a_hi=hi.area if hi else nan, p_lo=pressure(lo), p_hi=pressure(hi),
+                n_solves=n, model=model, tol=tol, bracketed=False, message=msg,
+                solves=records)
+            continue
+        lo, hi = _bracket(samples, ax)
+        corrected = 0.5 * (lo.area + hi.area) - 0.5 * PERIMETER_C * (lo.perimeter + hi.perimeter)
+        out[ax] = Threshold(
+            axis=ax, a_c_star=0.5 * (lo.area + hi.area), a_lo=lo.area, a_hi=hi.area,
+            p_lo=pressure(lo), p_hi=pressure(hi), n_solves=n, model=model, tol=tol,
+            solves=records, a_c_star_corrected=corrected if model == "elastic" else nan)
+    return out
+
+
+def _refine(evaluate: Callable[[float, ContactResult | None], _Sample], axes, *, tol: float,
+            first: float, load_range: tuple[float, float], law: ContactLaw,
+            options: SearchOptions, model: str, loads_are_pressures: bool):
+    samples: list[_Sample] = []
+    misses = dict.fromkeys(axes, 0)  # consecutive solves that missed the intended side
+    expected: tuple[int, bool] | None = None  # (axis, spanning the last solve aimed for)
+    unbracketed: dict = {}
+
+    def run(load: float) -> None:
+        init = warm_start(samples, load) if options.warm_start else None
+        samples.append(evaluate(load, init))
+
+    run(min(max(first, load_range[0]), load_range[1]))
+    while True:
+        if expected is not None:
+            ax, want = expected
+            misses[ax] = misses[ax] + 1 if samples[-1].spans[ax] != want else 0
+            expected = None
+        todo = _pending(samples, axes, tol, load_range, options.strategy, unbracketed)
+        if not todo:
+            break
+        if len(samples) >= options.max_solves:
+            w, ax = max((t.width, t.axis) for t in todo)
+            tried = ", ".join(f"({q.load:.4g}, {q.area:.4g})" for q in samples[-4:])
+            raise ConvergenceError(
+                f"threshold along axis {ax} not resolved to tol={tol:g} within "
+                f"max_solves={options.max_solves} contact solves; last (load, a_c): {tried}; "
+                "residual = bracket width", residual=float(w), iterations=len(samples))
+        work = _pick(todo)
+        lo, hi = work.lo, work.hi
+        if lo is not None and hi is not None and hi.load - lo.load <= 1e-12 * hi.load:
+            raise ConvergenceError(
+                f"contact area jumps from {lo.area:.6g} to {hi.area:.6g} between pressures "
+                f"{lo.load:.12g} and {hi.load:.12g}: threshold along axis {work.axis} cannot "
+                f"be resolved to tol={tol:g}", residual=float(work.width),
+                iterations=len(samples))
+        target, want = _propose(work, tol=tol, misses=misses[work.axis],
+                                strategy=options.strategy)
+        if want is not None:
+            expected = (work.axis, want)
+        bounds = (lo.load if lo is not None else load_range[0],
+                  hi.load if hi is not None else load_range[1])
+        run(load_for_area(target, samples, law, bounds=bounds))
+    return _assemble(samples, axes, unbracketed, model=model, tol=tol,
+                     on_unbracketed=options.on_unbracketed,
+                     loads_are_pressures=loads_are_pressures)
+
+
+# -------------------------------------------------------------------------------------------
+# public entry point
+# -------------------------------------------------------------------------------------------
+
+def _bearing_exact(heights: np.ndarray, axes, tol: float, on_unbracketed: str):
+    out = {}
+    for ax in axes:
+        b = bearing_bracket(heights, ax)
+        ok = b.tied == 1 or b.a_hi - b.a_lo <= tol  # one cell: exact at grid resolution
+        msg = ""
+        if not ok:
+            msg = (f"{b.tied} cells share the critical height {b.height!r}: the threshold "
+                   f"along axis {ax} is only known to lie in [{b.a_lo:.6g}, {b.a_hi:.6g}], "
+                   f"wider than tol={tol:g}")
+            if on_unbracketed == "raise":
+                raise ThresholdNotBracketed(msg)
+        a = 0.5 * (b.a_lo + b.a_hi) if ok else float("nan")
+        out[ax] = Threshold(axis=ax, a_c_star=a, a_lo=b.a_lo, a_hi=b.a_hi, p_lo=float("nan"),
+                            p_hi=float("nan"), n_solves=0, model="bearing", tol=tol,
+                            bracketed=ok, message=msg, a_c_star_corrected=a)
+    return out
+
+
+def threshold(
+    surface: Surface,
+    axis: int | None = None,
+    *,
+    model: str = "elastic",
+    tol: float = THRESHOLD_TOL,
+    adhesion=None,
+    options: SearchOptions | None = None,
+    threads: int | None = None,
+) -> Threshold | dict[int, Threshold]:
+    """Critical contact area a_c* for fluid flow along ``axis`` (0 = x, 1 = y).
+
+    ``axis=None`` returns ``{0: Threshold, 1: Threshold}`` from one shared sequence of
+    contact solves. ``tol`` is the largest allowed ``a_hi - a_lo``. ``model``: ``"elastic"``
+    (default), ``"adhesive"`` (needs ``adhesion=Adhesion(...)``) or ``"bearing"``.
+    ``options``: :class:`SearchOptions` (strategy, pressure range, contact tolerance, ...).
+    Every contact solve logs one line (load, area, iterations, residual, seconds) at INFO.
+    """
+    if not isinstance(surface, Surface):
+        raise InputError(f"surface must be a roughflow Surface, got {type(surface).__name__}")
+    axes = (0, 1) if axis is None else (check_axis(axis),)
+    if model not in MODELS:
+        raise InputError(f"model must be one of {MODELS}, got {model!r}")
+    tol = require_positive("tol", tol)
+    if tol >= 1:
+        raise InputError(f"tol must be below 1 (a contact-area difference), got {tol!r}")
+    opts = SearchOptions() if options is None else options
+    if not isinstance(opts, SearchOptions):
+        raise InputError(f"options must be SearchOptions, got {type(opts).__name__}")
+    if model == "elastic" and opts.pressure_range[0] <= 0:
+        raise InputError("pressure_range must be positive for the elastic model, got "
+                         f"{opts.pressure_range!r}")
+    if model == "adhesive" and adhesion is None:
+        raise InputError("model='adhesive' needs adhesion=Adhesion(surface_energy=, range=)")
+    heights = surface.heights
+    shape = heights.shape
+    law = ContactLaw(model)
+
+    def sample(r: ContactResult, load: float, open_first: np.ndarray | None,
+               pressure: np.ndarray | None) -> _Sample:
+        seen = r if opts.observe is None else opts.observe(r)
+        if seen is not r:
+            pressure = seen.contact_pressure
+        opn = ~seen.contact
+        spans = {ax: percolates(opn, ax, periodic=opts.periodic) for ax in axes}
+        predictor = None
+        if opts.strategy == "predict":
+            def predictor() -> dict[int, float]:
+                # periodic union-find even with walls: the prediction only aims the solves
+                order = (np.argsort(-open_first, axis=None) if open_first is not None
+                         else open_first_order(seen.gap, seen.contact, pressure))
+                return predicted_thresholds(order, seen.contact.shape, axes)
+        perimeter = float("nan")
+        if model == "elastic":
+            lx = surface.lx * seen.contact.shape[0] / shape[0]
+            ly = surface.ly * seen.contact.shape[1] / shape[1]
+            perimeter = perimeter_term(seen.contact, lx, ly)
+        return _Sample(load=float(load), area=float(seen.area_fraction), spans=spans, state=r,
+                       predictor=predictor, perimeter=perimeter)
+
+    if model == "bearing":
+        if opts.observe is not None or not opts.periodic:
+            raise InputError("observe= and periodic=False are for the elastic and adhesive "
+                             "models (the bearing model has no solver cell)")
+        if opts.exact_bearing:
+            res = _bearing_exact(np.asarray(heights, dtype=np.float64), axes, tol,
+                                 opts.on_unbracketed)
+            return res if axis is None else res[axes[0]]
+
+        def evaluate_bearing(a: float, init) -> _Sample:
+            return sample(solve(surface, model="bearing", area_fraction=a), a, -heights, None)
+
+        res = _refine(evaluate_bearing, axes, tol=tol, first=0.5, load_range=law.bounds,
+                      law=law, options=dataclasses.replace(opts, warm_start=False),
+                      model=model, loads_are_pressures=False)
+        return res if axis is None else res[axes[0]]
+
+    kwargs = {"model": model, "method": opts.method, "adhesion": adhesion, "threads": threads,
+              "tol": opts.contact_tol}
+
+    def contact_at(p: float, init: ContactResult | None) -> ContactResult:
+        return solve(surface, p, init=init, **kwargs)
+
+    def evaluate(p: float, init: ContactResult | None) -> _Sample:
+        r = timed_solve(contact_at, p, init, what=f"threshold ({model}) solve")
+        return sample(r, p, None, r.contact_pressure)
+
+    first = first_pressure(model) if opts.first_pressure is None else float(opts.first_pressure)
+    res = _refine(evaluate, axes, tol=tol, first=first, load_range=opts.pressure_range, law=law,
+                  options=opts, model=model, loads_are_pressures=True)
+    return res if axis is None else res[axes[0]]

@@ -1,0 +1,179 @@
+"""Physical units: parsing quantities and converting the dimensionless results (pint).
+
+The dimensionless results stay the core (:mod:`roughflow.datasets.units` names the
+reference units ``ref_length`` = L, ``ref_pressure`` = E*, ``ref_viscosity`` = eta). This
+thin layer parses user quantities ("200GPa", "1mPa.s", "1MPa:100MPa:20"), converts with
+:class:`Scales`, and builds pint registries in which the reference units are defined from
+a dataset's attributes. pint is imported on first use (about 1 s), so commands that need
+no units do not pay for it.
+
+Example (plain pint, no pint-xarray needed)::
+
+    ds = xr.open_dataset("leak.nc")
+    ureg = roughflow.units.registry(ds.attrs)
+    gap_m = ureg.Quantity(ds["mean_gap"].values, ds["mean_gap"].attrs["units"]).to("m")
+"""
+
+from __future__ import annotations
+
+import functools
+import math
+import re
+from collections.abc import Mapping
+from dataclasses import dataclass
+
+import numpy as np
+
+from roughflow.datasets.units import REFERENCE_ATTRS
+from roughflow.errors import InputError
+
+#: What each kind of quantity must convert to (pint dimensionality, SI unit).
+DIMENSIONS = {
+    "length": ("[length]", "m"),
+    "pressure": ("[pressure]", "Pa"),
+    "viscosity": ("[pressure] * [time]", "Pa*s"),
+}
+
+
+@functools.lru_cache(maxsize=1)
+def _base_registry():
+    import pint
+
+    return pint.UnitRegistry()
+
+
+@functools.lru_cache(maxsize=16)
+def _registry(scales: tuple[tuple[str, float | None], ...]):
+    import pint
+
+    ureg = pint.UnitRegistry()
+    for name, value in scales:
+        si = REFERENCE_ATTRS[name][1]
+        # an unknown scale: the reference unit is a base dimension of its own
+        ureg.define(f"{name} = [{name}]" if value is None else f"{name} = {value!r} * {si}")
+    return ureg
+
+
+def registry(attrs: Mapping | None = None):
+    """A pint UnitRegistry that parses every ``units`` string roughflow writes.
+
+    The reference units are defined from ``attrs`` (a dataset's attributes, see
+    :data:`roughflow.datasets.units.REFERENCE_ATTRS`) where they hold a positive finite
+    SI value, and as base dimensions of their own otherwise. Registries are cached.
+    """
+    attrs = {} if attrs is None else attrs
+    scales = []
+    for name, (key, _) in REFERENCE_ATTRS.items():
+        value = attrs.get(key)
+        try:
+            v = float(value)
+        except (TypeError, ValueError):
+            v = math.nan
+        scales.append((name, v if math.isfinite(v) and v > 0 else None))
+    return _registry(tuple(scales))
+
+
+def parse_quantity(text, kind: str, name: str) -> float:
+    """SI value of ``text`` ("200GPa", "1 mPa s", "2mm", or a number already in SI units),
+    which must be a positive quantity of ``kind`` (:data:`DIMENSIONS`); ``name`` is the
+    option or key reported in the error."""
+    dim, si = DIMENSIONS[kind]
+    if isinstance(text, (int, float, np.integer, np.floating)) and not isinstance(text, bool):
+        value = float(text)
+    else:
+        import pint
+
+        ureg = _base_registry()
+        s = str(text).strip()
+        try:
+            q = ureg.Quantity(s)
+        except (pint.errors.PintError, ValueError, TypeError, AttributeError,
+                SyntaxError) as exc:
+            raise InputError(f"{name}: cannot parse {text!r} as a {kind} ({exc})") from None
+        if isinstance(q, (int, float)) or q.dimensionless:
+            raise InputError(f"{name}: {text!r} has no unit; give a {kind} such as "
+                             f"'{_EXAMPLES[kind]}'")
+        if q.dimensionality != ureg.get_dimensionality(dim):
+            raise InputError(f"{name}: {text!r} is not a {kind} (its dimension is "
+                             f"{q.dimensionality}, expected {dim})")
+        value = float(q.to(si).magnitude)
+    if not (math.isfinite(value) and value > 0):
+        raise InputError(f"{name} must be a positive {kind}, got {text!r}")
+    return value
+
+
+_EXAMPLES = {"length": "2mm", "pressure": "1MPa", "viscosity": "1mPa.s"}
+
+
+def parse_range(text: str, kind: str, name: str) -> np.ndarray:
+    """SI values of a range "LO:HI:N" (N values spaced logarithmically from LO to HI,
+    LO < HI) or of a comma-separated increasing list "A,B,C"."""
+    s = str(text).strip()
+    if ":" in s:
+        parts = s.split(":")
+        if len(parts) != 3:
+            raise InputError(f"{name}: {text!r} must be LO:HI:N, e.g. '1MPa:100MPa:20'")
+        lo = parse_quantity(parts[0], kind, f"{name} (low end)")
+        hi = parse_quantity(parts[1], kind, f"{name} (high end)")
+        if not re.fullmatch(r"\s*\d+\s*", parts[2]) or int(parts[2]) < 2:
+            raise InputError(f"{name}: the count in {text!r} must be an integer >= 2")
+        if not lo < hi:
+            raise InputError(f"{name}: the range {text!r} is in the wrong order (low end "
+                             f"{lo:g} {DIMENSIONS[kind][1]} >= high end {hi:g})")
+        return np.geomspace(lo, hi, int(parts[2]))
+    values = np.array([parse_quantity(p, kind, name) for p in s.split(",") if p.strip()])
+    if values.size == 0:
+        raise InputError(f"{name}: no values in {text!r}")
+    if np.any(np.diff(values) <= 0):
+        raise InputError(f"{name}: the values {text!r} must increase strictly")
+    return values
+
+
+@dataclass(frozen=True)
+class Scales:
+    """SI values of the reference units: ``length`` L (m), ``modulus`` E* (Pa),
+    ``viscosity`` eta (Pa s). Conversions of the dimensionless results (E* = 1, L = 1,
+    eta = 1) to SI units."""
+
+    length: float
+    modulus: float
+    viscosity: float
+
+    def __post_init__(self) -> None:
+        for name in ("length", "modulus", "viscosity"):
+            v = getattr(self, name)
+            if not (isinstance(v, (int, float)) and math.isfinite(v) and v > 0):
+                raise InputError(f"{name} scale must be a positive number, got {v!r}")
+
+    def pressure_to_si(self, p):
+        """Pressure in E* -> Pa."""
+        return np.asarray(p, dtype=float) * self.modulus
+
+    def pressure_from_si(self, p):
+        """Pressure in Pa -> E*."""
+        return np.asarray(p, dtype=float) / self.modulus
+
+    def length_to_si(self, u):
+        """Length in L -> m."""
+        return np.asarray(u, dtype=float) * self.length
+
+    def conductance_to_si(self, sigma):
+        """Conductance u^3/(12 eta) in L^3/eta -> m^3/(Pa s) (per unit width per unit
+        pressure gradient)."""
+        return np.asarray(sigma, dtype=float) * self.length**3 / self.viscosity
+
+    def attrs(self) -> dict:
+        """The dataset attributes that define the reference units (:func:`registry`)."""
+        keys = {k: a for k, (a, _) in REFERENCE_ATTRS.items()}
+        return {keys["ref_length"]: self.length, keys["ref_pressure"]: self.modulus,
+                keys["ref_viscosity"]: self.viscosity}
+
+
+def leak_rate(conductance_si, *, fluid_pressure: float, seal_width: float,
+              seal_length: float):
+    """Volume leak rate Q (m^3/s) through a seal of width ``seal_width`` (m, along the
+    flow) and length ``seal_length`` (m, across it, e.g. the circumference) under the
+    pressure drop ``fluid_pressure`` (Pa): Q = sigma_eff l dp / w (paper Eq. 4 with the
+    effective conductance sigma_eff in m^3/(Pa s))."""
+    return (np.asarray(conductance_si, dtype=float) * seal_length * fluid_pressure
+            / seal_width)

@@ -1,0 +1,117 @@
+"""Non-periodic scans: the embeddings of roughflow.boundary and walls across the flow."""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+from hypothesis import given, settings
+from hypothesis import strategies as st
+
+from roughflow import contact, flow
+from roughflow.boundary import PAD_DEPTH, embed
+from roughflow.errors import InputError
+from roughflow.percolation import percolates, spanning_cells
+from roughflow.surface import Surface, SurfaceSpec, generate
+
+
+def mirror_across(a: np.ndarray, axis: int) -> np.ndarray:
+    """``a`` followed by its mirror image across ``axis`` (flow along the other axis)."""
+    across = 1 - axis
+    return np.concatenate([a, np.flip(a, axis=across)], axis=across)
+
+
+@settings(max_examples=60, deadline=None)
+@given(st.integers(0, 2**32 - 1), st.floats(0.3, 0.7), st.integers(0, 1))
+def test_walls_across_equal_the_mirrored_periodic_cell(seed, p_open, axis):
+    """Folding the mirrored cell onto the original maps 4-neighbours to 4-neighbours or to
+    the same cell, so a spanning path exists with walls exactly when one exists in the
+    periodic, mirrored cell (the exact statement that lets "mirror" use walls)."""
+    mask = np.random.default_rng(seed).random((9, 7)) < p_open
+    assert percolates(mask, axis, periodic=False) == percolates(mirror_across(mask, axis), axis)
+    cells = spanning_cells(mask, axis, periodic=False)
+    mirrored = spanning_cells(mirror_across(mask, axis), axis)
+    np.testing.assert_array_equal(mirror_across(cells, axis), mirrored)
+
+
+def test_walls_block_a_path_that_needs_the_seam():
+    # open along x only through the seam between the last and the first column
+    m = np.zeros((6, 5), bool)
+    m[:3, 0] = True
+    m[2:, 4] = True
+    assert percolates(m, 0) and not percolates(m, 0, periodic=False)
+
+
+@pytest.mark.parametrize("axis", [0, 1])
+def test_flow_with_walls_equals_the_mirrored_periodic_flow(axis):
+    """By symmetry no fluid crosses the mirror lines of the mirrored periodic cell, so its
+    conductance (per unit width) is that of the cell with walls across the flow."""
+    spec = SurfaceSpec.from_sweep(l_over_lambda_r=2, eps_f=0.25, points_per_lambda_s=4, seed=1)
+    s = generate(spec)
+    # the bearing-model gap at 20 % contact (with seed 1 the walls cut sigma by ~28 %)
+    gap = np.maximum(np.quantile(s.heights, 0.8) - s.heights, 0.0)
+    assert flow.solve(gap, axis, periodic=False).percolating
+    walls = flow.solve(gap, axis, lx=s.lx, ly=s.ly, periodic=False).sigma
+    lx, ly = (s.lx, 2 * s.ly) if axis == 0 else (2 * s.lx, s.ly)
+    mirrored = flow.solve(mirror_across(gap, axis), axis, lx=lx, ly=ly).sigma
+    periodic = flow.solve(gap, axis, lx=s.lx, ly=s.ly).sigma
+    assert walls == pytest.approx(mirrored, rel=1e-7)  # solver tolerance 1e-8
+    assert walls != pytest.approx(periodic, rel=1e-3)  # the walls matter on this gap
+
+
+def scan(n=32, seed=0) -> Surface:
+    spec = SurfaceSpec.from_sweep(l_over_lambda_r=2, eps_f=0.25, points_per_lambda_s=4,
+                                  seed=seed)
+    h = generate(spec).heights[:n, : n - 4]  # a non-periodic piece
+    return Surface(heights=h, lx=1.0, ly=(n - 4) / n)
+
+
+def test_mirror_cell_is_symmetric_and_its_quadrant_carries_the_solution():
+    s = scan()
+    emb = embed(s, "mirror")
+    nx, ny = s.shape
+    h = emb.surface.heights
+    assert h.shape == (2 * nx, 2 * ny) and emb.load_factor == 1.0 and not emb.periodic
+    np.testing.assert_array_equal(h[:nx, :ny], s.heights)
+    np.testing.assert_array_equal(h[nx:, :ny], s.heights[::-1, :])
+    np.testing.assert_array_equal(h[:nx, ny:], s.heights[:, ::-1])
+    np.testing.assert_array_equal(h[nx:, ny:], s.heights[::-1, ::-1])
+    res = contact.solve(emb.surface, 0.2)
+    seen = emb.observe(res)
+    # the solution is mirror-symmetric: the quadrant has the cell's contact area, to one
+    # cell in 2 x 2 (round-off may break a tie at the contact edge)
+    assert abs(seen.area_fraction - res.area_fraction) <= 2 / res.contact.size * 4
+    assert seen.pressure == pytest.approx(0.2) and seen.gap.shape == s.shape
+
+
+def test_pad_keeps_the_load_on_the_scan():
+    s = scan()
+    emb = embed(s, "pad")
+    assert emb.load_factor == 0.25 and emb.surface.heights.shape == (64, 56)
+    low = s.heights.min() - PAD_DEPTH * np.ptp(s.heights)
+    assert np.all(emb.surface.heights[32:, :] == low)
+    res = contact.solve(emb.surface, emb.cell_pressure(0.2))
+    seen = emb.observe(res)
+    # no contact in the padding, so the scan carries the whole load: nominal pressure 0.2
+    assert seen.contact.sum() == res.contact.sum() > 0
+    assert seen.contact_pressure.mean() == pytest.approx(0.2, rel=1e-4)
+    assert seen.pressure == pytest.approx(0.2)
+
+
+def test_window_and_periodic():
+    s = scan()
+    emb = embed(s, "window", margin=0.125)
+    assert emb.window == (slice(4, 28), slice(4, 24)) and emb.shape == (24, 20)
+    assert emb.lx == pytest.approx(24 / 32) and emb.surface is s
+    per = embed(s, "periodic")
+    assert per.periodic and per.shape == s.shape
+    res = contact.solve(s, 0.1)
+    assert per.observe(res) is res
+
+
+def test_bad_embeddings_are_refused():
+    with pytest.raises(InputError, match="'tile'"):
+        embed(scan(), "tile")
+    with pytest.raises(InputError, match="margin"):
+        embed(scan(), "window", margin=0.5)
+    with pytest.raises(InputError, match="Surface"):
+        embed(np.zeros((8, 8)), "mirror")

@@ -1,0 +1,95 @@
+"""Every default is written once (roughflow.defaults and the job dataclasses); the workflow
+schema, the command line and the library entry points must agree with it."""
+
+from __future__ import annotations
+
+import inspect
+from pathlib import Path
+
+import pytest
+import yaml
+
+from roughflow import defaults
+from roughflow.cli import build_parser
+from roughflow.scenes import study_defaults
+
+SCHEMA = Path(__file__).resolve().parents[1] / "workflow" / "schemas" / "config.schema.yaml"
+STUDY_SCHEMA = {"channels": "channels", "threshold_vs_gamma": "threshold_study",
+                "flow_isotropic": "flow_study", "measured": "measured_study"}
+
+
+def _schema_defaults(node: dict) -> dict:
+    """The defaults a JSON schema object declares for its properties (nested objects too)."""
+    out = {}
+    for key, prop in node.get("properties", {}).items():
+        if "default" in prop:
+            out[key] = prop["default"]
+        elif "properties" in prop:
+            nested = _schema_defaults(prop)
+            if nested:
+                out[key] = nested
+    return out
+
+
+@pytest.mark.parametrize("study", STUDY_SCHEMA)
+def test_schema_defaults_equal_roughflow_defaults(study):
+    schema = yaml.safe_load(SCHEMA.read_text())["$defs"][STUDY_SCHEMA[study]]
+    declared = _schema_defaults(schema)
+    ours = study_defaults(study)
+    # the schema documents every default roughflow applies, with the same value
+    assert set(ours) <= set(declared), sorted(set(ours) - set(declared))
+    for key, value in declared.items():
+        assert key in ours, f"schema declares a default for {key!r} that roughflow lacks"
+        if isinstance(value, dict) and isinstance(ours[key], dict):
+            for k, v in value.items():
+                assert ours[key][k] == pytest.approx(v), (key, k)
+        elif isinstance(value, list):
+            assert list(ours[key]) == value, key
+        else:
+            assert ours[key] == pytest.approx(value) if isinstance(value, float) \
+                else ours[key] == value, key
+
+
+def _defaults_of(argv: list[str]) -> dict:
+    return vars(build_parser().parse_args(argv))
+
+
+def test_threshold_cli_defaults_are_the_search_defaults():
+    from roughflow.search import SearchOptions, threshold
+
+    got = _defaults_of(["threshold", "s.nc", "-o", "t.nc"])
+    opts = SearchOptions()
+    assert got["tol"] == inspect.signature(threshold).parameters["tol"].default
+    assert (got["p_min"], got["p_max"]) == opts.pressure_range
+    assert got["contact_tol"] == opts.contact_tol
+    assert got["strategy"] == opts.strategy and got["method"] == opts.method
+
+
+def test_contact_and_flow_cli_defaults_are_the_solver_defaults():
+    from roughflow.contact import solve
+    from roughflow.flow import solve as flow_solve
+
+    got = _defaults_of(["contact", "s.nc", "-o", "c.nc"])
+    assert got["tol"] == inspect.signature(solve).parameters["tol"].default
+    assert got["model"] == inspect.signature(solve).parameters["model"].default
+    got = _defaults_of(["flow", "c.nc", "-o", "f.nc"])
+    assert got["tol"] == inspect.signature(flow_solve).parameters["tol"].default
+
+
+@pytest.mark.parametrize("argv", [["surface", "-o", "s.nc"], ["theory"]])
+def test_surface_options_are_the_spec_defaults(argv):
+    from roughflow.surface import SurfaceSpec
+
+    got = _defaults_of(argv)
+    sweep = inspect.signature(SurfaceSpec.from_sweep).parameters
+    for name in ("hurst", "eps_f", "points_per_lambda_s", "aspect", "rolloff"):
+        assert got[name] == sweep[name].default, name
+    assert got["gamma"] in (None, sweep["gamma"].default)
+
+
+def test_theory_lines_default_per_model():
+    from roughflow.scenes import LadderJob, SurfaceParams
+
+    for model, a_star in defaults.A_C_STAR_THEORY.items():
+        job = LadderJob(surface=SurfaceParams(), model=model, area_fractions=(0.1,))
+        assert job.a_c_star == a_star

@@ -1,0 +1,172 @@
+"""The leak question: leak rate against a hand calculation, closing pressures, the sealing
+bracket, and the command line's refusals (roughflow.leak, `roughflow leak`)."""
+
+from __future__ import annotations
+
+import inspect
+from pathlib import Path
+
+import numpy as np
+import pytest
+import xarray as xr
+
+from roughflow import flow
+from roughflow.cli import build_parser, main
+from roughflow.datasets import leak_dataset
+from roughflow.defaults import BOUNDARY
+from roughflow.errors import InputError
+from roughflow.leak import LeakCurve, leak_curve
+from roughflow.surface import ScanInfo, Surface, SurfaceSpec, generate
+from roughflow.units import Scales
+
+DATA = Path(__file__).resolve().parent / "data"
+
+
+def test_uniform_gap_leak_rate_equals_the_hand_calculation():
+    """A seal of width w = 2 mm (along the flow) and length l = 60 mm (across it) with a
+    uniform gap h = 1 um, fluid pressure drop dp = 1 MPa, viscosity eta = 1 mPa s:
+
+        Q = l h^3 dp / (12 eta w)
+          = 0.06 m * (1e-6 m)^3 * 1e6 Pa / (12 * 1e-3 Pa s * 2e-3 m)
+          = 6e-14 / 2.4e-5 m^3/s = 2.5e-9 m^3/s.
+
+    roughflow: the gap in units of L = 10 um is u = 0.1; the Reynolds solve gives
+    sigma = u^3 / 12 (L^3/eta) exactly for a uniform gap (docs/flow.md), the scales convert
+    it to m^3/(Pa s), and the leak dataset multiplies by l dp / w.
+    """
+    w, seal_l, h, dp, eta = 2e-3, 60e-3, 1e-6, 1e6, 1e-3
+    q_hand = seal_l * h**3 * dp / (12 * eta * w)
+    assert q_hand == pytest.approx(2.5e-9, rel=1e-12)
+
+    L = 10e-6
+    gap = np.full((16, 12), h / L)
+    sigma = [flow.solve(gap, ax, lx=1.0, ly=0.75).sigma for ax in (0, 1)]
+    assert sigma == pytest.approx([(h / L) ** 3 / 12] * 2, rel=1e-12)
+    curve = LeakCurve(
+        pressure=np.array([1e-3]), area_fraction=np.zeros(1), mean_gap=np.array([h / L]),
+        percolating=np.ones((1, 2), bool), sigma=np.array([sigma]),
+        iterations=np.zeros(1, int), residual=np.zeros(1), thresholds={}, boundary="periodic",
+        rms_gradient=0.0, window_lx=1.0, window_ly=0.75, window_shape=(16, 12))
+    surface = Surface.from_array(np.zeros((16, 12)), lx=1.0, ly=0.75)
+    ds = leak_dataset(curve, surface, scales=Scales(length=L, modulus=1e9, viscosity=eta),
+                      fluid_pressure=dp, seal_width=w, seal_length=seal_l, name="uniform")
+    np.testing.assert_allclose(ds["leak_rate"].values, q_hand, rtol=1e-12)
+    np.testing.assert_allclose(ds["conductance"].values, h**3 / (12 * eta), rtol=1e-12)
+
+
+def scan_surface(seed=0) -> Surface:
+    """A small non-periodic surface with scan provenance (L = 10 um)."""
+    spec = SurfaceSpec.from_sweep(l_over_lambda_r=4, eps_f=0.125, points_per_lambda_s=4,
+                                  seed=seed)
+    h = generate(spec).heights[:96, :96]
+    info = ScanInfo(source="test", reader="test", channel="h", length_scale=1e-5,
+                    rms_gradient=1.0, detrend="none", fill="none", filled=0)
+    return Surface(heights=h, lx=1.0, ly=1.0, scan=info)
+
+
+@pytest.fixture(scope="module")
+def curve():
+    # up to 30 E*: far beyond full contact
+    return leak_curve(scan_surface(), np.geomspace(0.01, 30.0, 7))
+
+
+def test_closing_every_gap_is_an_answer(curve):
+    assert curve.boundary == BOUNDARY
+    assert curve.area_fraction[-1] == 1.0 and curve.mean_gap[-1] == 0.0
+    assert not curve.percolating[-1].any() and (curve.sigma[-1] == 0).all()
+    assert curve.percolating[0].all() and (curve.sigma[0] > 0).all()
+    assert (np.diff(curve.area_fraction) >= 0).all()
+    assert (np.diff(curve.sigma, axis=0) <= 0).all()
+
+
+def test_sealing_bracket_agrees_with_the_curve(curve):
+    for ax, t in curve.thresholds.items():
+        assert t.bracketed and t.p_lo < t.p_hi and t.a_hi - t.a_lo <= t.tol
+        below, above = curve.pressure <= t.p_lo, curve.pressure >= t.p_hi
+        assert curve.percolating[below, ax].all() and not curve.percolating[above, ax].any()
+        assert (curve.sigma[above, ax] == 0).all()
+
+
+def test_periodic_surfaces_are_analysed_as_they_are():
+    s = generate(SurfaceSpec.from_sweep(l_over_lambda_r=2, eps_f=0.25, points_per_lambda_s=4))
+    c = leak_curve(s, [0.05], sealing=False)
+    assert c.boundary == "periodic" and c.window_shape == s.shape and c.thresholds == {}
+
+
+@pytest.mark.parametrize("pressures, match", [([0.1, 0.05], "increase"), ([], "non-empty"),
+                                              ([0.0, 0.1], "positive")])
+def test_bad_pressures_are_refused(pressures, match):
+    with pytest.raises(InputError, match=match):
+        leak_curve(scan_surface(), pressures)
+
+
+LEAK = ["--modulus", "200GPa", "--pressures", "1MPa:100GPa:4", "--fluid-pressure", "1MPa",
+        "--viscosity", "1mPa.s", "--seal-width", "2mm", "--seal-length", "60mm"]
+
+
+@pytest.fixture(scope="module")
+def imported(tmp_path_factory):
+    out = tmp_path_factory.mktemp("leak") / "afm.nc"
+    assert main(["import", str(DATA / "afm-64.npy"), "--size", "500nm", "--unit", "nm",
+                 "-o", str(out)]) == 0
+    return out
+
+
+def test_cli_leak_prints_and_writes_the_curve(imported, tmp_path, capsys):
+    out = tmp_path / "leak.nc"
+    capsys.readouterr()
+    assert main(["leak", str(imported), *LEAK, "-o", str(out)]) == 0
+    text = capsys.readouterr().out
+    assert f"boundary {BOUNDARY}" in text and "sealing pressure along y: between" in text
+    with xr.open_dataset(out) as ds:
+        assert ds.attrs["boundary"] == BOUNDARY and ds.attrs["scan_filled"] == 0
+        np.testing.assert_allclose(ds["pressure"], np.geomspace(1e6, 1e11, 4), rtol=1e-12)
+        assert ds.attrs["ref_length_m"] == pytest.approx(500e-9)
+        assert ds.sizes == {"scan": 1, "pressure": 4, "axis": 2}
+        # the table's numbers are the dataset's
+        q = ds["leak_rate"].isel(scan=0, pressure=0).values
+        assert f"{q[0]:10.3e}" in text and f"{q[1]:10.3e}" in text
+
+
+@pytest.mark.parametrize("change, match", [
+    ({"--modulus": "200 GPx"}, "--modulus: cannot parse '200 GPx'"),
+    ({"--pressures": "100MPa:1MPa:5"}, "wrong order"),
+    ({"--seal-width": "0mm"}, "--seal-width must be a positive length"),
+    ({"--viscosity": "1MPa"}, "not a viscosity"),
+    ({"--seal-length": "-60mm"}, "--seal-length must be a positive length"),
+])
+def test_cli_leak_refuses_bad_quantities_before_any_solve(imported, tmp_path, capsys,
+                                                          change, match):
+    argv = list(LEAK)
+    for k, v in change.items():  # "--opt=value": argparse takes "-60mm" for an option
+        i = argv.index(k)
+        argv[i:i + 2] = [f"{k}={v}"]
+    with pytest.raises(SystemExit) as exc:
+        main(["leak", str(imported), *argv, "-o", str(tmp_path / "leak.nc")])
+    assert exc.value.code == 2 and match in capsys.readouterr().err
+    assert not (tmp_path / "leak.nc").exists()
+
+
+def test_cli_leak_refuses_files_without_physical_length(tmp_path, capsys):
+    assert main(["surface", "--l-over-lambda-r", "2", "--eps-f", "0.25",
+                 "--points-per-lambda-s", "4", "-o", str(tmp_path / "s.nc")]) == 0
+    (tmp_path / "junk.nc").write_text("not netcdf")
+    for path, match in ((tmp_path / "s.nc", "--length-scale"),
+                        (tmp_path / "junk.nc", "cannot read"),
+                        (tmp_path / "none.nc", "does not exist")):
+        with pytest.raises(SystemExit) as exc:
+            main(["leak", str(path), *LEAK, "-o", str(tmp_path / "leak.nc")])
+        assert exc.value.code == 2 and match in capsys.readouterr().err
+
+
+def test_cli_defaults_are_the_library_defaults():
+    from roughflow.scan import read_scan
+
+    got = vars(build_parser().parse_args(["leak", "s.nc", *LEAK, "-o", "l.nc"]))
+    params = inspect.signature(leak_curve).parameters
+    assert got["contact_tol"] == params["contact_tol"].default
+    assert got["threshold_tol"] == params["threshold_tol"].default
+    got = vars(build_parser().parse_args(["import", "s.di", "-o", "s.nc"]))
+    params = inspect.signature(read_scan).parameters
+    assert got["detrend"] == params["detrend_mode"].default
+    assert got["fill"] == params["fill"].default

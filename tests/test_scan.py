@@ -1,0 +1,171 @@
+"""Reading measured scans (roughflow.scan, `roughflow import`): formats written by the test
+with writers the reader supports, units, detrending, missing points and refusals."""
+
+from __future__ import annotations
+
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+from roughflow.cli import main
+from roughflow.errors import InputError
+from roughflow.io import read_surface
+from roughflow.scan import detrend, fill_missing, read_scan
+from roughflow.surface import from_scan
+
+ST = pytest.importorskip("SurfaceTopography")
+DATA = Path(__file__).resolve().parent / "data"
+
+UM = 1e-6
+
+
+def heights(nx=16, ny=12, seed=0) -> np.ndarray:
+    return np.random.default_rng(seed).normal(size=(nx, ny))
+
+
+def check_scaled(surface, h_m: np.ndarray, lx_m: float, ly_m: float) -> None:
+    """The surface is h_m (metres) on lx_m x ly_m in units of L = sqrt(lx_m ly_m)."""
+    L = np.sqrt(lx_m * ly_m)
+    assert surface.scan.length_scale == pytest.approx(L, rel=1e-12)
+    assert surface.lx == pytest.approx(lx_m / L) and surface.ly == pytest.approx(ly_m / L)
+    np.testing.assert_allclose(surface.heights * L, h_m, rtol=1e-6, atol=1e-12 * UM)
+
+
+def test_netcdf_written_by_surfacetopography_gives_size_and_unit(tmp_path):
+    h = heights()
+    ST.Topography(h, (2.0, 1.5), unit="um").to_netcdf(str(tmp_path / "scan.nc"))
+    s = from_scan(tmp_path / "scan.nc", detrend_mode="none")
+    check_scaled(s, h * UM, 2 * UM, 1.5 * UM)
+    assert s.scan.filled == 0 and not s.periodic and s.scan.detrend == "none"
+    # the file gives its size: a --size of our own is refused, naming it
+    with pytest.raises(InputError, match="already gives its size"):
+        from_scan(tmp_path / "scan.nc", size="3um")
+
+
+def test_npy_needs_size_and_unit(tmp_path):
+    h = heights()
+    np.save(tmp_path / "scan.npy", h)
+    with pytest.raises(InputError, match="unit"):
+        from_scan(tmp_path / "scan.npy", size="2um,1.5um")
+    with pytest.raises(InputError, match="physical size"):
+        from_scan(tmp_path / "scan.npy", unit="nm")
+    s = from_scan(tmp_path / "scan.npy", size="2um,1.5um", unit="nm", detrend_mode="none")
+    check_scaled(s, h * 1e-9, 2 * UM, 1.5 * UM)
+    # numbers alone are in --unit; heights in another unit via height_unit
+    s = from_scan(tmp_path / "scan.npy", size="2000,1500", unit="nm", height_unit="um",
+                  detrend_mode="none")
+    check_scaled(s, h * UM, 2 * UM, 1.5 * UM)
+
+
+def test_plain_text_written_by_numpy(tmp_path):
+    h = heights()
+    # SurfaceTopography's plain-text reader takes a row as a line along x (rows are y):
+    # write the transpose so that the file holds h[ix, iy]
+    np.savetxt(tmp_path / "scan.txt", h.T)
+    s = from_scan(tmp_path / "scan.txt", size="2mm,1.5mm", unit="mm", detrend_mode="none")
+    check_scaled(s, h * 1e-3, 2e-3, 1.5e-3)
+
+
+def test_repository_scan_imports():
+    s = from_scan(DATA / "afm-64.npy", size="500nm", unit="nm")
+    assert s.shape == (64, 64) and s.scan.length_scale == pytest.approx(500e-9)
+    # the AFM scan's rms gradient is about 0.77 at full resolution; the 8x8 block average
+    # smooths the shortest wavelengths away
+    assert 0.2 < s.scan.rms_gradient < 0.77
+    assert abs(s.heights.mean()) < 1e-12  # the plane fit removed the mean
+
+
+def test_missing_points_refused_unless_filled(tmp_path):
+    h = heights()
+    h[3:5, 4] = np.nan
+    h[0, 0] = np.nan
+    np.save(tmp_path / "scan.npy", h)
+    with pytest.raises(InputError, match="3 missing points"):
+        from_scan(tmp_path / "scan.npy", size="1um", unit="um")
+    s = from_scan(tmp_path / "scan.npy", size="1um", unit="um", fill="min",
+                  detrend_mode="none")
+    assert s.scan.filled == 3 and s.scan.fill == "min"
+    ok = np.isfinite(h)
+    assert np.all(s.heights[~ok] == pytest.approx(s.heights[ok].min()))
+    s = from_scan(tmp_path / "scan.npy", size="1um", unit="um", fill="harmonic")
+    assert s.scan.filled == 3 and np.isfinite(s.heights).all()
+    # masked points of a SurfaceTopography file count as missing too
+    m = np.ma.masked_array(heights(), mask=np.zeros((16, 12), bool))
+    m.mask[5, 5] = True
+    ST.Topography(m, (1.0, 1.0), unit="um").to_netcdf(str(tmp_path / "m.nc"))
+    with pytest.raises(InputError, match="1 missing points"):
+        from_scan(tmp_path / "m.nc")
+    # cropping the missing points away needs no fill
+    s = from_scan(tmp_path / "m.nc", crop="6:,:")
+    assert s.shape == (10, 12) and s.scan.filled == 0 and s.scan.crop == "6:16,0:12"
+
+
+def test_harmonic_fill_is_exact_for_a_plane_inside():
+    plane = np.add.outer(0.3 * np.arange(20.0), -0.7 * np.arange(15.0))
+    miss = np.zeros(plane.shape, bool)
+    miss[3:8, 4:9] = True
+    miss[12, 1:3] = True
+    filled = fill_missing(np.where(miss, 0.0, plane), miss, "harmonic")
+    np.testing.assert_allclose(filled, plane, atol=1e-12)
+
+
+def test_detrend_removes_plane_and_curvature_exactly():
+    x = np.linspace(-1, 1, 20)[:, None]
+    y = np.linspace(-1, 1, 15)[None, :]
+    # a residual of the curvature fit is orthogonal to every fitted function: adding a plane
+    # or a quadratic and detrending again gives it back
+    rough = detrend(heights(20, 15, seed=3), 1, 1, "curvature")
+    tilt = 2.0 + 3.0 * x - 1.5 * y
+    np.testing.assert_allclose(detrend(rough + tilt, 1, 1, "plane"), rough, atol=1e-12)
+    quad = tilt + 0.8 * x * x - 0.4 * x * y + 1.1 * y * y
+    np.testing.assert_allclose(detrend(rough + quad, 1, 1, "curvature"), rough, atol=1e-12)
+    np.testing.assert_array_equal(detrend(rough + quad, 1, 1, "none"), rough + quad)
+
+
+@pytest.mark.parametrize("kwargs, match", [
+    ({"size": "0um", "unit": "um"}, "positive"),
+    ({"size": "-2um", "unit": "um"}, "positive"),
+    ({"size": "2furlongz", "unit": "um"}, "furlongz"),
+    ({"size": "2um", "unit": "kg"}, "not a length"),
+    ({"size": "2um", "unit": "um", "crop": "0:2,:"}, "at least 4 x 4"),
+    ({"size": "2um", "unit": "um", "crop": "zero"}, "i0:i1,j0:j1"),
+    ({"size": "2um", "unit": "um", "detrend_mode": "cubic"}, "cubic"),
+    ({"size": "2um", "unit": "um", "fill": "zero"}, "zero"),
+    ({"size": "2um", "unit": "um", "channel": "phase"}, "phase"),
+])
+def test_bad_options_are_refused_naming_them(tmp_path, kwargs, match):
+    np.save(tmp_path / "scan.npy", heights())
+    with pytest.raises(InputError, match=match):
+        read_scan(tmp_path / "scan.npy", **kwargs)
+
+
+def test_a_file_that_is_not_a_topography_is_refused(tmp_path):
+    bad = tmp_path / "notes.txt"
+    bad.write_text("this is not a height map\nat all\n")
+    with pytest.raises(InputError, match="notes.txt"):
+        from_scan(bad, size="1um", unit="um")
+    with pytest.raises(InputError, match="does not exist"):
+        from_scan(tmp_path / "missing.di")
+
+
+def test_cli_import_round_trip(tmp_path, capsys):
+    out = tmp_path / "s.nc"
+    assert main(["import", str(DATA / "afm-64.npy"), "--size", "500nm", "--unit", "nm",
+                 "-o", str(out)]) == 0
+    assert "64 x 64 points" in capsys.readouterr().out
+    s = read_surface(out)
+    assert s.scan.length_scale == pytest.approx(500e-9) and s.scan.reader.startswith("NumPy")
+    direct = from_scan(DATA / "afm-64.npy", size="500nm", unit="nm")
+    np.testing.assert_array_equal(s.heights, direct.heights)
+    assert s.scan == direct.scan
+
+
+def test_cli_import_refusal_exits_2(tmp_path, capsys):
+    np.save(tmp_path / "n.npy", np.where(np.eye(8, 6) > 0, np.nan, 1.0))
+    with pytest.raises(SystemExit) as exc:
+        main(["import", str(tmp_path / "n.npy"), "--size", "1um", "--unit", "um",
+              "-o", str(tmp_path / "s.nc")])
+    assert exc.value.code == 2
+    assert "6 missing points" in capsys.readouterr().err
+    assert not (tmp_path / "s.nc").exists()

@@ -1,0 +1,65 @@
+"""``roughflow threshold``: the command line of the threshold search."""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+import xarray as xr
+
+from roughflow.cli import main
+from roughflow.io import surface_to_dataset, write_dataset
+from roughflow.search import threshold
+from roughflow.surface import SurfaceSpec, generate
+
+
+@pytest.fixture()
+def surface_file(tmp_path):
+    s = generate(SurfaceSpec.from_sweep(points_per_lambda_s=2, l_over_lambda_r=2, seed=1))
+    path = tmp_path / "s.nc"
+    write_dataset(surface_to_dataset(s), path)
+    return s, path
+
+
+def test_cli_threshold_bearing_both_axes(surface_file, tmp_path):
+    s, path = surface_file
+    out = tmp_path / "t.nc"
+    assert main(["threshold", str(path), "--axis", "both", "--model", "bearing",
+                 "-o", str(out)]) == 0
+    ref = threshold(s, model="bearing")
+    with xr.open_dataset(out) as ds:
+        assert list(ds["axis"].values) == ["x", "y"]
+        assert ds["a_c_star"].attrs["units"] == "1"
+        for i in (0, 1):
+            assert float(ds["a_c_star"][i]) == ref[i].a_c_star
+        assert ds.attrs["model"] == "bearing"
+
+
+def test_cli_threshold_elastic_one_axis(surface_file, tmp_path):
+    s, path = surface_file
+    out = tmp_path / "t.nc"
+    assert main(["threshold", str(path), "--axis", "y", "--tol", "4e-3", "-o", str(out)]) == 0
+    with xr.open_dataset(out) as ds:
+        assert list(ds["axis"].values) == ["y"]
+        lo, hi = float(ds["a_lo"][0]), float(ds["a_hi"][0])
+        assert 0 < hi - lo <= 4e-3
+        assert ds.sizes["solve"] == ds.attrs["n_solves"] >= 2
+        assert float(ds["p_lo"][0]) < float(ds["p_hi"][0])
+
+
+def test_cli_threshold_errors(surface_file, tmp_path):
+    _, path = surface_file
+    out = tmp_path / "t.nc"
+    with pytest.raises(SystemExit) as e:
+        main(["threshold", str(path), "--tol", "0", "-o", str(out)])
+    assert e.value.code == 2
+    with pytest.raises(SystemExit) as e:
+        main(["threshold", str(path), "--model", "adhesive", "-o", str(out)])
+    assert e.value.code == 2
+    with pytest.raises(SystemExit) as e:  # always percolates below p = 1e-2
+        main(["threshold", str(path), "--p-max", "0.01", "-o", str(out)])
+    assert e.value.code == 2
+    assert not out.exists()
+    assert main(["threshold", str(path), "--p-max", "0.01", "--allow-unbracketed",
+                 "-o", str(out)]) == 0
+    with xr.open_dataset(out) as ds:
+        assert np.all(ds["bracketed"].values == 0) and np.all(np.isnan(ds["a_c_star"]))

@@ -1,0 +1,51 @@
+# The measured study: per scan, `roughflow import` (scan -> surface file) and `roughflow leak`
+# (leak curve in physical units); the study's aggregation and figure are the shared rules.
+
+MEASURED = JOBS.get("measured", {})
+
+
+def measured_job(wildcards):
+    try:
+        return MEASURED[wildcards.scan]
+    except KeyError:
+        raise WorkflowError(f"no scan {wildcards.scan!r} in config studies.measured") from None
+
+
+rule import_scan:
+    """A measured scan -> a roughflow surface file (crop, detrend, fill, units)."""
+    input:
+        lambda wc: measured_job(wc).file,
+    output:
+        f"{RESULTS}/measured/surfaces/{{scan}}.nc",
+    params:
+        args=lambda wc: " ".join(measured_job(wc).import_args()),
+    log:
+        f"{RESULTS}/logs/measured/import_{{scan}}.log",
+    threads: 1
+    resources:
+        mem_mb=2000,
+        runtime=10,
+    shell:
+        "{RF} -v import {input} {params.args} -o {output} > {log} 2>&1"
+
+
+rule leak:
+    """Leak curve of one scan: contact, percolation, Reynolds flow, sealing pressure."""
+    input:
+        f"{RESULTS}/measured/surfaces/{{scan}}.nc",
+    output:
+        data=f"{RESULTS}/jobs/leak/{{scan}}.nc",
+        table=f"{RESULTS}/measured/{{scan}}.txt",
+    params:
+        args=lambda wc: " ".join(measured_job(wc).cli_args()),
+    log:
+        f"{RESULTS}/logs/jobs/leak/{{scan}}.log",
+    benchmark:
+        f"{RESULTS}/benchmarks/workflow/jobs/leak/{{scan}}.tsv"
+    threads: 1
+    resources:
+        mem_mb=4000,
+        runtime=120,
+    shell:
+        "ROUGHFLOW_FFT_THREADS={threads} {RF} -v leak {input} {params.args} "
+        "--threads {threads} -o {output.data} > {output.table} 2> {log}"
