@@ -9,6 +9,7 @@ import xarray as xr
 from roughflow.errors import InputError
 from roughflow.fits import (
     NU_PERCOLATION,
+    UnderdeterminedFit,
     bootstrap_fit,
     fit_dataset,
     fit_scaling,
@@ -76,6 +77,37 @@ def test_too_few_points_raise():
         fit_scaling({"easy": (EPS[:2], scaling(EPS[:2], 0.4, 0.1))}, nu=None)
     with pytest.raises(InputError, match="same shape"):
         fit_scaling({"easy": (EPS, EPS[:3])})
+
+
+def test_underdetermined_fits_are_refused_not_reported():
+    # issue 13 item 4. One system size (x and y pooled, as the isotropic group does): two
+    # points, two parameters, but the amplitude is undetermined (it came back as its
+    # starting value 0 with a tiny error bar).
+    one = np.array([0.1, 0.1])
+    with pytest.raises(UnderdeterminedFit, match="two system sizes"):
+        fit_scaling({"both": (one, [0.40, 0.41])})
+    # Two sizes per direction: a fixed nu is determined (3 parameters, 4 points), a free
+    # nu is not (it returned its starting value 4/3 +- 3e-15 on config/test.yaml).
+    two = {d: (EPS[:2], scaling(EPS[:2], 0.42, amp)) for d, amp in (("easy", 0.3),
+                                                                     ("hard", -0.2))}
+    assert fit_scaling(two).a_star == pytest.approx(0.42, abs=1e-8)
+    with pytest.raises(UnderdeterminedFit, match="free nu"):
+        fit_scaling(two, nu=None)
+    for bad in (-1.0, 0.0, float("inf"), 10.0):
+        with pytest.raises(InputError, match="nu"):
+            fit_scaling(two, nu=bad)
+
+
+def test_fit_dataset_flags_underdetermined_fits():
+    # the gamma = 1 group has two sizes: its fixed-nu fit is determined, its free-nu fit not
+    res = fit_dataset(_threshold_dataset(), n_boot=0)
+    iso = res.sel(group="isotropic", fit="joint")
+    assert np.isfinite(float(iso["a_star"].sel(nu_mode="fixed")))
+    assert int(iso["underdetermined"].sel(nu_mode="fixed")) == 0
+    assert np.isnan(float(iso["a_star"].sel(nu_mode="free")))
+    assert int(iso["underdetermined"].sel(nu_mode="free")) == 1
+    with pytest.raises(InputError, match="seed"):
+        fit_dataset(_threshold_dataset(), seed=-1)
 
 
 def _threshold_dataset(a_star=0.415, nu=NU_PERCOLATION, noise=0.003, seed=2):

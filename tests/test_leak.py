@@ -152,7 +152,7 @@ def test_cli_leak_refuses_files_without_physical_length(tmp_path, capsys):
                  "--points-per-lambda-s", "4", "-o", str(tmp_path / "s.nc")]) == 0
     (tmp_path / "junk.nc").write_text("not netcdf")
     for path, match in ((tmp_path / "s.nc", "--length-scale"),
-                        (tmp_path / "junk.nc", "cannot read"),
+                        (tmp_path / "junk.nc", "roughflow import"),
                         (tmp_path / "none.nc", "does not exist")):
         with pytest.raises(SystemExit) as exc:
             main(["leak", str(path), *LEAK, "-o", str(tmp_path / "leak.nc")])

@@ -17,7 +17,7 @@ from __future__ import annotations
 
 import numpy as np
 import pytest
-from hypothesis import HealthCheck, given, settings
+from hypothesis import HealthCheck, example, given, settings
 from hypothesis import strategies as st
 
 from roughflow import contact, flow
@@ -104,6 +104,7 @@ def test_contact_transposition_swaps_axes(seed, n, gamma, p):
 
 
 @SETTINGS
+@example(seed=258350335, n=16, gamma=1.0, ps=[0.9921875, 1.0])
 @given(seed=seeds, n=sizes, gamma=gammas,
        ps=st.lists(st.floats(min_value=0.01, max_value=1.0), min_size=2, max_size=4,
                    unique=True))
@@ -121,8 +122,10 @@ def test_contact_area_monotone_in_load(seed, n, gamma, ps):
             assert np.count_nonzero(prev & ~r.contact) <= 1
         prev = r.contact
     assert all(a1 >= a0 - 1.0 / n**2 for a0, a1 in zip(areas, areas[1:], strict=False))
-    # the mean gap falls strictly with the load (p = -d(elastic energy)/d(gap) > 0)
-    assert all(g1 < g0 for g0, g1 in zip(gaps, gaps[1:], strict=False))
+    # the mean gap falls strictly with the load (p = -d(elastic energy)/d(gap) > 0) until
+    # full contact, where it stays 0 (a 16^2 surface is fully in contact from p = 0.99 on:
+    # found by hypothesis, seed 258350335, loads 0.9921875 and 1)
+    assert all(g1 < g0 or g0 == g1 == 0.0 for g0, g1 in zip(gaps, gaps[1:], strict=False))
 
 
 # ---------------------------------------------------------------------------------------

@@ -111,12 +111,16 @@ def test_flow_file_values_are_carried(tmp_path, capsys):
     gap = np.maximum(s.heights - np.quantile(s.heights, 0.2), 0.0)
     write_dataset(xr.Dataset({"gap": (("x", "y"), gap)}, attrs={"lx": 1.0, "ly": 1.0}),
                   tmp_path / "c.nc")
-    write_dataset(xr.Dataset({"sigma_x": ((), 1.5e-9), "sigma_y": ((), 2.5e-10)}),
+    from roughflow import flow
+    from roughflow.datasets import flow_dataset
+
+    res = {ax: flow.solve(gap, ax) for ax in (0, 1)}
+    write_dataset(flow_dataset(res, gap <= 0, lx=1.0, ly=1.0, eta=1.0, tol=1e-8),
                   tmp_path / "f.nc")
     out = tmp_path / "t.nc"
     main(["theory", str(tmp_path / "c.nc"), "--flow", str(tmp_path / "f.nc"), "-o", str(out)])
     assert "sx_reynolds" in capsys.readouterr().out
     with xr.open_dataset(out) as ds:
-        assert float(ds["sigma_x_reynolds"][0]) == 1.5e-9
-        assert float(ds["sigma_y_reynolds"][0]) == 2.5e-10
+        assert float(ds["sigma_x_reynolds"][0]) == res[0].sigma
+        assert float(ds["sigma_y_reynolds"][0]) == res[1].sigma
         assert ds["sigma_x_reynolds"].attrs["units"]

@@ -6,6 +6,7 @@ config/, profiles/), as a user would run it from a fresh checkout.
 
 from __future__ import annotations
 
+import math
 import os
 import re
 import signal
@@ -163,6 +164,22 @@ def test_every_units_attribute_parses(test_run):
     assert len(kinds) >= 6, kinds
 
 
+def test_outputs_record_their_provenance(test_run):
+    # issue 18: job files their parameters, study datasets (and the fit) the study's config
+    import json
+
+    wd, _ = test_run
+    cfg = yaml.safe_load((ROOT / "config" / "test.yaml").read_text())["studies"]
+    job = sorted((wd / "results" / "jobs" / "threshold").glob("*.nc"))[0]
+    with xr.open_dataset(job) as ds:
+        assert ds.attrs["job_parameters"].startswith("threshold --gamma")
+        assert "-v scene threshold" in ds.attrs["command"]
+    for name in ("dataset", "fit"):
+        with xr.open_dataset(wd / "results" / "threshold_vs_size" / f"{name}.nc") as ds:
+            assert json.loads(ds.attrs["study_config"]) == cfg["threshold_vs_size"]
+            assert ds.attrs["roughflow_version"] and ds.attrs["history"]
+
+
 @pytest.mark.slow
 def test_second_invocation_does_nothing(test_run):
     wd, _ = test_run
@@ -192,6 +209,28 @@ def test_figure_style_change_does_not_rerun_simulations(test_run):
     assert "leak" not in counts and "import_scan" not in counts
 
 
+@pytest.mark.slow
+def test_deleted_job_output_reruns_only_when_named(test_run):
+    # docs/workflow.md "Deleted outputs": Snakemake does not recreate a missing intermediate
+    # file whose dependents are up to date; naming it as a target reruns that one job, and
+    # the next plain run then refreshes the study it belongs to. (Last of the tests on the
+    # shared run: it leaves the run complete again.)
+    wd, _ = test_run
+    job = sorted((wd / "results" / "jobs" / "threshold").glob("bearing_*.nc"))[0]
+    job.unlink()
+    dry = snakemake(wd, "--configfile", "config/test.yaml", "-n")
+    assert "Nothing to be done" in dry.stdout + dry.stderr
+    named = snakemake(wd, "--configfile", "config/test.yaml", "--cores", "1",
+                      str(job.relative_to(wd)))
+    assert named.returncode == 0 and job.exists()
+    assert job_counts(named.stdout + named.stderr) == {"scene": 1}
+    dry = snakemake(wd, "--configfile", "config/test.yaml", "-n")
+    counts = job_counts(dry.stdout)
+    assert "scene" not in counts and counts.get("aggregate", 0) >= 1
+    done = snakemake(wd, "--configfile", "config/test.yaml", "--cores", "2")
+    assert done.returncode == 0
+
+
 def test_only_requested_targets_run(tmp_path):
     wd = copy_workflow(tmp_path)
     dry = snakemake(wd, "--configfile", "config/test.yaml", "-n",
@@ -201,6 +240,19 @@ def test_only_requested_targets_run(tmp_path):
     # 2 gammas x 2 models, seeds grouped 2 per job: 4 threshold jobs, no ladder/channels
     assert counts == {"scene": 4, "aggregate": 1, "figure": 1}
     assert "ladder" not in dry.stdout
+    # each job requests the library's memory estimate plus the Snakemake wrapper
+    # (roughflow.scenes.jobs.requested_mem_mb)
+    from roughflow.scenes import estimated_memory, expand_study
+    from roughflow.scenes.jobs import WRAPPER_MB, requested_mem_mb
+
+    cfg = yaml.safe_load((wd / "config" / "test.yaml").read_text())["studies"]
+    jobs = expand_study("threshold_vs_gamma", cfg["threshold_vs_gamma"])
+    requested = dict(re.findall(r"wildcards: kind=threshold, job=(\S+)\s+resources: .*?"
+                                r"mem_mb=(\d+)", dry.stdout + dry.stderr))
+    assert requested.keys() == jobs.keys()
+    for job_id, mb in requested.items():
+        assert int(mb) == requested_mem_mb(jobs[job_id])
+        assert int(mb) == WRAPPER_MB + math.ceil(estimated_memory(jobs[job_id]) / 1e6)
 
 
 def test_paper_config_dry_run_job_counts(tmp_path):
@@ -248,6 +300,23 @@ BAD = {
         ["studies.measured", "nope.npy", "does not exist"]),
     "zero seal width": (lambda c: c["studies"]["measured"].update(seal_width="0mm"),
                         ["studies.measured", "seal_width", "0mm"]),
+    # issue 13 item 5: valid for the schema, but every job would fail
+    "adhesive threshold study": (
+        lambda c: c["studies"]["threshold_vs_gamma"]["series"][0].update(model=["adhesive"]),
+        ["studies.threshold_vs_gamma.series[0]", "adhesive"]),
+    # item 5: paths go into the jobs' shell commands unquoted
+    "results with a space": (lambda c: c.update(results="res space"),
+                             ["'results'", "res space"]),
+    # item 1: the series differ only in a setting that is not a dimension of the dataset
+    "series differ in resolution only": (
+        lambda c: c["studies"]["threshold_vs_size"]["series"][1].update(
+            gamma=[2], l_over_lambda_r=[2.8284271247461903], points_per_lambda_s=3),
+        ["studies.threshold_vs_size", "points-per-lambda-s 2.0 vs 3.0"]),
+    # item 2: about 54 TB per job (mem_mb 5e7)
+    "job larger than the machine": (
+        lambda c: c["studies"]["threshold_vs_size"].update(
+            points_per_lambda_s=64, series=[{"l_over_lambda_r": [64], "eps_f": [0.01]}]),
+        ["studies.threshold_vs_size", "TB", "max_mem_mb"]),
 }
 
 

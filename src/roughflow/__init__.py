@@ -11,8 +11,26 @@ gamma > 1 stretches the surface along x. Units are dimensionless by default:
 contact modulus E* = 1, rms gradient 1, cell side L = 1, viscosity eta = 1.
 """
 
-from roughflow.errors import ConvergenceError, InputError
-from roughflow.surface import Surface, SurfaceSpec, generate
+from importlib import import_module
 
-__all__ = ["ConvergenceError", "InputError", "Surface", "SurfaceSpec", "generate"]
+from roughflow.errors import ConvergenceError, InputError
+from roughflow.progress import log_progress
+
 __version__ = "0.1.0"
+
+# Imported on first use (PEP 562), so that ``import roughflow`` and ``roughflow --help``
+# do not load pyFFTW, numba, pyamg, xarray or matplotlib.
+_LAZY = {"Surface": "roughflow.surface", "SurfaceSpec": "roughflow.surface",
+         "generate": "roughflow.surface", "references": "roughflow.citation"}
+__all__ = ["ConvergenceError", "InputError", "Surface", "SurfaceSpec", "__version__",
+           "generate", "log_progress", "references"]
+
+
+def __getattr__(name: str):
+    if name in _LAZY:
+        return getattr(import_module(_LAZY[name]), name)
+    raise AttributeError(f"module 'roughflow' has no attribute {name!r}")
+
+
+def __dir__() -> list[str]:
+    return sorted(set(globals()) | set(_LAZY))

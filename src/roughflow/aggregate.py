@@ -4,6 +4,12 @@ Jobs that did not run leave NaN (never zero); variables that are integers in the
 files are written back as int32 with the explicit fill value -1; float coordinates get
 no ``_FillValue``. Attributes that differ between jobs are dropped; the job ids are kept
 in the ``jobs`` attribute.
+
+Only job files of one scene (threshold or ladder) combine, and no two of them may fill the
+same cells: jobs with the same parameters (model, gamma, hurst, eps_t, eps_f) must have
+distinct seeds and equal settings (:func:`check_disjoint`). Anything else would silently
+drop or duplicate data, so it is refused (the workflow refuses such configs at planning,
+``roughflow.scenes.jobs.check_collisions``).
 """
 
 from __future__ import annotations
@@ -15,24 +21,99 @@ from collections.abc import Sequence
 import numpy as np
 import xarray as xr
 
+from roughflow.datasets.kinds import check_kind
+from roughflow.datasets.sweep import INT_FILL, PARAM_DIMS
+from roughflow.defaults import JOB_KINDS
 from roughflow.errors import InputError
-from roughflow.io import write_dataset
+from roughflow.io import read_dataset, write_dataset
+from roughflow.provenance import Provenance
 
 log = logging.getLogger(__name__)
-INT_FILL = -1
 
 
-def load(path: str | os.PathLike) -> xr.Dataset:
-    if not os.path.exists(path):
-        raise InputError(f"dataset {str(path)!r} does not exist")
-    with xr.open_dataset(path) as ds:
-        return ds.load()
+def load(path: str | os.PathLike, kinds: str | tuple[str, ...] | None = None) -> xr.Dataset:
+    """Read a dataset (:func:`roughflow.io.read_dataset`), optionally of given kinds."""
+    return read_dataset(path, kinds, what="dataset")
 
 
-def combine(datasets: Sequence[xr.Dataset]) -> xr.Dataset:
-    """Outer combination by coordinates (``xr.combine_by_coords``, falling back to merge)."""
+def _key(ds: xr.Dataset, source: str) -> tuple:
+    """The job's parameter values (one per :data:`PARAM_DIMS`)."""
+    sizes = {d: ds.sizes[d] for d in PARAM_DIMS}
+    if any(n != 1 for n in sizes.values()):
+        raise InputError(f"{source} covers several parameter values {sizes}: aggregate combines "
+                         "job files (roughflow scene), not study datasets")
+    return tuple(ds[d].values[0].item() for d in PARAM_DIMS)
+
+
+def _settings(ds: xr.Dataset) -> dict:
+    """What jobs stacked along ``seed`` must share: every variable without a seed
+    dimension (grid, resolution, ...) and the job's settings attribute."""
+    out = {name: np.unique(v.values).tolist() for name, v in ds.data_vars.items()
+           if "seed" not in v.dims}
+    if "job_settings" in ds.attrs:
+        out["job_settings"] = str(ds.attrs["job_settings"])
+    return out
+
+
+def check_disjoint(datasets: Sequence[xr.Dataset], sources: Sequence[str]) -> None:
+    """Refuse job datasets that would fill the same cells of the study dataset: the same
+    parameters and a common seed (the combination would duplicate or drop the seed), or the
+    same parameters and different settings (the study would mix two computations, and
+    variables such as ``points_per_lambda_s`` would collide)."""
+    seen: dict[tuple, list[int]] = {}
+    for i, (ds, src) in enumerate(zip(datasets, sources, strict=True)):
+        key = _key(ds, src)
+        seeds = set(ds["seed"].values.tolist())
+        if len(seeds) != ds.sizes["seed"]:
+            raise InputError(f"{src} lists a seed twice: {ds['seed'].values.tolist()}")
+        for j in seen.get(key, []):
+            other = datasets[j]
+            common = sorted(seeds & set(other["seed"].values.tolist()))
+            params = ", ".join(f"{d}={v}" for d, v in zip(PARAM_DIMS, key, strict=True))
+            if common:
+                raise InputError(f"{sources[j]} and {src} both hold seeds {common} of {params}: "
+                                 "combining them would drop or duplicate data")
+            a, b = _settings(other), _settings(ds)
+            # variables (points_per_lambda_s, nx, ...) say it plainest, job_settings last
+            diff = sorted((k for k in set(a) | set(b) if a.get(k) != b.get(k)),
+                          key=lambda k: (k == "job_settings", k))
+            if diff:
+                what = "; ".join(f"{k} {a.get(k, '(none)')} vs {b.get(k, '(none)')}"
+                                 for k in diff[:3])
+                raise InputError(
+                    f"{sources[j]} and {src} hold the same parameters ({params}) with "
+                    f"different settings ({what}); the study dataset has no dimension for "
+                    "them: aggregate them separately")
+        seen.setdefault(key, []).append(i)
+
+
+def _check_scans_disjoint(datasets: Sequence[xr.Dataset], sources: Sequence[str]) -> None:
+    """Leak files are stacked along ``scan``: each scan name may appear once."""
+    seen: dict[str, str] = {}
+    for ds, src in zip(datasets, sources, strict=True):
+        for name in map(str, ds["scan"].values):
+            if name in seen:
+                raise InputError(f"{seen[name]} and {src} both hold the scan {name!r}: "
+                                 "combining them would drop one")
+            seen[name] = src
+
+
+def combine(datasets: Sequence[xr.Dataset], sources: Sequence[str] | None = None) -> xr.Dataset:
+    """Outer combination by coordinates (``xr.combine_by_coords``, falling back to merge) of
+    job datasets of one scene that fill disjoint cells (:func:`check_disjoint`)."""
     if not datasets:
         raise InputError("nothing to aggregate: no datasets given")
+    if sources is None:
+        sources = [f"dataset {i}" for i in range(len(datasets))]
+    kinds = [check_kind(ds, JOB_KINDS, src) for ds, src in zip(datasets, sources, strict=True)]
+    if len(set(kinds)) > 1:
+        i = next(i for i, k in enumerate(kinds) if k != kinds[0])
+        raise InputError(f"cannot combine {sources[0]} ({kinds[0]}) with {sources[i]} "
+                         f"({kinds[i]}): a study dataset holds one scene")
+    if kinds[0] == "leak_job":
+        _check_scans_disjoint(datasets, sources)
+    else:
+        check_disjoint(datasets, sources)
     # integer variables arrive as int (no missing values) or, decoded with a fill value,
     # as float with an integer on-disk dtype in their encoding
     int_vars = {name for ds in datasets for name, v in ds.data_vars.items()
@@ -60,15 +141,21 @@ def combine(datasets: Sequence[xr.Dataset]) -> xr.Dataset:
     return out
 
 
-def aggregate(paths: Sequence[str | os.PathLike], output: str | os.PathLike,
-              *, study: str | None = None) -> xr.Dataset:
-    """Load, combine and atomically write the study dataset; returns it."""
-    datasets = [load(p) for p in paths]
-    out = combine(datasets)
+def aggregate(inputs: Sequence[str | os.PathLike | xr.Dataset], output: str | os.PathLike,
+              *, study: str | None = None, sources: Sequence[str] | None = None,
+              provenance: Provenance | None = None) -> xr.Dataset:
+    """Load (paths) or take (datasets) the job datasets, combine them and atomically write
+    the study dataset (with ``provenance``); returns it. ``sources`` name the inputs in
+    messages."""
+    if sources is None:
+        sources = [repr(str(p)) if not isinstance(p, xr.Dataset) else f"dataset {i}"
+                   for i, p in enumerate(inputs)]
+    datasets = [p if isinstance(p, xr.Dataset) else load(p, JOB_KINDS) for p in inputs]
+    out = combine(datasets, sources)
     if study is not None:
         out.attrs["study"] = study
     out.attrs["title"] = f"roughflow study {study or ''}".strip()
-    write_dataset(out, output)
+    write_dataset(out, output, provenance=provenance)
     log.info("aggregated %d datasets into %s (%s)", len(datasets), output,
              dict(out.sizes))
     return out

@@ -35,6 +35,11 @@ PAPER_SIZE_FACTOR = 4.0
 CONTACT_METHODS = ("gfmd", "cg")
 #: Residual of a single contact solve: largest gap error over the rms height.
 CONTACT_TOL = 1e-6
+#: Solver steps between two DEBUG progress lines of a contact solve (roughflow -vv).
+SOLVER_LOG_EVERY = 20
+#: Loosest contact tolerance accepted: a gap error of 1 % of the rms height (a looser one
+#: returns the starting state after zero iterations as "converged").
+CONTACT_TOL_MAX = 1e-2
 #: The adhesion that reproduces the paper's adhesive case (docs/contact.md "Adhesion"):
 #: surface energy gamma_s / v_ela^full ...
 ADHESION_SURFACE_ENERGY_RATIO = 0.1
@@ -47,6 +52,8 @@ ADHESION_RANGE_OVER_LAMBDA_S = 0.42
 A_C_STAR_PAPER = 0.415
 #: Largest allowed a_hi - a_lo of a threshold bracket.
 THRESHOLD_TOL = 2e-3
+#: Widest bracket accepted (a_c* itself varies by about 0.1 between systems).
+THRESHOLD_TOL_MAX = 0.1
 #: Contact-solve tolerance inside a threshold search (docs/accuracy.md: a_c* moves by less
 #: than 4e-5 against a 1e-8 solve).
 THRESHOLD_CONTACT_TOL = 1e-4
@@ -69,6 +76,10 @@ LADDER_AREA_TOL = 5e-3
 # --- Reynolds flow (docs/flow.md) ----------------------------------------------------------
 #: Relative residual of the linear flow solve.
 FLOW_TOL = 1e-8
+#: Loosest flow tolerance accepted: the solve is refined until the inlet and outlet fluxes
+#: agree to ``tol``, so a looser one gives no usable flux balance (``tol`` 1e6 gave sigma
+#: 1e4 times too large after zero iterations).
+FLOW_TOL_MAX = 1e-2
 #: Linear solvers of the flow: auto (direct for small systems, else rs), Ruge-Stueben AMG
 #: + CG, smoothed aggregation + CG, sparse direct, plain CG.
 FLOW_METHODS = ("auto", "rs", "sa", "direct", "cg")
@@ -113,3 +124,6 @@ CHANNELS = {"gamma": 4.0, "hurst": 0.8, "l_over_lambda_r": 4.0, "eps_f": 0.1,
 NU_PERCOLATION = 4 / 3
 #: Bootstrap resamples over seeds for the fit errors.
 FIT_BOOTSTRAP = 200
+
+#: The kinds of job file (roughflow.datasets.kinds) that ``roughflow aggregate`` combines.
+JOB_KINDS = ("threshold_job", "ladder_job", "leak_job")

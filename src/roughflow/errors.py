@@ -3,12 +3,16 @@
 from __future__ import annotations
 
 import math
-
-import numpy as np
+from numbers import Integral
 
 
 class InputError(ValueError):
     """Bad input (config, CLI or API argument), raised before any work starts."""
+
+
+class ResourceError(InputError):
+    """The work would need more memory than the machine (or the job's limit) has; raised
+    before anything is allocated (:mod:`roughflow.resources`)."""
 
 
 class ConvergenceError(RuntimeError):
@@ -39,8 +43,41 @@ def require_positive(name: str, value: float) -> float:
     return x
 
 
-def require_field(name: str, array, *, ndim: int = 2) -> np.ndarray:
-    """Return ``array`` as float64, or raise if it has the wrong rank or non-finite values."""
+#: Largest seed: seeds are stored as 64-bit integers in the netCDF files.
+MAX_SEED = 2**63 - 1
+
+
+def require_int(name: str, value, *, minimum: int | None = None,
+                maximum: int | None = None) -> int:
+    """Return ``value`` as an int, or raise :class:`InputError` naming it if it is not an
+    integer (bools and floats are refused) or lies outside [``minimum``, ``maximum``]."""
+    if isinstance(value, bool) or not isinstance(value, Integral):
+        raise InputError(f"{name} must be an integer, got {value!r}")
+    v = int(value)
+    if minimum is not None and v < minimum:
+        raise InputError(f"{name} must be >= {minimum}, got {value!r}")
+    if maximum is not None and v > maximum:
+        raise InputError(f"{name} must be <= {maximum}, got {value!r}")
+    return v
+
+
+def require_seeds(name: str, seeds) -> tuple[int, ...]:
+    """A non-empty tuple of distinct seeds in [0, :data:`MAX_SEED`] (a duplicate seed would
+    give a duplicate coordinate in the datasets)."""
+    out = tuple(require_int(f"{name} entry", s, minimum=0, maximum=MAX_SEED) for s in seeds)
+    if not out:
+        raise InputError(f"{name} is empty")
+    dup = sorted({s for s in out if out.count(s) > 1})
+    if dup:
+        raise InputError(f"{name} must be distinct, got {list(out)} ({dup} repeated)")
+    return out
+
+
+def require_field(name: str, array, *, ndim: int = 2):
+    """Return ``array`` as a float64 numpy array, or raise if it has the wrong rank or
+    non-finite values."""
+    import numpy as np
+
     a = np.asarray(array, dtype=np.float64)
     if a.ndim != ndim:
         raise InputError(f"{name} must be a {ndim}D array, got shape {a.shape}")

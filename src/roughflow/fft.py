@@ -16,7 +16,11 @@ import os
 from functools import lru_cache
 
 import numpy as np
-import pyfftw
+
+from roughflow.errors import InputError, require_int
+
+#: More FFT threads than this is a typo, not a machine.
+MAX_THREADS = 4096
 
 _EFFORTS = ("FFTW_ESTIMATE", "FFTW_MEASURE", "FFTW_PATIENT", "FFTW_EXHAUSTIVE")
 
@@ -27,16 +31,24 @@ def default_threads() -> int:
     try:
         n = int(raw)
     except ValueError:
-        raise ValueError(f"ROUGHFLOW_FFT_THREADS must be a positive integer, got {raw!r}") from None
-    if n < 1:
-        raise ValueError(f"ROUGHFLOW_FFT_THREADS must be a positive integer, got {raw!r}")
+        raise InputError(f"ROUGHFLOW_FFT_THREADS must be a positive integer, got {raw!r}") from None
+    if not 1 <= n <= MAX_THREADS:
+        raise InputError(f"ROUGHFLOW_FFT_THREADS must be a positive integer, got {raw!r}")
     return n
+
+
+def check_threads(threads: int | None) -> int | None:
+    """``threads`` (None: the environment's default) or :class:`InputError` unless it is a
+    positive integer (0 or a negative count reached FFTW as an OverflowError)."""
+    if threads is None:
+        return None
+    return require_int("threads", threads, minimum=1, maximum=MAX_THREADS)
 
 
 def _effort() -> str:
     effort = os.environ.get("ROUGHFLOW_FFTW_EFFORT", "FFTW_ESTIMATE")
     if effort not in _EFFORTS:
-        raise ValueError(f"ROUGHFLOW_FFTW_EFFORT must be one of {_EFFORTS}, got {effort!r}")
+        raise InputError(f"ROUGHFLOW_FFTW_EFFORT must be one of {_EFFORTS}, got {effort!r}")
     return effort
 
 
@@ -48,6 +60,8 @@ class RealFFT2:
     """
 
     def __init__(self, shape: tuple[int, int], threads: int):
+        import pyfftw  # here, not at import: it loads scipy.fft (1 s in python -X importtime)
+
         nx, ny = shape
         self.shape = (int(nx), int(ny))
         self.spectral_shape = (int(nx), int(ny) // 2 + 1)
@@ -115,7 +129,8 @@ class RealFFT2:
 @lru_cache(maxsize=16)
 def plan(shape: tuple[int, int], threads: int | None = None) -> RealFFT2:
     """Cached :class:`RealFFT2` for ``shape`` (plans are reused, buffers are shared)."""
-    return RealFFT2(tuple(shape), default_threads() if threads is None else int(threads))
+    threads = check_threads(threads)
+    return RealFFT2(tuple(shape), default_threads() if threads is None else threads)
 
 
 def rfft2(a: np.ndarray, threads: int | None = None) -> np.ndarray:

@@ -33,6 +33,7 @@ from roughflow.defaults import (
 )
 from roughflow.errors import InputError, require_positive
 from roughflow.percolation import percolates
+from roughflow.resources import check_memory
 from roughflow.search import SearchOptions, Threshold, first_pressure, threshold
 from roughflow.surface import Surface, rms_gradient
 
@@ -130,6 +131,8 @@ def leak_curve(surface: Surface, pressures, *, boundary: str | None = None,
         require_positive(name, v)
     method = default_boundary(surface) if boundary is None else boundary
     emb = embed(surface, method)
+    # a leak curve holds what a pressure ladder holds, on the embedded grid
+    check_memory("ladder", emb.surface.heights.shape, what="a leak curve")
     gbar = (surface.scan.rms_gradient if surface.scan is not None else
             rms_gradient(surface.heights, surface.lx, surface.ly, periodic=surface.periodic))
     curve = pressure_curve(emb, p, contact_tol=contact_tol, flow_tol=flow_tol,

@@ -27,13 +27,13 @@ import numpy as np
 
 from roughflow import defaults, fft
 from roughflow.defaults import ROLLOFF_FORMS
-from roughflow.errors import InputError, require_finite, require_positive
+from roughflow.errors import MAX_SEED, InputError, require_finite, require_int, require_positive
 
 
 def paper_l_over_lambda_r(gamma: float) -> float:
     """The paper's default size L / lambda_r = 4 max(sqrt(gamma), 1/sqrt(gamma)): four
     roll-off wavelengths in the easy direction."""
-    s = math.sqrt(gamma)
+    s = math.sqrt(require_positive("gamma", gamma))
     return defaults.PAPER_SIZE_FACTOR * max(s, 1.0 / s)
 
 
@@ -68,9 +68,7 @@ class SurfaceSpec:
         h = require_finite("hurst", self.hurst)
         if not 0 < h <= 1:
             raise InputError(f"hurst must lie in (0, 1], got {self.hurst!r}")
-        seed = self.seed
-        if isinstance(seed, bool) or not isinstance(seed, (int, np.integer)) or seed < 0:
-            raise InputError(f"seed must be a non-negative integer, got {self.seed!r}")
+        require_int("seed", self.seed, minimum=0, maximum=MAX_SEED)
         if self.rolloff not in ROLLOFF_FORMS:
             raise InputError(f"rolloff must be one of {ROLLOFF_FORMS}, got {self.rolloff!r}")
         if self.lambda_s > self.lambda_r:
@@ -305,7 +303,10 @@ def generate(spec: SurfaceSpec) -> Surface:
     uniform phases is again uniform); the self-conjugate modes (q_x and q_y each 0 or
     Nyquist) get a real amplitude of random sign. Peak memory about 32 bytes per point.
     """
+    from roughflow.resources import check_memory
+
     nx, ny = spec.nx, spec.ny
+    check_memory("surface", (nx, ny), what="generating a surface")
     box, kx_max, ky_max = _phase_box(spec)
     qx, qy = fft.wavevectors(nx, ny, spec.lx, spec.ly)
     half = peklenik_wavenumber(qx, qy, spec.gamma)

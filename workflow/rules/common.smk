@@ -1,5 +1,6 @@
 # Config validation and job planning (runs before any job starts).
 
+import json
 import math
 import sys
 from pathlib import Path
@@ -35,15 +36,29 @@ _validate_config(config)
 
 from roughflow.defaults import FLOW_STUDIES, MEASURED_STUDY, THRESHOLD_STUDIES  # noqa: E402
 from roughflow.errors import InputError  # noqa: E402
-from roughflow.scenes import expand_study, grid_points, study_defaults  # noqa: E402
-from roughflow.scenes.jobs import estimated_seconds  # noqa: E402
+from roughflow.resources import total_bytes  # noqa: E402
+from roughflow.scenes import expand_study, study_defaults  # noqa: E402
+from roughflow.scenes.jobs import (  # noqa: E402
+    check_plan_memory,
+    estimated_seconds,
+    requested_mem_mb,
+)
 
 RESULTS = config.get("results", "results")
 # the roughflow of the Python that runs snakemake (no PATH lookup needed)
 RF = f"{sys.executable} -m roughflow"
 STUDIES = config["studies"]
+# The memory a job may need: the config's max_mem_mb (the nodes of a cluster), else the
+# memory of this machine. A job above it is refused at planning, before any job runs.
+if config.get("max_mem_mb") is not None:
+    _MEM_LIMIT = (int(config["max_mem_mb"]) * 10**6, f"max_mem_mb = {config['max_mem_mb']}")
+else:
+    _MEM_LIMIT = (total_bytes(), "the memory of this machine; set max_mem_mb in the config "
+                                 "for a cluster")
 try:
     JOBS = {name: expand_study(name, block) for name, block in STUDIES.items()}
+    if _MEM_LIMIT[0] is not None:
+        check_plan_memory(JOBS, *_MEM_LIMIT)
 except InputError as exc:
     raise WorkflowError(f"invalid config: {exc}") from None
 
@@ -107,10 +122,10 @@ def runtime_min(wildcards, attempt=1):
 
 
 def mem_mb(wildcards, attempt=1):
-    # ~40 float64 fields of the grid (surface, gap, pressure, FFT buffers, AMG hierarchy);
-    # the 500 MB base holds the interpreters (under SLURM two snakemake processes and
-    # roughflow's: 375 MB peak in the job's memory cgroup for a config/test.yaml job)
-    return attempt * (500 + math.ceil(grid_points(job_of(wildcards)) * 8 * 40 / 1e6))
+    # the library's memory estimate of the job (roughflow.resources, calibrated by
+    # benchmarks/bench_memory.py; also the limit of the refusals) plus the Snakemake
+    # process that wraps it on a cluster node
+    return requested_mem_mb(job_of(wildcards), attempt)
 
 
 def jobs_of(study):

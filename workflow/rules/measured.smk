@@ -1,6 +1,10 @@
 # The measured study: per scan, `roughflow import` (scan -> surface file) and `roughflow leak`
 # (leak curve in physical units); the study's aggregation and figure are the shared rules.
 
+import os  # noqa: E402
+
+import netCDF4  # noqa: E402
+
 MEASURED = JOBS.get("measured", {})
 
 
@@ -9,6 +13,19 @@ def measured_job(wildcards):
         return MEASURED[wildcards.scan]
     except KeyError:
         raise WorkflowError(f"no scan {wildcards.scan!r} in config studies.measured") from None
+
+
+def leak_mem_mb(wildcards, input, attempt):
+    # the grid is the imported scan's: Snakemake evaluates this again once the import has
+    # run (before the job is submitted); until then, the estimate of a 1024^2 grid
+    points = 1024 * 1024
+    if os.path.exists(input[0]):
+        with netCDF4.Dataset(input[0]) as ds:
+            points = len(ds.dimensions["x"]) * len(ds.dimensions["y"])
+    job = measured_job(wildcards)
+    if job.boundary in ("mirror", "pad"):
+        points *= 4  # both double the scan along each axis (roughflow.boundary.embed)
+    return requested_mem_mb(job, attempt, points)
 
 
 rule import_scan:
@@ -44,7 +61,7 @@ rule leak:
         f"{RESULTS}/benchmarks/workflow/jobs/leak/{{scan}}.tsv"
     threads: 1
     resources:
-        mem_mb=4000,
+        mem_mb=leak_mem_mb,
         runtime=120,
     shell:
         "ROUGHFLOW_FFT_THREADS={threads} {RF} -v leak {input} {params.args} "

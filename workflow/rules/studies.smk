@@ -7,6 +7,9 @@ rule aggregate:
         lambda wc: jobs_of(wc.study),
     output:
         f"{RESULTS}/{{study}}/dataset.nc",
+    params:
+        # the study's config block, recorded as the dataset's study_config (provenance)
+        config=lambda wc: json.dumps(STUDIES[wc.study], sort_keys=True),
     log:
         f"{RESULTS}/logs/{{study}}/aggregate.log",
     benchmark:
@@ -18,7 +21,8 @@ rule aggregate:
         mem_mb=1000,
         runtime=5,
     shell:
-        "{RF} -v aggregate {input} --study {wildcards.study} -o {output} 2> {log}"
+        "{RF} -v aggregate {input} --study {wildcards.study} --study-config {params.config:q} "
+        "-o {output} 2> {log}"
 
 
 rule fit:

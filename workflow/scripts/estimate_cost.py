@@ -16,7 +16,8 @@ from pathlib import Path
 
 import yaml
 
-from roughflow.scenes import expand_study, grid_points
+from roughflow.resources import describe
+from roughflow.scenes import estimated_memory, expand_study, grid_points
 from roughflow.scenes.jobs import estimated_seconds
 
 
@@ -46,7 +47,8 @@ def main() -> None:
     largest = max(jobs.values(), key=estimated_seconds)
     print(f"total {sum(total.values()) / 3600:.1f} core-hours for {len(jobs)} jobs; largest "
           f"job {largest.job_id}: {estimated_seconds(largest) / 3600:.1f} h, "
-          f"{grid_points(largest)} grid points")
+          f"{grid_points(largest)} grid points, {describe(estimated_memory(largest))}; "
+          f"most memory: {describe(max(map(estimated_memory, jobs.values())))}")
     if args.benchmarks:
         for tsv in sorted(Path(args.benchmarks).glob("jobs/*/*.tsv")):
             job = jobs.get(tsv.stem)

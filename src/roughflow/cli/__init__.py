@@ -3,6 +3,15 @@
 Each subcommand lives in its own module in this package and defines
 ``register(subparsers)``, which adds its parser and sets ``func`` to a
 function taking the parsed arguments. Modules are discovered automatically.
+Files are declared with ``_common.add_input``/``add_output``; :func:`main` checks the
+outputs and reads the inputs before ``func`` runs and maps errors to exit statuses
+(:data:`EXIT_STATUS`). ``args.provenance`` (:class:`roughflow.provenance.Provenance`)
+carries the command line, start time and the inputs' history to ``write_dataset``.
+``-v``/``-vv``/``-q`` work before or after the subcommand (:mod:`roughflow.progress`).
+
+Only the standard library, :mod:`roughflow.defaults` and :mod:`roughflow.errors` are
+imported to build the parser: numpy, xarray, pyFFTW, numba, pyamg and matplotlib are
+imported by the subcommand that runs (``roughflow --help`` stays fast).
 """
 
 from __future__ import annotations
@@ -12,38 +21,96 @@ import importlib
 import logging
 import pkgutil
 import sys
+from dataclasses import replace
 
+from roughflow import __version__
 from roughflow.errors import ConvergenceError, InputError
+from roughflow.progress import log_progress
+
+from ._common import check_outputs, read_inputs
+
+#: Exit statuses of every subcommand (also in ``roughflow --help``).
+EXIT_STATUS = {0: "success", 1: "unexpected error (a bug: please report the traceback)",
+               2: "bad input: options, input files or output path (nothing was computed)",
+               3: "a solver did not converge (its residual is printed)",
+               4: "out of memory although the estimate fitted (roughflow.resources)",
+               130: "interrupted"}
 
 
 def build_parser() -> argparse.ArgumentParser:
     parser = argparse.ArgumentParser(
         prog="roughflow",
         description="Contact, percolation and Reynolds flow of randomly rough surfaces.",
+        epilog="exit status: " + "; ".join(f"{k} {v}" for k, v in EXIT_STATUS.items()),
     )
-    parser.add_argument("-v", "--verbose", action="store_true", help="log progress to stderr")
+    parser.add_argument("--version", action="version", version=f"roughflow {__version__}")
+    _add_verbosity(parser, default=True)
     sub = parser.add_subparsers(dest="command", metavar="COMMAND", required=True)
     for info in sorted(pkgutil.iter_modules(__path__), key=lambda m: m.name):
         if info.name.startswith("_"):
             continue
         module = importlib.import_module(f"{__name__}.{info.name}")
         module.register(sub)
+    for p in _subparsers(parser):
+        _add_verbosity(p, default=False)
     return parser
 
 
+def _add_verbosity(parser: argparse.ArgumentParser, *, default: bool) -> None:
+    """-v/-q on the main parser (with defaults) and on every subcommand (without: a value
+    given after the subcommand then overrides, one not given leaves the main one)."""
+    kw = {} if default else {"default": argparse.SUPPRESS}
+    g = parser.add_argument_group("progress")
+    g.add_argument("-v", "--verbose", action="count", help="log progress to stderr: -v one "
+                   "line per solve, seed and step (INFO), -vv also solver steps (DEBUG)",
+                   **({"default": 0} if default else kw))
+    g.add_argument("-q", "--quiet", action="store_true", help="log errors only",
+                   **({"default": False} if default else kw))
+
+
+def _subparsers(parser: argparse.ArgumentParser):
+    for action in parser._actions:
+        if isinstance(action, argparse._SubParsersAction):
+            for p in action.choices.values():
+                yield p
+                yield from _subparsers(p)
+
+
+def _level(args: argparse.Namespace) -> int:
+    if args.quiet:
+        return logging.ERROR
+    return {0: logging.WARNING, 1: logging.INFO}.get(args.verbose, logging.DEBUG)
+
+
 def main(argv: list[str] | None = None) -> int:
+    from roughflow.provenance import Provenance, input_history, input_references
+
+    argv = sys.argv[1:] if argv is None else list(argv)
+    provenance = Provenance.for_command(argv)
     parser = build_parser()
     args = parser.parse_args(argv)
-    logging.basicConfig(
-        level=logging.INFO if args.verbose else logging.WARNING,
-        format="%(asctime)s %(name)s %(levelname)s: %(message)s",
-    )
+    log_progress(_level(args))
+    name = f"roughflow {args.command}"
     try:
+        check_outputs(args)
+        read_inputs(args)
+        given = [v for v in args.data.values() if v is not None]
+        single = [v for v in given if not isinstance(v, list)]
+        listed = [d for v in given if isinstance(v, list) for d in v]
+        # a derived file continues its input's history (CF; an aggregate lists its jobs
+        # instead) and cites what its inputs cite
+        args.provenance = replace(provenance, history=input_history(*single),
+                                  references=input_references(*single, *listed))
         args.func(args)
     except InputError as exc:
-        parser.exit(2, f"roughflow {args.command}: error: {exc}\n")
+        parser.exit(2, f"{name}: error: {exc}\n")
     except ConvergenceError as exc:
-        parser.exit(3, f"roughflow {args.command}: solver did not converge: {exc}\n")
+        parser.exit(3, f"{name}: solver did not converge: {exc}\n")
+    except MemoryError:
+        parser.exit(4, f"{name}: out of memory (the estimate of roughflow.resources fitted "
+                       "the available memory, which other processes may have taken since)\n")
+    except KeyboardInterrupt:
+        parser.exit(130, f"{name}: interrupted\n")
     return 0
 
 

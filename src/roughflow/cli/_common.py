@@ -1,10 +1,27 @@
-"""Argument helpers shared by the subcommands."""
+"""The shared input/output layer of the subcommands.
+
+A subcommand declares its files with :func:`add_input` (a dataset of given kinds,
+:mod:`roughflow.datasets.kinds`) and :func:`add_output`; before its ``func`` runs,
+:func:`roughflow.cli.main` checks every output path (:func:`check_output`: writable, not a
+directory, the right suffix) and reads every input (:func:`read_inputs`: readable netCDF of
+the expected kind, loaded into ``args.data[dest]``). Any failure is an
+:class:`~roughflow.errors.InputError`: exit status 2 with a message naming the file, before
+any work starts. A new subcommand gets all of this by using the two helpers.
+"""
 
 from __future__ import annotations
 
 import argparse
+import os
+import tempfile
+from pathlib import Path
 
 from roughflow import defaults
+from roughflow.errors import InputError
+
+#: Namespace attributes where the helpers record what to check (set with set_defaults).
+_OUTPUTS = "_outputs"
+_INPUTS = "_inputs"
 
 AXES = {"x": 0, "y": 1, "both": None}
 
@@ -23,10 +40,76 @@ SURFACE_OPTIONS = {
 }
 
 
-def add_output(parser: argparse.ArgumentParser) -> None:
-    parser.add_argument(
-        "-o", "--output", required=True, metavar="FILE.nc", help="netCDF file to write"
-    )
+def _record(parser: argparse.ArgumentParser, attr: str, entry: tuple) -> None:
+    parser.set_defaults(**{attr: [*(parser.get_default(attr) or []), entry]})
+
+
+def add_output(parser: argparse.ArgumentParser, *flags: str, dest: str = "output",
+               suffixes: tuple[str, ...] = (".nc",), required: bool = True,
+               metavar: str = "FILE.nc", help: str = "netCDF file to write") -> None:
+    """An output file option (default ``-o/--output``), checked by :func:`check_output`
+    before the subcommand runs."""
+    flags = flags or ("-o", "--output")
+    parser.add_argument(*flags, dest=dest, required=required, default=None, metavar=metavar,
+                        help=help)
+    _record(parser, _OUTPUTS, (dest, flags[-1], tuple(suffixes)))
+
+
+def add_input(parser: argparse.ArgumentParser, *names: str, kinds: str | tuple[str, ...] | None,
+              what: str, **kwargs) -> None:
+    """An input file (positional ``names[0]``, or an option), read by :func:`read_inputs`
+    before the subcommand runs: ``args.data[dest]`` holds the dataset (a list for
+    ``nargs``, None when an optional input is not given). ``kinds`` None: any dataset (the
+    subcommand checks the kind itself)."""
+    action = parser.add_argument(*names, **kwargs)
+    _record(parser, _INPUTS, (action.dest, kinds, what))
+
+
+def check_output(path: str, *, option: str = "--output",
+                 suffixes: tuple[str, ...] = (".nc",)) -> None:
+    """Refuse an output path that cannot be written, before any work: a wrong suffix, an
+    existing directory, a parent that is a file, or a folder where no file can be created
+    (probed by creating and removing a temporary file, which also works for root)."""
+    p = Path(path)
+    if p.is_dir():
+        raise InputError(f"{option} {path!r} is a directory; give a file name")
+    if suffixes and p.suffix.lower() not in suffixes:
+        raise InputError(f"{option} {path!r}: the file name must end in "
+                         f"{' or '.join(suffixes)}")
+    parent = p.absolute().parent
+    while not parent.exists():
+        parent = parent.parent
+    if not parent.is_dir():
+        raise InputError(f"{option} {path!r}: {str(parent)!r} is a file, not a directory")
+    try:
+        fd, tmp = tempfile.mkstemp(prefix=".roughflow-probe-", dir=parent)
+    except OSError as exc:
+        raise InputError(f"{option} {path!r}: cannot create files in {str(parent)!r} "
+                         f"({exc.strerror})") from None
+    os.close(fd)
+    os.unlink(tmp)
+
+
+def check_outputs(args: argparse.Namespace) -> None:
+    """:func:`check_output` for every output the subcommand declared (given ones only)."""
+    for dest, option, suffixes in getattr(args, _OUTPUTS, None) or []:
+        if getattr(args, dest, None) is not None:
+            check_output(getattr(args, dest), option=option, suffixes=suffixes)
+
+
+def read_inputs(args: argparse.Namespace) -> None:
+    """Read every input the subcommand declared into ``args.data`` (by destination)."""
+    from roughflow.io import read_dataset
+
+    args.data = {}
+    for dest, kinds, what in getattr(args, _INPUTS, None) or []:
+        value = getattr(args, dest, None)
+        if value is None:
+            args.data[dest] = None
+        elif isinstance(value, list):
+            args.data[dest] = [read_dataset(v, kinds, what=what) for v in value]
+        else:
+            args.data[dest] = read_dataset(value, kinds, what=what)
 
 
 def axis_arg(value: str) -> int | None:

@@ -4,7 +4,9 @@ from __future__ import annotations
 
 import argparse
 
-from ._common import add_output
+from roughflow.defaults import JOB_KINDS
+
+from ._common import add_input, add_output
 
 
 def register(sub: argparse._SubParsersAction) -> None:
@@ -12,13 +14,29 @@ def register(sub: argparse._SubParsersAction) -> None:
         "aggregate", help="combine per-job netCDF files into one study dataset",
         description="Combine per-job datasets by their coordinates (outer join): missing jobs "
                     "stay NaN, integer variables keep the fill value -1.")
-    p.add_argument("inputs", nargs="+", metavar="JOB.nc", help="per-job datasets")
+    add_input(p, "inputs", kinds=JOB_KINDS, what="job file", nargs="+",
+              metavar="JOB.nc", help="per-job datasets (roughflow scene threshold or ladder)")
     p.add_argument("--study", default=None, help="study name stored as an attribute")
+    p.add_argument("--study-config", default=None, metavar="JSON",
+                   help="the study's config block (JSON), stored as the study_config "
+                        "attribute (the workflow passes it)")
     add_output(p)
     p.set_defaults(func=run)
 
 
 def run(args: argparse.Namespace) -> None:
-    from roughflow.aggregate import aggregate
+    import json
+    from dataclasses import replace
 
-    aggregate(args.inputs, args.output, study=args.study)
+    from roughflow.aggregate import aggregate
+    from roughflow.errors import InputError
+
+    provenance = args.provenance
+    if args.study_config is not None:
+        try:
+            config = json.loads(args.study_config)
+        except json.JSONDecodeError as exc:
+            raise InputError(f"--study-config is not JSON: {exc}") from None
+        provenance = replace(provenance, study_config=json.dumps(config, sort_keys=True))
+    aggregate(args.data["inputs"], args.output, study=args.study,
+              sources=[repr(p) for p in args.inputs], provenance=provenance)

@@ -3,6 +3,8 @@
 from __future__ import annotations
 
 import argparse
+import logging
+import time
 
 from roughflow.defaults import (
     ADHESION_RANGE_OVER_LAMBDA_S,
@@ -13,7 +15,9 @@ from roughflow.defaults import (
 )
 from roughflow.errors import InputError
 
-from ._common import add_output
+from ._common import add_input, add_output
+
+log = logging.getLogger(__name__)
 
 
 def register(sub: argparse._SubParsersAction) -> None:
@@ -28,7 +32,8 @@ def register(sub: argparse._SubParsersAction) -> None:
             "with every scalar of the result and every surface parameter as attributes."
         ),
     )
-    p.add_argument("surface", metavar="SURFACE.nc", help="surface file ('roughflow surface')")
+    add_input(p, "surface", kinds="surface", what="surface file", metavar="SURFACE.nc",
+              help="surface file ('roughflow surface')")
     p.add_argument("--pressure", type=float, default=None,
                    help="mean applied pressure in units of E* gbar (elastic, adhesive)")
     p.add_argument("--model", choices=MODELS, default="elastic",
@@ -81,15 +86,23 @@ def _adhesion(args: argparse.Namespace, surface):
 def run(args: argparse.Namespace) -> None:
     from roughflow.contact import solve
     from roughflow.datasets import contact_dataset
-    from roughflow.io import read_surface, write_dataset
+    from roughflow.io import surface_from_dataset, write_dataset
 
     if args.model == "bearing" and args.pressure is not None:
         raise InputError("--model bearing takes --area-fraction, not --pressure")
-    surface = read_surface(args.surface)
+    surface = surface_from_dataset(args.data["surface"])
     adhesion = _adhesion(args, surface)
+    t0 = time.perf_counter()
     result = solve(
         surface, args.pressure, model=args.model, method=args.method,
         area_fraction=args.area_fraction, tol=args.tol, max_iter=args.max_iter,
         adhesion=adhesion,
     )
-    write_dataset(contact_dataset(surface, result, adhesion), args.output)
+    log.info("%s contact (%s) on %d x %d: p = %.6g -> a_c = %.5f (%d iterations, residual "
+             "%.1e, %.2f s)", result.model, result.method, *surface.shape, result.pressure,
+             result.area_fraction, result.iterations, result.residual,
+             time.perf_counter() - t0)
+    methods = ["bearing"] if result.model == "bearing" else [result.method]
+    methods += ["adhesion"] if result.model == "adhesive" else []
+    write_dataset(contact_dataset(surface, result, adhesion), args.output,
+                  provenance=args.provenance.using(*methods))

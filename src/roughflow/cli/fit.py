@@ -6,7 +6,7 @@ import argparse
 
 from roughflow.defaults import FIT_BOOTSTRAP, NU_PERCOLATION
 
-from ._common import add_output
+from ._common import add_input, add_output
 
 
 def register(sub: argparse._SubParsersAction) -> None:
@@ -15,7 +15,8 @@ def register(sub: argparse._SubParsersAction) -> None:
         description="Fit a_c*(eps) = a_c* + A eps^(1/nu) to a threshold study dataset: per "
                     "direction and jointly (shared a_c*), with nu fixed and free, bootstrap "
                     "errors over seeds. Writes a netCDF dataset over (group, fit, nu_mode).")
-    p.add_argument("dataset", metavar="DATASET.nc", help="aggregated threshold dataset")
+    add_input(p, "dataset", kinds="threshold_study", what="study dataset",
+              metavar="DATASET.nc", help="aggregated threshold dataset (roughflow aggregate)")
     p.add_argument("--bootstrap", type=int, default=FIT_BOOTSTRAP,
                    help=f"bootstrap resamples over seeds ({FIT_BOOTSTRAP}; 0 = none)")
     p.add_argument("--nu", type=float, default=NU_PERCOLATION,
@@ -26,9 +27,13 @@ def register(sub: argparse._SubParsersAction) -> None:
 
 
 def run(args: argparse.Namespace) -> None:
-    from roughflow.aggregate import load
+    from dataclasses import replace
+
     from roughflow.fits import fit_dataset
     from roughflow.io import write_dataset
 
-    res = fit_dataset(load(args.dataset), n_boot=args.bootstrap, nu=args.nu, seed=args.seed)
-    write_dataset(res, args.output)
+    ds = args.data["dataset"]
+    res = fit_dataset(ds, n_boot=args.bootstrap, nu=args.nu, seed=args.seed)
+    provenance = replace(args.provenance.using("scaling"),
+                         study_config=str(ds.attrs.get("study_config", "")))
+    write_dataset(res, args.output, provenance=provenance)

@@ -4,13 +4,14 @@ from __future__ import annotations
 
 import argparse
 import logging
-
-import numpy as np
+from typing import TYPE_CHECKING
 
 from roughflow.defaults import FLOW_METHODS, FLOW_TOL
-from roughflow.errors import InputError
 
-from ._common import add_output, axis_arg
+from ._common import add_input, add_output, axis_arg
+
+if TYPE_CHECKING:  # numpy is imported when the command runs, not for --help
+    import numpy as np
 
 log = logging.getLogger(__name__)
 
@@ -27,7 +28,8 @@ def register(sub: argparse._SubParsersAction) -> None:
             "the pressure and the flux fields. sigma = 0 when the gap does not percolate."
         ),
     )
-    p.add_argument("input", metavar="CONTACT.nc", help="contact file with a gap(x, y) variable")
+    add_input(p, "input", kinds="contact", what="contact file", metavar="CONTACT.nc",
+              help="contact file with a gap(x, y) variable (roughflow contact)")
     p.add_argument("--axis", type=axis_arg, default=None, metavar="{x,y,both}",
                    help="flow direction(s): x, y or both (both)")
     p.add_argument("--eta", type=float, default=1.0, help="viscosity eta (1)")
@@ -36,39 +38,33 @@ def register(sub: argparse._SubParsersAction) -> None:
     p.add_argument("--method", choices=FLOW_METHODS, default="auto",
                    help="linear solver: auto (direct for small systems, else rs), rs "
                         "(Ruge-Stueben AMG + CG), sa (smoothed aggregation + CG), direct, cg")
-    p.add_argument("--plot", metavar="FILE.png", default=None,
-                   help="also draw the flux magnitude over the contact map (one panel per axis)")
+    add_output(p, "--plot", dest="plot", required=False, suffixes=(".png", ".pdf", ".svg"),
+               metavar="FILE.png",
+               help="also draw the flux magnitude over the contact map (one panel per axis)")
     add_output(p)
     p.set_defaults(func=run)
 
 
-def _read_gap(path: str):
-    import xarray as xr
+def _read_gap(ds):
+    """gap, contact mask and cell lengths of a contact dataset (kind checked on reading)."""
+    from roughflow.errors import require_positive
 
-    try:
-        with xr.open_dataset(path) as ds:
-            ds.load()
-    except (OSError, ValueError) as exc:
-        raise InputError(f"cannot read {path!r}: {exc}") from None
-    if "gap" not in ds:
-        raise InputError(f"{path!r} has no 'gap' variable (variables: {list(ds.data_vars)})")
-    if ds["gap"].dims != ("x", "y"):
-        raise InputError(f"gap in {path!r} must have dims ('x', 'y'), got {ds['gap'].dims}")
-    try:
-        lx, ly = float(ds.attrs["lx"]), float(ds.attrs["ly"])
-    except KeyError as exc:
-        raise InputError(f"{path!r} lacks the attribute {exc.args[0]!r}") from None
+    lx, ly = require_positive("lx", ds.attrs["lx"]), require_positive("ly", ds.attrs["ly"])
+    import numpy as np
+
     gap = ds["gap"].values.astype(np.float64)
     contact = ds["contact"].values.astype(bool) if "contact" in ds else gap <= 0
-    return ds, gap, contact, lx, ly
+    return gap, contact, lx, ly
 
 
 def run(args: argparse.Namespace) -> None:
     from roughflow.datasets import flow_dataset
     from roughflow.flow import solve
     from roughflow.io import write_dataset
+    from roughflow.provenance import PROVENANCE_ATTRS
 
-    ds_in, gap, contact, lx, ly = _read_gap(args.input)
+    ds_in = args.data["input"]
+    gap, contact, lx, ly = _read_gap(ds_in)
     axes = (0, 1) if args.axis is None else (args.axis,)
     results = {}
     for ax in axes:
@@ -80,24 +76,23 @@ def run(args: argparse.Namespace) -> None:
     out = flow_dataset(results, contact, lx=lx, ly=ly, eta=args.eta, tol=args.tol)
     out.attrs["source"] = str(args.input)
     for k, v in ds_in.attrs.items():
-        if k not in ("title", "lx", "ly"):
+        # the contact's provenance continues in this file's history and references
+        if k not in ("title", "lx", "ly", *PROVENANCE_ATTRS):
             out.attrs[f"contact_{k}"] = v
-    write_dataset(out, args.output)
+    write_dataset(out, args.output, provenance=args.provenance.using("reynolds"))
     if args.plot:
         _plot(results, contact, args.plot)
 
 
 def _plot(results: dict, contact: np.ndarray, path: str) -> None:
-    import matplotlib
-
-    matplotlib.use("Agg")
-    import matplotlib.pyplot as plt
+    # a Figure without pyplot: no backend is selected or switched (savefig renders with Agg)
+    from matplotlib.figure import Figure
 
     from roughflow.flow import plot_flux
 
-    fig, axes = plt.subplots(1, len(results), figsize=(5 * len(results), 4.2), squeeze=False)
+    fig = Figure(figsize=(5 * len(results), 4.2))
+    axes = fig.subplots(1, len(results), squeeze=False)
     for ax, r in zip(axes[0], results.values(), strict=True):
         plot_flux(r, contact, ax=ax)
     fig.tight_layout()
     fig.savefig(path, dpi=120)
-    plt.close(fig)

@@ -58,7 +58,7 @@ def run(args: argparse.Namespace) -> None:
                         height_unit=args.height_unit, detrend_mode=args.detrend,
                         fill=args.fill, crop=args.crop, channel=args.channel,
                         periodic=args.periodic)
-    write_dataset(surface_to_dataset(surface), args.output)
+    write_dataset(surface_to_dataset(surface), args.output, provenance=args.provenance)
     s = surface.scan
     nx, ny = surface.shape
     print(f"{args.scan}: {s.reader}, channel {s.channel}, {nx} x {ny} points, "

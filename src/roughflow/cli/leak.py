@@ -8,7 +8,7 @@ from pathlib import Path
 from roughflow.defaults import BOUNDARY, BOUNDARY_METHODS, CONTACT_TOL, THRESHOLD_TOL
 from roughflow.errors import InputError
 
-from ._common import add_output
+from ._common import add_input, add_output
 
 
 def register(sub: argparse._SubParsersAction) -> None:
@@ -29,7 +29,8 @@ def register(sub: argparse._SubParsersAction) -> None:
             "contact pressure (it does not push the surfaces apart)."
         ),
     )
-    p.add_argument("surface", metavar="SURFACE.nc", help="surface file (roughflow import)")
+    add_input(p, "surface", kinds="surface", what="surface file", metavar="SURFACE.nc",
+              help="surface file (roughflow import)")
     p.add_argument("--modulus", required=True, help="contact modulus E*, e.g. 200GPa")
     p.add_argument("--pressures", required=True, metavar="LO:HI:N",
                    help="nominal contact pressures: LO:HI:N (log-spaced) or A,B,C")
@@ -58,11 +59,12 @@ def register(sub: argparse._SubParsersAction) -> None:
 
 def run(args: argparse.Namespace) -> None:
     from roughflow.datasets import leak_dataset
-    from roughflow.io import read_surface, write_dataset
+    from roughflow.io import surface_from_dataset, write_dataset
     from roughflow.leak import check_pressures, leak_curve
     from roughflow.units import Scales, parse_quantity, parse_range
 
-    # every quantity is checked before the surface is read and before any solve
+    # every quantity is checked before any solve (the surface file was read and checked by
+    # the shared input layer)
     modulus = parse_quantity(args.modulus, "pressure", "--modulus")
     pressures = parse_range(args.pressures, "pressure", "--pressures")
     fluid = parse_quantity(args.fluid_pressure, "pressure", "--fluid-pressure")
@@ -71,7 +73,7 @@ def run(args: argparse.Namespace) -> None:
     length = parse_quantity(args.seal_length, "length", "--seal-length")
     given = (None if args.length_scale is None
              else parse_quantity(args.length_scale, "length", "--length-scale"))
-    surface = read_surface(args.surface)
+    surface = surface_from_dataset(args.data["surface"])
     if surface.scan is not None and given is not None:
         raise InputError(f"{args.surface} already records its length scale "
                          f"({surface.scan.length_scale:g} m): drop --length-scale")
@@ -87,7 +89,8 @@ def run(args: argparse.Namespace) -> None:
     ds = leak_dataset(curve, surface, scales=scales, fluid_pressure=fluid, seal_width=width,
                       seal_length=length, name=name)
     ds.attrs["surface_file"] = str(args.surface)
-    write_dataset(ds, args.output)
+    write_dataset(ds, args.output,
+                  provenance=args.provenance.using("gfmd", "percolation", "reynolds"))
     print(format_table(ds))
 
 

@@ -124,12 +124,16 @@ def job_from_args(args: argparse.Namespace):
 
 
 def run(args: argparse.Namespace) -> None:
+    from dataclasses import replace
+
     from roughflow.io import write_dataset
+    from roughflow.scenes import job_methods
     from roughflow.scenes import run as run_job
 
     job = job_from_args(args)
     t0 = time.perf_counter()
     log.info("job %s (%s)", job.job_id, job.kind)
     ds = run_job(job, threads=args.threads)
-    write_dataset(ds, args.output)
+    provenance = replace(args.provenance, threads=args.threads).using(*job_methods(job))
+    write_dataset(ds, args.output, provenance=provenance)
     log.info("wrote %s in %.1f s", args.output, time.perf_counter() - t0)

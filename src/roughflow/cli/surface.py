@@ -3,10 +3,13 @@
 from __future__ import annotations
 
 import argparse
+import logging
 
 from roughflow.errors import InputError
 
 from ._common import add_output, add_surface_options
+
+log = logging.getLogger(__name__)
 
 
 def register(sub: argparse._SubParsersAction) -> None:
@@ -68,4 +71,7 @@ def run(args: argparse.Namespace) -> None:
     from roughflow.surface import generate
 
     spec = spec_from_args(args)
-    write_dataset(surface_to_dataset(generate(spec)), args.output)
+    log.info("surface: %d x %d grid, gamma=%g H=%g lambda_r=%g lambda_s=%g seed=%d", spec.nx,
+             spec.ny, spec.gamma, spec.hurst, spec.lambda_r, spec.lambda_s, spec.seed)
+    write_dataset(surface_to_dataset(generate(spec)), args.output,
+                  provenance=args.provenance.using("surface"))

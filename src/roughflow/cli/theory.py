@@ -17,14 +17,16 @@ from __future__ import annotations
 import argparse
 import sys
 from pathlib import Path
-
-import numpy as np
+from typing import TYPE_CHECKING
 
 from roughflow import defaults
 from roughflow.defaults import A_C_STAR_PAPER, MODELS
 from roughflow.errors import InputError
 
-from ._common import add_surface_options
+from ._common import add_input, add_output, add_surface_options
+
+if TYPE_CHECKING:  # numpy is imported when a command runs, not for --help
+    import numpy as np
 
 DEFAULT_PRESSURES = "0.002,0.005,0.01,0.02,0.05,0.1,0.15,0.2,0.25"
 
@@ -41,8 +43,9 @@ def register(sub: argparse._SubParsersAction) -> None:
             "and sigma(p) = Eq. 16 over --pressures. Units: E* = 1, lengths in L, eta = 1."
         ),
     )
-    p.add_argument("file", nargs="?", default=None,
-                   help="netCDF file with 'gap' (result) or 'heights' (surface); optional")
+    add_input(p, "file", kinds=("gap", "surface"), what="input file", nargs="?", default=None,
+              metavar="FILE.nc",
+              help="netCDF file with 'gap' (result) or 'heights' (surface); optional")
     p.add_argument("--a-c-star", type=float, default=A_C_STAR_PAPER,
                    help=f"percolation threshold a_c* in (0, 1) ({A_C_STAR_PAPER}, the paper's "
                         "large-system elastic value)")
@@ -54,9 +57,10 @@ def register(sub: argparse._SubParsersAction) -> None:
     g.add_argument("--gamma", type=float, default=None,
                    help="Peklenik number for the anisotropic forms (default: the file's "
                         "spec_gamma attribute, else 1); also the spec's gamma without a file")
-    g.add_argument("--flow", default=None, metavar="FLOW.nc",
-                   help="flow file of the same gap (roughflow flow): its sigma_x, sigma_y are "
-                        "added to the table and the output for comparison")
+    add_input(g, "--flow", kinds="flow", what="flow file", default=None, metavar="FLOW.nc",
+              help="flow file of the same gap (roughflow flow; its contact map must equal "
+                   "the gap file's): its sigma_x, sigma_y are added to the table and the "
+                   "output for comparison")
     g.add_argument("--peklenik", choices=("height", "conductivity"), default="height",
                    help="use the height Peklenik number (--gamma) or estimate the conductivity "
                         "Peklenik number of each gap field from its autocorrelation (height)")
@@ -68,12 +72,13 @@ def register(sub: argparse._SubParsersAction) -> None:
                         "roughflow.theory.DEFAULT_ENERGY_FACTOR, docs/theory.md)")
     add_surface_options(s, ("--hurst", "--l-over-lambda-r", "--eps-f", "--points-per-lambda-s",
                             "--aspect", "--rolloff"))
-    p.add_argument("-o", "--output", default=None, metavar="FILE.nc",
-                   help="also write the results to this netCDF file")
+    add_output(p, required=False, help="also write the results to this netCDF file")
     p.set_defaults(func=run)
 
 
 def _parse_pressures(text: str) -> np.ndarray:
+    import numpy as np
+
     try:
         values = [float(v) for v in text.split(",") if v.strip()]
     except ValueError:
@@ -84,26 +89,23 @@ def _parse_pressures(text: str) -> np.ndarray:
 
 
 def run(args: argparse.Namespace) -> None:
-    import xarray as xr
-
     from roughflow.io import surface_from_dataset
 
     if args.file is None:
+        if args.flow is not None:
+            raise InputError("--flow needs a gap file (roughflow contact) to compare with")
         _run_persson(args, _spec_from_args(args), source="spec from options")
         return
     path = Path(args.file)
-    if not path.exists():
-        raise InputError(f"file {str(path)!r} does not exist")
-    with xr.open_dataset(path) as ds:
-        ds = ds.load()
+    ds = args.data["file"]
     if "gap" in ds:
         _run_gap(args, ds)
-    elif "heights" in ds:
+    else:
+        if args.flow is not None:
+            raise InputError(f"--flow compares with a gap file, but {str(path)!r} is a surface")
         surface = surface_from_dataset(ds)
         src = surface.spec if surface.spec is not None else surface
         _run_persson(args, src, source=f"{path.name} ({'spec' if surface.spec else 'measured'})")
-    else:
-        raise InputError(f"{str(path)!r} has neither 'gap' nor 'heights'")
 
 
 def _spec_from_args(args: argparse.Namespace):
@@ -165,7 +167,7 @@ def _run_persson(args: argparse.Namespace, src, *, source: str) -> None:
     spec = src if not hasattr(src, "heights") else getattr(src, "spec", None)
     if spec is not None:
         ds.attrs.update({f"spec_{k}": v for k, v in spec.as_attrs().items()})
-    write_dataset(ds, args.output)
+    write_dataset(ds, args.output, provenance=args.provenance.using("persson", "closed_form"))
 
 
 def _cell(ds, nx: int, ny: int) -> tuple[float, float]:
@@ -184,14 +186,20 @@ def _cell(ds, nx: int, ny: int) -> tuple[float, float]:
     return lx, ly
 
 
-def _read_flow(path: str, n: int) -> dict[str, list[float]]:
-    """sigma_x, sigma_y of a ``roughflow flow`` file (variables or attributes)."""
-    import xarray as xr
+def _read_flow(path: str, fl, masks: np.ndarray | None, gap_shape) -> dict[str, list[float]]:
+    """sigma_x, sigma_y of a ``roughflow flow`` file (variables or attributes), checked to
+    belong to the gap fields: a flow file holds one field, whose contact map must equal the
+    gap file's (else the comparison would be with another gap's conductance)."""
+    import numpy as np
 
-    if not Path(path).exists():
-        raise InputError(f"flow file {path!r} does not exist")
-    with xr.open_dataset(path) as fl:
-        fl = fl.load()
+    n = gap_shape[0]
+    contact = np.asarray(fl["contact"].transpose("x", "y").values, dtype=bool)
+    if n != 1 or contact.shape != tuple(gap_shape[1:]):
+        raise InputError(f"flow file {path!r} holds one {contact.shape} field, the gap file "
+                         f"{n} of shape {tuple(gap_shape[1:])}: not the same gap")
+    if masks is not None and (differ := int((masks[0] != contact).sum())):
+        raise InputError(f"flow file {path!r} belongs to another gap: its contact map differs "
+                         f"from the gap file's in {differ} of {contact.size} cells")
     out = {}
     for ax in ("x", "y"):
         name = f"sigma_{ax}"
@@ -239,6 +247,7 @@ def _columns(t) -> dict[str, float]:
 
 
 def _run_gap(args: argparse.Namespace, ds) -> None:
+    import numpy as np
     import xarray as xr
 
     from roughflow.datasets.units import DIMENSIONLESS, LENGTH_UNITS, SIGMA_UNITS
@@ -271,7 +280,10 @@ def _run_gap(args: argparse.Namespace, ds) -> None:
                        noncontact=True)
         for k, v in _columns(t).items():
             cols[k].append(float(v))
-    reynolds = _read_flow(args.flow, fields.shape[0]) if args.flow else {}
+    if args.flow and masks is None:
+        masks = (fields <= 0)  # a gap file without a contact map: contact = closed cells
+    reynolds = (_read_flow(args.flow, args.data["flow"], masks, fields.shape) if args.flow
+                else {})
     cols.update(reynolds)
     out = sys.stdout
     out.write(f"# Bruggeman (a_c* = {a_star}, D = {1 / (1 - a_star):.4f}) and Eq. 16 ({kind}); "
@@ -312,4 +324,5 @@ def _run_gap(args: argparse.Namespace, ds) -> None:
                "peklenik_source": args.peklenik, "gamma": gamma},
     )
     res.attrs.update({k: v for k, v in ds.attrs.items() if k.startswith("spec_")})
-    write_dataset(res, args.output)
+    methods = ("bruggeman", "closed_form", *(("reynolds",) if reynolds else ()))
+    write_dataset(res, args.output, provenance=args.provenance.using(*methods))

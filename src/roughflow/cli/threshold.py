@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import argparse
+import logging
 
 from roughflow.defaults import (
     A_C_STAR_PAPER,
@@ -15,7 +16,9 @@ from roughflow.defaults import (
 )
 from roughflow.errors import InputError
 
-from ._common import add_output, axis_arg
+from ._common import add_input, add_output, axis_arg
+
+log = logging.getLogger(__name__)
 
 
 def register(sub: argparse._SubParsersAction) -> None:
@@ -32,7 +35,8 @@ def register(sub: argparse._SubParsersAction) -> None:
         ),
     )
     p_min, p_max = THRESHOLD_PRESSURE_RANGE
-    p.add_argument("surface", help="surface file written by 'roughflow surface'")
+    add_input(p, "surface", kinds="surface", what="surface file", metavar="SURFACE.nc",
+              help="surface file written by 'roughflow surface'")
     p.add_argument("--axis", type=axis_arg, default=None, metavar="{x,y,both}",
                    help="flow direction: x, y or both (both: one shared sequence of solves)")
     p.add_argument("--model", choices=MODELS, default="elastic", help="contact model (elastic)")
@@ -66,7 +70,7 @@ def register(sub: argparse._SubParsersAction) -> None:
 
 def run(args: argparse.Namespace) -> None:
     from roughflow.datasets import threshold_dataset
-    from roughflow.io import read_surface, write_dataset
+    from roughflow.io import surface_from_dataset, write_dataset
     from roughflow.search import SearchOptions, threshold
 
     adhesion = None
@@ -82,11 +86,16 @@ def run(args: argparse.Namespace) -> None:
         strategy=args.strategy, pressure_range=(args.p_min, args.p_max),
         first_pressure=args.p_guess, contact_tol=args.contact_tol, method=args.method,
         on_unbracketed="nan" if args.allow_unbracketed else "raise")
-    surface = read_surface(args.surface)
+    surface = surface_from_dataset(args.data["surface"])
     res = threshold(surface, args.axis, model=args.model, tol=args.tol, adhesion=adhesion,
                     options=options)
     if args.axis is not None:
         res = {args.axis: res}
+    for ax, r in res.items():
+        log.info("a_c*(%s) = %.4f in [%.4f, %.4f] after %d contact solves", "xy"[ax],
+                 r.a_c_star, r.a_lo, r.a_hi, r.n_solves)
     ds = threshold_dataset(res, surface)
     ds.attrs["surface_file"] = str(args.surface)
-    write_dataset(ds, args.output)
+    methods = ["percolation", "bearing" if args.model == "bearing" else args.method or "gfmd"]
+    methods += {"elastic": ["perimeter"], "adhesive": ["adhesion"]}.get(args.model, [])
+    write_dataset(ds, args.output, provenance=args.provenance.using(*methods))

@@ -8,13 +8,18 @@ Each iteration costs two FFT pairs (displacement of p and of the search directio
 
 from __future__ import annotations
 
+import logging
+
 import numpy as np
 
 from roughflow import fft
+from roughflow.defaults import SOLVER_LOG_EVERY
 
 from ._linalg import dot as _dot
 from ._result import SolverOutput
 from .elastic import compliance
+
+log = logging.getLogger(__name__)
 
 
 def _convolve(plan: fft.RealFFT2, kernel: np.ndarray, a: np.ndarray, out: np.ndarray) -> None:
@@ -61,6 +66,7 @@ def polonsky_keer(
     residual = np.inf
     it = 0
     gbar = 0.0
+    debug = log.isEnabledFor(logging.DEBUG)  # progress every SOLVER_LOG_EVERY iterations
     while True:
         _convolve(plan, kern, p, g)
         g -= h
@@ -73,6 +79,9 @@ def polonsky_keer(
         residual /= hscale
         if residual <= tol or it >= max_iter:
             break
+        if debug and it % SOLVER_LOG_EVERY == 0 and it:
+            log.debug("cg iteration %d: residual %.3e (tol %.1e), contact %.4f", it, residual,
+                      tol, float(np.count_nonzero(s)) / n)
         it += 1
         gg = _dot(gs, gs)
         t *= delta * gg / g_old

@@ -51,11 +51,13 @@ checks it once the free estimate max |z| / rms(h) says it may be below the toler
 
 from __future__ import annotations
 
+import logging
 import math
 
 import numpy as np
 
 from roughflow import fft
+from roughflow.defaults import SOLVER_LOG_EVERY
 
 from . import _kernels as _k
 from ._linalg import dot
@@ -91,6 +93,8 @@ ALPHA_MIN = 1e-3
 ALPHA_MAX = 1e3
 T_MAX = 4.0
 T_KEEP = 0.8
+
+log = logging.getLogger(__name__)
 
 
 def gfmd(
@@ -341,6 +345,10 @@ def _fire(
 
     dt, alpha, n_pos = (ADHESIVE_DT0 if soft else DT0), ALPHA0, 0
     it = 0
+    # progress at DEBUG every SOLVER_LOG_EVERY steps, at the residual checks (the level is
+    # read once: the loop itself pays one comparison per check)
+    debug = log.isEnabledFor(logging.DEBUG)
+    next_log = SOLVER_LOG_EVERY
     res = forces(True)
     while res > tol and it < max_iter:
         it += 1
@@ -364,6 +372,10 @@ def _fire(
         r = forces(check)
         if check:
             res = r
+            if debug and it >= next_log:
+                next_log += SOLVER_LOG_EVERY
+                log.debug("gfmd step %d: residual %.3e (tol %.1e), dt %.3g, contact %.4f", it,
+                          res, tol, dt, float(np.count_nonzero(active)) / size)
     separation = float(u.mean())
     g = np.subtract(u, h, out=f).reshape(shape)
     if not soft:

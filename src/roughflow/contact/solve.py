@@ -6,7 +6,7 @@ import math
 
 import numpy as np
 
-from roughflow.defaults import CONTACT_METHODS, CONTACT_TOL, MODELS
+from roughflow.defaults import CONTACT_METHODS, CONTACT_TOL, CONTACT_TOL_MAX, MODELS
 from roughflow.errors import (
     ConvergenceError,
     InputError,
@@ -14,6 +14,7 @@ from roughflow.errors import (
     require_finite,
     require_positive,
 )
+from roughflow.resources import check_memory
 from roughflow.surface import Surface
 
 from ._result import ContactResult
@@ -64,7 +65,8 @@ def solve(
     tol:
       residual to reach: the largest gap error (cg: max |gap - 0| on the contact set and
       max overlap off it; gfmd: the same measured after the solve) in units of the rms
-      height. The default 1e-6 converges a_c and the mean gap to about 1e-5 relative.
+      height, at most ``CONTACT_TOL_MAX``. The default 1e-6 converges a_c and the mean
+      gap to about 1e-5 relative.
     max_iter:
       iteration cap; if it is reached first a :class:`ConvergenceError` carrying the
       residual is raised.
@@ -77,6 +79,8 @@ def solve(
     if not isinstance(surface, Surface):
         raise InputError(f"surface must be a roughflow Surface, got {type(surface).__name__}")
     heights = require_field("surface heights", surface.heights)
+    check_memory("bearing" if model == "bearing" else "contact", heights.shape,
+                 what=f"a {model} contact solve")
     if model == "bearing":
         if area_fraction is None:
             raise InputError("the bearing model needs area_fraction=")
@@ -90,6 +94,9 @@ def solve(
             "is load controlled (pressure=)"
         )
     tol = require_positive("tol", tol)
+    if tol > CONTACT_TOL_MAX:
+        raise InputError(f"tol must be at most {CONTACT_TOL_MAX:g} (a gap error of 1 % of the rms "
+                         f"height; a looser one returns the starting state), got {tol!r}")
     if method is None:
         method = "gfmd"
     if method not in METHODS:

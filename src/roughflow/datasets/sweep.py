@@ -27,7 +27,7 @@ INT_FILL = -1
 CORRECTION_MIN_POINTS = 4.0
 
 __all__ = ["AXIS_COORD", "CORRECTION_MIN_POINTS", "INT_FILL", "PARAM_DIMS", "area_values",
-           "expand", "no_fill_on_coords", "param_coords", "rnd", "surface_vars",
+           "expand", "no_fill_on_coords", "param_coords", "param_key", "rnd", "surface_vars",
            "threshold_values", "var"]
 
 
@@ -36,21 +36,24 @@ def rnd(v: float) -> float:
     return float(f"{float(v):.12g}")
 
 
+def param_key(p: SurfaceParams, model: str) -> tuple:
+    """The values of :data:`PARAM_DIMS` of a job: jobs with equal keys fill the same cells
+    of a study dataset (and must therefore differ in their seeds only)."""
+    return (model, rnd(p.gamma), rnd(p.hurst), p.eps_t, rnd(p.eps_f))
+
+
 def param_coords(p: SurfaceParams, model: str) -> dict:
     """Length-1 parameter coordinates shared by every per-job dataset."""
-    return {
-        "model": ("model", [model], {"long_name": "contact model"}),
-        "gamma": ("gamma", [rnd(p.gamma)],
-                  {"units": DIMENSIONLESS,
-                   "long_name": "Peklenik number (> 1: stretched along x)"}),
-        "hurst": ("hurst", [rnd(p.hurst)],
-                  {"units": DIMENSIONLESS, "long_name": "Hurst exponent H"}),
-        "eps_t": ("eps_t", [p.eps_t], {
-            "units": DIMENSIONLESS,
-            "long_name": "eps_t = max(sqrt(gamma), 1/sqrt(gamma)) lambda_r / L"}),
-        "eps_f": ("eps_f", [rnd(p.eps_f)],
-                  {"units": DIMENSIONLESS, "long_name": "eps_f = lambda_s / lambda_r"}),
+    values = dict(zip(PARAM_DIMS, param_key(p, model), strict=True))
+    attrs = {
+        "model": {"long_name": "contact model"},
+        "gamma": {"units": DIMENSIONLESS, "long_name": "Peklenik number (> 1: stretched along x)"},
+        "hurst": {"units": DIMENSIONLESS, "long_name": "Hurst exponent H"},
+        "eps_t": {"units": DIMENSIONLESS,
+                  "long_name": "eps_t = max(sqrt(gamma), 1/sqrt(gamma)) lambda_r / L"},
+        "eps_f": {"units": DIMENSIONLESS, "long_name": "eps_f = lambda_s / lambda_r"},
     }
+    return {dim: (dim, [values[dim]], attrs[dim]) for dim in PARAM_DIMS}
 
 
 def expand(values, extra_dims: tuple[str, ...]) -> tuple[tuple[str, ...], np.ndarray]:

@@ -2,7 +2,9 @@
 
 ``make_figure(study, dataset, output, fit=None)`` writes ``output`` (PNG) and the PDF
 next to it and returns the caption. Every module has ``CAPTION`` and
-``draw(ds, fit=None) -> matplotlib.figure.Figure``.
+``draw(ds, fit=None) -> matplotlib.figure.Figure``. The figures are made without pyplot,
+so the library never selects or switches a matplotlib backend: in a notebook the returned
+Figure displays inline, and ``fig.savefig`` renders with Agg or the PDF backend.
 """
 
 from __future__ import annotations
@@ -25,24 +27,28 @@ def caption(study: str) -> str:
     return module(study).CAPTION
 
 
-def make_figure(study: str, dataset, output: str | os.PathLike, fit=None) -> str:
-    """Draw ``study`` from ``dataset`` (xr.Dataset or path) into PNG + PDF; returns caption."""
-    import matplotlib
-
-    matplotlib.use("Agg")
-    import matplotlib.pyplot as plt
-
+def make_figure(study: str, dataset, output: str | os.PathLike, fit=None, *,
+                source: str = "the dataset") -> str:
+    """Draw ``study`` from ``dataset`` (xr.Dataset or path) into ``output`` (a .png file) and
+    the PDF next to it; returns the caption. The dataset must be of the study's kind
+    (:data:`roughflow.datasets.kinds.STUDY_KINDS`); ``source`` names it in messages."""
     from roughflow.aggregate import load
+    from roughflow.datasets.kinds import STUDY_KINDS, check_kind
 
-    mod = module(study)
-    ds = load(dataset) if isinstance(dataset, (str, os.PathLike)) else dataset
-    fit_ds = load(fit) if isinstance(fit, (str, os.PathLike)) else fit
-    fig = mod.draw(ds, fit=fit_ds)
     out = Path(output)
+    if out.suffix.lower() != ".png":
+        raise InputError(f"the figure is written as PNG (and a PDF next to it): {str(out)!r} "
+                         "must end in .png")
+    mod = module(study)
+    if isinstance(dataset, (str, os.PathLike)):
+        source = f"study dataset {str(dataset)!r}"
+        dataset = load(dataset)
+    check_kind(dataset, STUDY_KINDS[study], source)
+    fit_ds = load(fit, "fit") if isinstance(fit, (str, os.PathLike)) else fit
+    fig = mod.draw(dataset, fit=fit_ds)
     out.parent.mkdir(parents=True, exist_ok=True)
     for path in (out.with_suffix(".png"), out.with_suffix(".pdf")):
         tmp = path.with_name(path.stem + ".part" + path.suffix)
         fig.savefig(tmp, dpi=150)
         os.replace(tmp, path)
-    plt.close(fig)
     return mod.CAPTION

@@ -2,10 +2,11 @@
 
 from __future__ import annotations
 
-import matplotlib.pyplot as plt
 import numpy as np
 import xarray as xr
 from matplotlib.colors import ListedColormap
+from matplotlib.figure import Figure
+from matplotlib.patches import Rectangle
 
 CAPTION = (
     "Fluid channels of an isotropic and an anisotropic surface (paper Fig. 1). "
@@ -20,8 +21,9 @@ CAPTION = (
 PHASE_COLORS = ListedColormap(["#f28e2b", "#1f3b99", "#a6cee3"])
 
 
-def draw(ds: xr.Dataset, fit=None) -> plt.Figure:
-    fig, axes = plt.subplots(1, 3, figsize=(12, 4.6), constrained_layout=True)
+def draw(ds: xr.Dataset, fit=None) -> Figure:
+    fig = Figure(figsize=(12, 4.6), layout="constrained")
+    axes = fig.subplots(1, 3)
     h = ds["heights_iso"].values
     im = axes[0].imshow((h / np.abs(h).max()).T, origin="lower", cmap="viridis",
                         aspect="auto", extent=(0, 1, 0, 1))
@@ -41,7 +43,7 @@ def draw(ds: xr.Dataset, fit=None) -> plt.Figure:
     for ax in axes:
         ax.set_xlabel("x / Lx")
         ax.set_ylabel("y / Ly")
-    handles = [plt.Rectangle((0, 0), 1, 1, color=c) for c in PHASE_COLORS.colors]
+    handles = [Rectangle((0, 0), 1, 1, color=c) for c in PHASE_COLORS.colors]
     fig.legend(handles, ["contact", "fluid percolating along x", "other fluid"],
                loc="outside lower center", ncol=3, fontsize=8, frameon=False)
     return fig

@@ -2,8 +2,8 @@
 
 from __future__ import annotations
 
-import matplotlib.pyplot as plt
 import xarray as xr
+from matplotlib.figure import Figure
 
 from roughflow.datasets.sweep import area_values
 
@@ -25,10 +25,11 @@ CAPTION = (
 MODEL_MARKER = {"elastic": "o", "bearing": "s", "adhesive": "^"}
 
 
-def draw(ds: xr.Dataset, fit=None) -> plt.Figure:
+def draw(ds: xr.Dataset, fit=None) -> Figure:
     models = [m for m in ("elastic", "bearing", "adhesive") if m in ds["model"].values]
     n = len(models) + 1
-    fig, axes = plt.subplots(1, n, figsize=(4.6 * n, 4.2), constrained_layout=True)
+    fig = Figure(figsize=(4.6 * n, 4.2), layout="constrained")
+    axes = fig.subplots(1, n)
     gamma = float(ds["gamma"].values[0])
     rax = axes[-1]
     for ax, model, tag in zip(axes[:-1], models, "abc", strict=False):

@@ -2,9 +2,9 @@
 
 from __future__ import annotations
 
-import matplotlib.pyplot as plt
 import numpy as np
 import xarray as xr
+from matplotlib.figure import Figure
 
 from roughflow.datasets.sweep import area_values
 from roughflow.defaults import MODELS
@@ -26,10 +26,10 @@ TITLES = {"elastic": "elastic, non-adhesive", "adhesive": "short-range adhesion"
           "bearing": "bearing-area model"}
 
 
-def draw(ds: xr.Dataset, fit=None) -> plt.Figure:
+def draw(ds: xr.Dataset, fit=None) -> Figure:
     models = [m for m in MODELS if m in ds["model"].values]
-    fig, axes = plt.subplots(1, len(models), figsize=(4.6 * len(models), 4.2),
-                             constrained_layout=True, squeeze=False)
+    fig = Figure(figsize=(4.6 * len(models), 4.2), layout="constrained")
+    axes = fig.subplots(1, len(models), squeeze=False)
     for ax, model, tag in zip(axes[0], models, "abc", strict=False):
         sub = ladder(ds, model)
         ref = sigma_ref(sub)

@@ -2,9 +2,9 @@
 
 from __future__ import annotations
 
-import matplotlib.pyplot as plt
 import numpy as np
 import xarray as xr
+from matplotlib.figure import Figure
 
 from roughflow.datasets.sweep import threshold_values
 from roughflow.defaults import A_C_STAR_PAPER
@@ -25,10 +25,10 @@ CAPTION = (
 MARKERS = ("o", "s", "^", "D")
 
 
-def draw(ds: xr.Dataset, fit=None) -> plt.Figure:
+def draw(ds: xr.Dataset, fit=None) -> Figure:
     models = [m for m in ("elastic", "bearing", "adhesive") if m in ds["model"].values]
-    fig, axes = plt.subplots(1, len(models), figsize=(5.2 * len(models), 4.2),
-                             constrained_layout=True, squeeze=False)
+    fig = Figure(figsize=(5.2 * len(models), 4.2), layout="constrained")
+    axes = fig.subplots(1, len(models), squeeze=False)
     a_all = threshold_values(ds)
     for dim in ("hurst",):
         if dim in a_all.dims and a_all.sizes[dim] == 1:

@@ -2,9 +2,9 @@
 
 from __future__ import annotations
 
-import matplotlib.pyplot as plt
 import numpy as np
 import xarray as xr
+from matplotlib.figure import Figure
 
 from roughflow.datasets.sweep import threshold_values
 
@@ -21,8 +21,9 @@ CAPTION = (
 )
 
 
-def draw(ds: xr.Dataset, fit=None) -> plt.Figure:
-    fig, ax = plt.subplots(figsize=(5.5, 4.2), constrained_layout=True)
+def draw(ds: xr.Dataset, fit=None) -> Figure:
+    fig = Figure(figsize=(5.5, 4.2), layout="constrained")
+    ax = fig.subplots()
     a = threshold_values(ds)
     for dim in ("model", "eps_f"):
         if dim in a.dims and a.sizes[dim] == 1:

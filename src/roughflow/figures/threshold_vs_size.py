@@ -2,9 +2,9 @@
 
 from __future__ import annotations
 
-import matplotlib.pyplot as plt
 import numpy as np
 import xarray as xr
+from matplotlib.figure import Figure
 
 from roughflow.datasets.sweep import threshold_values
 from roughflow.fits import scaling
@@ -34,8 +34,9 @@ def _fit_row(fit: xr.Dataset, group: str, which: str, mode: str) -> dict | None:
     return {k: float(row[k]) for k in row.data_vars}
 
 
-def draw(ds: xr.Dataset, fit: xr.Dataset | None = None) -> plt.Figure:
-    fig, ax = plt.subplots(figsize=(6.4, 4.8), constrained_layout=True)
+def draw(ds: xr.Dataset, fit: xr.Dataset | None = None) -> Figure:
+    fig = Figure(figsize=(6.4, 4.8), layout="constrained")
+    ax = fig.subplots()
     a = threshold_values(ds)
     for dim in ("model", "hurst", "eps_f"):
         if dim in a.dims and a.sizes[dim] == 1:

@@ -19,9 +19,10 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from roughflow.defaults import FLOW_TOL
+from roughflow.defaults import FLOW_TOL, FLOW_TOL_MAX
 from roughflow.errors import InputError, require_field, require_positive
 from roughflow.percolation import spanning_cells
+from roughflow.resources import check_memory
 
 from .assembly import Faces, assemble, face_transmissibilities
 from .linsolve import LinearSolution, check_method, solve_spd
@@ -150,8 +151,8 @@ def solve(
     """Reynolds flow along ``axis`` (0/"x" or 1/"y") through the gap field ``gap[ix, iy]``.
 
     ``lx``, ``ly``: cell lengths (``ly`` defaults to ``lx``); ``eta``: viscosity;
-    ``tol``: relative residual of the linear solve (refined further, down to round-off,
-    until |Q_in - Q_out| / Q <= ``tol``); ``method``: None/"auto"
+    ``tol``: relative residual of the linear solve, at most ``FLOW_TOL_MAX`` (refined
+    further, down to round-off, until |Q_in - Q_out| / Q <= ``tol``); ``method``: None/"auto"
     (direct up to 70k unknowns, else "rs"), "rs", "sa", "direct" or "cg" (see
     :mod:`roughflow.flow.linsolve`). A gap whose open cells (u > 0) do not connect
     the two reservoirs gives sigma = 0 without a solve. ``periodic``: the cell is periodic
@@ -165,7 +166,11 @@ def solve(
     ly = lx if ly is None else require_positive("ly", ly)
     eta = require_positive("eta", eta)
     tol = require_positive("tol", tol)
+    if tol > FLOW_TOL_MAX:
+        raise InputError(f"tol must be at most {FLOW_TOL_MAX:g} (a looser solve does not balance "
+                         f"the inlet and outlet fluxes), got {tol!r}")
     method = check_method(method)
+    check_memory("flow", g.shape, what="a Reynolds flow solve")
 
     nx, ny = g.shape
     hx, hy = lx / nx, ly / ny

@@ -16,15 +16,19 @@ from .jobs import (
     LadderJob,
     SurfaceParams,
     ThresholdJob,
+    check_job_memory,
+    estimated_memory,
     expand_study,
     grid_points,
+    job_methods,
     study_defaults,
 )
 
 _RUNNERS = {"run_threshold": "threshold", "run_ladder": "ladder", "run_channels": "channels"}
 
-__all__ = ["ChannelsJob", "LadderJob", "SurfaceParams", "ThresholdJob", "expand_study",
-           "grid_points", "run", "study_defaults", *_RUNNERS]
+__all__ = ["ChannelsJob", "LadderJob", "SurfaceParams", "ThresholdJob", "check_job_memory",
+           "estimated_memory", "expand_study", "grid_points", "job_methods", "run",
+           "study_defaults", *_RUNNERS]
 
 
 def __getattr__(name: str):
@@ -34,5 +38,16 @@ def __getattr__(name: str):
 
 
 def run(job, *, threads: int | None = None):
-    """Run any job and return its dataset."""
-    return __getattr__(f"run_{job.kind}")(job, threads=threads)
+    """Run any job and return its dataset (refused before any work if the job would need
+    more memory than the machine has, :func:`roughflow.scenes.jobs.check_job_memory`)."""
+    from roughflow.fft import check_threads
+
+    check_threads(threads)
+    check_job_memory(job)
+    ds = __getattr__(f"run_{job.kind}")(job, threads=threads)
+    # provenance: the job's parameters (`roughflow scene` arguments)
+    ds.attrs["job_parameters"] = " ".join(job.cli_args())
+    if hasattr(job, "settings"):
+        # what jobs stacked along seed must share (checked by roughflow.aggregate)
+        ds.attrs["job_settings"] = " ".join(job.settings())
+    return ds

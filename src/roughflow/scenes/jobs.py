@@ -19,9 +19,9 @@ from dataclasses import dataclass, field, fields
 from pathlib import Path
 
 from roughflow import defaults
-from roughflow.datasets.sweep import rnd
+from roughflow.datasets.sweep import param_key, rnd
 from roughflow.defaults import FLOW_STUDIES, STUDIES, THRESHOLD_STUDIES
-from roughflow.errors import InputError
+from roughflow.errors import InputError, require_positive, require_seeds
 from roughflow.surface import SurfaceSpec, paper_l_over_lambda_r
 
 SWEEP_KEYS = ("model", "gamma", "hurst", "l_over_lambda_r", "eps_f", "points_per_lambda_s")
@@ -54,6 +54,12 @@ class SurfaceParams:
     eps_f: float = defaults.EPS_F
     points_per_lambda_s: float = defaults.POINTS_PER_LAMBDA_S
     aspect: float = defaults.ASPECT
+
+    def __post_init__(self) -> None:
+        # every number is checked by building the spec (no allocation), so that a bad value
+        # (gamma <= 0, an unresolvable size, ...) is refused here, naming it, and not as a
+        # ZeroDivisionError inside a running job
+        self.spec(0)
 
     @property
     def size(self) -> float:
@@ -89,6 +95,22 @@ class SurfaceParams:
         return args
 
 
+def _check_tol(name: str, value: float, maximum: float) -> float:
+    v = require_positive(name, value)
+    if v > maximum:
+        raise InputError(f"{name} must be at most {maximum:g}, got {value!r}")
+    return v
+
+
+def _without_seeds(args: list[str]) -> tuple[str, ...]:
+    """``cli_args`` without ``--seeds`` and its values (the job's settings)."""
+    i = args.index("--seeds")
+    j = i + 1
+    while j < len(args) and not args[j].startswith("--"):
+        j += 1
+    return tuple(args[:i] + args[j:])
+
+
 def _seed_tag(seeds: tuple[int, ...]) -> str:
     s = sorted(seeds)
     if s == list(range(s[0], s[-1] + 1)) and len(s) > 1:
@@ -96,8 +118,22 @@ def _seed_tag(seeds: tuple[int, ...]) -> str:
     return "s" + "_".join(str(v) for v in s)
 
 
+class _SeedGroup:
+    """A job over a group of seeds of one surface family (threshold and ladder jobs)."""
+
+    @property
+    def key(self) -> tuple:
+        """The study-dataset cells this job fills, less the seed (:func:`param_key`)."""
+        return param_key(self.surface, self.model)
+
+    def settings(self) -> tuple[str, ...]:
+        """Everything that defines the job except its seeds: jobs that share a
+        :attr:`key` must have equal settings (else one study mixes two computations)."""
+        return _without_seeds(self.cli_args())
+
+
 @dataclass(frozen=True)
-class ThresholdJob:
+class ThresholdJob(_SeedGroup):
     """Percolation thresholds a_c*(x), a_c*(y) of ``seeds`` (threshold search, no flow)."""
 
     surface: SurfaceParams
@@ -114,6 +150,9 @@ class ThresholdJob:
             raise InputError("threshold jobs take the elastic or bearing model, got 'adhesive' "
                              "(the threshold scene has no adhesion options; use "
                              "`roughflow threshold --model adhesive` on a surface file)")
+        object.__setattr__(self, "seeds", require_seeds("seeds", self.seeds))
+        _check_tol("tol", self.tol, defaults.THRESHOLD_TOL_MAX)
+        _check_tol("contact_tol", self.contact_tol, defaults.CONTACT_TOL_MAX)
 
     @property
     def job_id(self) -> str:
@@ -141,7 +180,7 @@ def _adhesion_args(adh: dict) -> dict:
 
 
 @dataclass(frozen=True)
-class LadderJob:
+class LadderJob(_SeedGroup):
     """Contact along an area ladder, Reynolds flow along x and y, theory predictions."""
 
     surface: SurfaceParams
@@ -161,6 +200,7 @@ class LadderJob:
     def __post_init__(self) -> None:
         if self.model not in defaults.MODELS:
             raise InputError(f"model must be one of {defaults.MODELS}, got {self.model!r}")
+        object.__setattr__(self, "seeds", require_seeds("seeds", self.seeds))
         if self.a_c_star is None:
             object.__setattr__(self, "a_c_star", defaults.A_C_STAR_THEORY[self.model])
         a = self.area_fractions
@@ -217,6 +257,16 @@ class ChannelsJob:
     seed: int = defaults.CHANNELS["seed"]
     points_per_lambda_s: float = defaults.CHANNELS["points_per_lambda_s"]
     kind: str = field(default="channels", init=False)
+
+    def __post_init__(self) -> None:
+        if self.model not in ("elastic", "bearing"):
+            raise InputError(f"the channels job takes the elastic or bearing model, got "
+                             f"{self.model!r}")
+        a = self.area_fraction
+        if not (isinstance(a, (int, float)) and 0 < a < 1):
+            raise InputError(f"area_fraction must lie in (0, 1), got {a!r}")
+        require_seeds("seed", (self.seed,))
+        self.surfaces()  # checks both cells (SurfaceParams)
 
     @property
     def job_id(self) -> str:
@@ -325,15 +375,19 @@ _NAME = re.compile(r"[A-Za-z0-9_.\-]+")
 Job = ThresholdJob | LadderJob | ChannelsJob | LeakJob
 
 
-def grid_points(job: Job) -> int:
-    """Grid points of one surface of the job (for memory and runtime estimates)."""
+def _grid(job: Job) -> tuple[int, int]:
+    """(nx, ny) of one surface of the job (the stretched one of the channels job)."""
     if isinstance(job, LeakJob):
         raise InputError("a leak job's grid is that of its scan (known after the import)")
-    if isinstance(job, ChannelsJob):
-        spec = job.surfaces()[1].spec(job.seed)
-    else:
-        spec = job.surface.spec(job.seeds[0])
-    return spec.nx * spec.ny
+    spec = job.surfaces()[1].spec(job.seed) if isinstance(job, ChannelsJob) \
+        else job.surface.spec(job.seeds[0])
+    return spec.nx, spec.ny
+
+
+def grid_points(job: Job) -> int:
+    """Grid points of one surface of the job (for memory and runtime estimates)."""
+    nx, ny = _grid(job)
+    return nx * ny
 
 
 def _as_list(v) -> list:
@@ -376,20 +430,24 @@ def expand_study(name: str, block: dict) -> dict[str, Job]:
     """Jobs of one study block (already validated against the schema), keyed by job id.
 
     Keys the block leaves out take :func:`study_defaults`. List keys expand as a Cartesian
-    product per series; seeds are grouped into ``seeds_per_job`` per job. Every surface
-    spec is built here, so an unresolvable size raises :class:`InputError` naming the
-    study, key and value before any job runs.
+    product per series; seeds are grouped into ``seeds_per_job`` per job. Every job (and
+    so every surface spec) is built here and the jobs are checked against each other
+    (:func:`check_collisions`), so a bad value or a study whose jobs would overwrite each
+    other's cells raises :class:`InputError` naming the study, series and values before any
+    job runs.
     """
     block = {**study_defaults(name), **block}
     if name == defaults.MEASURED_STUDY:
         return _expand_measured(block)
     if name == "channels":
-        job = ChannelsJob(**block)
-        for p in job.surfaces():
-            _check_spec(name, p, job.seed)
+        try:
+            job = ChannelsJob(**block)
+        except InputError as exc:
+            raise InputError(f"config studies.{name}: {exc}") from None
         return {job.job_id: job}
     jobs: dict[str, Job] = {}
-    for s in _series(block):
+    for n, s in enumerate(_series(block)):
+        where = f"config studies.{name}" + (f".series[{n}]" if block.get("series") else "")
         seeds = [int(v) for v in _as_list(s["seeds"])]
         per = int(s["seeds_per_job"])
         groups = [tuple(seeds[i:i + per]) for i in range(0, len(seeds), per)]
@@ -398,25 +456,16 @@ def expand_study(name: str, block: dict) -> dict[str, Job]:
             _as_list(s["model"]), _as_list(s["gamma"]), _as_list(s["hurst"]),
             _as_list(s["l_over_lambda_r"]), _as_list(s["eps_f"]),
         ):
-            size = paper_l_over_lambda_r(float(gamma)) if size is None else float(size)
-            p = SurfaceParams(gamma=float(gamma), hurst=float(hurst), l_over_lambda_r=size,
-                              eps_f=float(eps_f), points_per_lambda_s=ppl)
-            _check_spec(name, p, seeds[0])
-            for g in groups:
-                if name in THRESHOLD_STUDIES:
-                    job = ThresholdJob(surface=p, model=model, seeds=g, tol=float(s["tol"]),
-                                       contact_tol=float(s["contact_tol"]))
-                else:
-                    stars = {**defaults.A_C_STAR_THEORY, **s["a_c_star"]}
-                    alt = s["a_c_star_alt"]
-                    job = LadderJob(
-                        surface=p, model=model, seeds=g,
-                        area_fractions=tuple(sorted(float(a) for a in s["area_fraction"])),
-                        a_c_star=float(stars[model]),
-                        a_c_star_alt=None if alt is None else float(alt),
-                        area_tol=float(s["area_tol"]), **_adhesion_args(s["adhesion"]),
-                    )
-                jobs.setdefault(job.job_id, job)
+            values = (f"model={model}, gamma={gamma:g}, hurst={hurst:g}, l_over_lambda_r="
+                      f"{'null' if size is None else format(size, 'g')}, eps_f={eps_f:g}, "
+                      f"points_per_lambda_s={ppl:g}")
+            try:
+                for g in groups:
+                    job = _make_job(name, s, model, gamma, hurst, size, eps_f, ppl, g)
+                    jobs.setdefault(job.job_id, job)
+            except InputError as exc:
+                raise InputError(f"{where}: {values}: {exc}") from None
+    check_collisions(name, jobs.values())
     return jobs
 
 
@@ -441,15 +490,142 @@ def _expand_measured(block: dict) -> dict[str, Job]:
     return jobs
 
 
-def _check_spec(study: str, p: SurfaceParams, seed: int) -> None:
-    try:
-        p.spec(seed)
-    except InputError as exc:
-        raise InputError(
-            f"config studies.{study}: gamma={p.gamma:g}, hurst={p.hurst:g}, "
-            f"l_over_lambda_r={p.size:g}, eps_f={p.eps_f:g}, "
-            f"points_per_lambda_s={p.points_per_lambda_s:g}: {exc}"
-        ) from None
+
+def _make_job(name: str, s: dict, model, gamma, hurst, size, eps_f, ppl, seeds) -> Job:
+    size = paper_l_over_lambda_r(float(gamma)) if size is None else float(size)
+    p = SurfaceParams(gamma=float(gamma), hurst=float(hurst), l_over_lambda_r=size,
+                      eps_f=float(eps_f), points_per_lambda_s=ppl)
+    if name in THRESHOLD_STUDIES:
+        return ThresholdJob(surface=p, model=model, seeds=seeds, tol=float(s["tol"]),
+                            contact_tol=float(s["contact_tol"]))
+    stars = {**defaults.A_C_STAR_THEORY, **s["a_c_star"]}
+    alt = s["a_c_star_alt"]
+    return LadderJob(
+        surface=p, model=model, seeds=seeds,
+        area_fractions=tuple(sorted(float(a) for a in s["area_fraction"])),
+        a_c_star=float(stars[model]), a_c_star_alt=None if alt is None else float(alt),
+        area_tol=float(s["area_tol"]), **_adhesion_args(s["adhesion"]),
+    )
+
+
+def _options(args: tuple[str, ...]) -> dict[str, str]:
+    """``--flag value ...`` -> {flag: "value ..."} (for messages)."""
+    out: dict[str, list[str]] = {}
+    flag = ""
+    for a in args:
+        if a.startswith("--"):
+            flag = a
+            out[flag] = []
+        else:
+            out.setdefault(flag, []).append(a)
+    return {k: " ".join(v) for k, v in out.items()}
+
+
+def describe_key(key: tuple) -> str:
+    """``model=elastic, gamma=1, ...`` for a :attr:`ThresholdJob.key`."""
+    from roughflow.datasets.sweep import PARAM_DIMS
+
+    return ", ".join(f"{d}={v:g}" if isinstance(v, float) else f"{d}={v}"
+                     for d, v in zip(PARAM_DIMS, key, strict=True))
+
+
+def check_collisions(study: str, jobs) -> None:
+    """Refuse jobs of one study that would fill the same cells of its dataset.
+
+    Jobs with the same :attr:`~ThresholdJob.key` (model, gamma, hurst, eps_t, eps_f) are
+    stacked along ``seed`` by the aggregation; they must have the same settings (grid
+    resolution, tolerances, ladder, ...: else the study would mix two computations, and the
+    settings that are variables, such as ``points_per_lambda_s``, would collide) and
+    distinct seeds (else the aggregation would duplicate or drop a seed).
+    """
+    seen: dict[tuple, list] = {}
+    for job in jobs:
+        if isinstance(job, ChannelsJob):
+            continue
+        for other in seen.get(job.key, []):
+            if other.settings() != job.settings():
+                a, b = _options(other.settings()), _options(job.settings())
+                diff = "; ".join(f"{k} {a.get(k, '(none)')} vs {b.get(k, '(none)')}"
+                                 for k in sorted(set(a) | set(b)) if a.get(k) != b.get(k))
+                raise InputError(
+                    f"config studies.{study}: two jobs fill the same cells "
+                    f"({describe_key(job.key)}) with different settings ({diff}); the "
+                    "dataset has no dimension for them: put them in different studies or "
+                    "give them different parameters")
+            common = sorted(set(job.seeds) & set(other.seeds))
+            if common:
+                raise InputError(
+                    f"config studies.{study}: seeds {common} of {describe_key(job.key)} are "
+                    f"computed by two jobs ({other.job_id} and {job.job_id}); every seed "
+                    "may appear once per parameter set (check overlapping series)")
+        seen.setdefault(job.key, []).append(job)
+
+
+def job_methods(job: Job) -> tuple[str, ...]:
+    """The methods a job uses (names of :data:`roughflow.citation.METHODS`)."""
+    if isinstance(job, LeakJob):
+        return ("gfmd", "percolation", "reynolds")
+    contact = ("bearing",) if job.model == "bearing" else ("gfmd",)
+    if job.model == "adhesive":
+        contact += ("adhesion",)
+    corrected = ("perimeter",) if job.model == "elastic" else ()
+    if isinstance(job, ThresholdJob):
+        return ("surface", *contact, "percolation", *corrected)
+    if isinstance(job, LadderJob):
+        return ("surface", *contact, "percolation", "reynolds", "bruggeman", "closed_form",
+                *corrected)
+    return ("surface", *contact, "percolation")
+
+
+#: The task of :mod:`roughflow.resources` whose memory model covers each job kind (a leak
+#: job is a pressure ladder on the imported scan).
+MEMORY_TASKS = {"threshold": "threshold", "ladder": "ladder", "channels": "channels",
+                "leak": "ladder"}
+#: Memory of the Snakemake process that runs a job inside its cluster allocation (it shares
+#: the job's memory cgroup: 375 MB peak measured for a whole config/test.yaml job under
+#: SLURM, whose roughflow process the estimate puts at about 315 MB).
+WRAPPER_MB = 200
+
+
+def estimated_memory(job: Job, points: int | None = None) -> int:
+    """Estimated peak memory of ``job`` in bytes (:func:`roughflow.resources.estimate_bytes`
+    of its grid, or of ``points`` grid points: a leak job's grid is known after the import);
+    the limit of the refusals."""
+    from roughflow.resources import estimate_bytes
+
+    return estimate_bytes(MEMORY_TASKS[job.kind], grid_points(job) if points is None
+                          else points)
+
+
+def requested_mem_mb(job: Job, attempt: int = 1, points: int | None = None) -> int:
+    """Snakemake ``mem_mb`` of ``job``: its estimate plus :data:`WRAPPER_MB`, times the
+    attempt (a job that a cluster ended for its memory would only fail again with the
+    same request)."""
+    return attempt * (WRAPPER_MB + math.ceil(estimated_memory(job, points) / 1e6))
+
+
+def check_job_memory(job: Job, *, limit: int | None = None) -> int:
+    """Raise :class:`~roughflow.errors.ResourceError` if ``job`` needs more memory than
+    ``limit`` bytes (default: what this process can reach); returns the estimate."""
+    from roughflow.resources import check_memory
+
+    return check_memory(MEMORY_TASKS[job.kind], _grid(job), limit=limit,
+                        what=f"the {job.kind} job {job.job_id}")
+
+
+def check_plan_memory(jobs: dict[str, dict[str, Job]], limit: int, source: str) -> None:
+    """Refuse a plan (study name -> jobs) with a job that needs more than ``limit`` bytes
+    (``source`` says where the limit comes from), naming the study and the job."""
+    from roughflow.errors import ResourceError
+
+    for study, study_jobs in jobs.items():
+        for job in study_jobs.values():
+            if isinstance(job, LeakJob):
+                continue  # its grid is the scan's; ``roughflow leak`` checks it itself
+            try:
+                check_job_memory(job, limit=limit)
+            except ResourceError as exc:
+                raise ResourceError(f"config studies.{study}: {exc} ({source})") from None
 
 
 # Cost model (CPU seconds on one core of the development machine), calibrated with single

@@ -43,6 +43,7 @@ from roughflow.defaults import (
     THRESHOLD_PRESSURE_RANGE,
     THRESHOLD_STRATEGIES,
     THRESHOLD_TOL,
+    THRESHOLD_TOL_MAX,
 )
 from roughflow.errors import ConvergenceError, InputError, require_positive
 from roughflow.percolation import (
@@ -52,6 +53,7 @@ from roughflow.percolation import (
     percolates,
     predicted_thresholds,
 )
+from roughflow.resources import check_memory
 from roughflow.surface import Surface
 
 from .load import load_for_area, timed_solve, warm_start
@@ -427,8 +429,9 @@ def threshold(
     if model not in MODELS:
         raise InputError(f"model must be one of {MODELS}, got {model!r}")
     tol = require_positive("tol", tol)
-    if tol >= 1:
-        raise InputError(f"tol must be below 1 (a contact-area difference), got {tol!r}")
+    if tol > THRESHOLD_TOL_MAX:
+        raise InputError(f"tol must be at most {THRESHOLD_TOL_MAX:g} (a contact-area "
+                         f"difference), got {tol!r}")
     opts = SearchOptions() if options is None else options
     if not isinstance(opts, SearchOptions):
         raise InputError(f"options must be SearchOptions, got {type(opts).__name__}")
@@ -439,6 +442,7 @@ def threshold(
         raise InputError("model='adhesive' needs adhesion=Adhesion(surface_energy=, range=)")
     heights = surface.heights
     shape = heights.shape
+    check_memory("threshold", shape, what="a threshold search")
     law = ContactLaw(model)
 
     def sample(r: ContactResult, load: float, open_first: np.ndarray | None,

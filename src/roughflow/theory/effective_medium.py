@@ -362,8 +362,11 @@ def _solve_emt(s: np.ndarray, w: np.ndarray, z: float, a: float, b: float) -> tu
     smax = float(s.max())
     # Scale to O(1) values so that the tolerance is relative.
     t = s / smax
-    slope0 = a * float(_wsum(w, 1.0 / t))
+    with np.errstate(over="ignore", divide="ignore"):
+        slope0 = a * float(_wsum(w, 1.0 / t))
     lo = -h0 / (2.0 * slope0)
+    if not lo > 0:  # the conductivities span more than the float range (1/t overflows)
+        return _solve_emt_log(s, w, z, a, b)
     hi = max(2.0 * (1.0 - z) * a / (b * (a - b)), 2.0 * lo)
 
     def h(y: float) -> float:
@@ -381,3 +384,25 @@ def _solve_emt(s: np.ndarray, w: np.ndarray, z: float, a: float, b: float) -> tu
             abs(hlo), abs(hhi)), iterations=0)
     y = brentq(h, ylo, yhi, xtol=_XTOL, rtol=4 * np.finfo(float).eps, maxiter=_MAXITER)
     return math.exp(y) * smax, abs(h(y))
+
+
+def _solve_emt_log(s: np.ndarray, w: np.ndarray, z: float, a: float,
+                   b: float) -> tuple[float, float]:
+    """:func:`_solve_emt` for conductivities whose ratios overflow (e.g. 1e-300 and 1e300):
+    every quantity in logarithms, H(x) = sum w A / (exp(log s - log x) + B) + z A/B - 1,
+    where an overflowing exp(log s - log x) is a term -> 0 and an underflowing one a term
+    A/B, the exact limits; the bracket of :func:`_solve_emt` in logarithms."""
+    log_s = np.log(s)
+    h0 = z * a / b - 1.0
+    # x_lo = -h0 / (2 A sum w/s), x_hi = 2 (1 - z) A max(s) / (B (A - B)), in logs
+    log_slope = math.log(a) + float(np.logaddexp.reduce(np.log(w) - log_s))
+    ylo = math.log(-h0 / 2.0) - log_slope
+    yhi = max(math.log(2.0 * (1.0 - z) * a / (b * (a - b))) + float(log_s.max()),
+              ylo + math.log(2.0))
+
+    def h(y: float) -> float:
+        with np.errstate(over="ignore", under="ignore"):
+            return float(_wsum(w, a / (np.exp(log_s - y) + b))) + z * a / b - 1.0
+
+    y = brentq(h, ylo, yhi, xtol=_XTOL, rtol=4 * np.finfo(float).eps, maxiter=_MAXITER)
+    return math.exp(y), abs(h(y))

@@ -77,7 +77,10 @@ def gap_theory(gap, *, a_c_star: float, contact=None, gamma: float = 1.0,
     isotropic form; ``noncontact``: also solve Eq. 15 for sigma_nc (defined while some
     fluid cell is open and a_c <= a_c*).
     """
+    from roughflow.resources import check_memory
+
     gap = np.asarray(gap, dtype=np.float64)
+    check_memory("theory", gap.size, what="the gap theory")
     sig = local_conductivity(gap, eta, contact=contact).ravel()
     # contact cells; an open cell with a gap of exactly 0 (the bearing model's critical cell)
     # also has sigma = 0 but is not contact

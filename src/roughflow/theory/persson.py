@@ -82,8 +82,11 @@ class PerssonPrediction:
 
 def discrete_spectrum(source: SurfaceSpec | Surface) -> DiscreteSpectrum:
     """Shell-summed discrete spectrum |h_q|^2 of a spec (deterministic amplitudes) or a surface."""
+    from roughflow.resources import check_memory
+
     if isinstance(source, SurfaceSpec):
         nx, ny, lx, ly = source.nx, source.ny, source.lx, source.ly
+        check_memory("spectrum", (nx, ny), what="the Persson spectrum of a spec")
         qx, qy = fft.wavevectors(nx, ny, lx, ly)
         power = spectrum(peklenik_wavenumber(qx, qy, source.gamma), source)
         power = np.broadcast_to(power, (nx, ny // 2 + 1))

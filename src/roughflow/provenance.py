@@ -1,0 +1,104 @@
+"""Provenance: which roughflow made a dataset, how, when and from what.
+
+``roughflow.io.write_dataset`` (the single writer of every netCDF file) adds
+:meth:`Provenance.attrs` to every dataset it writes:
+
+- ``roughflow_version``, ``python_version``, ``backend`` ("cpu"), ``fft_threads``;
+- ``command``: the command line (``roughflow contact s.nc ...``) or, for the Python API,
+  the process's ``sys.argv``;
+- ``created`` (ISO 8601, UTC) and ``wall_time_s`` (seconds from the start of the command
+  to the write);
+- ``history`` (CF convention): the history of the input file(s) plus one line
+  ``<created>: <command> (roughflow <version>)``;
+- ``references``: keys of :mod:`roughflow.citation` behind the methods used
+  (``roughflow cite FILE.nc`` prints them);
+- ``study_config`` (workflow study datasets): the study's config block as JSON; the job
+  files record their own parameters in ``job_parameters`` (``roughflow.scenes.run``).
+
+:data:`PROVENANCE_ATTRS` are the attributes that differ between two runs of the same
+computation; comparisons of datasets ignore them (and ``wall_time``).
+"""
+
+from __future__ import annotations
+
+import platform
+import shlex
+import sys
+import time
+from dataclasses import dataclass, field, replace
+from datetime import datetime, timezone
+
+#: Attributes written by :meth:`Provenance.attrs` (never copied from one file into another).
+PROVENANCE_ATTRS = ("roughflow_version", "python_version", "backend", "fft_threads",
+                    "command", "created", "wall_time_s", "history", "references",
+                    "study_config")
+
+
+@dataclass(frozen=True)
+class Provenance:
+    """How a dataset is being made. ``started``: ``time.time()`` when the work began
+    (None: no wall time); ``threads``: FFT threads (None: ``ROUGHFLOW_FFT_THREADS`` or
+    1); ``history``: the CF history of the inputs; ``references``: keys of
+    :data:`roughflow.citation.REFERENCES`; ``study_config``: JSON of a study block."""
+
+    command: str = field(default_factory=lambda: "python " + shlex.join(sys.argv))
+    started: float | None = None
+    threads: int | None = None
+    history: str = ""
+    references: tuple[str, ...] = ()
+    study_config: str = ""
+
+    @classmethod
+    def for_command(cls, argv: list[str]) -> Provenance:
+        """The provenance of ``roughflow argv``, started now."""
+        return cls(command="roughflow " + shlex.join(argv), started=time.time())
+
+    def using(self, *methods: str) -> Provenance:
+        """A copy that also records the references of ``methods``
+        (:data:`roughflow.citation.METHODS`)."""
+        from roughflow.citation import keys_for
+
+        return replace(self, references=tuple(dict.fromkeys((*self.references,
+                                                              *keys_for(*methods)))))
+
+    def attrs(self) -> dict:
+        """The netCDF attributes (module docstring)."""
+        from roughflow import __version__
+        from roughflow.fft import default_threads
+
+        now = datetime.now(timezone.utc)
+        created = now.isoformat(timespec="seconds")
+        line = f"{created}: {self.command} (roughflow {__version__})"
+        out = {
+            "roughflow_version": __version__,
+            "python_version": platform.python_version(),
+            "backend": "cpu",
+            "fft_threads": self.threads if self.threads is not None else default_threads(),
+            "command": self.command,
+            "created": created,
+            "history": f"{self.history}\n{line}" if self.history else line,
+        }
+        if self.started is not None:
+            out["wall_time_s"] = round(now.timestamp() - self.started, 3)
+        if self.references:
+            out["references"] = " ".join(self.references)
+        if self.study_config:
+            out["study_config"] = self.study_config
+        return out
+
+
+def input_history(*datasets) -> str:
+    """The CF ``history`` lines of input datasets (in order, each line once)."""
+    lines: list[str] = []
+    for ds in datasets:
+        text = str(getattr(ds, "attrs", {}).get("history", ""))
+        lines += [ln for ln in text.splitlines() if ln and ln not in lines]
+    return "\n".join(lines)
+
+
+def input_references(*datasets) -> tuple[str, ...]:
+    """The ``references`` keys the input datasets record (in order, each once)."""
+    keys: list[str] = []
+    for ds in datasets:
+        keys += str(getattr(ds, "attrs", {}).get("references", "")).split()
+    return tuple(dict.fromkeys(keys))

@@ -1,0 +1,132 @@
+"""Memory: how much a computation on a grid needs, and the check against what there is.
+
+One estimate per task, ``estimate_bytes(task, points) = BASE[task] + PER_POINT[task] * points``:
+the peak resident memory of a ``roughflow`` process (interpreter, imported libraries, the
+task's arrays), calibrated with ``benchmarks/bench_memory.py`` (peak RSS of fresh
+processes at 128^2 ... 2048^2 points; docs/workflow.md "Memory") and rounded up. The same
+numbers refuse work that cannot fit (the library entry points call :func:`check_memory`
+before allocating: ``surface.generate``, ``contact.solve``, ``flow.solve``,
+``search.threshold``, the Persson spectrum, ``theory.gap_theory``, every scene job) and set
+the Snakemake ``mem_mb`` of a job (:func:`roughflow.scenes.jobs.estimated_memory`).
+
+Tasks: ``surface`` (generate a surface), ``contact`` (one elastic or adhesive solve, GFMD or
+CG), ``bearing``, ``threshold`` (a threshold search: several warm-start states are kept),
+``flow`` (Reynolds flow with AMG, the largest per point), ``ladder`` (contact + flow +
+theory per step), ``channels`` (two contacts), ``spectrum`` (Persson theory from a spec),
+``theory`` (Bruggeman and closed forms of a gap field).
+
+What there is: the memory the kernel reports available (``MemAvailable``) within the
+process's cgroup limit (a SLURM job's allocation), plus what this process already holds,
+since the estimate counts the whole process. This module imports nothing heavy.
+"""
+
+from __future__ import annotations
+
+import os
+from pathlib import Path
+
+from roughflow.errors import ResourceError
+
+MB = 1024**2
+
+#: Fixed cost of a process in bytes: interpreter and libraries (numba's compiler for the
+#: GFMD kernels, scipy.sparse and pyamg for the flow).
+BASE = {"surface": 150 * MB, "contact": 300 * MB, "bearing": 150 * MB, "threshold": 300 * MB,
+        "flow": 350 * MB, "ladder": 400 * MB, "channels": 300 * MB, "spectrum": 150 * MB,
+        "theory": 200 * MB}
+#: Bytes per grid point at the peak (float64 fields, FFT buffers, AMG hierarchy, ...).
+PER_POINT = {"surface": 80, "contact": 160, "bearing": 64, "threshold": 320, "flow": 560,
+             "ladder": 720, "channels": 320, "spectrum": 32, "theory": 200}
+TASKS = tuple(PER_POINT)
+#: Grids whose arrays need less than this are never refused (the check is for grids that
+#: cannot fit, not for a machine that is momentarily short of memory).
+SMALL = 64 * MB
+
+
+def estimate_bytes(task: str, points: int) -> int:
+    """Estimated peak memory in bytes of ``task`` on ``points`` grid points."""
+    if task not in PER_POINT:
+        raise KeyError(f"unknown task {task!r}; known: {', '.join(PER_POINT)}")
+    return int(BASE[task] + PER_POINT[task] * int(points))
+
+
+def _meminfo(key: str) -> int | None:
+    try:
+        for line in Path("/proc/meminfo").read_text().splitlines():
+            if line.startswith(key + ":"):
+                return int(line.split()[1]) * 1024
+    except (OSError, ValueError, IndexError):
+        pass
+    return None
+
+
+def _cgroup_limit() -> int | None:
+    """The memory limit of this process's cgroup (v2 or v1), None if unlimited/unknown."""
+    for path in ("/sys/fs/cgroup/memory.max", "/sys/fs/cgroup/memory/memory.limit_in_bytes"):
+        try:
+            raw = Path(path).read_text().strip()
+        except OSError:
+            continue
+        if raw.isdigit() and int(raw) < 2**60:
+            return int(raw)
+    return None
+
+
+def _own_rss() -> int:
+    try:
+        pages = int(Path("/proc/self/statm").read_text().split()[1])
+        return pages * os.sysconf("SC_PAGE_SIZE")
+    except (OSError, ValueError, IndexError):
+        return 0
+
+
+def total_bytes() -> int | None:
+    """Physical memory of the machine (within the cgroup limit); None if unknown."""
+    values = [v for v in (_meminfo("MemTotal"), _cgroup_limit()) if v is not None]
+    return min(values) if values else None
+
+
+def available_bytes() -> int | None:
+    """Memory this process can reach: what it holds plus what the machine has available
+    (within the cgroup limit); None if unknown (then nothing is refused)."""
+    avail = _meminfo("MemAvailable")
+    if avail is None:
+        return None
+    have = avail + _own_rss()
+    limit = _cgroup_limit()
+    return min(have, limit) if limit is not None else have
+
+
+def describe(nbytes: float) -> str:
+    """``1.5 GB`` (decimal units, as SLURM's ``--mem`` and Snakemake's ``mem_mb``)."""
+    for unit, size in (("TB", 1e12), ("GB", 1e9), ("MB", 1e6)):
+        if nbytes >= size:
+            return f"{nbytes / size:.3g} {unit}"
+    return f"{nbytes / 1e3:.3g} kB"
+
+
+def check_memory(task: str, shape: tuple[int, ...] | int, *, limit: int | None = None,
+                 what: str = "") -> int:
+    """Raise :class:`ResourceError` before any allocation if ``task`` on a grid of
+    ``shape`` (or a number of points) needs more than ``limit`` bytes (default: what this
+    process can reach, :func:`available_bytes`); returns the estimate. ``what`` names the
+    work in the message (default "a <task> computation")."""
+    if isinstance(shape, int):
+        points, grid = shape, f"{shape} points"
+    else:
+        points = 1
+        for n in shape:
+            points *= int(n)
+        grid = " x ".join(str(int(n)) for n in shape) + f" grid ({points:.3g} points)"
+    need = estimate_bytes(task, points)
+    if need - BASE[task] < SMALL:
+        return need
+    have = available_bytes() if limit is None else limit
+    if have is not None and need > have:
+        source = (f"the limit is {describe(have)}" if limit is not None
+                  else f"this machine has {describe(have)} available")
+        raise ResourceError(
+            f"{what or f'a {task} computation'} on a {grid} needs about {describe(need)} of "
+            f"memory, but {source}; use a coarser grid (fewer points per lambda_s, a larger "
+            "eps_f or a smaller L/lambda_r)")
+    return need

@@ -1,0 +1,313 @@
+"""Adversarial inputs against every subcommand: each must be refused with exit status 2 and a
+message naming the offending file or value, before any work and without a traceback.
+
+The bad files are generated here from small valid ones (32 x 32 grids): a directory, an
+empty file, a text file, a truncated netCDF file, a surface without its ``lx`` attribute,
+3-D or non-finite heights, and every valid file of the wrong kind. The cases of issue 13
+("Reliability") are here too, by their number. Everything runs through
+``roughflow.cli.main`` in this process (an unexpected exception fails the test with its
+traceback, as a user would see it).
+"""
+
+from __future__ import annotations
+
+import math
+import os
+import stat
+
+import numpy as np
+import pytest
+import xarray as xr
+
+from roughflow.cli import main
+
+TINY = ["--l-over-lambda-r", "4", "--eps-f", "0.25", "--points-per-lambda-s", "2"]
+
+
+def run(argv, capsys) -> tuple[int, str]:
+    """(exit status, stderr) of ``roughflow argv``."""
+    try:
+        code = main([str(a) for a in argv])
+    except SystemExit as exc:
+        code = exc.code
+    return code, capsys.readouterr().err
+
+
+@pytest.fixture(scope="module")
+def files(tmp_path_factory):
+    """Valid files of every kind and bad files of every sort, made once."""
+    d = tmp_path_factory.mktemp("adv")
+    f = {k: d / f"{k}.nc" for k in ("surface", "contact", "flow", "threshold", "job", "job2",
+                                    "ladder", "study", "fit")}
+
+    def ok(*argv):
+        try:
+            code = main([str(a) for a in argv])
+        except SystemExit as exc:
+            code = exc.code
+        assert code in (0, None), argv
+
+    ok("surface", *TINY, "-o", f["surface"])
+    ok("contact", f["surface"], "--pressure", "0.1", "-o", f["contact"])
+    ok("flow", f["contact"], "-o", f["flow"])
+    ok("threshold", f["surface"], "--tol", "0.01", "-o", f["threshold"])
+    ok("scene", "threshold", "--model", "bearing", *TINY, "--seeds", "0", "1", "-o", f["job"])
+    ok("scene", "threshold", "--model", "bearing", *TINY, "--seeds", "2", "-o", f["job2"])
+    ok("scene", "ladder", "--model", "bearing", *TINY, "--area-fractions", "0.1", "0.3",
+       "-o", f["ladder"])
+    ok("aggregate", f["job"], f["job2"], "-o", f["study"])
+    ok("fit", f["study"], "--bootstrap", "0", "-o", f["fit"])
+
+    bad = {"directory": d / "folder.nc", "empty": d / "empty.nc", "text": d / "text.nc",
+           "truncated": d / "truncated.nc", "no_lx": d / "no_lx.nc", "heights_3d": d / "h3.nc",
+           "heights_nan": d / "hnan.nc", "missing": d / "missing.nc"}
+    bad["directory"].mkdir()
+    bad["empty"].write_bytes(b"")
+    bad["text"].write_text("x,y,height\n0,0,1.0\n")
+    data = f["contact"].read_bytes()
+    bad["truncated"].write_bytes(data[: len(data) // 2])
+    with xr.open_dataset(f["surface"]) as ds:
+        s = ds.load()
+    s.drop_attrs().assign_attrs(ly=1.0).to_netcdf(bad["no_lx"])
+    h = s["heights"].values
+    xr.Dataset({"heights": (("x", "y", "z"), np.stack([h, h], axis=-1))},
+               attrs={"lx": 1.0, "ly": 1.0}).to_netcdf(bad["heights_3d"])
+    hn = h.copy()
+    hn[3, 4] = np.nan
+    s.assign(heights=(("x", "y"), hn)).to_netcdf(bad["heights_nan"])
+    return {**f, **{f"bad_{k}": v for k, v in bad.items()}, "dir": d}
+
+
+GENERIC = ("bad_directory", "bad_empty", "bad_text", "bad_truncated", "bad_missing")
+#: subcommand -> (argv with {} for the input file, the inputs of the wrong kind or broken)
+COMMANDS = {
+    "contact": (["contact", "{}", "--pressure", "0.1", "-o", "{out}.nc"],
+                GENERIC + ("bad_no_lx", "bad_heights_3d", "bad_heights_nan", "flow",
+                           "threshold", "job", "study", "fit")),
+    "threshold": (["threshold", "{}", "--tol", "0.01", "-o", "{out}.nc"],
+                  GENERIC + ("bad_no_lx", "bad_heights_3d", "bad_heights_nan", "flow",
+                             "threshold", "job", "ladder", "fit")),
+    "flow": (["flow", "{}", "-o", "{out}.nc"],
+             GENERIC + ("surface", "threshold", "job", "study", "fit")),
+    "theory": (["theory", "{}"],
+               GENERIC + ("bad_no_lx", "bad_heights_3d", "flow", "threshold", "job", "fit")),
+    "aggregate": (["aggregate", "{}", "-o", "{out}.nc"],
+                  GENERIC + ("surface", "contact", "flow", "threshold", "study", "fit")),
+    "fit": (["fit", "{}", "-o", "{out}.nc"],
+            GENERIC + ("surface", "contact", "flow", "threshold", "job", "ladder")),
+    "figure": (["figure", "threshold_vs_gamma", "{}", "-o", "{out}.png"],
+               GENERIC + ("surface", "contact", "flow", "threshold", "ladder", "fit")),
+}
+CASES = [(cmd, bad) for cmd, (_, bads) in COMMANDS.items() for bad in bads]
+
+
+@pytest.mark.parametrize(("command", "bad"), CASES, ids=[f"{c}-{b}" for c, b in CASES])
+def test_bad_input_file_exits_2_naming_it(files, capsys, command, bad):
+    template, _ = COMMANDS[command]
+    out = files["dir"] / f"out_{command}_{bad}"
+    argv = [a.replace("{}", str(files[bad])).replace("{out}", str(out)) for a in template]
+    code, err = run(argv, capsys)
+    assert code == 2, err
+    assert files[bad].name in err and "Traceback" not in err
+    assert not list(files["dir"].glob(f"out_{command}_{bad}*")), "nothing may be written"
+
+
+OUTPUT_CASES = {
+    "existing directory": lambda d: d / "folder.nc",
+    "parent is a file": lambda d: d / "text.nc" / "x.nc",
+    "not writable": lambda d: "/proc/roughflow-test.nc",
+}
+
+
+@pytest.mark.parametrize("case", sorted(OUTPUT_CASES))
+@pytest.mark.parametrize("command", ["surface", "contact", "flow", "threshold", "theory",
+                                     "scene", "aggregate", "fit"])
+def test_bad_output_path_exits_2_before_any_work(files, capsys, command, case):
+    # issue 13 item 9: the output path is checked before the computation
+    bad = OUTPUT_CASES[case](files["dir"])
+    argv = {
+        "surface": ["surface", *TINY, "-o", bad],
+        "contact": ["contact", files["surface"], "--pressure", "0.1", "-o", bad],
+        "flow": ["flow", files["contact"], "-o", bad],
+        "threshold": ["threshold", files["surface"], "-o", bad],
+        "theory": ["theory", files["contact"], "-o", bad],
+        "scene": ["scene", "threshold", *TINY, "--model", "bearing", "-o", bad],
+        "aggregate": ["aggregate", files["job"], "-o", bad],
+        "fit": ["fit", files["study"], "-o", bad],
+    }[command]
+    code, err = run(argv, capsys)
+    assert code == 2, err
+    assert str(bad) in err
+
+
+# ---------------------------------------------------------------------------------------
+# the defects of issue 13, by number
+# ---------------------------------------------------------------------------------------
+
+def _job(d, name, *argv):
+    path = d / f"{name}.nc"
+    if not path.exists():
+        assert main(["scene", "threshold", "--model", "bearing", "--eps-f", "0.125", *argv,
+                     "-o", str(path)]) == 0
+    return path
+
+
+def test_01_aggregate_refuses_overlapping_seeds(files, capsys):
+    d = files["dir"]
+    a = _job(d, "a01", "--points-per-lambda-s", "2", "--seeds", "0", "1", "--tol", "0.01")
+    b = _job(d, "b01", "--points-per-lambda-s", "2", "--seeds", "0", "--tol", "0.002")
+    for order in ((a, b), (b, a)):
+        code, err = run(["aggregate", *order, "-o", d / "ab.nc"], capsys)
+        assert code == 2 and "seeds [0]" in err, err
+    assert not (d / "ab.nc").exists()
+
+
+def test_01_aggregate_refuses_jobs_differing_only_in_resolution(files, capsys):
+    d = files["dir"]
+    a = _job(d, "a01", "--points-per-lambda-s", "2", "--seeds", "0", "1", "--tol", "0.01")
+    c = _job(d, "c01", "--points-per-lambda-s", "3", "--seeds", "2", "--tol", "0.01")
+    code, err = run(["aggregate", a, c, "-o", d / "ac.nc"], capsys)
+    assert code == 2 and "points_per_lambda_s" in err, err
+
+
+def test_01_aggregate_keeps_every_seed_of_disjoint_jobs(files, capsys):
+    code, _ = run(["aggregate", files["job"], files["job2"], "-o", files["dir"] / "ok.nc"],
+                  capsys)
+    assert code == 0
+    with xr.open_dataset(files["dir"] / "ok.nc") as ds:
+        assert ds["seed"].values.tolist() == [0, 1, 2]
+        assert np.isfinite(ds["a_c_star"].values).all()
+
+
+def test_02_huge_grids_are_refused_before_allocating(capsys):
+    # 2e5 x 2e5 points need terabytes on any machine; the refusal names the grid and memory
+    code, err = run(["surface", "--nx", "200000", "--ny", "200000", "--lambda-r", "0.25",
+                     "--lambda-s", "0.001", "-o", "/tmp/never.nc"], capsys)
+    assert code == 2 and "200000 x 200000" in err and "TB" in err, err
+    for argv in (["surface", "--eps-f", "1e-5", "-o", "/tmp/never.nc"],
+                 ["scene", "threshold", "--eps-f", "1e-5", "-o", "/tmp/never.nc"],
+                 ["scene", "ladder", "--eps-f", "1e-5", "--area-fractions", "0.1",
+                  "-o", "/tmp/never.nc"],
+                 ["scene", "channels", "--eps-f", "1e-5", "-o", "/tmp/never.nc"],
+                 ["theory", "--eps-f", "1e-5"]):
+        code, err = run(argv, capsys)
+        assert code == 2 and "memory" in err, (argv, err)
+
+
+def test_03_flow_tol_has_an_upper_bound(files, capsys):
+    code, err = run(["flow", files["contact"], "--tol", "1e6", "-o", files["dir"] / "x.nc"],
+                    capsys)
+    assert code == 2 and "tol" in err and "1000000" in err
+
+
+def test_04_fit_of_a_single_size_is_flagged_not_reported(files, capsys):
+    # the study has one system size: no fit can determine an amplitude (or a free nu)
+    with xr.open_dataset(files["fit"]) as fit:
+        assert np.isnan(fit["a_star"].values).all()
+        # (an isotropic study has only the joint fit: x and y pooled)
+        assert (fit["underdetermined"].sel(group="isotropic", fit="joint") == 1).all()
+
+
+@pytest.mark.parametrize("bad", [["--nu", "-1"], ["--nu", "inf"], ["--nu", "0"],
+                                 ["--seed", "-1"], ["--bootstrap", "-3"]])
+def test_04_fit_options_are_checked(files, capsys, bad):
+    code, err = run(["fit", files["study"], *bad, "-o", files["dir"] / "x.nc"], capsys)
+    assert code == 2 and "Traceback" not in err, err
+
+
+def test_06_theory_refuses_a_flow_file_of_another_gap(files, capsys):
+    d = files["dir"]
+    other = d / "c_other.nc"
+    assert main(["contact", str(files["surface"]), "--pressure", "0.2", "-o", str(other)]) == 0
+    code, err = run(["theory", other, "--flow", files["flow"]], capsys)
+    assert code == 2 and "another gap" in err, err
+    code, err = run(["theory", files["contact"], "--flow", files["contact"]], capsys)
+    assert code == 2 and "not a flow file" in err, err
+    code, _ = run(["theory", files["contact"], "--flow", files["flow"]], capsys)
+    assert code == 0
+
+
+def test_07_figure_output_must_be_png_and_keeps_other_files(files, capsys):
+    d = files["dir"]
+    png = d / "fig.png"
+    png.write_bytes(b"keep me")
+    code, err = run(["figure", "threshold_vs_gamma", files["study"], "-o", d / "fig.nc"],
+                    capsys)
+    assert code == 2 and ".png" in err
+    assert png.read_bytes() == b"keep me"
+
+
+@pytest.mark.parametrize("bad", [["--gamma", "0"], ["--gamma", "-1"], ["--threads", "-3"],
+                                 ["--threads", "0"], ["--seeds", "0", "0"],
+                                 ["--hurst", "1.5"], ["--points-per-lambda-s", "nan"]])
+def test_10_11_scene_options_are_checked(files, capsys, bad):
+    code, err = run(["scene", "threshold", *TINY, *bad, "-o", files["dir"] / "x.nc"], capsys)
+    assert code == 2 and "Traceback" not in err, err
+    assert not (files["dir"] / "x.nc").exists()
+
+
+@pytest.mark.parametrize("areas", [["0"], ["1"], ["nan"], ["0.3", "0.1"], ["-0.2"]])
+def test_11_ladder_area_fractions_are_named(files, capsys, areas):
+    code, err = run(["scene", "ladder", *TINY, "--area-fractions", *areas,
+                     "-o", files["dir"] / "x.nc"], capsys)
+    assert code == 2 and "area_fractions" in err, err
+
+
+def test_12_huge_seed_is_refused_before_the_work(files, capsys):
+    code, err = run(["surface", "--seed", "99999999999999999999999", "-o",
+                     files["dir"] / "x.nc"], capsys)
+    assert code == 2 and "seed" in err
+
+
+def test_13_outputs_follow_the_umask(files, capsys, tmp_path):
+    old = os.umask(0o022)
+    try:
+        assert main(["surface", *TINY, "-o", str(tmp_path / "s.nc")]) == 0
+    finally:
+        os.umask(old)
+    assert stat.S_IMODE((tmp_path / "s.nc").stat().st_mode) == 0o644
+
+
+def test_14_aggregate_refuses_mixed_scenes(files, capsys):
+    code, err = run(["aggregate", files["job"], files["ladder"], "-o", files["dir"] / "x.nc"],
+                    capsys)
+    assert code == 2 and "one scene" in err, err
+    code, err = run(["aggregate", files["surface"], files["job"], "-o", files["dir"] / "x.nc"],
+                    capsys)
+    assert code == 2 and files["surface"].name in err, err
+
+
+def test_15_bruggeman_of_an_extreme_contrast():
+    from roughflow.theory import bruggeman
+
+    # two equal halves with a contrast of 1e600 (beyond the float range): the low half
+    # controls, sigma = c s_low with 0.5 (1 - c)/(1 + (D - 1) c) + 0.5 = 0 -> c = 2/(2 - D)
+    r = bruggeman([1e-300, 1e300], a_c_star=0.4)
+    d = 1 / 0.6
+    assert math.isclose(r.sigma, 2 / (2 - d) * 1e-300, rel_tol=1e-9)
+
+
+def test_every_file_argument_goes_through_the_shared_layer():
+    # a file argument (metavar NAME.nc / NAME.png) declared without add_input/add_output
+    # would bypass the kind, readability and output checks; a new subcommand must not
+    import argparse
+
+    from roughflow.cli import build_parser
+
+    def parsers(p, name):
+        subs = [a for a in p._actions if isinstance(a, argparse._SubParsersAction)]
+        if not subs:
+            yield name, p
+        for sub in subs:
+            for k, v in sub.choices.items():
+                yield from parsers(v, f"{name} {k}".strip())
+
+    files = 0
+    for name, p in parsers(build_parser(), ""):
+        declared = {d for d, *_ in (p.get_default("_inputs") or [])} | \
+                   {d for d, *_ in (p.get_default("_outputs") or [])}
+        for a in p._actions:
+            if str(a.metavar or "").endswith((".nc", ".png")):
+                files += 1
+                assert a.dest in declared, f"roughflow {name}: {a.dest} bypasses the checks"
+    assert files >= 15

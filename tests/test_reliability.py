@@ -1,0 +1,201 @@
+"""Library-level guards of issue 13: job and config checks at planning time, the memory
+estimate and its refusals, dataset kinds, atomic writes with the right permissions.
+
+Each test names the defect it would catch; the command-line side of the same defects is
+in tests/test_adversarial.py, the workflow side in tests/test_workflow.py.
+"""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+import pytest
+import xarray as xr
+
+from roughflow import fft, resources
+from roughflow.errors import MAX_SEED, InputError, ResourceError
+from roughflow.scenes import (
+    ChannelsJob,
+    LadderJob,
+    SurfaceParams,
+    ThresholdJob,
+    estimated_memory,
+    expand_study,
+)
+from roughflow.scenes.jobs import check_collisions, check_plan_memory
+from roughflow.surface import SurfaceSpec, generate
+
+SMALL = SurfaceParams(l_over_lambda_r=4, eps_f=0.25, points_per_lambda_s=2)
+
+
+# --- jobs and configs, refused at planning time ------------------------------------------
+
+@pytest.mark.parametrize("kw", [{"gamma": 0.0}, {"gamma": -1.0}, {"hurst": 1.5},
+                                {"eps_f": 2.0}, {"points_per_lambda_s": 1.0},
+                                {"points_per_lambda_s": math.nan}, {"aspect": 0.0},
+                                {"l_over_lambda_r": -4.0}])
+def test_surface_params_refuse_bad_numbers(kw):
+    # item 10: gamma = 0 used to fail as ZeroDivisionError, -1 as a math domain error
+    name = next(iter(kw))
+    with pytest.raises(InputError, match=name):
+        SurfaceParams(**kw)
+
+
+def test_jobs_refuse_duplicate_and_invalid_seeds():
+    # item 11: --seeds 0 0 wrote a duplicate seed coordinate; item 12: huge seeds
+    with pytest.raises(InputError, match="distinct"):
+        ThresholdJob(surface=SMALL, seeds=(0, 0))
+    with pytest.raises(InputError, match="distinct"):
+        LadderJob(surface=SMALL, seeds=(3, 1, 3))
+    for bad in ((), (-1,), (MAX_SEED + 1,), (1.5,)):
+        with pytest.raises(InputError, match="seed"):
+            ThresholdJob(surface=SMALL, seeds=bad)
+    with pytest.raises(InputError, match="seed"):
+        SurfaceSpec.from_sweep(seed=MAX_SEED + 1)
+    assert SurfaceSpec.from_sweep(seed=MAX_SEED).seed == MAX_SEED
+
+
+def test_jobs_refuse_tolerances_beyond_their_maximum():
+    with pytest.raises(InputError, match="tol"):
+        ThresholdJob(surface=SMALL, tol=0.5)
+    with pytest.raises(InputError, match="contact_tol"):
+        ThresholdJob(surface=SMALL, contact_tol=1.0)
+    with pytest.raises(InputError, match="area_fraction"):
+        ChannelsJob(area_fraction=1.0)
+
+
+@pytest.mark.parametrize("areas", [(0.0,), (1.0,), (math.nan,), (0.3, 0.1), (0.2, 0.2)])
+def test_ladder_areas_are_named(areas):
+    # item 11: an area of 1 or NaN was reported as "pressure must be finite"
+    with pytest.raises(InputError, match="area_fractions"):
+        LadderJob(surface=SMALL, area_fractions=areas)
+
+
+def test_threshold_study_refuses_the_adhesive_model_naming_the_study():
+    # item 5: every job of such a study failed at run time
+    with pytest.raises(InputError, match=r"studies\.threshold_vs_gamma.*adhesive"):
+        expand_study("threshold_vs_gamma", {"model": ["adhesive"], "seeds": [0]})
+
+
+def test_series_differing_only_in_resolution_collide():
+    # item 1: two series that differ only in points_per_lambda_s fill the same cells
+    block = {"seeds": [0, 1], "eps_f": [0.25], "l_over_lambda_r": [4],
+             "series": [{"points_per_lambda_s": 2}, {"points_per_lambda_s": 3}]}
+    with pytest.raises(InputError, match="points-per-lambda-s 2.0 vs 3.0"):
+        expand_study("threshold_vs_size", block)
+
+
+def test_overlapping_seeds_of_two_series_collide():
+    # item 1: overlapping seeds across series gave a seed index [0 1 1 2]
+    block = {"eps_f": [0.25], "l_over_lambda_r": [4], "points_per_lambda_s": 2,
+             "seeds_per_job": 2, "series": [{"seeds": [0, 1]}, {"seeds": [1, 2]}]}
+    with pytest.raises(InputError, match=r"seeds \[1\]"):
+        expand_study("threshold_vs_size", block)
+    # disjoint seed groups of one parameter set are fine (stacked along seed)
+    ok = {**block, "series": [{"seeds": [0, 1]}, {"seeds": [2, 3]}]}
+    assert len(expand_study("threshold_vs_size", ok)) == 2
+    # and different models do not collide
+    check_collisions("x", [ThresholdJob(surface=SMALL, model=m) for m in ("elastic", "bearing")])
+
+
+def test_job_settings_leave_out_only_the_seeds():
+    a = LadderJob(surface=SMALL, seeds=(0, 1), area_fractions=(0.1, 0.2))
+    b = LadderJob(surface=SMALL, seeds=(5,), area_fractions=(0.1, 0.2))
+    c = LadderJob(surface=SMALL, seeds=(5,), area_fractions=(0.1, 0.3))
+    assert a.settings() == b.settings() != c.settings()
+    assert "--seeds" not in a.settings() and a.key == c.key
+
+
+# --- memory ---------------------------------------------------------------------------
+
+def test_memory_model_grows_with_the_grid_and_orders_the_tasks():
+    n = 1024**2
+    est = {t: resources.estimate_bytes(t, n) for t in resources.TASKS}
+    assert est["flow"] > est["contact"] > est["surface"]
+    assert resources.estimate_bytes("contact", 4 * n) > est["contact"]
+    with pytest.raises(KeyError):
+        resources.estimate_bytes("nonsense", n)
+
+
+def test_check_memory_refuses_with_grid_and_sizes():
+    with pytest.raises(ResourceError, match=r"60000 x 60000 grid.*GB.*limit is 1 GB"):
+        resources.check_memory("surface", (60000, 60000), limit=10**9)
+    # small grids are never refused, whatever the limit
+    assert resources.check_memory("flow", (64, 64), limit=1) > 0
+
+
+def test_generate_refuses_before_allocating():
+    # item 2: --nx 60000 --ny 60000 took the whole host; 2e5^2 needs terabytes anywhere
+    spec = SurfaceSpec(nx=200_000, ny=200_000, lx=1, ly=1, hurst=0.8, gamma=1, lambda_r=0.25,
+                       lambda_s=1e-4, seed=0)
+    with pytest.raises(ResourceError, match="TB"):
+        generate(spec)
+    from roughflow.theory import discrete_spectrum
+
+    with pytest.raises(ResourceError, match="spectrum"):
+        discrete_spectrum(spec)
+
+
+def test_plan_memory_refuses_the_54_terabyte_config():
+    # item 2: points_per_lambda_s 64, L/lambda_r 64, eps_f 0.01 passed validation (mem_mb 5e7)
+    jobs = {"threshold_vs_size": expand_study("threshold_vs_size", {
+        "seeds": [0], "points_per_lambda_s": 64, "l_over_lambda_r": [64], "eps_f": [0.01]})}
+    (job,) = jobs["threshold_vs_size"].values()
+    assert estimated_memory(job) > 1e13
+    with pytest.raises(ResourceError, match=r"studies\.threshold_vs_size.*TB"):
+        check_plan_memory(jobs, 24 * 10**9, "test")
+
+
+def test_job_memory_is_the_snakemake_request():
+    # the workflow requests the estimate plus the Snakemake wrapper, doubled on the retry
+    # (workflow/rules/common.smk: mem_mb)
+    from roughflow.scenes.jobs import WRAPPER_MB, requested_mem_mb
+
+    job = ThresholdJob(surface=SMALL)
+    assert estimated_memory(job) == resources.estimate_bytes("threshold", 32 * 32)
+    mb = WRAPPER_MB + math.ceil(estimated_memory(job) / 1e6)
+    assert requested_mem_mb(job) == mb and requested_mem_mb(job, attempt=2) == 2 * mb
+
+
+def test_threads_must_be_positive():
+    # item 10: --threads -3 raised OverflowError inside FFTW, 0 was accepted
+    for bad in (0, -3, 2.5, True):
+        with pytest.raises(InputError, match="threads"):
+            fft.plan((8, 8), bad)
+    assert fft.check_threads(None) is None and fft.check_threads(2) == 2
+
+
+# --- files ----------------------------------------------------------------------------
+
+def test_read_dataset_names_the_kind_it_found(tmp_path):
+    from roughflow.io import read_dataset, surface_to_dataset, write_dataset
+
+    surface = generate(SMALL.spec(0))
+    path = write_dataset(surface_to_dataset(surface), tmp_path / "s.nc")
+    assert "heights" in read_dataset(path, "surface")
+    with pytest.raises(InputError, match="not a contact file.*looks like a surface file"):
+        read_dataset(path, "contact", what="contact file")
+
+
+def test_surface_spec_must_match_the_heights(tmp_path):
+    from roughflow.io import surface_from_dataset, surface_to_dataset
+
+    ds = surface_to_dataset(generate(SMALL.spec(0)))
+    with pytest.raises(InputError, match="spec_"):
+        surface_from_dataset(ds.assign_attrs(spec_nx=7))
+    with pytest.raises(InputError, match="incomplete"):
+        surface_from_dataset(ds.drop_attrs().assign_attrs(lx=1.0, ly=1.0, spec_nx=32))
+
+
+def test_write_is_atomic_and_leaves_no_partial_file(tmp_path, monkeypatch):
+    from roughflow.io import write_dataset
+
+    def boom(self, path, *a, **k):
+        open(path, "wb").write(b"half a file")
+        raise OSError("disk full")
+
+    monkeypatch.setattr(xr.Dataset, "to_netcdf", boom)
+    with pytest.raises(OSError, match="disk full"):
+        write_dataset(xr.Dataset({"a": ("x", np.arange(3))}), tmp_path / "a.nc")
+    assert list(tmp_path.iterdir()) == []

@@ -1,0 +1,236 @@
+"""Issue 18: progress as work happens, provenance in every file, a light command line, no
+global matplotlib backend switch, and one citable reference list."""
+
+from __future__ import annotations
+
+import io
+import logging
+import re
+import subprocess
+import sys
+import time
+from pathlib import Path
+
+import pytest
+import xarray as xr
+
+import roughflow
+from roughflow.cli import main
+
+ROOT = Path(__file__).resolve().parents[1]
+TINY = ["--l-over-lambda-r", "4", "--eps-f", "0.25", "--points-per-lambda-s", "2"]
+
+
+def run(argv, capsys) -> tuple[int, str, str]:
+    try:
+        code = main([str(a) for a in argv])
+    except SystemExit as exc:
+        code = exc.code
+    out = capsys.readouterr()
+    return code, out.out, out.err
+
+
+@pytest.fixture(scope="module")
+def files(tmp_path_factory):
+    d = tmp_path_factory.mktemp("use")
+    f = {k: d / f"{k}.nc" for k in ("surface", "contact", "flow", "job", "job2", "study")}
+    for argv in (["surface", *TINY, "-o", f["surface"]],
+                 ["contact", f["surface"], "--pressure", "0.1", "-o", f["contact"]],
+                 ["flow", f["contact"], "-o", f["flow"]],
+                 ["scene", "threshold", "--model", "bearing", *TINY, "--seeds", "0", "1",
+                  "-o", f["job"]],
+                 ["scene", "threshold", "--model", "bearing", *TINY, "--seeds", "2",
+                  "-o", f["job2"]],
+                 ["aggregate", f["job"], f["job2"], "--study", "threshold_vs_gamma",
+                  "--study-config", '{"seeds": [0, 1, 2], "model": ["bearing"]}',
+                  "-o", f["study"]]):
+        assert main([str(a) for a in argv]) == 0, argv
+    return {**f, "dir": d}
+
+
+# --- progress ---------------------------------------------------------------------------
+
+@pytest.mark.parametrize("where", ["before", "after"])
+def test_verbose_works_before_or_after_the_subcommand(files, capsys, where):
+    argv = ["contact", files["surface"], "--pressure", "0.1", "-o", files["dir"] / "v.nc"]
+    argv = ["-v", *argv] if where == "before" else [*argv, "-v"]
+    code, _, err = run(argv, capsys)
+    assert code == 0
+    assert re.search(r"INFO: elastic contact \(gfmd\) on 32 x 32: p = 0.1 -> a_c = 0\.\d+ "
+                     r"\(\d+ iterations, residual .*, .* s\)", err), err
+
+
+def test_vv_shows_solver_steps_and_q_hides_everything(files, capsys):
+    out = files["dir"] / "vv.nc"
+    code, _, err = run(["contact", files["surface"], "--pressure", "0.1", "--method", "cg",
+                        "--tol", "1e-9", "-o", out, "-vv"], capsys)
+    assert code == 0 and "DEBUG: cg iteration 20: residual" in err, err
+    code, _, err = run(["-q", "threshold", files["surface"], "--tol", "0.01", "-o", out],
+                       capsys)
+    assert code == 0 and err == ""
+    code, _, err = run(["threshold", files["surface"], "--tol", "0.01", "-o", out, "-v"],
+                       capsys)
+    # one line per contact solve of the search (load, area, iterations, residual, seconds)
+    solves = re.findall(r"threshold \(elastic\) solve: p = \S+ -> a_c = \S+ \(\d+ iterations, "
+                        r"residual \S+, \S+ s\)", err)
+    with xr.open_dataset(out) as ds:
+        assert len(solves) == int(ds.attrs["n_solves"]) > 0
+
+
+def test_log_progress_for_notebooks():
+    stream = io.StringIO()
+    handler = roughflow.log_progress("DEBUG", stream=stream)
+    try:
+        assert roughflow.log_progress("INFO", stream=stream) is not handler  # replaced
+        logging.getLogger("roughflow.test").info("hello")
+        logging.getLogger("roughflow.test").debug("hidden")
+        assert sum(isinstance(h, type(handler)) for h in
+                   logging.getLogger("roughflow").handlers) == 1
+    finally:
+        roughflow.log_progress(None)
+    assert "INFO: hello" in stream.getvalue() and "hidden" not in stream.getvalue()
+    assert not any(isinstance(h, type(handler)) for h in logging.getLogger("roughflow").handlers)
+    assert logging.getLogger("roughflow").propagate
+
+
+def test_job_log_is_written_live(tmp_path):
+    # the workflow runs `roughflow -v scene ... 2> log`: lines must reach the file while the
+    # job runs (logging flushes each record), not when it ends
+    log = tmp_path / "job.log"
+    with open(log, "w") as err:
+        proc = subprocess.Popen(
+            [sys.executable, "-m", "roughflow", "-v", "scene", "threshold", "--eps-f", "0.0625",
+             "--points-per-lambda-s", "4", "--seeds", *map(str, range(20)),
+             "-o", str(tmp_path / "j.nc")], stderr=err, stdout=subprocess.DEVNULL)
+    try:
+        deadline = time.time() + 300
+        while "solve: p =" not in log.read_text() and time.time() < deadline:
+            assert proc.poll() is None, "the job ended before its log showed a solve"
+            time.sleep(0.05)
+        assert "solve: p =" in log.read_text()
+        assert proc.poll() is None  # 20 seeds: far from done
+    finally:
+        proc.kill()
+        proc.wait()
+    assert not (tmp_path / "j.nc").exists()
+
+
+# --- provenance ---------------------------------------------------------------------------
+
+@pytest.mark.parametrize("kind", ["surface", "contact", "flow", "job", "study"])
+def test_every_file_records_its_provenance(files, kind):
+    with xr.open_dataset(files[kind]) as ds:
+        a = ds.attrs
+    assert a["roughflow_version"] == roughflow.__version__
+    assert a["backend"] == "cpu" and int(a["fft_threads"]) >= 1
+    assert a["command"].startswith("roughflow ") and a["created"].endswith("+00:00")
+    assert float(a["wall_time_s"]) > 0
+    assert a["history"].splitlines()[-1].startswith(a["created"] + ": " + a["command"])
+    assert "WM21" in a["references"].split()
+
+
+def test_history_and_references_follow_the_data(files):
+    with xr.open_dataset(files["flow"]) as fl, xr.open_dataset(files["surface"]) as s:
+        lines = fl.attrs["history"].splitlines()
+        # surface -> contact -> flow, oldest first
+        assert len(lines) == 3 and lines[0] == s.attrs["history"]
+        assert [ln.split(": ", 1)[1].split()[1] for ln in lines] == ["surface", "contact", "flow"]
+        # GFMD (CM06, ZMM19, FIRE B06) and the flow (DM15, DM16) are cited
+        assert {"CM06", "ZMM19", "B06", "DM15"} <= set(fl.attrs["references"].split())
+        assert not any(k.startswith("contact_history") for k in fl.attrs)
+
+
+def test_workflow_datasets_record_job_and_study(files):
+    with xr.open_dataset(files["job"]) as job:
+        assert job.attrs["job_parameters"].startswith("threshold --gamma 1.0")
+        assert "--seeds 0 1" in job.attrs["job_parameters"]
+    with xr.open_dataset(files["study"]) as study:
+        assert '"model": ["bearing"]' in study.attrs["study_config"]
+        assert study.attrs["command"].startswith("roughflow aggregate")
+
+
+def test_python_api_writes_provenance_too(tmp_path):
+    from roughflow.io import write_dataset
+
+    write_dataset(xr.Dataset({"a": ("x", [1.0, 2.0])}), tmp_path / "a.nc")
+    with xr.open_dataset(tmp_path / "a.nc") as ds:
+        assert ds.attrs["roughflow_version"] == roughflow.__version__
+        assert ds.attrs["command"].startswith("python ")
+
+
+def test_version_option(capsys):
+    with pytest.raises(SystemExit) as exc:
+        main(["--version"])
+    assert exc.value.code == 0 and capsys.readouterr().out.strip() == \
+        f"roughflow {roughflow.__version__}"
+
+
+# --- light command line and no backend switch -----------------------------------------------
+
+HEAVY = ("numpy", "scipy", "xarray", "pyfftw", "numba", "pyamg", "matplotlib", "netCDF4")
+
+
+def test_help_and_import_load_no_numerical_stack():
+    # roughflow --help builds every subcommand's parser; nothing heavy may be imported for it
+    code = ("import sys, roughflow; from roughflow.cli import build_parser; "
+            "build_parser().format_help(); "
+            f"print(sorted(m for m in {HEAVY!r} if m in sys.modules))")
+    res = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True,
+                         check=True)
+    assert res.stdout.strip() == "[]"
+
+
+def test_figures_leave_the_matplotlib_backend_alone(files, tmp_path):
+    import matplotlib
+
+    from roughflow.figures import make_figure
+
+    before = matplotlib.get_backend()
+    matplotlib.use("svg")  # a user's choice (a notebook has its inline backend)
+    try:
+        make_figure("threshold_vs_gamma", files["study"], tmp_path / "f.png")
+        assert matplotlib.get_backend() == "svg"
+    finally:
+        matplotlib.use(before)
+    assert (tmp_path / "f.png").stat().st_size > 5000 and (tmp_path / "f.pdf").exists()
+
+
+# --- citation -----------------------------------------------------------------------------
+
+def test_docs_reference_list_is_the_citation_module():
+    from roughflow.citation import markdown
+
+    docs = (ROOT / "docs" / "physics.md").read_text().split("## References")[1]
+    entries = [" ".join(e.split()) for e in re.split(r"\n- ", docs) if e.startswith("[")]
+    assert entries == [" ".join(e.split()) for e in re.split(r"\n- ", "\n" + markdown())
+                       if e.startswith("[")]
+    assert len(entries) == 16
+
+
+def test_citation_cff_and_license_are_current():
+    from roughflow.citation import cff
+
+    assert (ROOT / "CITATION.cff").read_text() == cff(roughflow.__version__)
+    assert (ROOT / "LICENSE").read_text().startswith("MIT License")
+    assert 'license = "MIT"' in (ROOT / "pyproject.toml").read_text()
+
+
+def test_every_method_cites_known_references():
+    from roughflow.citation import METHODS, REFERENCES, references
+
+    assert all(set(keys) <= set(REFERENCES) for keys in METHODS.values())
+    assert references(["gfmd"])[0].key == "CM06"
+    assert [r.key for r in roughflow.references(["surface", "gfmd"])] == \
+        ["WM21", "CM06", "ZMM19", "B06"]
+    with pytest.raises(roughflow.InputError, match="unknown methods"):
+        references(["magic"])
+
+
+def test_cite_prints_the_references_a_file_used(files, capsys):
+    code, out, _ = run(["cite", files["flow"]], capsys)
+    assert code == 0
+    assert out.startswith("[WM21] A. Wang, M. H. Müser, Percolation and Reynolds flow")
+    assert "doi:10.1103/PhysRevB.99.144103" in out  # mass-weighted GFMD
+    assert "[PK99]" not in out  # CG was not used
+    code, out, _ = run(["cite", "--method", "cg", "--format", "bibtex"], capsys)
+    assert code == 0 and out.startswith("@article{PK99,")
