@@ -141,8 +141,7 @@ REFERENCES = {r.key: r for r in (
 #: The references each method rests on (docs/physics.md says where each is used).
 METHODS = {
     "surface": ("WM21",),                    # random-phase surfaces, Peklenik anisotropy
-    "gfmd": ("CM06", "ZMM19", "B06", "PK99"),  # GFMD, mass weighting, FIRE (adhesion),
-                                               # constrained CG (the hard wall)
+    "gfmd": ("CM06", "ZMM19", "B06"),        # GFMD, mass weighting, FIRE
     "cg": ("PK99",),                         # constrained conjugate gradients
     "adhesion": ("WM21",),                   # the paper's short-range adhesion
     "bearing": ("WM21",),                    # bearing-area (overlap) model
