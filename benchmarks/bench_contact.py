@@ -222,15 +222,16 @@ def memory(n: int) -> list[dict]:
 
 
 def write_table(name: str, rows: list[dict]) -> None:
-    keys = list(rows[0])
+    """csv and markdown tables over the union of the rows' keys ("-" where absent)."""
+    keys = list(dict.fromkeys(k for r in rows for k in r))
 
     def fmt(v):
         return f"{v:.4g}" if isinstance(v, float) else str(v)
 
-    (OUT / f"{name}.csv").write_text(
-        "\n".join([",".join(keys)] + [",".join(fmt(r[k]) for k in keys) for r in rows]) + "\n")
+    cells = [[fmt(r[k]) if k in r else "-" for k in keys] for r in rows]
+    (OUT / f"{name}.csv").write_text("\n".join(",".join(c) for c in [keys, *cells]) + "\n")
     md = ["| " + " | ".join(keys) + " |", "|" + "---|" * len(keys)]
-    md += ["| " + " | ".join(fmt(r[k]) for k in keys) + " |" for r in rows]
+    md += ["| " + " | ".join(c) + " |" for c in cells]
     (OUT / f"{name}.md").write_text("\n".join(md) + "\n")
 
 

@@ -30,7 +30,8 @@ ROLLOFF_FORMS = ("smooth", "plateau")
 PAPER_SIZE_FACTOR = 4.0
 
 # --- contact (docs/contact.md) -------------------------------------------------------------
-#: Contact methods: mass-weighted GFMD with FIRE (the default) and Polonsky-Keer CG.
+#: Contact methods: mass-weighted GFMD (the default; hard wall: projected CG in the mass
+#: metric, adhesion: FIRE) and Polonsky-Keer CG on the pressure.
 CONTACT_METHODS = ("gfmd", "cg")
 #: Residual of a single contact solve: largest gap error over the rms height.
 CONTACT_TOL = 1e-6

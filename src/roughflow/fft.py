@@ -81,6 +81,37 @@ class RealFFT2:
             flags=(effort,), threads=threads,
         )
 
+    @property
+    def real_in(self) -> np.ndarray:
+        """Input buffer of :meth:`execute_forward` (solvers write into it directly)."""
+        return self._real
+
+    @property
+    def spectral_out(self) -> np.ndarray:
+        """Output buffer of :meth:`execute_forward`."""
+        return self._cplx
+
+    @property
+    def spectral_in(self) -> np.ndarray:
+        """Input buffer of :meth:`execute_inverse` (destroyed by it)."""
+        return self._cplx_in
+
+    @property
+    def real_out(self) -> np.ndarray:
+        """Output buffer of :meth:`execute_inverse`."""
+        return self._real_out
+
+    def execute_forward(self) -> np.ndarray:
+        """Forward transform of :attr:`real_in` (preserved) into :attr:`spectral_out`, no copies."""
+        self._fwd.execute()
+        return self._cplx
+
+    def execute_inverse(self) -> np.ndarray:
+        """Unnormalised inverse of :attr:`spectral_in` into :attr:`real_out` (the caller folds
+        1/(nx ny) into its spectral factors: one pass over memory less than :meth:`inverse`)."""
+        self._inv.execute()
+        return self._real_out
+
     def forward(self, a: np.ndarray) -> np.ndarray:
         """Unnormalised forward transform (numpy's ``rfft2`` convention)."""
         self._real[...] = a

@@ -43,7 +43,7 @@ def register(sub: argparse._SubParsersAction) -> None:
                    help="target relative contact area of the bearing model, in [0, 1]")
     p.add_argument("--method", choices=CONTACT_METHODS, default=None,
                    help="cg: constrained conjugate gradients (Polonsky-Keer); gfmd: "
-                        "mass-weighted GFMD with FIRE (default: gfmd, the faster one; "
+                        "mass-weighted GFMD (default: gfmd, the faster one; "
                         "docs/contact.md)")
     p.add_argument("--tol", type=float, default=CONTACT_TOL,
                    help=f"residual: largest gap error in units of the rms height ({CONTACT_TOL:g})")

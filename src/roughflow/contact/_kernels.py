@@ -1,7 +1,9 @@
-"""Fused numba loops of the GFMD step (one pass over memory instead of five to eight).
+"""Fused numba loops of the GFMD iterations (one pass over memory instead of five to eight).
 
-Measured in benchmarks/bench_contact.py against the numpy version of the same step
-(``ROUGHFLOW_CONTACT_NUMBA=0`` selects numpy): see docs/contact.md.
+``wall_forces``, ``reductions``, ``step``: the FIRE step (adhesive model). ``cg_*``: the
+projected conjugate-gradient iteration of the hard wall (``gfmd._hard_wall``). Each has a
+numpy twin (suffix ``_np``, selected by ``gfmd(..., use_numba=False)``) with the same outputs,
+used to test the kernels and to benchmark them (docs/contact.md).
 """
 
 from __future__ import annotations
@@ -62,6 +64,100 @@ def step(u, v, a, h, c1, c2, dt):  # pragma: no cover - compiled
         v[i] = vi
 
 
+@numba.njit(cache=True, nogil=True)
+def cg_update(u, f, s, fel_t, t, h, eps, load, r, active):  # pragma: no cover - compiled
+    """Move to u + t s, where the force is f + t (f_t - f) with f_t = fel_t - load (exact: the
+    force is linear in u and the step does not clip); then the active set (on the wall,
+    force pushing into it) and r = f off it, 0 on it. t = 0 only classifies."""
+    for i in range(u.size):
+        ui = u[i] + t * s[i]
+        if ui < h[i]:  # round-off of a step that ends on the wall
+            ui = h[i]
+        fi = f[i] + t * (fel_t[i] - load - f[i])
+        u[i] = ui
+        f[i] = fi
+        if ui <= h[i] + eps and fi < 0.0:
+            active[i] = True
+            r[i] = 0.0
+        else:
+            active[i] = False
+            r[i] = fi
+
+
+@numba.njit(cache=True, nogil=True)
+def cg_precondition(rt, pre, rt_old, out, ny):  # pragma: no cover - compiled
+    """out = rt pre (spectral preconditioning), rt_old = rt; returns r.z and r_old.z by
+    Parseval (z = unnormalised inverse transform of out), without a real-space pass.
+
+    Arrays on the rfft2 grid (nx, ny//2+1); ``pre`` carries the 1/(nx ny) of the inverse.
+    """
+    nx, nh = rt.shape
+    rz = 0.0
+    roz = 0.0
+    for i in range(nx):
+        for j in range(nh):
+            w = 1.0 if j == 0 or 2 * j == ny else 2.0  # columns present twice in the spectrum
+            c = rt[i, j]
+            p = pre[i, j]
+            co = rt_old[i, j]
+            out[i, j] = c * p
+            rz += w * p * (c.real * c.real + c.imag * c.imag)
+            roz += w * p * (co.real * c.real + co.imag * c.imag)
+            rt_old[i, j] = c
+    return rz, roz
+
+
+@numba.njit(cache=True, nogil=True)
+def cg_direction(z, d, u, h, f, beta, alpha, ut, s, active):  # pragma: no cover - compiled
+    """d = z + beta d (0 on the active set); trial point ut = max(u + alpha d, h); s = ut - u.
+    Returns the number of clipped points, f.s, the largest t with u + t s >= h, and max |z|
+    off the active set (a free estimate of the residual)."""
+    nclip = 0
+    fs = 0.0
+    tf = np.inf
+    zmax = 0.0
+    for i in range(u.size):
+        if active[i]:
+            di = 0.0
+        else:
+            zi = z[i]
+            zmax = max(zmax, abs(zi))
+            di = zi + beta * d[i]
+        d[i] = di
+        ui0 = u[i]
+        hi = h[i]
+        ui = ui0 + alpha * di
+        if ui < hi:
+            ui = hi
+            nclip += 1
+        si = ui - ui0
+        ut[i] = ui
+        s[i] = si
+        fs += f[i] * si
+        if si < 0.0 and ui0 - hi < tf * -si:  # divide only when the bound tightens
+            tf = (ui0 - hi) / -si
+    return nclip, fs, tf, zmax
+
+
+@numba.njit(cache=True, nogil=True)
+def cg_secant(s, f, fel_t, load):  # pragma: no cover - compiled
+    """s.K s = s.(f - f_t) with f_t = fel_t - load: the curvature along the trial step."""
+    sks = 0.0
+    for i in range(s.size):
+        sks += s[i] * (f[i] - fel_t[i] + load)
+    return sks
+
+
+@numba.njit(cache=True, nogil=True)
+def max_abs(a):  # pragma: no cover - compiled
+    """max |a| without a temporary array."""
+    m = 0.0
+    for i in range(a.size):
+        if abs(a[i]) > m:
+            m = abs(a[i])
+    return m
+
+
 def warm_up() -> None:
     """Compile the kernels (cached on disk after the first run)."""
     n = 4
@@ -70,6 +166,12 @@ def warm_up() -> None:
     wall_forces(z, z, z, 0.0, 0.0, z.copy(), z.copy(), b)
     reductions(z, z.copy(), z.copy(), b)
     step(z.copy(), z.copy(), z, z, 0.0, 0.0, 0.0)
+    cg_update(z.copy(), z.copy(), z, z, 0.0, z, 0.0, 0.0, z.copy(), b.copy())
+    c = np.zeros((4, 3), dtype=np.complex128)
+    cg_precondition(c, np.ones((4, 3)), c.copy(), c.copy(), 4)
+    cg_direction(z, z.copy(), z, z, z, 0.0, 0.0, z.copy(), z.copy(), b)
+    cg_secant(z, z, z, 0.0)
+    max_abs(z)
 
 
 def wall_forces_np(fel, u, h, eps, load, f, sigma, active):
@@ -100,3 +202,54 @@ def step_np(u, v, a, h, c1, c2, dt):
     below = u < h
     u[below] = h[below]
     v[below] = 0.0
+
+
+def cg_update_np(u, f, s, fel_t, t, h, eps, load, r, active):
+    """numpy version of :func:`cg_update`."""
+    u += t * s
+    np.maximum(u, h, out=u)
+    f += t * (fel_t - load - f)
+    np.logical_and(u <= h + eps, f < 0.0, out=active)
+    np.copyto(r, f)
+    r[active] = 0.0
+
+
+def cg_precondition_np(rt, pre, rt_old, out, ny):
+    """numpy version of :func:`cg_precondition`."""
+    nh = rt.shape[1]
+    w = np.full(nh, 2.0)
+    w[0] = 1.0
+    if ny % 2 == 0:
+        w[-1] = 1.0
+    np.multiply(rt, pre, out=out)
+    rz = float((w * pre * (rt.real**2 + rt.imag**2)).sum())
+    roz = float((w * pre * (rt_old.real * rt.real + rt_old.imag * rt.imag)).sum())
+    np.copyto(rt_old, rt)
+    return rz, roz
+
+
+def cg_direction_np(z, d, u, h, f, beta, alpha, ut, s, active):
+    """numpy version of :func:`cg_direction`."""
+    zmax = float(np.abs(np.where(active, 0.0, z)).max(initial=0.0))
+    d *= beta
+    d += z
+    d[active] = 0.0
+    np.multiply(d, alpha, out=s)
+    s += u
+    nclip = int(np.count_nonzero(s < h))
+    np.maximum(s, h, out=ut)
+    np.subtract(ut, u, out=s)
+    fs = float(np.einsum("i,i->", f, s))
+    neg = s < 0.0
+    tf = float(((u[neg] - h[neg]) / -s[neg]).min()) if neg.any() else np.inf
+    return nclip, fs, tf, zmax
+
+
+def cg_secant_np(s, f, fel_t, load):
+    """numpy version of :func:`cg_secant`."""
+    return float(np.einsum("i,i->", s, f - fel_t + load))
+
+
+def max_abs_np(a):
+    """numpy version of :func:`max_abs`."""
+    return float(np.abs(a).max(initial=0.0))

@@ -1,31 +1,52 @@
-"""Green's function molecular dynamics with mass weighting and FIRE (docs/physics.md Sect. 3.2).
+"""Green's function molecular dynamics with mass weighting (docs/physics.md Sect. 3.2).
 
-The elastic surface height u(r) (gap = u - h) moves under the force per unit area
+The elastic surface height u(r) (gap = u - h) relaxes under the force per unit area
 
     f = -IFFT(k(q) FFT(u)) - p + f_int(u - h),        k(q) = |q| E*/2,
 
 with the Fourier-space masses of Zhou, Moseler & Mueser (PRB 99, 144103, 2019),
-m(q) = sqrt((z k_min)^2 + k(q)^2): the acceleration is a = IFFT(FFT(f) / m(q)), so all
-elastic modes share one frequency and the number of steps barely grows with the grid.
-The dynamics is damped to the energy minimum by FIRE (Bitzek et al., PRL 97, 170201,
-2006), with power f.v and velocity mixing along a.
+m(q) = sqrt(m_0^2 + k(q)^2): the preconditioned force IFFT(FFT(f) / m(q)) moves every
+elastic mode with k(q) > m_0 at one rate. Cost: two FFT pairs per iteration (the force,
+the preconditioning), plus one inverse FFT for each exact residual check.
 
-Hard wall (elastic model). The constraint u >= h is handled by an active set that is
-consistent with the non-local mass metric: points on the wall whose force pushes into
-it are active; their force (the wall reaction cancels it) and their acceleration and
-velocity are set to zero, i.e. the preconditioner is restricted to the free points.
-After each step u = max(u, h) with the velocity of clipped points zeroed. A fixed point
-has f = 0 off the active set and f <= 0 on it: exactly the contact (KKT) conditions, so
-GFMD and CG solve the same discrete problem. Plain projection of a mass-weighted step
-(no active set) spuriously detaches points and stalls FIRE (measured: dt -> 0).
-Cost: two FFT pairs per step (force, preconditioning).
-Adhesive model: the cosine attraction of ``adhesion.Adhesion`` acts on the gap; with
-``repulsion="hard"`` the same active-set wall as above, with ``"harmonic"`` no wall.
+Hard wall (elastic model): projected preconditioned conjugate gradients. Points on the wall
+whose force pushes into it are active: their force (the wall reaction cancels it) and their
+search direction are zero, i.e. the preconditioner acts on the free points only. A fixed
+point has f = 0 off the active set and f <= 0 on it, exactly the contact (KKT) conditions,
+so this and ``cg.polonsky_keer`` solve the same discrete problem. Each iteration:
 
-Residual (checked every ``check_every`` steps, one more inverse FFT): max |G f_eff| / rms(h),
-the largest displacement the unbalanced force would still cause, in units of the rms
-height (G = compliance 2/(|q| E*)); same units as the CG residual. G has no q = 0 part,
-so the load imbalance |mean f_eff| / min(p, k_min rms(h)) enters the maximum as well.
+1. z = M^-1 r (r = f off the active set), Polak-Ribiere direction d = z + beta d;
+2. trial point u_t = max(u + alpha d, h) and its exact force f_t (the FFT pair);
+3. the energy is quadratic along the actual displacement s = u_t - u (f is linear in u), so
+   s.K s = s.(f - f_t) and the minimum t = f.s / s.K s are known without another FFT; move to
+   u + t s with force f + t (f_t - f), still exact. t > 1 extrapolates only when nothing
+   clipped (up to the wall); when something clipped and t >= ``T_KEEP`` the trial point
+   itself is kept, so that the clipped points sit on the wall and join the active set (a
+   point moved only part of the way never joins it and the iteration jams: measured).
+   alpha follows t.
+
+Why not FIRE here (benchmarks/gfmd_growth.py, docs/contact.md "Step count at scale"): the
+masses cannot make the constrained problem uniformly stiff. Contacts pin the long waves of
+the free surface, so the largest eigenvalue of the preconditioned operator grows with the
+number of contact patches (about n^0.8 at fixed points per lambda_s), and its stiff modes
+reverse the power f.v every 2-4 steps; FIRE answers each reversal with a restart and a
+smaller dt, which then decays far below the stable step (0.2 against 0.4-0.6) and, at
+8192^2 and beyond, towards a stall. CG takes the exact step along each direction instead.
+m_0 = max(z k_min, k_h), where k_h is the stiffness averaged over the height spectrum:
+modes longer than the surface's own wavelengths are pinned by the contacts and need no
+faster rate, and the heavier long-wave masses cut the pinned modes' eigenvalues.
+
+Adhesive model (``adhesion=``, not convex): mass-weighted FIRE (Bitzek et al., PRL 97,
+170201, 2006) with the masses m_0 = z k_min, the power f.v and velocity mixing along the
+acceleration; the cosine attraction of ``adhesion.Adhesion`` acts on the gap, with
+``repulsion="hard"`` on the free points of the active-set wall above (velocity zeroed on
+the active set, u = max(u, h) after each step), with ``"harmonic"`` without a wall.
+
+Residual: max |G f_eff| / rms(h), the largest displacement the unbalanced force would still
+cause, in units of the rms height (G = compliance 2/(|q| E*)); same units as the CG
+residual. G has no q = 0 part, so the load imbalance |mean f_eff| / min(p, k_min rms(h))
+enters the maximum as well. FIRE checks it every ``check_every`` steps; the hard-wall CG
+checks it once the free estimate max |z| / rms(h) says it may be below the tolerance.
 """
 
 from __future__ import annotations
@@ -59,7 +80,19 @@ F_ALPHA = 0.97
 # kappa to them did not converge on 128^2 surfaces) and the time step is capped lower,
 # because the repulsion stiffens the contact points beyond the elastic frequency.
 ADHESIVE_DT0 = 0.2
-Z_MASS = 3.0  # q = 0 mass z k_min: 3 gave the fewest steps cold and warm (1, 3, 10, 30, 100 tried)
+Z_MASS = 3.0  # q = 0 mass z k_min: 3 gave the fewest FIRE steps cold and warm (1, 3, 10, 30, 100)
+# Hard-wall CG (measured on the rows of docs/contact.md "Step count at scale"): the mass
+# floor m_0 = max(Z_MASS k_min, H_MASS k_h) (H_MASS 1, 2, 3 within a few iterations of
+# each other; 0, i.e. z k_min alone, 10-30 % more iterations from 2048^2 on); the change
+# of the trial step alpha per iteration and its range; the largest extrapolation T_MAX of
+# the secant step; T_KEEP (0.5: 10-20 % more iterations, 0.95: about the same as 0.8).
+H_MASS = 1.0
+ALPHA_SHRINK = 0.1
+ALPHA_GROW = 2.0
+ALPHA_MIN = 1e-3
+ALPHA_MAX = 1e3
+T_MAX = 4.0
+T_KEEP = 0.8
 
 log = logging.getLogger(__name__)
 
@@ -77,13 +110,167 @@ def gfmd(
     threads: int | None = None,
     check_every: int = 5,
     use_numba: bool = True,
+    minimizer: str = "auto",
 ) -> SolverOutput:
     """Minimise elastic + interaction + load energy; returns a :class:`SolverOutput`.
 
+    Hard wall (``adhesion=None``): projected conjugate gradients in the mass metric
+    (``iterations`` counts CG iterations, two FFT pairs each). Adhesion: mass-weighted FIRE
+    (``iterations`` counts MD steps; residual checked every ``check_every`` steps).
     ``u0``: initial elastic surface height (warm start), default a flat surface touching
     the highest point (or one range above it with adhesion). ``use_numba=False`` runs the
-    same step with numpy (for benchmarking the kernels).
+    same iteration with numpy (for testing and benchmarking the kernels).
+    ``minimizer="fire"`` runs FIRE on the hard wall too (the method before CG; benchmarks).
     """
+    if minimizer not in ("auto", "fire"):
+        raise ValueError(f"minimizer must be 'auto' or 'fire', got {minimizer!r}")
+    if adhesion is None and minimizer == "auto":
+        return _hard_wall(heights, lx, ly, load, tol=tol, max_iter=max_iter, u0=u0,
+                          threads=threads, use_numba=use_numba)
+    return _fire(heights, lx, ly, load, tol=tol, max_iter=max_iter, u0=u0, adhesion=adhesion,
+                 threads=threads, check_every=check_every, use_numba=use_numba)
+
+
+def _hard_wall(
+    heights: np.ndarray,
+    lx: float,
+    ly: float,
+    load: float,
+    *,
+    tol: float,
+    max_iter: int,
+    u0: np.ndarray | None,
+    threads: int | None,
+    use_numba: bool,
+) -> SolverOutput:
+    """Projected preconditioned CG with a secant step (module docstring, "Hard wall")."""
+    if use_numba:
+        update, precondition, direction, secant, max_abs = (
+            _k.cg_update, _k.cg_precondition, _k.cg_direction, _k.cg_secant, _k.max_abs)
+    else:
+        update, precondition, direction, secant, max_abs = (
+            _k.cg_update_np, _k.cg_precondition_np, _k.cg_direction_np, _k.cg_secant_np,
+            _k.max_abs_np)
+    shape = heights.shape
+    size = heights.size
+    plan = fft.plan(shape, threads)
+    # the kernels read and write the plan's buffers directly; 1/size (the normalisation of
+    # the inverse transform) is folded into the spectral factors
+    rbuf = plan.real_in.reshape(-1)
+    out = plan.real_out.reshape(-1)
+    spec_in = plan.spectral_in
+    k = stiffness(shape, lx, ly)
+    kmin = float(k[k > 0].min())
+    neg_k = k * (-1.0 / size)
+    h0 = float(heights.mean())
+    h = np.ascontiguousarray(heights - h0).ravel()
+    rbuf[:] = h
+    ht = plan.execute_forward()
+    wts = fft.rfft_weights(shape[1])
+    hpow = wts * (ht.real**2 + ht.imag**2)
+    k_h = float((hpow * k).sum() / hpow.sum()) if hpow.sum() > 0 else kmin
+    pre = np.reciprocal(np.hypot(max(Z_MASS * kmin, H_MASS * k_h), k)) * (1.0 / size)
+    comp = compliance(shape, lx, ly) * (1.0 / size)
+    hscale = math.sqrt(dot(h, h) / size) or 1.0
+    load_scale = kmin * hscale
+    if load > 0:
+        load_scale = min(load_scale, load)
+    eps = 1e-12 * hscale  # round-off of the FFT round trip: points this close touch
+
+    if u0 is not None:
+        u = np.asarray(u0, dtype=np.float64).ravel() - h0
+        np.maximum(u, h, out=u)
+    else:
+        u = np.full(size, h.max())
+
+    def elastic_force() -> np.ndarray:
+        """-K (rbuf) into ``out`` (one FFT pair)."""
+        np.multiply(plan.execute_forward(), neg_k, out=spec_in)
+        plan.execute_inverse()
+        return out
+
+    f = np.empty(size)
+    d = np.zeros(size)
+    s = np.zeros(size)
+    rt_old = np.zeros(plan.spectral_shape, dtype=complex)  # transform of the previous r
+    active = np.zeros(size, dtype=bool)
+    rbuf[:] = u
+    np.subtract(elastic_force(), load, out=f)
+    update(u, f, s, out, 0.0, h, eps, load, rbuf, active)
+
+    alpha = 1.0  # trial step along d; M approximates K, so 1 is the unconstrained optimum
+    rz_old = 0.0
+    estimate = math.inf  # max |z| / rms(h) of the previous iteration: a free residual estimate
+    check_at = tol  # exact residual once the estimate falls below this
+    res = math.inf
+    it = 0
+    while True:
+        ft = plan.execute_forward()  # FFT of r
+        imbalance = abs(ft[0, 0].real) / size / load_scale
+        if max(estimate, imbalance) <= check_at or it >= max_iter or it == 0:
+            np.multiply(ft, comp, out=spec_in)  # one inverse FFT for G r
+            plan.execute_inverse()
+            res = max(max_abs(out) / hscale, imbalance)
+            if res <= tol or it >= max_iter:
+                break
+            # next check when the estimate has fallen by the factor still missing
+            check_at = max(estimate, imbalance) * tol / res
+        rz, roz = precondition(ft, pre, rt_old, spec_in, shape[1])
+        z = plan.execute_inverse()
+        # Polak-Ribiere, >= 0: restarts itself when the active set changes (and after t = 0)
+        beta = max(0.0, (rz - roz) / rz_old) if rz_old > 0 else 0.0
+        rz_old = rz
+        it += 1
+        nclip, fs, tf, zmax = direction(z.reshape(-1), d, u, h, f, beta, alpha, rbuf, s, active)
+        estimate = zmax / hscale
+        fel_t = elastic_force()
+        sks = secant(s, f, fel_t, load)
+        # exact minimum along the actual (clipped) trial displacement s, where the energy
+        # is quadratic in t; t > 1 extrapolates only when nothing clipped (the clipped
+        # points would leave the feasible set). The next trial step learns from t.
+        t_opt = fs / sks if sks > 0 else (math.inf if fs > 0 else 0.0)
+        if nclip and T_KEEP <= t_opt <= 1.0:
+            # keep the trial point: its clipped points sit exactly on the wall (a point
+            # short of it never joins the active set, and the step jams); the energy
+            # still decreases for t_opt >= 1/2 (quadratic along s)
+            t = 1.0
+        elif t_opt <= 1.0:
+            t = max(t_opt, 0.0)
+            alpha *= max(t, ALPHA_SHRINK)
+        elif nclip:
+            t = 1.0
+            alpha *= min(t_opt, ALPHA_GROW)
+        else:
+            t = min(t_opt, tf, T_MAX)
+            alpha *= t
+        alpha = min(max(alpha, ALPHA_MIN), ALPHA_MAX)
+        update(u, f, s, fel_t, t, h, eps, load, rbuf, active)
+
+    sigma = np.where(active, -f, 0.0)
+    separation = float(u.mean())
+    g = np.subtract(u, h, out=s).reshape(shape)
+    contact = active.reshape(shape) | (g <= eps)
+    g[contact] = 0.0
+    return SolverOutput(pressure=sigma.reshape(shape), gap=g, contact=contact,
+                        separation=separation, iterations=it, residual=res,
+                        converged=res <= tol)
+
+
+def _fire(
+    heights: np.ndarray,
+    lx: float,
+    ly: float,
+    load: float,
+    *,
+    tol: float,
+    max_iter: int,
+    u0: np.ndarray | None = None,
+    adhesion: Adhesion | None = None,
+    threads: int | None = None,
+    check_every: int = 5,
+    use_numba: bool = True,
+) -> SolverOutput:
+    """Mass-weighted FIRE (the adhesive model); arguments as :func:`gfmd`."""
     if use_numba:
         wall_forces, reductions, step = _k.wall_forces, _k.reductions, _k.step
     else:

@@ -55,9 +55,10 @@ def solve(
     method:
       ``"cg"``: constrained conjugate gradients on the pressure (Polonsky-Keer), 2 FFT
       pairs per iteration. ``"gfmd"``: Green's function molecular dynamics with mass
-      weighting and FIRE (the paper's method), see ``roughflow.contact.gfmd``.
-      Default: ``"gfmd"``. In ``benchmarks/bench_contact.py`` GFMD needs about 40-50 steps
-      to the default tolerance at every grid size (mass weighting), while the CG
+      weighting (the paper's method), see ``roughflow.contact.gfmd``: for the hard wall
+      projected conjugate gradients in the mass metric, for adhesion FIRE dynamics.
+      Default: ``"gfmd"``. In ``benchmarks/bench_scaling.py`` it needs 25-45 iterations to
+      the default tolerance from 512^2 to 4096^2 (docs/contact.md), while the Polonsky-Keer
       iteration count grows with the grid (about 120 at 256^2, 470 at 1024^2, a_c = 0.4);
       both cost two FFT pairs per iteration, so GFMD is several times faster from 256^2
       up. GFMD is also the only method for the (non-convex) adhesive model.

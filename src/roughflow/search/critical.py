@@ -207,16 +207,16 @@ class _Sample:
     area: float
     spans: dict[int, bool]
     state: ContactResult | None = None
-    predictor: Callable[[], dict[int, float]] | None = None  # computed on first use
+    predictor: Callable[[int], float] | None = None  # per axis, computed on first use
     perimeter: float = float("nan")
-    _pred: dict[int, float] | None = None
+    _pred: dict[int, float] = field(default_factory=dict)
 
-    @property
-    def pred(self) -> dict[int, float]:
-        """Predicted a_c* per axis (first-order union-find sweep of this state)."""
-        if self._pred is None:
-            self._pred = self.predictor() if self.predictor is not None else {}
-        return self._pred
+    def pred(self, ax: int) -> float:
+        """Predicted a_c* along ``ax`` (first-order union-find sweep of this state); only
+        the axes a search asks about are swept (a sweep costs a few solver iterations)."""
+        if ax not in self._pred:
+            self._pred[ax] = self.predictor(ax)
+        return self._pred[ax]
 
 
 def _bracket(samples: list[_Sample], ax: int) -> tuple[_Sample | None, _Sample | None]:
@@ -259,7 +259,7 @@ def _pending(samples: list[_Sample], axes, tol: float, load_range, strategy: str
                                f"(a_c = {lo.area:.4g})")
         else:
             q = lo if lo is not None else hi
-            dist = abs(q.pred[ax] - q.area) if strategy == "predict" else 0.0
+            dist = abs(q.pred(ax) - q.area) if strategy == "predict" else 0.0
             todo.append(_Work(math.inf, ax, lo, hi, dist))
     return todo
 
@@ -279,7 +279,7 @@ def _propose(w: _Work, *, tol: float, misses: int, strategy: str) -> tuple[float
     if lo is not None and hi is not None:
         if strategy == "bisect" or misses >= MISSES_BEFORE_BISECTION:
             return 0.5 * (lo.area + hi.area), None
-        f_lo, f_hi = lo.pred[ax] - lo.area, hi.pred[ax] - hi.area
+        f_lo, f_hi = lo.pred(ax) - lo.area, hi.pred(ax) - hi.area
         root = lo.area + f_lo * (hi.area - lo.area) / (f_lo - f_hi)
         off = AIM_OFFSET * tol * step
         below, above = root - off, root + off
@@ -291,13 +291,13 @@ def _propose(w: _Work, *, tol: float, misses: int, strategy: str) -> tuple[float
         if strategy == "bisect":
             target = lo.area + BISECT_STEP * step
         else:
-            d = max(lo.pred[ax] - lo.area, 0.0)
+            d = max(lo.pred(ax) - lo.area, 0.0)
             target = lo.area + OVERSHOOT * d + ONE_SIDED_OFFSET * tol * step
         return min(target, 0.5 * (1.0 + lo.area)), False
     if strategy == "bisect":  # only blocked states so far: go down
         target = hi.area - BISECT_STEP * step
     else:
-        d = max(hi.area - hi.pred[ax], 0.0)
+        d = max(hi.area - hi.pred(ax), 0.0)
         target = hi.area - OVERSHOOT * d - ONE_SIDED_OFFSET * tol * step
     return max(target, 0.5 * hi.area), True
 
@@ -454,11 +454,14 @@ def threshold(
         spans = {ax: percolates(opn, ax, periodic=opts.periodic) for ax in axes}
         predictor = None
         if opts.strategy == "predict":
-            def predictor() -> dict[int, float]:
+            order: list[np.ndarray] = []  # sorted once, on the first axis asked for
+
+            def predictor(ax: int) -> float:
                 # periodic union-find even with walls: the prediction only aims the solves
-                order = (np.argsort(-open_first, axis=None) if open_first is not None
-                         else open_first_order(seen.gap, seen.contact, pressure))
-                return predicted_thresholds(order, seen.contact.shape, axes)
+                if not order:
+                    order.append(np.argsort(-open_first, axis=None) if open_first is not None
+                                 else open_first_order(seen.gap, seen.contact, pressure))
+                return predicted_thresholds(order[0], seen.contact.shape, (ax,))[ax]
         # faces per observed cell: independent of the cell size, so a window needs no scaling
         perimeter = perimeter_term(seen.contact) if model == "elastic" else float("nan")
         return _Sample(load=float(load), area=float(seen.area_fraction), spans=spans, state=r,
