@@ -53,15 +53,32 @@ def _append(path: Path, rec: dict) -> None:
     print(json.dumps(rec), flush=True)
 
 
-def _surface(seed: int, ppl: int, ppl_max: int, cache: dict) -> Surface:
+def _surface(seed: int, ppl: int, ppl_max: int, cache: dict, gamma: float = 1.0,
+             l_over_lambda_r: float | None = None) -> Surface:
+    """The seed's surface generated at ``ppl_max`` and sampled down to ``ppl`` (same physical
+    surface at every resolution; for gamma != 1 the grid has ``ppl`` points per shortest
+    wavelength along each axis, so both axes are sampled by the same factor)."""
     if seed not in cache:
-        spec = SurfaceSpec.from_sweep(points_per_lambda_s=ppl_max, seed=seed)
+        spec = SurfaceSpec.from_sweep(gamma=gamma, l_over_lambda_r=l_over_lambda_r,
+                                      points_per_lambda_s=ppl_max, seed=seed)
         cache[seed] = generate(spec)
     s = cache[seed]
     k = ppl_max // ppl
     if k * ppl != ppl_max:
         raise SystemExit(f"points_per_lambda_s {ppl} does not divide {ppl_max}")
+    coarse = SurfaceSpec.from_sweep(gamma=gamma, l_over_lambda_r=l_over_lambda_r,
+                                    points_per_lambda_s=ppl, seed=seed)
+    if (coarse.nx * k, coarse.ny * k) != s.shape:  # fft_friendly rounding broke the ratio
+        raise SystemExit(f"grid {s.shape} at ppl {ppl_max} is not {k} x the grid "
+                         f"({coarse.nx}, {coarse.ny}) at ppl {ppl}")
     return Surface.from_array(np.ascontiguousarray(s.heights[::k, ::k]), lx=s.lx, ly=s.ly)
+
+
+def _faces(contact_mask) -> dict:
+    """Contact/non-contact faces normal to x and to y per cell (pixel counts)."""
+    fx, fy = accuracy.contact_faces(contact_mask)
+    n = contact_mask.size
+    return {"tx": fx / n, "ty": fy / n}
 
 
 def _hit_area(surf: Surface, target: float, *, tol_a: float, ctol: float, init=None):
@@ -77,55 +94,107 @@ def _hit_area(surf: Surface, target: float, *, tol_a: float, ctol: float, init=N
     return solves[0], found.result, found.solves
 
 
+def resolution_file(out: str | Path, gamma: float) -> Path:
+    """JSON-lines file of the resolution phase for one gamma (the isotropic name is kept)."""
+    name = ("convergence_resolution.jsonl" if gamma == 1.0
+            else f"convergence_resolution_g{gamma:g}.jsonl")
+    return Path(out) / name
+
+
+def threshold_record(surf: Surface, *, tol: float, contact_tol: float,
+                     on_unbracketed: str = "raise") -> dict:
+    """a_c* along x and y (raw and as the search corrects it), and one contact solve at
+    each axis' bracket midpoint: the contact-line faces normal to x and to y per cell
+    (``tx_{ax}``, ``ty_{ax}``) at that axis' threshold, from which any weighting of the
+    perimeter term can be evaluated afterwards. Also used by benchmarks/finite_size.py."""
+    t0 = time.perf_counter()
+    th = threshold(surf, axis=None, tol=tol, options=SearchOptions(
+        contact_tol=contact_tol, on_unbracketed=on_unbracketed))
+    rec = dict(time=time.perf_counter() - t0, n_solves=th[0].n_solves)
+    t0 = time.perf_counter()
+    rm = None
+    for ax in (0, 1):
+        rec[f"a_star_{ax}"] = th[ax].a_c_star
+        rec[f"a_star_corrected_{ax}"] = th[ax].a_c_star_corrected
+        rec[f"a_lo_{ax}"], rec[f"a_hi_{ax}"] = th[ax].a_lo, th[ax].a_hi
+        if not th[ax].bracketed:
+            rec.update({f"{k}_{ax}": float("nan") for k in ("a_mid", "perim", "tx", "ty")})
+            continue
+        rm = contact.solve(surf, 0.5 * (th[ax].p_lo + th[ax].p_hi), tol=contact_tol, init=rm)
+        rec[f"a_mid_{ax}"] = rm.area_fraction
+        rec[f"perim_{ax}"] = accuracy.perimeter_term(rm.contact)
+        rec.update({f"{k}_{ax}": v for k, v in _faces(rm.contact).items()})
+    rec["time_mid"] = (time.perf_counter() - t0) / 2
+    rec["perim_mid"] = 0.5 * (rec["perim_0"] + rec["perim_1"])
+    return rec
+
+
 def phase_resolution(args) -> None:
-    out = Path(args.out) / "convergence_resolution.jsonl"
+    out = resolution_file(args.out, args.gamma)
+    with_sigma = args.gamma == 1.0 if args.sigma is None else args.sigma
     ppl_max = max(args.ppl)
     cache: dict = {}
-    for ppl in sorted(args.ppl):
-        for seed in args.seeds:
-            surf = _surface(seed, ppl, ppl_max, cache)
-            n = surf.shape[0]
-            t0 = time.perf_counter()
-            th = threshold(surf, axis=None, tol=args.bisect_tol,
-                           options=SearchOptions(contact_tol=args.threshold_contact_tol))
-            t_th = time.perf_counter() - t0
-            p_mid = 0.25 * (th[0].p_lo + th[0].p_hi + th[1].p_lo + th[1].p_hi)
-            t0 = time.perf_counter()
-            rm = contact.solve(surf, p_mid, tol=args.threshold_contact_tol)
-            t_mid = time.perf_counter() - t0
-            rec = dict(kind="threshold", seed=seed, ppl=ppl, n=n, bisect_tol=args.bisect_tol,
-                       contact_tol=args.threshold_contact_tol, time=t_th, time_mid=t_mid,
-                       n_solves=th[0].n_solves, a_mid=rm.area_fraction,
-                       perim_mid=accuracy.perimeter_term(rm.contact, surf.lx, surf.ly))
-            for ax in (0, 1):
-                rec[f"a_star_{ax}"] = th[ax].a_c_star
-                rec[f"a_lo_{ax}"], rec[f"a_hi_{ax}"] = th[ax].a_lo, th[ax].a_hi
-            _append(out, rec)
-            init = None
-            for target in TARGETS:
+    # records already in the file are not computed again (runs can be resumed)
+    done = {(r["kind"], r["seed"], r["ppl"], r.get("target")) for r in _load(out)}
+    # seed by seed (every resolution of a seed before the next seed): an interrupted run
+    # leaves complete seeds, and only one finest surface is held in memory
+    for seed, ppl in ((s, p) for s in args.seeds for p in sorted(args.ppl)):
+        todo_fixed = [t for t in args.fixed_targets if ("fixed", seed, ppl, t) not in done]
+        has_threshold = ("threshold", seed, ppl, None) in done
+        if has_threshold and (with_sigma or not todo_fixed):
+            continue
+        if seed not in cache:
+            cache.clear()
+        surf = _surface(seed, ppl, ppl_max, cache, args.gamma, args.l_over_lambda_r)
+        base = dict(seed=seed, ppl=ppl, n=surf.shape[0], ny=surf.shape[1],
+                    gamma=args.gamma, l_over_lambda_r=args.l_over_lambda_r,
+                    dx=surf.dx, dy=surf.dy)
+        if not has_threshold:
+            _append(out, dict(kind="threshold", **base, bisect_tol=args.bisect_tol,
+                              contact_tol=args.threshold_contact_tol,
+                              **threshold_record(surf, tol=args.bisect_tol,
+                                                 contact_tol=args.threshold_contact_tol)))
+        init = None
+        if not with_sigma:
+            # fixed loads only (the same pressures at every resolution): the points that
+            # fit the perimeter constant
+            for target in todo_fixed:
+                p = contact.ContactLaw().control(target)
                 t0 = time.perf_counter()
-                first, r, ns = _hit_area(surf, target, tol_a=args.area_tol,
-                                         ctol=args.contact_tol, init=init)
-                t_c = time.perf_counter() - t0
+                r = contact.solve(surf, p, tol=args.contact_tol, init=init)
                 init = r
-                t0 = time.perf_counter()
-                fr = flow.solve(r.gap, 0, lx=surf.lx, ly=surf.ly)
-                t_f = time.perf_counter() - t0
-                a = r.area_fraction
-                sig = fr.sigma
-                ln_sig_t = (math.log(sig) - BETA / (A_STAR - a) * (target - a)
-                            if sig > 0 else float("nan"))
                 _append(out, dict(
-                    kind="sigma", seed=seed, ppl=ppl, n=n, target=target,
-                    p_fixed=first.pressure, a_fixed=first.area_fraction,
-                    gap_fixed=first.mean_gap,
-                    perim_fixed=accuracy.perimeter_term(first.contact, surf.lx, surf.ly),
-                    a=a, perim=accuracy.perimeter_term(r.contact, surf.lx, surf.ly),
-                    sigma_raw=sig, sigma=math.exp(ln_sig_t), mean_gap=r.mean_gap,
-                    n_contact_solves=ns, time_contact=t_c, time_flow=t_f,
-                    flow_residual=fr.residual, flux_imbalance=fr.flux_imbalance,
-                    contact_tol=args.contact_tol,
-                ))
+                    kind="fixed", **base, target=target, p_fixed=p,
+                    a_fixed=r.area_fraction, gap_fixed=r.mean_gap,
+                    perim_fixed=accuracy.perimeter_term(r.contact),
+                    **{f"{k}_fixed": v for k, v in _faces(r.contact).items()},
+                    contact_tol=args.contact_tol, time_contact=time.perf_counter() - t0))
+            continue
+        for target in TARGETS:
+            t0 = time.perf_counter()
+            first, r, ns = _hit_area(surf, target, tol_a=args.area_tol,
+                                     ctol=args.contact_tol, init=init)
+            t_c = time.perf_counter() - t0
+            init = r
+            t0 = time.perf_counter()
+            fr = flow.solve(r.gap, 0, lx=surf.lx, ly=surf.ly)
+            t_f = time.perf_counter() - t0
+            a = r.area_fraction
+            sig = fr.sigma
+            ln_sig_t = (math.log(sig) - BETA / (A_STAR - a) * (target - a)
+                        if sig > 0 else float("nan"))
+            _append(out, dict(
+                kind="sigma", **base, target=target,
+                p_fixed=first.pressure, a_fixed=first.area_fraction,
+                gap_fixed=first.mean_gap,
+                perim_fixed=accuracy.perimeter_term(first.contact),
+                **{f"{k}_fixed": v for k, v in _faces(first.contact).items()},
+                a=a, perim=accuracy.perimeter_term(r.contact),
+                sigma_raw=sig, sigma=math.exp(ln_sig_t), mean_gap=r.mean_gap,
+                n_contact_solves=ns, time_contact=t_c, time_flow=t_f,
+                flow_residual=fr.residual, flux_imbalance=fr.flux_imbalance,
+                contact_tol=args.contact_tol,
+            ))
 
 
 def phase_tol(args) -> None:
@@ -199,6 +268,18 @@ def _md_table(header: list[str], rows: list[list]) -> str:
     return "\n".join(lines)
 
 
+def _write(outdir: Path, stem: str, md: list[str], csv_rows: list[str], fig, png: str) -> None:
+    """Save the figure, the markdown tables and the CSV of one report; print the tables."""
+    import matplotlib.pyplot as plt
+
+    fig.tight_layout()
+    fig.savefig(outdir / png, dpi=120)
+    plt.close(fig)
+    (outdir / f"{stem}.md").write_text("\n".join(md))
+    (outdir / f"{stem}.csv").write_text("\n".join(csv_rows) + "\n")
+    print("\n".join(md))
+
+
 def _fit_c(sig: list[dict], ppls: list[int], exclude_seed=None) -> float:
     pts = [r for r in sig if r["ppl"] in ppls and r["seed"] != exclude_seed]
     if len({r["ppl"] for r in pts}) < 2:
@@ -232,16 +313,17 @@ def report(args) -> None:
     csv_rows: list[str] = ["quantity,variant,ppl,seed,value,reference,error,time_s"]
     thr = [r for r in res if r["kind"] == "threshold"]
     sig = [r for r in res if r["kind"] == "sigma"]
+    fixed = [r for r in res if r["kind"] in ("sigma", "fixed")]  # fixed-load solves
     ppls = sorted({r["ppl"] for r in res})
     seeds = sorted({r["seed"] for r in res})
     # keep only seeds with every resolution
     seeds = [s for s in seeds if all(any(r["seed"] == s and r["ppl"] == p for r in thr)
                                      for p in ppls)]
     fit_ppls = [p for p in ppls if p >= args.fit_min_ppl]
-    c_all = _fit_c(sig, fit_ppls) if sig else float("nan")
+    c_all = _fit_c(fixed, fit_ppls) if fixed else float("nan")
     fit = None
-    if sig and len(fit_ppls) >= 2:
-        pts = [r for r in sig if r["ppl"] in fit_ppls]
+    if fixed and len(fit_ppls) >= 2:
+        pts = [r for r in fixed if r["ppl"] in fit_ppls]
         fit = accuracy.fit_perimeter_constant(
             [(r["seed"], r["target"]) for r in pts], [r["a_fixed"] for r in pts],
             [r["perim_fixed"] for r in pts])
@@ -252,11 +334,11 @@ def report(args) -> None:
 
     # fixed-load a_c and mean gap against resolution
     rows = []
-    for target in TARGETS:
+    for target in sorted({r["target"] for r in fixed}):
         for p in ppls:
             e_a, e_g, e_c = [], [], []
             for s in seeds:
-                rr = {q["ppl"]: q for q in sig if q["seed"] == s and q["target"] == target}
+                rr = {q["ppl"]: q for q in fixed if q["seed"] == s and q["target"] == target}
                 if p not in rr or max(ppls) not in rr:
                     continue
                 ref = rr[max(ppls)]
@@ -265,7 +347,7 @@ def report(args) -> None:
                                             rr[fine_ppls[1]]["a_fixed"],
                                             ratio=fine_ppls[1] / fine_ppls[0])
                 e_a.append(rr[p]["a_fixed"] - a_ref)
-                cs = _fit_c(sig, fit_ppls, exclude_seed=s) if len(seeds) > 1 else c_all
+                cs = _fit_c(fixed, fit_ppls, exclude_seed=s) if len(seeds) > 1 else c_all
                 e_c.append(rr[p]["a_fixed"] - cs * rr[p]["perim_fixed"] - a_ref)
                 e_g.append(rr[p]["gap_fixed"] / ref["gap_fixed"] - 1)
             if e_a:
@@ -298,14 +380,14 @@ def report(args) -> None:
             tt = {k: [] for k in variants}
             for s in seeds:
                 rr = {q["ppl"]: q for q in thr if q["seed"] == s}
-                cs = _fit_c(sig, fit_ppls, exclude_seed=s) if len(seeds) > 1 else c_all
+                cs = _fit_c(fixed, fit_ppls, exclude_seed=s) if len(seeds) > 1 else c_all
                 t_raw = rr[p]["time"]
                 for ax in (0, 1):
                     v = rr[p][f"a_star_{ax}"]
                     ref = refs[(s, ax)]
                     err["raw"].append(v - ref)
                     tt["raw"].append(t_raw)
-                    vc = v - cs * rr[p]["perim_mid"]
+                    vc = v - cs * rr[p].get(f"perim_{ax}", rr[p]["perim_mid"])
                     err["perimeter"].append(vc - ref)
                     tt["perimeter"].append(t_raw + rr[p]["time_mid"])
                     csv_rows.append(f"a_c_star_{'xy'[ax]},raw,{p},{s},{v},{ref},{v - ref},{t_raw}")
@@ -371,7 +453,7 @@ def report(args) -> None:
                     continue
                 q = rr[p]
                 ref = refs[s]
-                cs = _fit_c(sig, fit_ppls, exclude_seed=s) if len(seeds) > 1 else c_all
+                cs = _fit_c(fixed, fit_ppls, exclude_seed=s) if len(seeds) > 1 else c_all
                 ln_raw = math.log(q["sigma"])
                 e["raw"].append(ln_raw - ref)
                 ln_cor = _sigma_at_corrected_area(q, target, cs)
@@ -530,12 +612,211 @@ def report(args) -> None:
         axs[2].set_ylabel("rms |a_c* - a_c*(ref)|")
         axs[2].set_title("bisection tolerance (labels: tol)")
         axs[2].legend(fontsize=7)
-    fig.tight_layout()
-    fig.savefig(outdir / "convergence_tolerances.png", dpi=120)
-    plt.close(fig)
-    (outdir / "convergence.md").write_text("\n".join(md))
-    (outdir / "convergence.csv").write_text("\n".join(csv_rows) + "\n")
-    print("\n".join(md))
+    _write(outdir, "convergence", md, csv_rows, fig, "convergence_tolerances.png")
+
+
+# ---------------------------------------------------------------------------------------
+# anisotropic report: per direction, and the face weighting of the perimeter term
+# ---------------------------------------------------------------------------------------
+
+#: Two weightings of the contact/non-contact faces, computed from the stored face counts per
+#: cell (tx: faces normal to x, ty: normal to y) and the spacings, so that records written
+#: with any version of ``accuracy.perimeter_term`` compare alike. "geometric": face length
+#: times the geometric-mean spacing sqrt(dx dy) (the form calibrated on square cells before
+#: issue 20); "pixel": face length times the spacing normal to the face, i.e. one cell area
+#: per face whatever the cell's aspect ratio. Both are (tx + ty) on square cells.
+FORMS = ("geometric", "pixel")
+
+
+def _face_term(r: dict, suffix: str, form: str) -> float:
+    tx, ty = r[f"tx{suffix}"], r[f"ty{suffix}"]
+    if form == "pixel":
+        return tx + ty
+    q = math.sqrt(r["dy"] / r["dx"])
+    return tx * q + ty / q
+
+
+def _lstsq_groups(groups: list, a: np.ndarray, terms: np.ndarray) -> tuple[np.ndarray, float]:
+    """a = a_inf(group) + terms @ c (several constants; :func:`accuracy.fit_perimeter_constant`
+    is the one-constant case): returns (c, rms residual)."""
+    labels = sorted(set(groups), key=str)
+    idx = {lab: i for i, lab in enumerate(labels)}
+    design = np.zeros((a.size, len(labels) + terms.shape[1]))
+    for k, lab in enumerate(groups):
+        design[k, idx[lab]] = 1.0
+    design[:, len(labels):] = terms
+    coef, *_ = np.linalg.lstsq(design, a, rcond=None)
+    return coef[len(labels):], float(np.sqrt(np.mean((a - design @ coef) ** 2)))
+
+
+def _fit_form(pts: list[dict], form: str, exclude_seed=None) -> accuracy.PerimeterFit:
+    pts = [r for r in pts if r["seed"] != exclude_seed]
+    return accuracy.fit_perimeter_constant(
+        [(r["gamma"], r["seed"], r["target"]) for r in pts], [r["a_fixed"] for r in pts],
+        [_face_term(r, "_fixed", form) for r in pts])
+
+
+def _jackknife_c(pts: list[dict], form: str) -> float:
+    """Leave-one-seed-out (jackknife) standard error of the fitted constant."""
+    seeds = sorted({(r["gamma"], r["seed"]) for r in pts})
+    if len(seeds) < 3:
+        return float("nan")
+    cs = np.array([_fit_form([r for r in pts if (r["gamma"], r["seed"]) != gs], form).c
+                   for gs in seeds])
+    return float(np.sqrt((len(cs) - 1) / len(cs) * np.sum((cs - cs.mean()) ** 2)))
+
+
+def _direction(gamma: float, ax: int) -> str:
+    if gamma == 1.0:
+        return "x" if ax == 0 else "y"
+    return ("easy (x)" if ax == 0 else "hard (y)") if gamma > 1 else (
+        "hard (x)" if ax == 0 else "easy (y)")
+
+
+def report_anisotropic(args) -> None:
+    """Per-direction resolution study over every gamma with a resolution file (issue 20)."""
+    import matplotlib
+
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+
+    outdir = Path(args.out)
+    files = sorted(outdir.glob("convergence_resolution*.jsonl"))
+    recs = [r for f in files for r in _load(f)]
+    for r in recs:
+        r.setdefault("gamma", 1.0)
+    recs = [r for r in recs if "tx_0" in r or "tx_fixed" in r]  # face counts stored
+    gammas = sorted({r["gamma"] for r in recs})
+    if not gammas:
+        return
+    c0 = accuracy.PERIMETER_C
+    md = ["# Anisotropic resolution study (benchmarks/convergence.py report)\n",
+          "Same physical surface at every resolution (generated at the finest grid, sampled "
+          "h[::k, ::k]); ppl = points per shortest wavelength along each axis, so cells are "
+          "gamma:1 rectangles. Reference: first-order Richardson extrapolation of the two "
+          "finest grids per seed (and axis). Face terms: tx, ty = contact/non-contact faces "
+          "normal to x, y per cell; 'geometric' = tx sqrt(dy/dx) + ty sqrt(dx/dy) (the "
+          "pre-issue-20 perimeter_term), 'pixel' = tx + ty.\n"]
+    csv = ["gamma,quantity,direction,variant,ppl,seed,value,reference,error"]
+    fixed_all = []
+    rows_fit, rows_fixed, rows_thr = [], [], []
+    fig, axs = plt.subplots(1, len(gammas), figsize=(5 * len(gammas), 4.2), squeeze=False)
+    for gi, g in enumerate(gammas):
+        rg = [r for r in recs if r["gamma"] == g]
+        thr = [r for r in rg if r["kind"] == "threshold"]
+        fixed = [r for r in rg if r["kind"] in ("sigma", "fixed") and "tx_fixed" in r]
+        ppls = sorted({r["ppl"] for r in thr})
+        seeds = sorted(s for s in {r["seed"] for r in thr}
+                       if all(any(r["seed"] == s and r["ppl"] == p for r in thr) for p in ppls))
+        fit_ppls = [p for p in ppls if p >= args.fit_min_ppl]
+        if len(fit_ppls) < 2 or not seeds:  # nothing complete yet
+            continue
+        f0, f1 = ppls[-2], ppls[-1]
+        pts = [r for r in fixed if r["ppl"] in fit_ppls and r["seed"] in seeds]
+        fixed_all += pts
+        cfit = {}
+        for form in FORMS:
+            f = _fit_form(pts, form)
+            cfit[form] = f
+            rows_fit.append([g, form, f.c, _jackknife_c(pts, form), f.rms, f.n])
+        tx_ty = np.mean([r["tx_fixed"] / r["ty_fixed"] for r in pts])
+        cxy, rms_xy = _lstsq_groups([(r["seed"], r["target"]) for r in pts],
+                                    np.array([r["a_fixed"] for r in pts]),
+                                    np.array([[r["tx_fixed"], r["ty_fixed"]] for r in pts]))
+        rows_fit.append([g, f"pixel, c_x and c_y (tx/ty = {tx_ty:.2f}: nearly collinear)",
+                         f"{cxy[0]:.4f} / {cxy[1]:.4f}", "", rms_xy, len(pts)])
+        # fixed-load areas against resolution
+        for target in sorted({r["target"] for r in fixed}):
+            for p in ppls:
+                e = {k: [] for k in ("raw", *FORMS)}
+                for s in seeds:
+                    rr = {q["ppl"]: q for q in fixed if q["seed"] == s and q["target"] == target}
+                    if p not in rr or f0 not in rr or f1 not in rr:
+                        continue
+                    ref = accuracy.richardson(rr[f0]["a_fixed"], rr[f1]["a_fixed"],
+                                              ratio=f1 / f0)
+                    e["raw"].append(rr[p]["a_fixed"] - ref)
+                    for form in FORMS:
+                        e[form].append(rr[p]["a_fixed"] - c0 * _face_term(rr[p], "_fixed", form)
+                                       - ref)
+                if e["raw"]:
+                    rows_fixed.append([g, target, p, *[float(np.mean(e[k])) for k in e]])
+        # a_c* per direction
+        refs = {}
+        for s in seeds:
+            rr = {q["ppl"]: q for q in thr if q["seed"] == s}
+            for ax in (0, 1):
+                refs[(s, ax)] = accuracy.richardson(rr[f0][f"a_star_{ax}"],
+                                                    rr[f1][f"a_star_{ax}"], ratio=f1 / f0)
+        for ax in (0, 1):
+            d = _direction(g, ax)
+            # the constant that would remove the first-order error of a_c* itself, fitted
+            # on this direction's thresholds at the two finest grids (at 4 points per
+            # lambda_s the percolation jitter, sd ~0.014, swamps it); jackknife over seeds
+            tp = [dict(q, gamma=g, target=None, a_fixed=q[f"a_star_{ax}"],
+                       tx_fixed=q[f"tx_{ax}"], ty_fixed=q[f"ty_{ax}"])
+                  for q in thr if q["ppl"] in (f0, f1) and q["seed"] in seeds]
+            if len(seeds) > 2:
+                ft = _fit_form(tp, "pixel")
+                rows_fit.append([g, f"pixel, fitted on a_c* {d} (ppl {f0}, {f1})", ft.c,
+                                 _jackknife_c(tp, "pixel"), ft.rms, ft.n])
+            curves = {k: [] for k in ("raw", *FORMS, "pixel, c fitted")}
+            for p in ppls:
+                e = {k: [] for k in curves}
+                for s in seeds:
+                    q = next(r for r in thr if r["seed"] == s and r["ppl"] == p)
+                    v, ref = q[f"a_star_{ax}"], refs[(s, ax)]
+                    vals = {"raw": v}
+                    for form in FORMS:
+                        vals[form] = v - c0 * _face_term(q, f"_{ax}", form)
+                    c_loo = _fit_form(pts, "pixel", exclude_seed=s).c if len(seeds) > 1 \
+                        else cfit["pixel"].c
+                    vals["pixel, c fitted"] = v - c_loo * _face_term(q, f"_{ax}", "pixel")
+                    for k, val in vals.items():
+                        e[k].append(val - ref)
+                        csv.append(f"{g},a_c_star,{d},{k},{p},{s},{val},{ref},{val - ref}")
+                for k in curves:
+                    ea = np.asarray(e[k])
+                    sd = float(np.std(ea, ddof=1)) if ea.size > 1 else float("nan")
+                    curves[k].append((p, float(np.mean(ea)), sd / math.sqrt(ea.size)))
+                    rows_thr.append([g, d, k, p, float(np.mean(ea)), sd / math.sqrt(ea.size),
+                                     sd, len(ea)])
+            for k, col in zip(curves, ("k", "C0", "C3", "C2"), strict=True):
+                xs = [p for p, *_ in curves[k]]
+                axs[0, gi].errorbar(xs, [m for _, m, _ in curves[k]],
+                                    yerr=[se for *_, se in curves[k]], color=col, capsize=2,
+                                    ls="-" if ax == 0 else "--", marker="o" if ax == 0 else "s",
+                                    label=f"{d}: {k}")
+        ax_ = axs[0, gi]
+        ax_.axhline(0, color="gray", lw=0.8)
+        ax_.axhspan(-0.0033, 0.0033, color="gray", alpha=0.15, lw=0)
+        ax_.set_xscale("log", base=2)
+        ax_.set_xlabel("points per lambda_s (each axis)")
+        ax_.set_ylabel("a_c* error (mean over seeds +- SE)")
+        ax_.set_title(f"gamma = {g:g} ({len(seeds)} seeds, c = {c0})")
+        ax_.legend(fontsize=6)
+    if len({r["gamma"] for r in fixed_all}) > 1:
+        for form in FORMS:
+            f = _fit_form(fixed_all, form)
+            rows_fit.append(["pooled", form, f.c, _jackknife_c(fixed_all, form), f.rms, f.n])
+        cxy, rms_xy = _lstsq_groups([(r["gamma"], r["seed"], r["target"]) for r in fixed_all],
+                                    np.array([r["a_fixed"] for r in fixed_all]),
+                                    np.array([[r["tx_fixed"], r["ty_fixed"]]
+                                              for r in fixed_all]))
+        rows_fit.append(["pooled", "pixel, c_x and c_y", f"{cxy[0]:.4f} / {cxy[1]:.4f}", "",
+                         rms_xy, len(fixed_all)])
+    md.append(f"## Perimeter constant fitted on fixed-load areas (ppl >= {args.fit_min_ppl})\n")
+    md.append(_md_table(["gamma", "face weighting", "c", "jackknife SE over seeds",
+                         "rms residual", "points"], rows_fit)
+              + "\n")
+    md.append(f"## Fixed-load contact area error (mean over seeds; corrections with c = {c0})\n")
+    md.append(_md_table(["gamma", "a_c target (law)", "ppl", "raw", "geometric", "pixel"],
+                        rows_fixed) + "\n")
+    md.append(f"## a_c* error per direction (raw; corrected with c = {c0} and each face "
+              "weighting; pixel with c fitted on the other seeds of this gamma)\n")
+    md.append(_md_table(["gamma", "direction", "variant", "ppl", "bias", "SE of bias",
+                         "sd over seeds", "seeds"], rows_thr) + "\n")
+    _write(outdir, "convergence_anisotropic", md, csv, fig, "convergence_anisotropic.png")
 
 
 def main(argv=None) -> int:
@@ -545,6 +826,14 @@ def main(argv=None) -> int:
     ap.add_argument("--seeds", type=int, nargs="+", default=[0, 1, 2], help="surface seeds")
     ap.add_argument("--ppl", type=int, nargs="+", default=[2, 4, 8, 16],
                     help="points per lambda_s of the resolution study (each divides the max)")
+    ap.add_argument("--gamma", type=float, default=1.0,
+                    help="Peklenik number of the resolution study (file name carries it)")
+    ap.add_argument("--l-over-lambda-r", type=float, default=None,
+                    help="L / lambda_r of the resolution study (default: the paper's)")
+    ap.add_argument("--sigma", action=argparse.BooleanOptionalAction, default=None,
+                    help="sigma at a_c = 0.2, 0.35 (flow solves); default only for gamma 1")
+    ap.add_argument("--fixed-targets", type=float, nargs="+", default=[0.2, 0.35, 0.42],
+                    help="without --sigma: a_c of the contact law's fixed loads (c fit)")
     ap.add_argument("--bisect-tol", type=float, default=1e-3,
                     help="bisection tol (a_hi - a_lo) of the resolution study")
     ap.add_argument("--threshold-contact-tol", type=float, default=1e-5,
@@ -571,7 +860,9 @@ def main(argv=None) -> int:
     if args.phase in ("resolution", "all"):
         phase_resolution(args)
     if args.phase in ("report", "all"):
-        report(args)
+        if resolution_file(args.out, 1.0).exists():  # the isotropic tables need it
+            report(args)
+        report_anisotropic(args)
     return 0
 
 

@@ -264,13 +264,13 @@ def test_paper_config_dry_run_job_counts(tmp_path):
     # all 10 in one job for the cheap bearing model, one seed per ladder job):
     #   threshold_vs_gamma: 7 gammas x (elastic 1/16, elastic 1/64) = 14 elastic points,
     #     7 bearing points
-    #   threshold_vs_size: gamma 2 at 5 sizes + 4 gammas at L = 32 + isotropic at 4 sizes
-    #     = 13, minus the points shared with threshold_vs_gamma (gamma 2 at L 5.66,
-    #     gamma 1 at L 4) = 11
+    #   threshold_vs_size: gamma 2 at 5 sizes + 4 gammas at L = 32 + isotropic at 6 sizes
+    #     (the gamma = 2 series' eps_t and 32; issue 20) = 15, minus the points shared
+    #     with threshold_vs_gamma (gamma 2 at L 5.66, gamma 1 at L 4) = 13
     #   threshold_vs_hurst: 7 gammas x H 0.3 (H 0.8 is shared with threshold_vs_gamma) = 7
-    #   -> 32 elastic points x 10 jobs + 7 bearing jobs = 327 threshold jobs
+    #   -> 34 elastic points x 10 jobs + 7 bearing jobs = 347 threshold jobs
     #   flow: 3 isotropic + 2 anisotropic models x 10 seeds = 50 ladder jobs
-    assert counts["scene"] == 327 + 50
+    assert counts["scene"] == 347 + 50
     assert counts["channels"] == 1
     assert counts["aggregate"] == 5 and counts["fit"] == 1 and counts["figure"] == 6
 

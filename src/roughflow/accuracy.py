@@ -2,14 +2,19 @@
 
 The relative contact area a_c of a discretised elastic contact converges only to first
 order in the grid spacing: a cell whose centre lies in contact is counted whole, and the
-discrete solution over-predicts contact in a band of about one cell along every contact
-line. The excess is therefore proportional to the contact-line length times the grid
-spacing. Two remedies (docs/accuracy.md has the measurements):
+discrete solution over-predicts contact in a band along every contact line whose depth is
+a fixed fraction of the grid spacing normal to the line. Two remedies (docs/accuracy.md has
+the measurements):
 
-- :func:`perimeter_corrected_area`: a_c - c * (contact-line length) * dx / (cell area),
-  with the contact-line length counted as the number of contact/non-contact cell faces
-  times the face length (4-neighbour, periodic). ``c`` is fitted to converged references
-  with :func:`fit_perimeter_constant`; :data:`PERIMETER_C` is the value measured by
+- :func:`perimeter_corrected_area`: a_c - c * (contact/non-contact cell faces) / (cells).
+  Each face carries a band c * (spacing normal to the face) deep and one face long, i.e.
+  c cell areas, whatever the cell's aspect ratio: on the gamma:1 rectangular cells of
+  anisotropic sweep surfaces a face normal to x is dy long and dx deep. (Weighting the
+  faces by their length times the geometric-mean spacing instead under-weights x-normal
+  faces by 1/sqrt(gamma) and over-weights y-normal ones by sqrt(gamma): on gamma = 2 and 4
+  surfaces the constant fitted that way drifts with gamma while the per-face one does not;
+  issue 20, docs/accuracy.md.) ``c`` is fitted to converged references with
+  :func:`fit_perimeter_constant`; :data:`PERIMETER_C` is the value measured by
   ``benchmarks/convergence.py`` on the default sweep surfaces (elastic, H = 0.8,
   eps_f = 1/16). Yastrebov, Anciaux & Molinari (Tribol. Int. 114 (2017) 161) derived a
   correction of the same form from the geometry of the contact edge.
@@ -28,8 +33,11 @@ import numpy as np
 from roughflow.errors import InputError, require_finite, require_positive
 
 #: Perimeter constant c fitted by ``benchmarks/convergence.py`` (elastic contact, default
-#: sweep surfaces, 2 to 16 points per lambda_s; docs/accuracy.md). Faces are counted
-#: along the grid axes (Manhattan length, on average 4/pi times the Euclidean length).
+#: sweep surfaces, 4 to 16 points per lambda_s; docs/accuracy.md): the misclassified area
+#: per contact/non-contact face, in cell areas. Fitted on square cells (gamma = 1) and
+#: confirmed per face on the rectangular cells of gamma = 2 and 4 surfaces (issue 20).
+#: Faces are counted along the grid axes (Manhattan length, on average 4/pi times the
+#: Euclidean length).
 PERIMETER_C = 0.105
 
 
@@ -63,31 +71,29 @@ def contact_line_length(contact, lx: float = 1.0, ly: float | None = None) -> fl
     return fx * ly / ny + fy * lx / nx
 
 
-def perimeter_term(contact, lx: float = 1.0, ly: float | None = None) -> float:
-    """Contact-line length times the grid spacing over the cell area (dimensionless).
+def perimeter_term(contact) -> float:
+    """Contact/non-contact cell faces per cell (dimensionless, periodic).
 
-    For square cells this is (number of contact/non-contact faces) / (number of cells);
-    it is the quantity multiplied by ``c`` in :func:`perimeter_corrected_area`.
+    The quantity multiplied by ``c`` in :func:`perimeter_corrected_area`: each face stands
+    for a misclassified band of one cell area (face length times the spacing normal to it),
+    so the term is (faces normal to x + faces normal to y) / (number of cells) on square
+    and rectangular cells alike. On square cells it equals the contact-line length (counted
+    along faces) times the spacing over the cell area.
     """
     m = _mask(contact)
-    lx = require_positive("lx", lx)
-    ly = lx if ly is None else require_positive("ly", ly)
-    nx, ny = m.shape
-    h = np.sqrt((lx / nx) * (ly / ny))  # geometric mean spacing
-    return contact_line_length(m, lx, ly) * h / (lx * ly)
+    fx, fy = contact_faces(m)
+    return (fx + fy) / m.size
 
 
-def perimeter_corrected_area(
-    contact, lx: float = 1.0, ly: float | None = None, *, c: float = PERIMETER_C
-) -> float:
-    """Relative contact area corrected for the first-order pixel bias: a_c - c * P h / A.
+def perimeter_corrected_area(contact, *, c: float = PERIMETER_C) -> float:
+    """Relative contact area corrected for the first-order grid bias: a_c - c * faces / cells.
 
-    ``contact``: boolean mask ``[ix, iy]``; ``c``: the perimeter constant (default
-    :data:`PERIMETER_C`, measured); returns a fraction of the cell area.
+    ``contact``: boolean mask ``[ix, iy]`` (any cell aspect ratio); ``c``: the perimeter
+    constant (default :data:`PERIMETER_C`, measured); returns a fraction of the cell area.
     """
     m = _mask(contact)
     c = require_finite("c", c)
-    return float(m.mean()) - c * perimeter_term(m, lx, ly)
+    return float(m.mean()) - c * perimeter_term(m)
 
 
 def richardson(coarse: float, fine: float, *, ratio: float = 2.0, order: float = 1.0) -> float:

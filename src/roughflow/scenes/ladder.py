@@ -68,11 +68,10 @@ def _contact_ladder(surface: Surface, job: LadderJob, threads: int | None, adhes
 
     The targets are met in the perimeter-corrected area for the elastic model (the
     continuum estimate, :func:`_corrected_area`), in the cell count otherwise."""
-    lx, ly = surface.lx, surface.ly
     if job.model == "bearing":
         for a in job.area_fractions:
             res = contact.solve(surface, model="bearing", area_fraction=a)
-            yield a, res, _corrected_area(res, job.model, lx, ly)
+            yield a, res, _corrected_area(res, job.model)
         return
     kw = {"model": job.model, "threads": threads}
     if adhesion is not None:
@@ -82,7 +81,7 @@ def _contact_ladder(surface: Surface, job: LadderJob, threads: int | None, adhes
         return contact.solve(surface, p, init=init, **kw)
 
     def measure(r) -> float:
-        a = _corrected_area(r, job.model, lx, ly)
+        a = _corrected_area(r, job.model)
         return float(r.area_fraction) if math.isnan(a) else a
 
     search = LoadSearch(solve, contact.ContactLaw(job.model), measure=measure)
@@ -91,7 +90,7 @@ def _contact_ladder(surface: Surface, job: LadderJob, threads: int | None, adhes
         if not found.met:
             log.warning("target a_c %.4g missed: closest %.5g after %d solves", a, found.area,
                         found.solves)
-        yield a, found.result, _corrected_area(found.result, job.model, lx, ly)
+        yield a, found.result, _corrected_area(found.result, job.model)
 
 
 def _theory(gap: np.ndarray, contact_mask: np.ndarray, a_c: float,
@@ -104,10 +103,10 @@ def _theory(gap: np.ndarray, contact_mask: np.ndarray, a_c: float,
                              a_c_star_alt=job.a_c_star_alt)
 
 
-def _corrected_area(c, model: str, lx: float, ly: float) -> float:
+def _corrected_area(c, model: str) -> float:
     """Perimeter-corrected contact area of one ladder state (see the variable's long_name)."""
     if model == "elastic":
-        return perimeter_corrected_area(c.contact, lx, ly)
+        return perimeter_corrected_area(c.contact)
     return float(c.area_fraction) if model == "bearing" else math.nan
 
 

@@ -462,11 +462,8 @@ def threshold(
                     order.append(np.argsort(-open_first, axis=None) if open_first is not None
                                  else open_first_order(seen.gap, seen.contact, pressure))
                 return predicted_thresholds(order[0], seen.contact.shape, (ax,))[ax]
-        perimeter = float("nan")
-        if model == "elastic":
-            lx = surface.lx * seen.contact.shape[0] / shape[0]
-            ly = surface.ly * seen.contact.shape[1] / shape[1]
-            perimeter = perimeter_term(seen.contact, lx, ly)
+        # faces per observed cell: independent of the cell size, so a window needs no scaling
+        perimeter = perimeter_term(seen.contact) if model == "elastic" else float("nan")
         return _Sample(load=float(load), area=float(seen.area_fraction), spans=spans, state=r,
                        predictor=predictor, perimeter=perimeter)
 
