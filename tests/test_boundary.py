@@ -8,7 +8,7 @@ from hypothesis import given, settings
 from hypothesis import strategies as st
 
 from roughflow import contact, flow
-from roughflow.boundary import PAD_DEPTH, embed
+from roughflow.boundary import PAD_DEPTH, cell_points, embed
 from roughflow.errors import InputError
 from roughflow.percolation import percolates, spanning_cells
 from roughflow.surface import Surface, SurfaceSpec, generate
@@ -115,3 +115,14 @@ def test_bad_embeddings_are_refused():
         embed(scan(), "window", margin=0.5)
     with pytest.raises(InputError, match="Surface"):
         embed(np.zeros((8, 8)), "mirror")
+
+
+def test_cell_points_is_the_size_of_the_embedded_cell():
+    # the workflow sizes a leak job's memory request with it before the scan is embedded
+    from roughflow.defaults import BOUNDARY_METHODS
+
+    surface = Surface(heights=np.random.default_rng(0).normal(size=(24, 40)), lx=1.0, ly=1.5)
+    for method in BOUNDARY_METHODS:
+        assert cell_points((24, 40), method) == embed(surface, method).surface.heights.size
+    with pytest.raises(InputError, match="boundary method"):
+        cell_points((24, 40), "tile")

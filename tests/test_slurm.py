@@ -198,6 +198,7 @@ def _leak_request(wd: Path, output: str) -> int:
 
     import netCDF4
 
+    from roughflow.boundary import cell_points
     from roughflow.scenes import expand_study
     from roughflow.scenes.jobs import requested_mem_mb
 
@@ -206,8 +207,8 @@ def _leak_request(wd: Path, output: str) -> int:
     with contextlib.chdir(wd):  # scan paths are relative to the workflow
         job = expand_study("measured", cfg)[name]
     with netCDF4.Dataset(wd / "results" / "measured" / "surfaces" / f"{name}.nc") as ds:
-        points = len(ds.dimensions["x"]) * len(ds.dimensions["y"])
-    return requested_mem_mb(job, points=points)
+        shape = (len(ds.dimensions["x"]), len(ds.dimensions["y"]))
+    return requested_mem_mb(job, points=cell_points(shape, job.boundary))
 
 
 def megabytes(reqmem: str) -> int:

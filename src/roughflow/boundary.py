@@ -98,6 +98,15 @@ class Embedding:
             pressure=self.nominal_pressure(result.pressure))
 
 
+def cell_points(shape: tuple[int, int], method: str) -> int:
+    """Grid points of the solver cell :func:`embed` builds for a scan of ``shape`` (mirror
+    and pad double each side; for memory estimates before the scan is read)."""
+    if method not in BOUNDARY_METHODS:
+        raise InputError(f"boundary method must be one of {BOUNDARY_METHODS}, got {method!r}")
+    factor = 4 if method in ("mirror", "pad") else 1
+    return factor * int(shape[0]) * int(shape[1])
+
+
 def embed(surface: Surface, method: str, *, margin: float = WINDOW_MARGIN) -> Embedding:
     """The periodic solver cell for ``surface`` by ``method`` (module docstring)."""
     if not isinstance(surface, Surface):

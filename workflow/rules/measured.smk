@@ -5,6 +5,8 @@ import os  # noqa: E402
 
 import netCDF4  # noqa: E402
 
+from roughflow.boundary import cell_points  # noqa: E402
+
 MEASURED = JOBS.get("measured", {})
 
 
@@ -17,15 +19,13 @@ def measured_job(wildcards):
 
 def leak_mem_mb(wildcards, input, attempt):
     # the grid is the imported scan's: Snakemake evaluates this again once the import has
-    # run (before the job is submitted); until then, the estimate of a 1024^2 grid
-    points = 1024 * 1024
+    # run (before the job is submitted); until then, the estimate of a 1024^2 scan
+    shape = (1024, 1024)
     if os.path.exists(input[0]):
         with netCDF4.Dataset(input[0]) as ds:
-            points = len(ds.dimensions["x"]) * len(ds.dimensions["y"])
+            shape = (len(ds.dimensions["x"]), len(ds.dimensions["y"]))
     job = measured_job(wildcards)
-    if job.boundary in ("mirror", "pad"):
-        points *= 4  # both double the scan along each axis (roughflow.boundary.embed)
-    return requested_mem_mb(job, attempt, points)
+    return requested_mem_mb(job, attempt, cell_points(shape, job.boundary))
 
 
 rule import_scan:
