@@ -9,7 +9,14 @@ import numpy as np
 import pytest
 
 from roughflow.errors import InputError
-from roughflow.percolation import bearing_bracket, critical_open_count, percolates
+from roughflow.percolation import (
+    bearing_bracket,
+    critical_open_count,
+    critical_open_count_by_key,
+    open_first_order,
+    openness,
+    percolates,
+)
 from roughflow.search import SearchOptions, Threshold, ThresholdNotBracketed, threshold
 from roughflow.surface import Surface, SurfaceSpec, generate
 
@@ -44,6 +51,31 @@ def test_sweep_count_is_first_spanning_prefix():
             assert percolates(m.reshape(shape), axis)
             m[order[k - 1]] = False
             assert not percolates(m.reshape(shape), axis)
+
+
+def test_sweep_by_key_equals_the_full_sweep():
+    # The blocked sweep (cells far before the expected threshold joined in memory order,
+    # the rest sorted a chunk at a time) must give the count of the full sorted sweep for
+    # any expectation: too high (the block spans and is shrunk), too low, or at the ends;
+    # continuous keys (no ties), grids down to 1 x n and up to ones where the chunks matter
+    rng = np.random.default_rng(8)
+    shapes = [tuple(rng.integers(1, 40, 2)) for _ in range(40)] + [(1, 30), (30, 1), (96, 80)]
+    for shape in shapes:
+        key = rng.standard_normal(shape)
+        for axis in (0, 1):
+            full = critical_open_count(np.argsort(-key, axis=None), shape, axis)
+            for expect in (0.0, 0.2, 0.5, 0.8, 1.0):
+                assert critical_open_count_by_key(key, axis, expect=expect) == full
+
+
+def test_openness_orders_like_open_first_order():
+    rng = np.random.default_rng(9)
+    contact = rng.random((20, 16)) < 0.4
+    gap = np.where(contact, 0.0, rng.random((20, 16)) + 1e-3)
+    pressure = np.where(contact, rng.random((20, 16)), 0.0)
+    order = open_first_order(gap, contact, pressure)
+    np.testing.assert_array_equal(np.argsort(-openness(gap, contact, pressure), axis=None,
+                                             kind="stable"), order)
 
 
 def test_bearing_bracket_is_one_cell_and_correct():

@@ -149,6 +149,23 @@ def cg_secant(s, f, fel_t, load):  # pragma: no cover - compiled
 
 
 @numba.njit(cache=True, nogil=True)
+def cg_finish(u, h, f, active, eps, sigma, gap, contact):  # pragma: no cover - compiled
+    """The solved state: sigma = wall reaction -f on the active set (0 elsewhere), gap =
+    u - h, zero where in contact (active, or within eps of the wall); returns sum(u)."""
+    total = 0.0
+    for i in range(u.size):
+        ui = u[i]
+        total += ui
+        g = ui - h[i]
+        a = active[i]
+        c = a or g <= eps
+        sigma[i] = -f[i] if a else 0.0
+        gap[i] = 0.0 if c else g
+        contact[i] = c
+    return total
+
+
+@numba.njit(cache=True, nogil=True)
 def max_abs(a):  # pragma: no cover - compiled
     """max |a| without a temporary array."""
     m = 0.0
@@ -171,6 +188,7 @@ def warm_up() -> None:
     cg_precondition(c, np.ones((4, 3)), c.copy(), c.copy(), 4)
     cg_direction(z, z.copy(), z, z, z, 0.0, 0.0, z.copy(), z.copy(), b)
     cg_secant(z, z, z, 0.0)
+    cg_finish(z, z, z, b, 0.0, z.copy(), z.copy(), b.copy())
     max_abs(z)
 
 
@@ -248,6 +266,15 @@ def cg_direction_np(z, d, u, h, f, beta, alpha, ut, s, active):
 def cg_secant_np(s, f, fel_t, load):
     """numpy version of :func:`cg_secant`."""
     return float(np.einsum("i,i->", s, f - fel_t + load))
+
+
+def cg_finish_np(u, h, f, active, eps, sigma, gap, contact):
+    """numpy version of :func:`cg_finish`."""
+    np.copyto(sigma, np.where(active, -f, 0.0))
+    np.subtract(u, h, out=gap)
+    np.logical_or(active, gap <= eps, out=contact)
+    gap[contact] = 0.0
+    return float(u.sum())
 
 
 def max_abs_np(a):

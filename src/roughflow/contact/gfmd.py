@@ -51,6 +51,7 @@ checks it once the free estimate max |z| / rms(h) says it may be below the toler
 
 from __future__ import annotations
 
+import functools
 import logging
 import math
 
@@ -95,6 +96,20 @@ T_MAX = 4.0
 T_KEEP = 0.8
 
 log = logging.getLogger(__name__)
+
+
+@functools.lru_cache(maxsize=2)  # large grids: 3 spectral arrays each
+def _spectral(shape: tuple[int, int], lx: float, ly: float):
+    """Read-only spectral factors of the hard wall for one grid: k(q), -k(q)/N, G(q)/N (the
+    1/N of the unnormalised inverse transform folded in), and the smallest k > 0."""
+    size = shape[0] * shape[1]
+    k = stiffness(shape, lx, ly)
+    kmin = float(k[k > 0].min())
+    neg_k = k * (-1.0 / size)
+    comp = compliance(shape, lx, ly) * (1.0 / size)
+    for a in (k, neg_k, comp):
+        a.setflags(write=False)
+    return k, neg_k, comp, kmin
 
 
 def gfmd(
@@ -145,12 +160,13 @@ def _hard_wall(
 ) -> SolverOutput:
     """Projected preconditioned CG with a secant step (module docstring, "Hard wall")."""
     if use_numba:
-        update, precondition, direction, secant, max_abs = (
-            _k.cg_update, _k.cg_precondition, _k.cg_direction, _k.cg_secant, _k.max_abs)
+        update, precondition, direction, secant, finish, max_abs = (
+            _k.cg_update, _k.cg_precondition, _k.cg_direction, _k.cg_secant, _k.cg_finish,
+            _k.max_abs)
     else:
-        update, precondition, direction, secant, max_abs = (
+        update, precondition, direction, secant, finish, max_abs = (
             _k.cg_update_np, _k.cg_precondition_np, _k.cg_direction_np, _k.cg_secant_np,
-            _k.max_abs_np)
+            _k.cg_finish_np, _k.max_abs_np)
     shape = heights.shape
     size = heights.size
     plan = fft.plan(shape, threads)
@@ -159,9 +175,7 @@ def _hard_wall(
     rbuf = plan.real_in.reshape(-1)
     out = plan.real_out.reshape(-1)
     spec_in = plan.spectral_in
-    k = stiffness(shape, lx, ly)
-    kmin = float(k[k > 0].min())
-    neg_k = k * (-1.0 / size)
+    k, neg_k, comp, kmin = _spectral(shape, lx, ly)
     h0 = float(heights.mean())
     h = np.ascontiguousarray(heights - h0).ravel()
     rbuf[:] = h
@@ -169,8 +183,9 @@ def _hard_wall(
     wts = fft.rfft_weights(shape[1])
     hpow = wts * (ht.real**2 + ht.imag**2)
     k_h = float((hpow * k).sum() / hpow.sum()) if hpow.sum() > 0 else kmin
-    pre = np.reciprocal(np.hypot(max(Z_MASS * kmin, H_MASS * k_h), k)) * (1.0 / size)
-    comp = compliance(shape, lx, ly) * (1.0 / size)
+    pre = np.hypot(max(Z_MASS * kmin, H_MASS * k_h), k)
+    np.reciprocal(pre, out=pre)
+    pre *= 1.0 / size
     hscale = math.sqrt(dot(h, h) / size) or 1.0
     load_scale = kmin * hscale
     if load > 0:
@@ -246,14 +261,13 @@ def _hard_wall(
         alpha = min(max(alpha, ALPHA_MIN), ALPHA_MAX)
         update(u, f, s, fel_t, t, h, eps, load, rbuf, active)
 
-    sigma = np.where(active, -f, 0.0)
-    separation = float(u.mean())
-    g = np.subtract(u, h, out=s).reshape(shape)
-    contact = active.reshape(shape) | (g <= eps)
-    g[contact] = 0.0
-    return SolverOutput(pressure=sigma.reshape(shape), gap=g, contact=contact,
-                        separation=separation, iterations=it, residual=res,
-                        converged=res <= tol)
+    sigma = np.empty(shape)
+    g = np.empty(shape)
+    contact = np.empty(shape, dtype=bool)
+    separation = finish(u, h, f, active, eps, sigma.reshape(-1), g.reshape(-1),
+                        contact.reshape(-1)) / size
+    return SolverOutput(pressure=sigma, gap=g, contact=contact, separation=separation,
+                        iterations=it, residual=res, converged=res <= tol)
 
 
 def _fire(

@@ -7,7 +7,9 @@ drives them is :mod:`roughflow.search`).
 - :func:`percolates`, :func:`spanning_cells`: does the fluid span along an axis, and which
   cells carry flow; :func:`contact_percolates`: the dual statement for contact (8-connected).
 - :func:`critical_open_count`, :func:`bearing_bracket`, :func:`predicted_thresholds`:
-  exact spanning thresholds of a growing open set (one union-find pass).
+  exact spanning thresholds of a growing open set (one union-find pass);
+  :func:`critical_open_count_by_key`, :func:`predicted_threshold_by_key`: the same from a
+  key per cell, sorting only the cells near the threshold.
 - :mod:`.clusters`: cluster-size statistics and the percolating-channel map (Fig. 1 b, c).
 """
 
@@ -25,7 +27,10 @@ from .sweep import (
     BearingBracket,
     bearing_bracket,
     critical_open_count,
+    critical_open_count_by_key,
     open_first_order,
+    openness,
+    predicted_threshold_by_key,
     predicted_thresholds,
 )
 
@@ -38,11 +43,14 @@ __all__ = [
     "cluster_stats",
     "contact_percolates",
     "critical_open_count",
+    "critical_open_count_by_key",
     "fisher_exponent",
     "label",
     "open_first_order",
+    "openness",
     "percolates",
     "percolation_map",
+    "predicted_threshold_by_key",
     "predicted_thresholds",
     "size_distribution",
     "spanning_cells",

@@ -32,14 +32,12 @@ def _find(parent, x):
 
 
 @numba.njit(cache=True)
-def _critical_count(order, nx, ny, axis):
-    n = nx * ny
-    parent = np.full(n, -1, dtype=np.int32)  # int32 halves the memory traffic
-    size = np.zeros(n, dtype=np.int32)
-    flags = np.zeros(n, dtype=np.int8)
+def _sweep(cells, nx, ny, axis, parent, size, flags):
+    """Open ``cells`` in turn on the union-find state (parent < 0: closed); returns the
+    position + 1 of the cell whose opening first links both ends along ``axis``, or -1."""
     nlen = nx if axis == 0 else ny
-    for k in range(order.size):
-        c = order[k]
+    for k in range(cells.size):
+        c = cells[k]
         ix = c // ny
         iy = c - ix * ny
         parent[c] = c
@@ -87,6 +85,12 @@ def _critical_count(order, nx, ny, axis):
     return -1
 
 
+def _union_find_state(n: int) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    # int32 halves the memory traffic
+    return (np.full(n, -1, dtype=np.int32), np.zeros(n, dtype=np.int32),
+            np.zeros(n, dtype=np.int8))
+
+
 def critical_open_count(order: np.ndarray, shape: tuple[int, int], axis: int) -> int:
     """Smallest k such that the first k cells of ``order`` (flat C-order indices into an
     array of ``shape``) form an open set that spans along ``axis`` (4-connected, open
@@ -100,7 +104,60 @@ def critical_open_count(order: np.ndarray, shape: tuple[int, int], axis: int) ->
     order = np.ascontiguousarray(order, dtype=np.int64)
     if order.size and (order.min() < 0 or order.max() >= nx * ny):
         raise ValueError("order holds indices outside the grid")
-    return int(_critical_count(order, nx, ny, ax))
+    return int(_sweep(order, nx, ny, ax, *_union_find_state(nx * ny)))
+
+
+#: First block of :func:`critical_open_count_by_key`: the cells opened before the expected
+#: critical count minus this fraction of all cells; later cells are sorted in chunks of it.
+_BLOCK_MARGIN = 0.05
+
+
+def critical_open_count_by_key(key: np.ndarray, axis: int, *, expect: float = 0.5) -> int:
+    """:func:`critical_open_count` for the order of decreasing ``key`` (cells with a larger
+    key open first), without sorting all cells.
+
+    ``expect``: the expected fraction of open cells at the threshold. The cells well before
+    it are joined as one block in memory order (only their set matters, not their order),
+    and only the cells after it are sorted, a chunk at a time, until the open set spans; a
+    block that already spans is shrunk and the sweep redone. Same count as
+    ``critical_open_count(np.argsort(-key, axis=None), key.shape, axis)`` up to the order of
+    equal keys. About 4x faster than that on 1024^2 (argsort and random access dominate).
+    """
+    ax = check_axis(axis)
+    key = np.asarray(key, dtype=np.float64)
+    nx, ny = (int(v) for v in key.shape)
+    n = nx * ny
+    if n >= 2**31:
+        raise ValueError(f"grid {nx} x {ny} too large for the int32 union-find")
+    flat = key.ravel()
+    chunk = max(1, int(_BLOCK_MARGIN * n))
+    m = int((min(max(float(expect), 0.0), 1.0) - _BLOCK_MARGIN) * n)
+    while True:
+        state = _union_find_state(n)
+        if m <= 0:
+            rest = np.arange(n)
+            done = 0
+            break
+        cut = np.partition(flat, n - m)[n - m]  # the m-th largest key
+        block = np.flatnonzero(flat >= cut)  # memory order: cache-friendly union-find
+        if _sweep(block, nx, ny, ax, *state) < 0:
+            rest = np.flatnonzero(flat < cut)
+            done = block.size
+            break
+        m -= 2 * chunk  # the block already spans: start lower
+    while rest.size:
+        vals = flat[rest]
+        if rest.size > chunk:
+            part = np.argpartition(-vals, chunk)
+            take, rest = rest[part[:chunk]], rest[part[chunk:]]
+            take = take[np.argsort(-flat[take])]
+        else:
+            take, rest = rest[np.argsort(-vals)], rest[:0]
+        k = _sweep(take, nx, ny, ax, *state)
+        if k >= 0:
+            return done + k
+        done += take.size
+    return -1
 
 
 
@@ -141,6 +198,21 @@ def open_first_order(gap: np.ndarray, contact: np.ndarray, pressure: np.ndarray)
     o = idx_open[np.argsort(-gap.ravel()[idx_open])]
     c = idx_cont[np.argsort(pressure.ravel()[idx_cont])]
     return np.concatenate([o, c])
+
+
+def openness(gap: np.ndarray, contact: np.ndarray, pressure: np.ndarray) -> np.ndarray:
+    """Key of :func:`open_first_order` (larger opens first): the gap of an open cell, minus
+    the contact pressure of a contact cell."""
+    return np.where(np.asarray(contact, dtype=bool), -np.asarray(pressure, dtype=np.float64),
+                    gap)
+
+
+def predicted_threshold_by_key(key: np.ndarray, axis: int, *, expect: float = 0.5) -> float:
+    """:func:`predicted_thresholds` for one axis from the :func:`openness` key (or any key,
+    larger opens first), via :func:`critical_open_count_by_key`; ``expect`` is the expected
+    open fraction at the threshold (e.g. the state's own open fraction)."""
+    k = critical_open_count_by_key(key, axis, expect=expect)
+    return 1.0 - (k - 0.5) / key.size
 
 
 def predicted_thresholds(order: np.ndarray, shape: tuple[int, int],

@@ -15,8 +15,9 @@ spanning the cell along ``axis`` (open boundaries along it, periodic across).
   default strategy ``"predict"`` the proposal comes from a first-order prediction of a_c*
   taken from a solved state: its cells ordered from the most open (largest gap) to the most
   closed (largest contact pressure) are swept with union-find
-  (:func:`roughflow.percolation.predicted_thresholds`). f(a) = prediction - a is > 0 on every
-  spanning state and < 0 on every blocked one, so once both sides are known the secant root
+  (:func:`roughflow.percolation.predicted_threshold_by_key`, sorting only the cells near the
+  state's own open fraction). f(a) = prediction - a is > 0 on every spanning state and < 0
+  on every blocked one, so once both sides are known the secant root
   of f lies inside the bracket; the solve aims just past it, and plain bisection takes over
   after repeated misses. ``strategy="bisect"`` is plain bisection in a_c, the reference.
 """
@@ -49,9 +50,9 @@ from roughflow.errors import ConvergenceError, InputError, require_positive
 from roughflow.percolation import (
     bearing_bracket,
     check_axis,
-    open_first_order,
+    openness,
     percolates,
-    predicted_thresholds,
+    predicted_threshold_by_key,
 )
 from roughflow.resources import check_memory
 from roughflow.surface import Surface
@@ -454,14 +455,15 @@ def threshold(
         spans = {ax: percolates(opn, ax, periodic=opts.periodic) for ax in axes}
         predictor = None
         if opts.strategy == "predict":
-            order: list[np.ndarray] = []  # sorted once, on the first axis asked for
+            keys: list[np.ndarray] = []  # built once, on the first axis asked for
 
             def predictor(ax: int) -> float:
                 # periodic union-find even with walls: the prediction only aims the solves
-                if not order:
-                    order.append(np.argsort(-open_first, axis=None) if open_first is not None
-                                 else open_first_order(seen.gap, seen.contact, pressure))
-                return predicted_thresholds(order[0], seen.contact.shape, (ax,))[ax]
+                if not keys:
+                    keys.append(open_first if open_first is not None
+                                else openness(seen.gap, seen.contact, pressure))
+                return predicted_threshold_by_key(keys[0], ax,
+                                                  expect=1.0 - float(seen.area_fraction))
         # faces per observed cell: independent of the cell size, so a window needs no scaling
         perimeter = perimeter_term(seen.contact) if model == "elastic" else float("nan")
         return _Sample(load=float(load), area=float(seen.area_fraction), spans=spans, state=r,
