@@ -7,7 +7,7 @@
 
 from ._result import ContactResult
 from .adhesion import Adhesion, adhesion_summary, tabor_parameter
-from .elastic import full_contact_energy
+from .elastic import cell_compliance, full_contact_energy
 from .law import ContactLaw
 from .solve import METHODS, MODELS, solve
 
@@ -18,6 +18,7 @@ __all__ = [
     "ContactLaw",
     "ContactResult",
     "adhesion_summary",
+    "cell_compliance",
     "full_contact_energy",
     "solve",
     "tabor_parameter",

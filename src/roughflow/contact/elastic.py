@@ -46,6 +46,15 @@ def compliance(shape: tuple[int, int], lx: float, ly: float, e_star: float = 1.0
     return c if e_star == 1.0 else c / e_star
 
 
+def cell_compliance(shape: tuple[int, int], lx: float, ly: float, e_star: float = 1.0) -> float:
+    """Displacement of one grid cell under unit pressure on that cell alone (units L / E*):
+    the mean of 2/(|q| E*) over the full spectrum (about 1.76 * 2 dx / (pi E*) on square
+    cells)."""
+    nx, ny = int(shape[0]), int(shape[1])
+    c = compliance((nx, ny), lx, ly, e_star)
+    return float((fft.rfft_weights(ny) * c).sum()) / (nx * ny)
+
+
 def full_contact_energy(heights: np.ndarray, lx: float, ly: float, e_star: float = 1.0) -> float:
     """v_ela^full: elastic energy per unit area to flatten ``heights`` completely.
 

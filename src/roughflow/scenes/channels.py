@@ -18,7 +18,7 @@ import xarray as xr
 from roughflow import contact
 from roughflow.datasets.units import DIMENSIONLESS, LENGTH_UNITS
 from roughflow.percolation import contact_percolates, percolates, spanning_cells
-from roughflow.search import LoadSearch
+from roughflow.search import LoadSearch, warm_start_compliance
 from roughflow.surface import Surface, generate
 
 from .jobs import ChannelsJob
@@ -42,7 +42,8 @@ def contact_at_area(surface: Surface, target: float, model: str, *, tol: float =
     def solve(p: float, init):
         return contact.solve(surface, p, model=model, init=init, threads=threads)
 
-    found = LoadSearch(solve, contact.ContactLaw(model)).solve_for(target, tol)
+    found = LoadSearch(solve, contact.ContactLaw(model),
+                       compliance=warm_start_compliance(surface)).solve_for(target, tol)
     if not found.met:
         log.warning("target a_c %.4g missed: closest %.5g after %d solves", target,
                     found.area, found.solves)

@@ -32,7 +32,7 @@ from roughflow.datasets.units import (
     SIGMA_UNITS,
 )
 from roughflow.defaults import CONTACT_TOL
-from roughflow.search import LoadSearch
+from roughflow.search import LoadSearch, warm_start_compliance
 from roughflow.surface import Surface, generate
 
 from .jobs import LadderJob
@@ -84,7 +84,8 @@ def _contact_ladder(surface: Surface, job: LadderJob, threads: int | None, adhes
         a = _corrected_area(r, job.model)
         return float(r.area_fraction) if math.isnan(a) else a
 
-    search = LoadSearch(solve, contact.ContactLaw(job.model), measure=measure)
+    search = LoadSearch(solve, contact.ContactLaw(job.model), measure=measure,
+                        compliance=warm_start_compliance(surface))
     for a in job.area_fractions:
         found = search.solve_for(a, job.area_tol)
         if not found.met:

@@ -18,7 +18,7 @@ from .critical import (
     first_pressure,
     threshold,
 )
-from .load import AreaSolve, LoadSearch, Point, load_for_area, warm_start
+from .load import AreaSolve, LoadSearch, Point, load_for_area, warm_start, warm_start_compliance
 
 __all__ = [
     "AreaSolve",
@@ -32,4 +32,5 @@ __all__ = [
     "load_for_area",
     "threshold",
     "warm_start",
+    "warm_start_compliance",
 ]

@@ -57,7 +57,7 @@ from roughflow.percolation import (
 from roughflow.resources import check_memory
 from roughflow.surface import Surface
 
-from .load import load_for_area, timed_solve, warm_start
+from .load import load_for_area, timed_solve, warm_start, warm_start_compliance
 
 log = logging.getLogger(__name__)
 
@@ -337,14 +337,15 @@ def _assemble(samples: list[_Sample], axes, unbracketed: dict, *, model: str, to
 
 def _refine(evaluate: Callable[[float, ContactResult | None], _Sample], axes, *, tol: float,
             first: float, load_range: tuple[float, float], law: ContactLaw,
-            options: SearchOptions, model: str, loads_are_pressures: bool):
+            options: SearchOptions, model: str, loads_are_pressures: bool,
+            compliance: float | None = None):
     samples: list[_Sample] = []
     misses = dict.fromkeys(axes, 0)  # consecutive solves that missed the intended side
     expected: tuple[int, bool] | None = None  # (axis, spanning the last solve aimed for)
     unbracketed: dict = {}
 
     def run(load: float) -> None:
-        init = warm_start(samples, load) if options.warm_start else None
+        init = warm_start(samples, load, compliance=compliance) if options.warm_start else None
         samples.append(evaluate(load, init))
 
     run(min(max(first, load_range[0]), load_range[1]))
@@ -498,5 +499,6 @@ def threshold(
 
     first = first_pressure(model) if opts.first_pressure is None else float(opts.first_pressure)
     res = _refine(evaluate, axes, tol=tol, first=first, load_range=opts.pressure_range, law=law,
-                  options=opts, model=model, loads_are_pressures=True)
+                  options=opts, model=model, loads_are_pressures=True,
+                  compliance=warm_start_compliance(surface))
     return res if axis is None else res[axes[0]]
