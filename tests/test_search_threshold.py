@@ -281,6 +281,9 @@ def test_complementarity_warm_start_reproduces_its_ends_and_stays_complementary(
     np.testing.assert_allclose(one.contact_pressure, r0.contact_pressure * 1.1, rtol=1e-12)
     np.testing.assert_allclose(one.gap, r0.gap / 1.1, rtol=1e-12)
     assert warm_start(pts[:1], 0.22) is r0  # without compliance: the state itself
+    for bad in (0.0, -c, float("nan")):
+        with pytest.raises(InputError, match="compliance"):
+            warm_start(pts, 0.205, compliance=bad)
 
 
 def test_complementarity_warm_start_needs_fewer_iterations():

@@ -117,6 +117,8 @@ def warm_start(points: Sequence[SolvedPoint], load: float, *,
     > 0 open, < 0 in contact) instead of gap and pressure separately
     (:func:`warm_start_compliance`); None: gap and pressure each linearly.
     """
+    if compliance is not None:
+        compliance = require_positive("compliance", compliance)
     if not points:
         return None
     below = [q for q in points if q.load < load]
@@ -194,7 +196,8 @@ class LoadSearch:
                  measure: Callable[[ContactResult], float] | None = None,
                  compliance: float | None = None):
         self._solve = solve
-        self.compliance = compliance
+        self.compliance = None if compliance is None else require_positive("compliance",
+                                                                             compliance)
         self.law = law
         self.bounds = law.bounds if bounds is None else (float(bounds[0]), float(bounds[1]))
         if not (math.isfinite(self.bounds[0]) and math.isfinite(self.bounds[1])
