@@ -124,3 +124,22 @@ def test_warm_start_from_the_solution_needs_no_iteration():
     assert again.iterations == 0
     np.testing.assert_array_equal(again.contact, r.contact)
     assert solve(s, 0.202, init=r).iterations < solve(s, 0.202).iterations
+
+
+def test_mass_floor_follows_the_bandwidth():
+    # m_0 = H_MASS k_h with H_MASS 1 for narrow spectra, 3 for wide ones (k2 / k_h >= 2.9),
+    # linear in between (docs/contact.md "The mass floor against the bandwidth": 8192^2 at
+    # L/lambda_r = 4, k2 / k_h = 2.96, 69 -> 57 iterations). Power on two stiffnesses k1 < k2
+    # with weights (1 - w, w): k_h and k2 follow in closed form.
+    k = np.array([0.0, 1.0, 100.0])
+    # ratios: w = 0 -> 1, 0.5 -> 1.40, 0.15 -> 2.44 (between), 0.05 -> 3.76
+    for w, h_mass in ((0.0, 1.0), (0.5, 1.0), (0.15, None), (0.05, 3.0)):
+        hpow = np.array([0.0, 1.0 - w, w])
+        k_h = (1 - w) + 100 * w
+        ratio = np.sqrt((1 - w) + 1e4 * w) / k_h
+        got = G.mass_floor(hpow, k, 1.0)
+        if h_mass is None:  # in between: linear in the ratio
+            h_mass = 1 + 2 * (ratio - G.BAND_R_LO) / (G.BAND_R_HI - G.BAND_R_LO)
+            assert 1 < h_mass < 3
+        assert got == pytest.approx(h_mass * k_h, rel=1e-12), (w, ratio)
+    assert G.mass_floor(np.zeros(3), k, 0.5) == 0.5  # no roughness: the q = 0 floor

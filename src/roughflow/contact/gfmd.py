@@ -83,11 +83,19 @@ F_ALPHA = 0.97
 ADHESIVE_DT0 = 0.2
 Z_MASS = 3.0  # q = 0 mass z k_min: 3 gave the fewest FIRE steps cold and warm (1, 3, 10, 30, 100)
 # Hard-wall CG (measured on the rows of docs/contact.md "Step count at scale"): the mass
-# floor m_0 = max(Z_MASS k_min, H_MASS k_h) (H_MASS 1, 2, 3 within a few iterations of
-# each other; 0, i.e. z k_min alone, 10-30 % more iterations from 2048^2 on); the change
-# of the trial step alpha per iteration and its range; the largest extrapolation T_MAX of
-# the secant step; T_KEEP (0.5: 10-20 % more iterations, 0.95: about the same as 0.8).
-H_MASS = 1.0
+# floor m_0 = max(Z_MASS k_min, H_MASS k_h) (H_MASS 0, i.e. z k_min alone: 10-30 % more
+# iterations from 2048^2 on), where H_MASS follows the bandwidth through the spectrum's
+# r = k2 / k_h (k2: stiffness of the rms slope over the rms height): H_MASS_NARROW up to
+# r = BAND_R_LO, H_MASS_WIDE from BAND_R_HI, linear in between (docs/contact.md "The mass
+# floor against the bandwidth": 3 instead of 1 takes 8192^2 at L/lambda_r 4 from 69 to
+# 57 iterations and 4096^2 at L/lambda_r 1 from 72 to 61, while 2 or 3 cost 4-5
+# iterations at r <= 2.2); the change of the trial step alpha per iteration and its range;
+# the largest extrapolation T_MAX of the secant step; T_KEEP (0.5: 10-20 % more
+# iterations, 0.95: about the same as 0.8).
+H_MASS_NARROW = 1.0
+H_MASS_WIDE = 3.0
+BAND_R_LO = 2.3
+BAND_R_HI = 2.9
 ALPHA_SHRINK = 0.1
 ALPHA_GROW = 2.0
 ALPHA_MIN = 1e-3
@@ -110,6 +118,19 @@ def _spectral(shape: tuple[int, int], lx: float, ly: float):
     for a in (k, neg_k, comp):
         a.setflags(write=False)
     return k, neg_k, comp, kmin
+
+
+def mass_floor(hpow: np.ndarray, k: np.ndarray, kmin: float) -> float:
+    """H_MASS k_h of the hard-wall masses for the height power ``hpow`` (rfft2 grid, column
+    weights included) and stiffness ``k``: k_h = power-weighted mean stiffness, H_MASS from
+    the bandwidth ratio k2 / k_h (module constants)."""
+    total = float(hpow.sum())
+    if total <= 0:
+        return kmin
+    k_h = float((hpow * k).sum()) / total
+    k2 = math.sqrt(float((hpow * k * k).sum()) / total)
+    x = min(max((k2 / k_h - BAND_R_LO) / (BAND_R_HI - BAND_R_LO), 0.0), 1.0)
+    return (H_MASS_NARROW + x * (H_MASS_WIDE - H_MASS_NARROW)) * k_h
 
 
 def gfmd(
@@ -182,8 +203,7 @@ def _hard_wall(
     ht = plan.execute_forward()
     wts = fft.rfft_weights(shape[1])
     hpow = wts * (ht.real**2 + ht.imag**2)
-    k_h = float((hpow * k).sum() / hpow.sum()) if hpow.sum() > 0 else kmin
-    pre = np.hypot(max(Z_MASS * kmin, H_MASS * k_h), k)
+    pre = np.hypot(max(Z_MASS * kmin, mass_floor(hpow, k, kmin)), k)
     np.reciprocal(pre, out=pre)
     pre *= 1.0 / size
     hscale = math.sqrt(dot(h, h) / size) or 1.0
