@@ -128,6 +128,8 @@ def mass_floor(hpow: np.ndarray, k: np.ndarray, kmin: float) -> float:
     if total <= 0:
         return kmin
     k_h = float((hpow * k).sum()) / total
+    if k_h <= 0:  # all power at q = 0: no roughness to set a scale
+        return kmin
     k2 = math.sqrt(float((hpow * k * k).sum()) / total)
     x = min(max((k2 / k_h - BAND_R_LO) / (BAND_R_HI - BAND_R_LO), 0.0), 1.0)
     return (H_MASS_NARROW + x * (H_MASS_WIDE - H_MASS_NARROW)) * k_h

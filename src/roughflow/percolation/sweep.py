@@ -214,8 +214,12 @@ def predicted_threshold_by_key(key: np.ndarray, axis: int, *, expect: float = 0.
     """:func:`predicted_thresholds` for one axis from the :func:`openness` key (or any key,
     larger opens first), via :func:`critical_open_count_by_key`; ``expect`` is the expected
     open fraction at the threshold (e.g. the state's own open fraction)."""
-    k = critical_open_count_by_key(key, axis, expect=expect)
-    return 1.0 - (k - 0.5) / key.size
+    return _area_at_count(critical_open_count_by_key(key, axis, expect=expect), key.size)
+
+
+def _area_at_count(k: int, n: int) -> float:
+    """Contact area at the middle of the k-th opened cell of n (the critical cell)."""
+    return 1.0 - (k - 0.5) / n
 
 
 def predicted_thresholds(order: np.ndarray, shape: tuple[int, int],
@@ -224,4 +228,4 @@ def predicted_thresholds(order: np.ndarray, shape: tuple[int, int],
     first spans, taken at the middle of the critical cell (exact for the bearing model with
     heights as the order, first order for an elastic state with :func:`open_first_order`)."""
     n = order.size
-    return {ax: 1.0 - (critical_open_count(order, shape, ax) - 0.5) / n for ax in axes}
+    return {ax: _area_at_count(critical_open_count(order, shape, ax), n) for ax in axes}

@@ -126,7 +126,7 @@ def warm_start(points: Sequence[SolvedPoint], load: float, *,
     if below and above:
         q0 = max(below, key=lambda q: q.load)
         q1 = min(above, key=lambda q: q.load)
-    else:  # extrapolate from the two nearest solves, by at most their spacing
+    else:  # extrapolate from the two nearest solves, by at most EXTRAPOLATE_SPACINGS
         near = sorted(points, key=lambda q: abs(q.load - load))
         reach = EXTRAPOLATE_SPACINGS[compliance is not None]
         if len(near) < 2 or abs(load - near[0].load) > reach * abs(near[1].load - near[0].load):
