@@ -12,7 +12,13 @@ from hypothesis import strategies as st
 from hypothesis.extra.numpy import arrays
 
 from roughflow.errors import InputError
-from roughflow.percolation import contact_percolates, label, percolates, spanning_cells
+from roughflow.percolation import (
+    contact_percolates,
+    label,
+    percolates,
+    percolates_along,
+    spanning_cells,
+)
 
 
 def _neighbours(i, j, nx, ny, periodic, connectivity):
@@ -162,6 +168,18 @@ def test_spanning_matches_flood_fill(m, axis):
     got = spanning_cells(m, axis)
     assert {tuple(c) for c in np.argwhere(got)} == ref
     assert percolates(m, axis) == bool(ref)
+
+
+@settings(max_examples=200, deadline=None)
+@given(arrays(np.bool_, st.tuples(st.integers(1, 9), st.integers(1, 9))), st.booleans())
+def test_percolates_along_both_axes_from_one_labelling(m, periodic):
+    # one labelling, the seams merged per axis: the same answers as one call per axis
+    # (walls across the flow with periodic=False included), checked against the flood fill
+    got = percolates_along(m, periodic=periodic)
+    assert got == {ax: percolates(m, ax, periodic=periodic) for ax in (0, 1)}
+    if periodic:
+        assert got == {ax: bool(_flood_spans(m, ax)) for ax in (0, 1)}
+    assert percolates_along(m, (1,), periodic=periodic) == {1: got[1]}
 
 
 @settings(max_examples=300, deadline=None)

@@ -5,7 +5,8 @@ drives them is :mod:`roughflow.search`).
 
 - :func:`label`: periodic cluster labelling (4- or 8-connected).
 - :func:`percolates`, :func:`spanning_cells`: does the fluid span along an axis, and which
-  cells carry flow; :func:`contact_percolates`: the dual statement for contact (8-connected).
+  cells carry flow (:func:`percolates_along`: several axes from one labelling);
+  :func:`contact_percolates`: the dual statement for contact (8-connected).
 - :func:`critical_open_count`, :func:`bearing_bracket`, :func:`predicted_thresholds`:
   exact spanning thresholds of a growing open set (one union-find pass);
   :func:`critical_open_count_by_key`, :func:`predicted_threshold_by_key`: the same from a
@@ -22,7 +23,7 @@ from .clusters import (
     size_distribution,
 )
 from .labels import check_axis, label
-from .spanning import contact_percolates, percolates, spanning_cells
+from .spanning import contact_percolates, percolates, percolates_along, spanning_cells
 from .sweep import (
     BearingBracket,
     bearing_bracket,
@@ -49,6 +50,7 @@ __all__ = [
     "open_first_order",
     "openness",
     "percolates",
+    "percolates_along",
     "percolation_map",
     "predicted_threshold_by_key",
     "predicted_thresholds",

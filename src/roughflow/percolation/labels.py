@@ -86,19 +86,28 @@ def label_raw(
     callers relabel only the cells they need.
     """
     raw, n = ndimage.label(mask, structure=_STRUCTURES[connectivity])
+    lut, n = merge_seams(raw, n, periodic, connectivity)
+    return raw, lut, n
+
+
+def merge_seams(raw: np.ndarray, n: int, periodic: tuple[bool, bool],
+                connectivity: int) -> tuple[np.ndarray, int]:
+    """Lookup table raw label -> merged label and the cluster count, for the non-periodic
+    labels ``raw`` (``n`` clusters, from ``ndimage.label``) joined across the seams marked
+    in ``periodic``. One labelling serves several seam choices (e.g. both flow axes)."""
     lut = np.arange(n + 1, dtype=raw.dtype)
     if n == 0:
-        return raw, lut, 0
+        return lut, 0
     pairs = _seam_pairs(raw, periodic, connectivity)
     if pairs.shape[0] == 0:
-        return raw, lut, n
+        return lut, n
     graph = coo_matrix(
         (np.ones(pairs.shape[0], dtype=np.int8), (pairs[:, 0], pairs[:, 1])), shape=(n + 1, n + 1)
     )
     ncomp, comp = connected_components(graph, directed=False)
     # Components are numbered in order of their lowest node: node 0 (background, no edges)
     # gets 0, the clusters 1..ncomp-1, so the lookup table is the component index itself.
-    return raw, comp.astype(raw.dtype), ncomp - 1
+    return comp.astype(raw.dtype), ncomp - 1
 
 
 def label(

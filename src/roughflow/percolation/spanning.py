@@ -13,7 +13,7 @@ from __future__ import annotations
 import numpy as np
 from scipy import ndimage
 
-from .labels import _STRUCTURES, check_axis, check_connectivity, check_mask, label_raw
+from .labels import _STRUCTURES, check_axis, check_connectivity, check_mask, merge_seams
 
 
 def _periodic_across(axis: int, periodic: bool = True) -> tuple[bool, bool]:
@@ -23,8 +23,13 @@ def _periodic_across(axis: int, periodic: bool = True) -> tuple[bool, bool]:
 
 
 def _spanning_labels(open_mask: np.ndarray, axis: int, connectivity: int,
-                     periodic: bool = True):
-    raw, lut, _ = label_raw(open_mask, _periodic_across(axis, periodic), connectivity)
+                     periodic: bool = True, raw: tuple[np.ndarray, int] | None = None):
+    """(raw labels, lookup table, merged labels touching both ends along ``axis``);
+    ``raw``: the non-periodic labelling of ``open_mask`` if already done."""
+    if raw is None:
+        raw = ndimage.label(open_mask, structure=_STRUCTURES[connectivity])
+    raw, n = raw
+    lut, _ = merge_seams(raw, n, _periodic_across(axis, periodic), connectivity)
     first = lut[raw.take(0, axis=axis)]
     last = lut[raw.take(-1, axis=axis)]
     common = np.intersect1d(first[first > 0], last[last > 0])
@@ -44,6 +49,25 @@ def percolates(open_mask, axis: int, *, connectivity: int = 4, periodic: bool = 
     if not (m.take(0, axis=ax).any() and m.take(-1, axis=ax).any()):
         return False
     return _spanning_labels(m, ax, conn, bool(periodic))[2].size > 0
+
+
+def percolates_along(open_mask, axes=(0, 1), *, connectivity: int = 4,
+                     periodic: bool = True) -> dict[int, bool]:
+    """:func:`percolates` along each of ``axes`` from one labelling of ``open_mask`` (the
+    axes differ only in which seam is periodic); ``{axis: spans}``."""
+    m = check_mask("open_mask", open_mask)
+    axes = tuple(check_axis(ax) for ax in axes)
+    conn = check_connectivity(connectivity)
+    raw = None
+    out = {}
+    for ax in axes:
+        if not (m.take(0, axis=ax).any() and m.take(-1, axis=ax).any()):
+            out[ax] = False
+            continue
+        if raw is None:
+            raw = ndimage.label(m, structure=_STRUCTURES[conn])
+        out[ax] = _spanning_labels(m, ax, conn, bool(periodic), raw)[2].size > 0
+    return out
 
 
 def spanning_cells(open_mask, axis: int, *, connectivity: int = 4,
