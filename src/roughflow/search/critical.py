@@ -530,7 +530,7 @@ def threshold(
     def evaluate(p: float, init: ContactResult | None, scout: bool) -> _Sample:
         args = dict(kwargs, tol=scout_tol) if scout else kwargs
         r = timed_solve(lambda p, init: solve(surface, p, init=init, **args), p, init,
-                        what=f"threshold ({model}) {'scout ' if scout else ''}solve")
+                        what=f"threshold ({model}) solve")  # a scout shows its residual
         return dataclasses.replace(sample(r, p, None, r.contact_pressure), scout=scout)
 
     first = first_pressure(model) if opts.first_pressure is None else float(opts.first_pressure)
