@@ -1,6 +1,7 @@
 """Elastic contact of a rigid rough surface with a flat elastic half-space (paper Sect. 2.2).
 
-``solve`` is the entry point; ``ContactResult`` holds the gap field and the scalars;
+``solve`` is the entry point (``prepare``: its per-surface set-up, built once for many
+solves); ``ContactResult`` holds the gap field and the scalars;
 ``Adhesion`` parameterises the short-range adhesive model (docs/physics.md Sect. 3.3);
 ``ContactLaw`` is the small-load law a_c(p) that load searches start from.
 """
@@ -9,7 +10,7 @@ from ._result import ContactResult
 from .adhesion import Adhesion, adhesion_summary, tabor_parameter
 from .elastic import cell_compliance, full_contact_energy
 from .law import ContactLaw
-from .solve import METHODS, MODELS, solve
+from .solve import METHODS, MODELS, prepare, solve
 
 __all__ = [
     "METHODS",
@@ -20,6 +21,7 @@ __all__ = [
     "adhesion_summary",
     "cell_compliance",
     "full_contact_energy",
+    "prepare",
     "solve",
     "tabor_parameter",
 ]

@@ -2,7 +2,9 @@
 
 from __future__ import annotations
 
+import dataclasses
 import math
+from typing import TYPE_CHECKING
 
 import numpy as np
 
@@ -20,6 +22,9 @@ from roughflow.surface import Surface
 from ._result import ContactResult
 from .adhesion import Adhesion
 from .bearing import solve_bearing
+
+if TYPE_CHECKING:  # gfmd (numba) is imported on first use: the CLI starts faster
+    from .gfmd import HardWallSetup
 
 METHODS = CONTACT_METHODS
 # The repulsive state an adhesive solve starts from: a small load (so that the attraction
@@ -41,6 +46,7 @@ def solve(
     init: ContactResult | None = None,
     adhesion: Adhesion | None = None,
     threads: int | None = None,
+    setup: HardWallSetup | None = None,
 ) -> ContactResult:
     """Contact of the rigid rough ``surface`` with a flat elastic half-space (E* = 1).
 
@@ -73,6 +79,10 @@ def solve(
     init:
       a previous result on the same surface (any load): warm start from its pressure
       field (cg) or displacement (gfmd).
+    setup:
+      :func:`prepare` of this surface, for many elastic gfmd solves of it (load searches):
+      the heights' spectrum and the preconditioner are then built once, not per solve.
+      The results are the same as without it.
     """
     if model not in MODELS:
         raise InputError(f"model must be one of {MODELS}, got {model!r}")
@@ -126,6 +136,17 @@ def solve(
             )
 
     lx, ly = float(surface.lx), float(surface.ly)
+    if setup is not None:
+        from .gfmd import HardWallSetup
+
+        if not isinstance(setup, HardWallSetup):
+            raise InputError(f"setup must come from contact.prepare, got {type(setup).__name__}")
+        if model != "elastic" or method != "gfmd":
+            raise InputError(f"setup= is for model='elastic' with method='gfmd', got "
+                             f"model={model!r}, method={method!r}")
+        if setup.heights is not surface.heights or (setup.lx, setup.ly) != (lx, ly):
+            raise InputError("setup was prepared for another surface (contact.prepare(surface) "
+                             "of the surface being solved)")
     if method == "cg":
         from .cg import polonsky_keer
 
@@ -148,7 +169,7 @@ def solve(
         u0 = heights + init.gap if init is not None else None
         out = gfmd(
             heights, lx, ly, load, tol=tol, max_iter=int(max_iter), u0=u0,
-            adhesion=adhesion if model == "adhesive" else None, threads=threads,
+            adhesion=adhesion if model == "adhesive" else None, threads=threads, setup=setup,
         )
     if not out.converged:
         raise ConvergenceError(
@@ -169,3 +190,16 @@ def solve(
         method=method,
         separation=float(out.separation),
     )
+
+
+def prepare(surface: Surface, threads: int | None = None) -> HardWallSetup:
+    """What every elastic gfmd solve of ``surface`` derives from its heights alone (centred
+    heights, rms height, preconditioner), built once for ``solve(..., setup=)``. Valid while
+    the heights are not modified."""
+    from .gfmd import hard_wall_setup
+
+    if not isinstance(surface, Surface):
+        raise InputError(f"surface must be a roughflow Surface, got {type(surface).__name__}")
+    heights = require_field("surface heights", surface.heights)
+    setup = hard_wall_setup(heights, float(surface.lx), float(surface.ly), threads)
+    return dataclasses.replace(setup, heights=surface.heights)  # the array solve() checks

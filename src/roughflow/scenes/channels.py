@@ -39,8 +39,10 @@ def contact_at_area(surface: Surface, target: float, model: str, *, tol: float =
     if model == "bearing":
         return contact.solve(surface, model="bearing", area_fraction=target)
 
+    setup = contact.prepare(surface, threads) if model == "elastic" else None
+
     def solve(p: float, init):
-        return contact.solve(surface, p, model=model, init=init, threads=threads)
+        return contact.solve(surface, p, model=model, init=init, threads=threads, setup=setup)
 
     found = LoadSearch(solve, contact.ContactLaw(model),
                        compliance=warm_start_compliance(surface)).solve_for(target, tol)

@@ -76,6 +76,8 @@ def _contact_ladder(surface: Surface, job: LadderJob, threads: int | None, adhes
     kw = {"model": job.model, "threads": threads}
     if adhesion is not None:
         kw["adhesion"] = adhesion
+    if job.model == "elastic":  # built once for all solves of the ladder
+        kw["setup"] = contact.prepare(surface, threads)
 
     def solve(p: float, init):
         return contact.solve(surface, p, init=init, **kw)

@@ -37,7 +37,7 @@ from typing import NamedTuple
 import numpy as np
 
 from roughflow.accuracy import PERIMETER_C, perimeter_term
-from roughflow.contact import ContactResult, solve
+from roughflow.contact import ContactResult, prepare, solve
 from roughflow.contact.law import ContactLaw
 from roughflow.defaults import (
     A_C_STAR_PAPER,
@@ -491,14 +491,13 @@ def threshold(
         spans = percolates_along(opn, axes, periodic=opts.periodic)
         predictor = None
         if opts.strategy == "predict":
-            keys: list[np.ndarray] = []  # built once, on the first axis asked for
-
             def predictor(ax: int) -> float:
-                # periodic union-find even with walls: the prediction only aims the solves
-                if not keys:
-                    keys.append(open_first if open_first is not None
-                                else openness(seen.gap, seen.contact, pressure))
-                return predicted_threshold_by_key(keys[0], ax,
+                # periodic union-find even with walls: the prediction only aims the solves.
+                # The key is rebuilt per axis (3 ms at 1024^2), not kept: a kept 8 MB array
+                # per state costs more in fresh pages (about 20 ms on these machines)
+                key = open_first if open_first is not None else openness(seen.gap,
+                                                                         seen.contact, pressure)
+                return predicted_threshold_by_key(key, ax,
                                                   expect=1.0 - float(seen.area_fraction))
         # faces per observed cell: independent of the cell size, so a window needs no scaling
         perimeter = perimeter_term(seen.contact) if model == "elastic" else float("nan")
@@ -524,6 +523,8 @@ def threshold(
 
     kwargs = {"model": model, "method": opts.method, "adhesion": adhesion, "threads": threads,
               "tol": opts.contact_tol}
+    if model == "elastic" and opts.method in (None, "gfmd"):  # built once for all solves
+        kwargs["setup"] = prepare(surface, threads)
 
     scout_tol = min(SCOUT_TOL_FACTOR * opts.contact_tol, CONTACT_TOL_MAX)
 
