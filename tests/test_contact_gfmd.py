@@ -169,3 +169,31 @@ def test_prepared_setup_gives_the_same_solve_and_checks_its_surface():
         solve(s, 0.2, method="cg", setup=setup)
     with pytest.raises(InputError, match="contact.prepare"):
         solve(s, 0.2, setup=object())
+
+
+def test_start_check_is_skipped_only_where_the_start_cannot_be_converged(monkeypatch):
+    # Issue 14: the exact residual of the start (one inverse FFT) is computed only when the
+    # free estimate says the start may already be converged. Same iterations and result as
+    # with the check always done (START_CHECK = inf), fewer inverse transforms; a converged
+    # start still returns with 0 iterations
+    s = generate(SurfaceSpec.from_sweep(points_per_lambda_s=2, seed=5))
+    r = solve(s, 0.2, tol=1e-6)
+    inverse = fft.RealFFT2.execute_inverse
+    default = G.START_CHECK
+    runs = {}
+    for start_check in (default, float("inf")):
+        monkeypatch.setattr(G, "START_CHECK", start_check)
+        calls: list[int] = []
+        monkeypatch.setattr(fft.RealFFT2, "execute_inverse",
+                            lambda plan, calls=calls: calls.append(1) or inverse(plan))
+        out = solve(s, 0.22, tol=1e-6, init=r)
+        runs[start_check] = (out, len(calls))
+        monkeypatch.setattr(fft.RealFFT2, "execute_inverse", inverse)
+    (saved, n_saved), (always, n_always) = runs[default], runs[float("inf")]
+    assert saved.iterations == always.iterations > 0
+    np.testing.assert_array_equal(saved.gap, always.gap)
+    # the forced check costs its inverse FFT and one more for the preconditioned residual
+    # whose buffer it overwrote
+    assert n_saved == n_always - 2
+    monkeypatch.setattr(G, "START_CHECK", default)
+    assert solve(s, 0.2, tol=1e-6, init=r).iterations == 0

@@ -175,6 +175,16 @@ def max_abs(a):  # pragma: no cover - compiled
     return m
 
 
+@numba.njit(cache=True, nogil=True)
+def max_abs_free(a, active):  # pragma: no cover - compiled
+    """max |a| off the active set."""
+    m = 0.0
+    for i in range(a.size):
+        if not active[i] and abs(a[i]) > m:
+            m = abs(a[i])
+    return m
+
+
 def warm_up() -> None:
     """Compile the kernels (cached on disk after the first run)."""
     n = 4
@@ -190,6 +200,7 @@ def warm_up() -> None:
     cg_secant(z, z, z, 0.0)
     cg_finish(z, z, z, b, 0.0, z.copy(), z.copy(), b.copy())
     max_abs(z)
+    max_abs_free(z, b)
 
 
 def wall_forces_np(fel, u, h, eps, load, f, sigma, active):
@@ -280,3 +291,8 @@ def cg_finish_np(u, h, f, active, eps, sigma, gap, contact):
 def max_abs_np(a):
     """numpy version of :func:`max_abs`."""
     return float(np.abs(a).max(initial=0.0))
+
+
+def max_abs_free_np(a, active):
+    """numpy version of :func:`max_abs_free`."""
+    return float(np.abs(a[~active]).max(initial=0.0))
