@@ -56,7 +56,10 @@ OUT = Path(__file__).resolve().parents[1] / "results" / "benchmarks"
 LOAD = 0.2
 TOL = 1e-6
 COLD_REPEATS = 3
-ISSUE_FIRE_8192 = 205  # issue 14's table: FIRE steps at 8192^2, L/lambda_r = 4 (GPU run)
+#: Issue 14's table: FIRE steps of the code before it, (n, L/lambda_r) -> steps (8192^2 from
+#: the same algorithm on a GPU); plotted as the reference where this run has no FIRE rows.
+ISSUE_FIRE_STEPS = {(512, 4.0): 35, (1024, 4.0): 45, (2048, 4.0): 55, (4096, 4.0): 90,
+                    (8192, 4.0): 205, (1024, 1.0): 65}
 
 
 def surface(n: int, l_over_lambda_r: float) -> Surface:
@@ -261,10 +264,12 @@ def plot(rows: list[dict], path: Path) -> None:
         axes[1].loglog(n, [r["ms_per_fft_pair"] for r in sel], "x" + ls, color="k",
                        label=f"FFT pair, {lab}")
         axes[2].loglog(n, [r["total_s"] for r in sel], "o" + ls, color="C0", label=f"CG, {lab}")
-    # the issue's FIRE step count at 8192^2 (same algorithm on a GPU; 24 GiB and one CPU thread
-    # do not afford it here)
-    axes[0].loglog([8192], [ISSUE_FIRE_8192], "s", mfc="none", color="C3",
-                   label="FIRE, 8192^2 (issue 14, GPU run)")
+    # the issue's FIRE step counts (8192^2 from a GPU run: 24 GiB and one CPU thread do not
+    # afford FIRE there)
+    for lr, ls in styles.items():
+        ref = sorted((n, v) for (n, lr_), v in ISSUE_FIRE_STEPS.items() if lr_ == lr)
+        axes[0].loglog([n for n, _ in ref], [v for _, v in ref], "s" + ls, mfc="none",
+                       color="C3", label=f"FIRE, issue 14's table, L/lambda_r = {lr:g}")
     axes[0].axhline(60, color="0.6", lw=0.8, label="target 60")
     axes[0].set_ylabel("iterations to tol 1e-6")
     axes[1].set_ylabel("ms per iteration / per FFT pair (1 thread)")
