@@ -65,23 +65,32 @@ def step(u, v, a, h, c1, c2, dt):  # pragma: no cover - compiled
 
 
 @numba.njit(cache=True, nogil=True)
-def cg_update(u, f, s, fel_t, t, h, eps, load, r, active):  # pragma: no cover - compiled
-    """Move to u + t s, where the force is f + t (f_t - f) with f_t = fel_t - load (exact: the
-    force is linear in u and the step does not clip); then the active set (on the wall,
-    force pushing into it) and r = f off it, 0 on it. t = 0 only classifies."""
+def cg_update(u, f, s, fks, t, h, eps, r, active):  # pragma: no cover - compiled
+    """Move to u + t s, where the force is f + t fks with fks = -K s (exact up to the
+    transform's round-off: the force is linear in u and the step does not clip); then the
+    active set (on the wall, force pushing into it) and r = f off it, 0 on it (``r`` may be
+    float32: the input of the single-precision transforms). Returns sum(r) in double (the
+    load imbalance). t = 0 only classifies (after an exact force)."""
+    total = 0.0
+    move = t != 0.0  # t = 0: s and fks are not read (they may not be set yet)
     for i in range(u.size):
-        ui = u[i] + t * s[i]
-        if ui < h[i]:  # round-off of a step that ends on the wall
-            ui = h[i]
-        fi = f[i] + t * (fel_t[i] - load - f[i])
-        u[i] = ui
-        f[i] = fi
+        ui = u[i]
+        fi = f[i]
+        if move:
+            ui += t * s[i]
+            if ui < h[i]:  # round-off of a step that ends on the wall
+                ui = h[i]
+            fi += t * fks[i]
+            u[i] = ui
+            f[i] = fi
         if ui <= h[i] + eps and fi < 0.0:
             active[i] = True
             r[i] = 0.0
         else:
             active[i] = False
             r[i] = fi
+            total += fi
+    return total
 
 
 @numba.njit(cache=True, nogil=True)
@@ -101,26 +110,31 @@ def cg_precondition(rt, pre, rt_old, out, ny):  # pragma: no cover - compiled
             p = pre[i, j]
             co = rt_old[i, j]
             out[i, j] = c * p
-            rz += w * p * (c.real * c.real + c.imag * c.imag)
-            roz += w * p * (co.real * c.real + co.imag * c.imag)
+            # sums in double also for complex64 spectra
+            cr = np.float64(c.real)
+            ci = np.float64(c.imag)
+            rz += w * p * (cr * cr + ci * ci)
+            roz += w * p * (np.float64(co.real) * cr + np.float64(co.imag) * ci)
             rt_old[i, j] = c
     return rz, roz
 
 
 @numba.njit(cache=True, nogil=True)
-def cg_direction(z, d, u, h, f, beta, alpha, ut, s, active):  # pragma: no cover - compiled
-    """d = z + beta d (0 on the active set); trial point ut = max(u + alpha d, h); s = ut - u.
-    Returns the number of clipped points, f.s, the largest t with u + t s >= h, and max |z|
-    off the active set (a free estimate of the residual)."""
+def cg_direction(z, d, u, h, f, beta, alpha, s_in, s, active):  # pragma: no cover - compiled
+    """d = z + beta d (0 on the active set); trial point max(u + alpha d, h) and the step to
+    it, s (double), also into ``s_in`` (the transform's input, float32). Returns the number
+    of clipped points, f.s, the largest t with u + t s >= h, max |z| off the active set (a
+    free estimate of the residual) and max |s|."""
     nclip = 0
     fs = 0.0
     tf = np.inf
     zmax = 0.0
+    smax = 0.0
     for i in range(u.size):
         if active[i]:
             di = 0.0
         else:
-            zi = z[i]
+            zi = np.float64(z[i])
             zmax = max(zmax, abs(zi))
             di = zi + beta * d[i]
         d[i] = di
@@ -131,20 +145,21 @@ def cg_direction(z, d, u, h, f, beta, alpha, ut, s, active):  # pragma: no cover
             ui = hi
             nclip += 1
         si = ui - ui0
-        ut[i] = ui
         s[i] = si
+        s_in[i] = si
+        smax = max(smax, abs(si))
         fs += f[i] * si
         if si < 0.0 and ui0 - hi < tf * -si:  # divide only when the bound tightens
             tf = (ui0 - hi) / -si
-    return nclip, fs, tf, zmax
+    return nclip, fs, tf, zmax, smax
 
 
 @numba.njit(cache=True, nogil=True)
-def cg_secant(s, f, fel_t, load):  # pragma: no cover - compiled
-    """s.K s = s.(f - f_t) with f_t = fel_t - load: the curvature along the trial step."""
+def cg_secant(s, fks):  # pragma: no cover - compiled
+    """s.K s = -s.fks with fks = -K s: the curvature along the trial step."""
     sks = 0.0
     for i in range(s.size):
-        sks += s[i] * (f[i] - fel_t[i] + load)
+        sks -= s[i] * np.float64(fks[i])
     return sks
 
 
@@ -193,11 +208,12 @@ def warm_up() -> None:
     wall_forces(z, z, z, 0.0, 0.0, z.copy(), z.copy(), b)
     reductions(z, z.copy(), z.copy(), b)
     step(z.copy(), z.copy(), z, z, 0.0, 0.0, 0.0)
-    cg_update(z.copy(), z.copy(), z, z, 0.0, z, 0.0, 0.0, z.copy(), b.copy())
-    c = np.zeros((4, 3), dtype=np.complex128)
+    z32 = np.zeros(n, dtype=np.float32)
+    cg_update(z.copy(), z.copy(), z, z32, 0.0, z, 0.0, z32.copy(), b.copy())
+    c = np.zeros((4, 3), dtype=np.complex64)
     cg_precondition(c, np.ones((4, 3)), c.copy(), c.copy(), 4)
-    cg_direction(z, z.copy(), z, z, z, 0.0, 0.0, z.copy(), z.copy(), b)
-    cg_secant(z, z, z, 0.0)
+    cg_direction(z32, z.copy(), z, z, z, 0.0, 0.0, z32.copy(), z.copy(), b)
+    cg_secant(z, z32)
     cg_finish(z, z, z, b, 0.0, z.copy(), z.copy(), b.copy())
     max_abs(z)
     max_abs_free(z, b)
@@ -233,14 +249,16 @@ def step_np(u, v, a, h, c1, c2, dt):
     v[below] = 0.0
 
 
-def cg_update_np(u, f, s, fel_t, t, h, eps, load, r, active):
+def cg_update_np(u, f, s, fks, t, h, eps, r, active):
     """numpy version of :func:`cg_update`."""
-    u += t * s
-    np.maximum(u, h, out=u)
-    f += t * (fel_t - load - f)
+    if t != 0.0:
+        u += t * s
+        np.maximum(u, h, out=u)
+        f += t * fks.astype(np.float64)
     np.logical_and(u <= h + eps, f < 0.0, out=active)
-    np.copyto(r, f)
+    np.copyto(r, f, casting="same_kind")
     r[active] = 0.0
+    return float(np.where(active, 0.0, f).sum())
 
 
 def cg_precondition_np(rt, pre, rt_old, out, ny):
@@ -250,14 +268,15 @@ def cg_precondition_np(rt, pre, rt_old, out, ny):
     w[0] = 1.0
     if ny % 2 == 0:
         w[-1] = 1.0
-    np.multiply(rt, pre, out=out)
-    rz = float((w * pre * (rt.real**2 + rt.imag**2)).sum())
-    roz = float((w * pre * (rt_old.real * rt.real + rt_old.imag * rt.imag)).sum())
+    np.multiply(rt, pre, out=out, casting="same_kind")
+    re, im = rt.real.astype(np.float64), rt.imag.astype(np.float64)
+    rz = float((w * pre * (re**2 + im**2)).sum())
+    roz = float((w * pre * (rt_old.real * re + rt_old.imag * im)).sum())
     np.copyto(rt_old, rt)
     return rz, roz
 
 
-def cg_direction_np(z, d, u, h, f, beta, alpha, ut, s, active):
+def cg_direction_np(z, d, u, h, f, beta, alpha, s_in, s, active):
     """numpy version of :func:`cg_direction`."""
     zmax = float(np.abs(np.where(active, 0.0, z)).max(initial=0.0))
     d *= beta
@@ -266,17 +285,18 @@ def cg_direction_np(z, d, u, h, f, beta, alpha, ut, s, active):
     np.multiply(d, alpha, out=s)
     s += u
     nclip = int(np.count_nonzero(s < h))
-    np.maximum(s, h, out=ut)
-    np.subtract(ut, u, out=s)
+    np.maximum(s, h, out=s)
+    s -= u
+    np.copyto(s_in, s, casting="same_kind")
     fs = float(np.einsum("i,i->", f, s))
     neg = s < 0.0
     tf = float(((u[neg] - h[neg]) / -s[neg]).min()) if neg.any() else np.inf
-    return nclip, fs, tf, zmax
+    return nclip, fs, tf, zmax, float(np.abs(s).max(initial=0.0))
 
 
-def cg_secant_np(s, f, fel_t, load):
+def cg_secant_np(s, fks):
     """numpy version of :func:`cg_secant`."""
-    return float(np.einsum("i,i->", s, f - fel_t + load))
+    return -float(np.einsum("i,i->", s, fks.astype(np.float64)))
 
 
 def cg_finish_np(u, h, f, active, eps, sigma, gap, contact):
