@@ -68,7 +68,6 @@ class RealFFT2:
         self.shape = (int(nx), int(ny))
         self.spectral_shape = (int(nx), int(ny) // 2 + 1)
         self.threads = threads
-        self.single = single
         effort = _effort()
         real, cplx = (np.float32, np.complex64) if single else (np.float64, np.complex128)
         self._real = pyfftw.empty_aligned(self.shape, dtype=real)

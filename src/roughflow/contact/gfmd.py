@@ -46,9 +46,8 @@ in the residual's units). A drift bound is kept; the exact force (a double FFT p
 the carried one when the bound reaches a tenth of the residual estimate (about once per cold
 solve). The residual a solve reports is the transform's plus the drift bound, a bound on the
 exact force's; when only the bound stands between a check and the tolerance, the exact force
-decides. Same iteration counts
-as double precision to tol 1e-10 (256^2 - 2048^2, docs/contact.md "Single precision"); the
-residual's own round-off is 1e-8 - 2e-7 relative.
+decides. Same iteration counts as double precision to tol 1e-10 (256^2 - 2048^2,
+docs/contact.md "Single precision"); the residual's own round-off is 1e-8 - 2e-7 relative.
 
 Adhesive model (``adhesion=``, not convex): mass-weighted FIRE (Bitzek et al., PRL 97,
 170201, 2006) with the masses m_0 = z k_min, the power f.v and velocity mixing along the
