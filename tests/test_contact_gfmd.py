@@ -117,6 +117,58 @@ def test_spectral_dot_products_are_real_space_ones(shape, numba):
     assert roz == pytest.approx(float((r_old * z).sum()), rel=1e-12)
     np.testing.assert_array_equal(out, rt * pre)
     np.testing.assert_array_equal(rt_old, rt)
+    # cg_stiffness: s.K s by Parseval and the transform of -K s (neg_k = -k/N)
+    neg_k = -rng.random(rt.shape) / r.size
+    fn = K.cg_stiffness if numba else K.cg_stiffness_np
+    sks = fn(rt, neg_k, out, shape[1])
+    ks = -np.fft.irfft2(rt * neg_k, shape) * r.size
+    assert sks == pytest.approx(float((r * ks).sum()), rel=1e-12)
+    np.testing.assert_array_equal(out, rt * neg_k)
+
+
+@pytest.mark.parametrize("numba", [True, False])
+def test_update_retraces_the_trial_step(numba):
+    # cg_update recomputes the trial step s = max(g + alpha d, 0) - g that cg_direction
+    # sent to the transform (s is not stored): a kept trial point (t = 1) puts every
+    # clipped point exactly on the wall (g == 0, the T_KEEP mechanism), and a step by t
+    # moves g by t s and f by t fks; cg_feasible bounds t where nothing may clip
+    rng = np.random.default_rng(2)
+    n = 1000
+    g = np.abs(rng.standard_normal(n))
+    g[::7] = 0.0
+    f = rng.standard_normal(n)
+    active = (g == 0.0) & (f < 0.0)
+    z = rng.standard_normal(n).astype(np.float32)
+    d = rng.standard_normal(n)
+    s_in = np.empty(n, dtype=np.float32)
+    fks = rng.standard_normal(n).astype(np.float32)
+    r = np.empty(n, dtype=np.float32)
+    kern = (K.cg_direction, K.cg_update, K.cg_feasible) if numba else (
+        K.cg_direction_np, K.cg_update_np, K.cg_feasible_np)
+    direction, update, feasible = kern
+    alpha = 0.7
+    nclip, fs, zmax, smax = direction(z, d, g, f, 0.3, alpha, s_in, active)
+    trial = np.maximum(g + alpha * d, 0.0)
+    clipped = g + alpha * d < 0.0
+    assert nclip == np.count_nonzero(clipped) > 0
+    np.testing.assert_array_equal(d[active], 0.0)
+    np.testing.assert_array_equal(s_in, (trial - g).astype(np.float32))
+    assert fs == pytest.approx(float(f @ (trial - g)), rel=1e-12)
+    assert zmax == np.abs(z[~active]).max() and smax == np.abs(trial - g).max()
+    neg = trial < g
+    assert feasible(g, d, alpha) == pytest.approx(float((g[neg] / (g - trial)[neg]).min()),
+                                                  rel=1e-15)
+    g1, f1 = g.copy(), f.copy()
+    total = update(g1, f1, d, fks, 1.0, alpha, 1e-12, r, active)
+    np.testing.assert_array_equal(g1[clipped], 0.0)
+    np.testing.assert_allclose(g1, trial, rtol=0, atol=1e-15)
+    np.testing.assert_allclose(f1, f + fks, rtol=1e-15)
+    np.testing.assert_array_equal(active, (g1 <= 1e-12) & (f1 < 0.0))
+    np.testing.assert_array_equal(r, np.where(active, 0.0, f1).astype(np.float32))
+    assert total == pytest.approx(float(np.where(active, 0.0, f1).sum()), rel=1e-12)
+    g2, f2 = g.copy(), f.copy()
+    update(g2, f2, d, fks, 0.25, alpha, 1e-12, r, active)
+    np.testing.assert_allclose(g2, g + 0.25 * (trial - g), rtol=0, atol=1e-15)
 
 
 def test_fire_minimizer_still_solves_the_hard_wall():

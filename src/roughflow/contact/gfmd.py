@@ -26,6 +26,11 @@ so this and ``cg.polonsky_keer`` solve the same discrete problem. Each iteration
    active set (a point moved only part of the way never joins it and the iteration jams:
    measured). alpha follows t.
 
+The loops carry the gap g = u - h (the wall is g >= 0, so they need not read h) and do not
+store s: the update recomputes it from d and alpha with the same arithmetic, and s.K s comes
+from the transform of s by Parseval; they are vectorized (``_kernels.CG_FASTMATH``), about
+0.35 of a double FFT pair per iteration together (docs/contact.md "Kernel traffic").
+
 Why not FIRE here (benchmarks/gfmd_growth.py, docs/contact.md "Step count at scale"): the
 masses cannot make the constrained problem uniformly stiff. Contacts pin the long waves of
 the free surface, so the largest eigenvalue of the preconditioned operator grows with the
@@ -39,7 +44,7 @@ faster rate, and the heavier long-wave masses cut the pinned modes' eigenvalues.
 
 Precision (hard wall): the two transforms of an iteration and of a residual check run in
 single precision (float32 FFTW, 0.6-0.7 of a double pair's time), everything else in double
-(u, f, d, s, every sum). The preconditioned residual z and the curvature s.K s need only
+(g, f, d, the step s, every sum). The preconditioned residual z and the curvature s.K s need only
 relative accuracy, and the force is carried as f - t K s, whose round-off is relative to the
 step: it drifts from the exact force by about 1e-7 of the distance moved (``SINGLE_DRIFT``,
 in the residual's units). A drift bound is kept; the exact force (a double FFT pair) replaces
@@ -268,20 +273,20 @@ def _hard_wall(
     """Projected preconditioned CG with a secant step (module docstring, "Hard wall"), its
     transforms in single precision ("Precision")."""
     if use_numba:
-        update, precondition, direction, secant, finish, max_abs, max_free = (
-            _k.cg_update, _k.cg_precondition, _k.cg_direction, _k.cg_secant, _k.cg_finish,
-            _k.max_abs, _k.max_abs_free)
+        update, precondition, direction, feasible, stiffness, finish, max_abs, max_free = (
+            _k.cg_update, _k.cg_precondition, _k.cg_direction, _k.cg_feasible,
+            _k.cg_stiffness, _k.cg_finish, _k.max_abs, _k.max_abs_free)
     else:
-        update, precondition, direction, secant, finish, max_abs, max_free = (
-            _k.cg_update_np, _k.cg_precondition_np, _k.cg_direction_np, _k.cg_secant_np,
-            _k.cg_finish_np, _k.max_abs_np, _k.max_abs_free_np)
+        update, precondition, direction, feasible, stiffness, finish, max_abs, max_free = (
+            _k.cg_update_np, _k.cg_precondition_np, _k.cg_direction_np, _k.cg_feasible_np,
+            _k.cg_stiffness_np, _k.cg_finish_np, _k.max_abs_np, _k.max_abs_free_np)
     shape = heights.shape
     size = heights.size
     exact = fft.plan(shape, threads)  # double: the force of the start and of each refresh
     plan = fft.plan(shape, threads, single=True)  # float32: everything else
     # the kernels read and write the plans' buffers directly; 1/size (the normalisation of
     # the inverse transform) is folded into the spectral factors
-    rin = plan.real_in.reshape(-1)  # r, then the step s
+    rin = plan.real_in.reshape(-1)  # r, then the trial step s
     rout = plan.real_out.reshape(-1)  # z, then -K s
     spec_in = plan.spectral_in
     _, neg_k, _, kmin = _spectral(shape, lx, ly)
@@ -297,24 +302,27 @@ def _hard_wall(
         load_scale = min(load_scale, load)
     eps = 1e-12 * hscale  # round-off of the FFT round trip: points this close touch
 
+    # the iteration moves the gap g = u - h (u: the elastic surface, centred heights): the
+    # wall is g >= 0 and the loops need not read h
     if u0 is not None:
-        u = np.asarray(u0, dtype=np.float64).ravel() - h0
-        np.maximum(u, h, out=u)
+        g = np.asarray(u0, dtype=np.float64).ravel() - h0
+        g -= h
+        np.maximum(g, 0.0, out=g)
     else:
-        u = np.full(size, h.max())
+        g = h.max() - h
 
     f = np.empty(size)
     d = np.zeros(size)
-    s = np.zeros(size)
     rt_old = np.zeros(plan.spectral_shape, dtype=np.complex64)  # transform of the previous r
     active = np.zeros(size, dtype=bool)
 
     def refresh() -> float:
-        """The exact force of u (a double FFT pair), the active set and r; returns sum(r)."""
-        exact.real_in.reshape(-1)[:] = u
+        """The exact force of u = g + h (a double FFT pair), the active set and r; returns
+        sum(r)."""
+        np.add(g, h, out=exact.real_in.reshape(-1))
         np.multiply(exact.execute_forward(), neg_k, out=exact.spectral_in)
         np.subtract(exact.execute_inverse().reshape(-1), load, out=f)
-        return update(u, f, s, rout, 0.0, h, eps, rin, active)
+        return update(g, f, d, rout, 0.0, 0.0, eps, rin, active)
 
     def residual() -> float:
         """max |G r| / rms(h) from the transform ``ft`` of r (one inverse FFT)."""
@@ -368,12 +376,11 @@ def _hard_wall(
         beta = max(0.0, (rz - roz) / rz_old) if rz_old > 0 else 0.0
         rz_old = rz
         it += 1
-        nclip, fs, tf, zmax, smax = direction(z.reshape(-1), d, u, h, f, beta, alpha, rin, s,
-                                              active)
+        nclip, fs, zmax, smax = direction(z.reshape(-1), d, g, f, beta, alpha, rin, active)
         estimate = zmax / hscale
-        np.multiply(plan.execute_forward(), neg_k32, out=spec_in)
+        trial = alpha  # update() recomputes the trial step s from d and this alpha
+        sks = stiffness(plan.execute_forward(), neg_k32, spec_in, shape[1])
         plan.execute_inverse()  # -K s
-        sks = secant(s, rout)
         # exact minimum along the actual (clipped) trial displacement s, where the energy
         # is quadratic in t; t > 1 extrapolates only when nothing clipped (the clipped
         # points would leave the feasible set). The next trial step learns from t.
@@ -389,19 +396,19 @@ def _hard_wall(
         elif nclip:
             t = 1.0
             alpha *= min(t_opt, ALPHA_GROW)
-        else:
-            t = min(t_opt, tf, T_MAX)
+        else:  # extrapolate, up to the wall
+            t = min(t_opt, T_MAX, feasible(g, d, alpha))
             alpha *= t
         alpha = min(max(alpha, ALPHA_MIN), ALPHA_MAX)
-        r_sum = update(u, f, s, rout, t, h, eps, rin, active)
+        r_sum = update(g, f, d, rout, t, trial, eps, rin, active)
         drift += SINGLE_DRIFT * t * smax / hscale
 
     sigma = np.empty(shape)
-    g = np.empty(shape)
     contact = np.empty(shape, dtype=bool)
-    separation = finish(u, h, f, active, eps, sigma.reshape(-1), g.reshape(-1),
+    gap = np.empty(shape)
+    separation = finish(g, h, f, active, eps, sigma.reshape(-1), gap.reshape(-1),
                         contact.reshape(-1)) / size
-    return SolverOutput(pressure=sigma, gap=g, contact=contact, separation=separation,
+    return SolverOutput(pressure=sigma, gap=gap, contact=contact, separation=separation,
                         iterations=it, residual=res, converged=res <= tol)
 
 
