@@ -191,7 +191,7 @@ def cg_stiffness(st, neg_k, out, ny):  # pragma: no cover - compiled
     return sks
 
 
-@numba.njit(cache=True, nogil=True)
+@numba.njit(cache=True, nogil=True, fastmath=CG_FASTMATH)
 def cg_finish(g, h, f, active, eps, sigma, gap, contact):  # pragma: no cover - compiled
     """The solved state: sigma = wall reaction -f on the active set (0 elsewhere), gap =
     g, zero where in contact (active, or within eps of the wall); returns sum(g + h), the
@@ -201,7 +201,7 @@ def cg_finish(g, h, f, active, eps, sigma, gap, contact):  # pragma: no cover - 
         gi = g[i]
         total += gi + h[i]
         a = active[i]
-        c = a or gi <= eps
+        c = a | (gi <= eps)
         sigma[i] = -f[i] if a else 0.0
         gap[i] = 0.0 if c else gi
         contact[i] = c
