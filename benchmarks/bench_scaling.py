@@ -319,6 +319,8 @@ def main() -> None:
                     "(L_over_lambda_r 0: bench_contact.py's surface), e.g. 256/0 512/0 1024/1")
     ap.add_argument("--tag", default="")
     args = ap.parse_args()
+    if args.repeats < 1:
+        ap.error(f"--repeats must be >= 1, got {args.repeats}")
     OUT.mkdir(parents=True, exist_ok=True)
     warm_up()
     if args.accuracy is not None:

@@ -70,7 +70,15 @@ def step(u, v, a, h, c1, c2, dt):  # pragma: no cover - compiled
 #: it vectorize loops with reductions: 2-2.5x faster update, preconditioning and curvature
 #: passes at 1024^2. No NaN or inf assumptions (``tf`` is inf when nothing bounds a step).
 #: Sums then differ from a sequential loop's in the last bits, as the numpy twins' do.
+#: (A set, not a frozenset: numba accepts only bool, dict or set.)
 CG_FASTMATH = {"reassoc", "nsz"}
+
+
+@numba.njit(cache=True, inline="always")
+def _rfft_weight(j, ny):  # pragma: no cover - compiled
+    """Multiplicity of rfft2 column j in the full spectrum: the compiled form of
+    :func:`roughflow.fft.rfft_weights`."""
+    return 1.0 if j == 0 or 2 * j == ny else 2.0
 
 
 @numba.njit(cache=True, nogil=True, fastmath=CG_FASTMATH)
@@ -119,7 +127,7 @@ def cg_precondition(rt, pre, rt_old, out, ny):  # pragma: no cover - compiled
     roz = 0.0
     for i in range(nx):
         for j in range(nh):
-            w = 1.0 if j == 0 or 2 * j == ny else 2.0  # columns present twice in the spectrum
+            w = _rfft_weight(j, ny)
             c = rt[i, j]
             p = pre[i, j]
             co = rt_old[i, j]
@@ -181,7 +189,7 @@ def cg_stiffness(st, neg_k, out, ny):  # pragma: no cover - compiled
     sks = 0.0
     for i in range(nx):
         for j in range(nh):
-            w = 1.0 if j == 0 or 2 * j == ny else 2.0  # columns present twice in the spectrum
+            w = _rfft_weight(j, ny)
             c = st[i, j]
             k = neg_k[i, j]
             out[i, j] = c * k

@@ -44,9 +44,9 @@ faster rate, and the heavier long-wave masses cut the pinned modes' eigenvalues.
 
 Precision (hard wall): the two transforms of an iteration and of a residual check run in
 single precision (float32 FFTW, 0.6-0.7 of a double pair's time), everything else in double
-(g, f, d, the step s, every sum). The preconditioned residual z and the curvature s.K s need only
-relative accuracy, and the force is carried as f - t K s, whose round-off is relative to the
-step: it drifts from the exact force by about 1e-7 of the distance moved (``SINGLE_DRIFT``,
+(g, f, d, the step s, every sum). The preconditioned residual z and the curvature s.K s need
+only relative accuracy, and the force is carried as f - t K s, whose round-off is relative to
+the step: it drifts from the exact force by about 1e-7 of the distance moved (``SINGLE_DRIFT``,
 in the residual's units). A drift bound is kept; the exact force (a double FFT pair) replaces
 the carried one when the bound reaches a tenth of the residual estimate (about once per cold
 solve). The residual a solve reports is the transform's plus the drift bound, a bound on the
