@@ -68,6 +68,24 @@ def test_sweep_by_key_equals_the_full_sweep():
                 assert critical_open_count_by_key(key, axis, expect=expect) == full
 
 
+def test_sweep_by_key_joins_the_block_across_the_periodic_seam():
+    # The block is joined in memory order, each bond once from its later cell; a bond across
+    # the periodic seam is looked at from the last row or column. Here the only spanning
+    # path crosses that seam: 4 cells along x at y = 5, then from (3, 5) to (3, 0) and 5
+    # cells on along x at y = 0. Its 9 cells have the largest keys, so the count is 9, and
+    # a block that holds the path (expect 0.5: the top 21 of 48 cells) must see it span.
+    rng = np.random.default_rng(3)
+    key = rng.random((8, 6))
+    for ix in range(4):
+        key[ix, 5] = 10.0 + rng.random()
+    for ix in range(3, 8):
+        key[ix, 0] = 10.0 + rng.random()
+    for k, axis in ((key, 0), (key.T.copy(), 1)):  # the same path, spanning along y
+        assert critical_open_count(np.argsort(-k, axis=None), k.shape, axis) == 9
+        for expect in (0.25, 0.5, 1.0):
+            assert critical_open_count_by_key(k, axis, expect=expect) == 9
+
+
 def test_openness_orders_like_open_first_order():
     rng = np.random.default_rng(9)
     contact = rng.random((20, 16)) < 0.4
