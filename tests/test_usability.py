@@ -77,6 +77,25 @@ def test_vv_shows_solver_steps_and_q_hides_everything(files, capsys):
         assert len(solves) == int(ds.attrs["n_solves"]) > 0
 
 
+def test_vv_progress_of_the_default_hard_wall_solver(caplog):
+    """The default elastic solver (hard-wall CG) reports every SOLVER_LOG_EVERY iterations,
+    like FIRE and the plain CG: a large surface's solve is not silent for minutes."""
+    from roughflow.contact import solve
+    from roughflow.defaults import SOLVER_LOG_EVERY
+    from roughflow.surface import SurfaceSpec, generate
+
+    s = generate(SurfaceSpec.from_sweep(gamma=1, hurst=0.8, l_over_lambda_r=1, eps_f=1 / 32,
+                                        points_per_lambda_s=4, seed=0))
+    with caplog.at_level(logging.DEBUG, logger="roughflow.contact"):
+        res = solve(s, 0.2, tol=1e-10)  # 29 iterations on this 128^2 surface
+    steps = [int(m.group(1)) for r in caplog.records
+             if (m := re.match(r"hard-wall cg iteration (\d+): residual estimate \S+ "
+                               r"\(tol 1\.0e-10\), trial step \S+, contact 0\.\d+",
+                               r.getMessage()))]
+    assert res.iterations >= SOLVER_LOG_EVERY
+    assert steps == list(range(SOLVER_LOG_EVERY, res.iterations + 1, SOLVER_LOG_EVERY))
+
+
 def test_log_progress_for_notebooks():
     stream = io.StringIO()
     handler = roughflow.log_progress("DEBUG", stream=stream)

@@ -3,8 +3,10 @@
 - INFO: one line per contact solve of a threshold search, a pressure ladder or the channels
   scene (load, contact area, iterations, residual, seconds: ``roughflow.search.load``), per
   seed and step of a scene, per command;
-- DEBUG: in addition, every :data:`~roughflow.defaults.SOLVER_LOG_EVERY` steps of a GFMD or
-  CG contact solve (step, residual, time step, contact fraction).
+- DEBUG: in addition, every :data:`~roughflow.defaults.SOLVER_LOG_EVERY` steps of a contact
+  solve (step, residual, contact fraction; FIRE also its time step; the default hard-wall CG
+  its free residual estimate, the exact residual being computed only near convergence, and
+  its trial step).
 
 The command line shows them with ``-v`` (INFO) or ``-vv`` (DEBUG), before or after the
 subcommand; a script or notebook calls :func:`log_progress`, or configures the standard

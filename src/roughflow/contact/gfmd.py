@@ -338,6 +338,9 @@ def _hard_wall(
     check_at = tol  # exact residual once the estimate falls below this
     res = math.inf
     it = 0
+    # progress at DEBUG every SOLVER_LOG_EVERY iterations, with the free estimate (the exact
+    # residual is computed only near convergence; the level is read once)
+    debug = log.isEnabledFor(logging.DEBUG)
     while True:
         if it > 0 and drift > DRIFT_REFRESH * max(estimate, tol):
             r_sum = refresh()
@@ -378,6 +381,10 @@ def _hard_wall(
         it += 1
         nclip, fs, zmax, smax = direction(z.reshape(-1), d, g, f, beta, alpha, rin, active)
         estimate = zmax / hscale
+        if debug and it % SOLVER_LOG_EVERY == 0:
+            log.debug("hard-wall cg iteration %d: residual estimate %.3e (tol %.1e), "
+                      "trial step %.3g, contact %.4f", it, max(estimate, imbalance), tol,
+                      alpha, float(np.count_nonzero(active)) / size)
         trial = alpha  # update() recomputes the trial step s from d and this alpha
         sks = stiffness(plan.execute_forward(), neg_k32, spec_in, shape[1])
         plan.execute_inverse()  # -K s
