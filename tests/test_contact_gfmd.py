@@ -285,3 +285,40 @@ def test_start_check_is_skipped_only_where_the_start_cannot_be_converged(monkeyp
     assert n_saved == n_always - 2
     monkeypatch.setattr(G, "START_CHECK", default)
     assert solve(s, 0.2, tol=1e-6, init=r).iterations == 0
+
+
+def test_workspace_gives_the_same_solve_and_is_reused():
+    # contact.workspace holds the arrays of the iteration and of the result, reused by every
+    # solve given work= (a threshold search keeps only q of each state, so its solves need
+    # not allocate: fresh memory cost 10-16 % of a pair, docs/percolation.md "Twelfth
+    # pass"). The arithmetic is the same on the same values, so the results must be
+    # bit-identical; the result is a view of the workspace, overwritten by the next solve,
+    # and a warm start from the workspace's own result is allowed. A workspace of another
+    # grid or for another method is refused before any work.
+    from roughflow.contact import workspace
+    from roughflow.errors import InputError
+
+    s = generate(SurfaceSpec.from_sweep(points_per_lambda_s=2, seed=5))
+    work = workspace(s)
+    plain = solve(s, 0.2, tol=1e-6)
+    warm = solve(s, 0.21, tol=1e-6, init=plain)
+    back = solve(s, 0.2, tol=1e-6, init=warm)
+    a = solve(s, 0.2, tol=1e-6, work=work)
+    assert a.iterations == plain.iterations
+    for name in ("gap", "contact_pressure", "contact"):
+        np.testing.assert_array_equal(getattr(a, name), getattr(plain, name))
+    assert np.shares_memory(a.gap, work.gap)
+    b = solve(s, 0.21, tol=1e-6, init=plain, work=work)
+    assert b.iterations == warm.iterations and a.gap is b.gap  # the same array
+    np.testing.assert_array_equal(a.gap, warm.gap)  # a was overwritten by b
+    np.testing.assert_array_equal(b.contact_pressure, warm.contact_pressure)
+    c = solve(s, 0.2, tol=1e-6, init=b, work=work)  # init is the workspace's own result
+    assert c.iterations == back.iterations
+    np.testing.assert_array_equal(c.gap, back.gap)
+    other = generate(SurfaceSpec.from_sweep(points_per_lambda_s=4, seed=5))
+    with pytest.raises(InputError, match="work is for"):
+        solve(other, 0.2, work=work)
+    with pytest.raises(InputError, match="method='gfmd'"):
+        solve(s, 0.2, method="cg", work=work)
+    with pytest.raises(InputError, match="contact.workspace"):
+        solve(s, 0.2, work=object())

@@ -57,15 +57,35 @@ def test_sweep_by_key_equals_the_full_sweep():
     # The blocked sweep (cells far before the expected threshold joined in memory order,
     # the rest sorted a chunk at a time) must give the count of the full sorted sweep for
     # any expectation: too high (the block spans and is shrunk), too low, or at the ends;
-    # continuous keys (no ties), grids down to 1 x n and up to ones where the chunks matter
+    # continuous keys (no ties), grids down to 1 x n and up to ones where the chunks matter.
+    # With a SweepWork reused from call to call (as a threshold search does) the same.
+    from roughflow.percolation import sweep_work
+
     rng = np.random.default_rng(8)
     shapes = [tuple(rng.integers(1, 40, 2)) for _ in range(40)] + [(1, 30), (30, 1), (96, 80)]
     for shape in shapes:
         key = rng.standard_normal(shape)
+        work = sweep_work(key.size)
         for axis in (0, 1):
             full = critical_open_count(np.argsort(-key, axis=None), shape, axis)
             for expect in (0.0, 0.2, 0.5, 0.8, 1.0):
                 assert critical_open_count_by_key(key, axis, expect=expect) == full
+                assert critical_open_count_by_key(key, axis, expect=expect, work=work) == full
+    with pytest.raises(ValueError, match="sweep work"):
+        critical_open_count_by_key(key, 0, work=sweep_work(key.size, np.float32))
+
+
+def test_sweep_by_key_takes_float32_keys_as_they_are():
+    # A threshold search sweeps its kept float32 q (CompactState) without a float64 copy:
+    # keys that float32 holds exactly (distinct integers) give the float64 count
+    rng = np.random.default_rng(4)
+    for shape in ((37, 23), (64, 64), (1, 40)):
+        key = rng.permutation(shape[0] * shape[1]).reshape(shape).astype(np.float64)
+        for axis in (0, 1):
+            for expect in (0.3, 0.6):
+                assert critical_open_count_by_key(key.astype(np.float32), axis,
+                                                  expect=expect) == \
+                    critical_open_count_by_key(key, axis, expect=expect)
 
 
 def test_sweep_by_key_joins_the_block_across_the_periodic_seam():
@@ -302,6 +322,78 @@ def test_complementarity_warm_start_reproduces_its_ends_and_stays_complementary(
     for bad in (0.0, -c, float("nan")):
         with pytest.raises(InputError, match="compliance"):
             warm_start(pts, 0.205, compliance=bad)
+
+
+def test_compact_states_warm_start_and_predict_like_the_full_ones():
+    # A threshold search keeps each elastic state as q = gap - c pressure in float32
+    # (CompactState: 4 bytes a cell instead of 17). The warm starts rebuilt from it match
+    # those from the full results to float32 rounding (6e-8 of |q|, |q| of order the rms
+    # height h: atol 1e-6 h for the gap, 1e-6 h / c for the pressure, far below a contact
+    # tolerance of 1e-4 h), written into the buffers given as out=; q orders the cells as
+    # the prediction key openness() does, so the predicted counts are the same
+    from roughflow.contact import solve
+    from roughflow.percolation import openness
+    from roughflow.search import Point, warm_start, warm_start_compliance
+    from roughflow.search.load import compact
+
+    s = _surface(seed=2, ppl=4)
+    c = warm_start_compliance(s)
+    h = float(s.heights.std())
+    r0 = solve(s, 0.2, tol=1e-8)
+    r1 = solve(s, 0.21, tol=1e-8, init=r0)
+    full = [Point(0.2, r0.area_fraction, r0), Point(0.21, r1.area_fraction, r1)]
+    kept = [Point(q.load, q.area, compact(q.state, c)) for q in full]
+    assert kept[0].state.q.dtype == np.float32 and kept[0].state.iterations == r0.iterations
+    out = (np.empty(s.shape), np.empty(s.shape))
+    for load in (0.205, 0.23, 0.3):  # inside, extrapolated, carried from one state
+        a, b = warm_start(full, load, compliance=c), warm_start(kept, load, compliance=c)
+        np.testing.assert_allclose(b.gap, a.gap, rtol=0, atol=1e-6 * h)
+        np.testing.assert_allclose(b.contact_pressure, a.contact_pressure, rtol=0,
+                                   atol=1e-6 * h / c)
+        assert b.pressure == load and b.area_fraction == pytest.approx(
+            float((b.contact_pressure > 0).mean()))
+        o = warm_start(kept, load, compliance=c, out=out)
+        assert np.shares_memory(o.gap, out[0]) and np.shares_memory(o.contact_pressure, out[1])
+        np.testing.assert_array_equal(o.gap, b.gap)
+        np.testing.assert_array_equal(o.contact_pressure, b.contact_pressure)
+    own = warm_start(kept[:1], 0.2, compliance=c)  # a scout re-solved from its own state
+    np.testing.assert_allclose(own.gap, r0.gap, rtol=0, atol=1e-6 * h)
+    for r, q in ((r0, kept[0].state), (r1, kept[1].state)):
+        key = openness(r.gap, r.contact, r.contact_pressure)
+        for ax in (0, 1):
+            e = 1.0 - r.area_fraction
+            assert critical_open_count_by_key(q.q, ax, expect=e) == \
+                critical_open_count_by_key(key, ax, expect=e)
+    with pytest.raises(InputError, match="compliance"):
+        warm_start(kept, 0.205)
+
+
+def test_lean_search_agrees_with_the_search_that_keeps_full_states(monkeypatch):
+    # The default elastic search keeps CompactStates and passes one solver workspace to
+    # every solve; with observe= it keeps the full results (a window is a view, which must
+    # stay valid) and allocates per solve. Same solves up to float32 rounding of the kept
+    # states, so a_c* must agree to the bisection tolerance (both brackets contain the
+    # threshold and are at most tol wide)
+    import roughflow.search.critical as critical
+
+    works = []
+    plain_solve = critical.solve
+
+    def recording(*args, **kwargs):
+        works.append(kwargs.get("work"))
+        return plain_solve(*args, **kwargs)
+
+    monkeypatch.setattr(critical, "solve", recording)
+    s = _surface(seed=3, ppl=4)
+    lean = threshold(s)
+    assert len(works) == lean[0].n_solves and works[0] is not None
+    assert all(w is works[0] for w in works)
+    works.clear()
+    full = threshold(s, options=SearchOptions(observe=lambda r: r))
+    assert works and all(w is None for w in works)
+    for ax in (0, 1):
+        assert lean[ax].a_hi - lean[ax].a_lo <= lean[ax].tol
+        assert abs(lean[ax].a_c_star - full[ax].a_c_star) <= lean[ax].tol
 
 
 def test_complementarity_warm_start_needs_fewer_iterations():

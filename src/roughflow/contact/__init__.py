@@ -1,16 +1,17 @@
 """Elastic contact of a rigid rough surface with a flat elastic half-space (paper Sect. 2.2).
 
 ``solve`` is the entry point (``prepare``: its per-surface set-up, built once for many
-solves); ``ContactResult`` holds the gap field and the scalars;
-``Adhesion`` parameterises the short-range adhesive model (docs/physics.md Sect. 3.3);
-``ContactLaw`` is the small-load law a_c(p) that load searches start from.
+solves; ``workspace``: arrays reused by a sequence of solves that keep little of each);
+``ContactResult`` holds the gap field and the scalars; ``Adhesion`` parameterises the
+short-range adhesive model (docs/physics.md Sect. 3.3); ``ContactLaw`` is the small-load
+law a_c(p) that load searches start from.
 """
 
 from ._result import ContactResult
 from .adhesion import Adhesion, adhesion_summary, tabor_parameter
 from .elastic import cell_compliance, full_contact_energy
 from .law import ContactLaw
-from .solve import METHODS, MODELS, prepare, solve
+from .solve import METHODS, MODELS, prepare, solve, workspace
 
 __all__ = [
     "METHODS",
@@ -24,4 +25,5 @@ __all__ = [
     "prepare",
     "solve",
     "tabor_parameter",
+    "workspace",
 ]

@@ -219,6 +219,49 @@ def hard_wall_setup(heights: np.ndarray, lx: float, ly: float,
                          hscale=hscale)
 
 
+@dataclass(frozen=True, eq=False)
+class HardWallWork:
+    """The arrays a hard-wall solve writes, kept for the next solve on the same grid.
+
+    A search that keeps only a little of each state (``search.threshold`` keeps q = gap - c
+    pressure in float32) passes one to every solve, so that no solve allocates: on machines
+    whose fresh memory is expensive (transparent huge pages with synchronous compaction, as
+    on ours) a fresh 8 MB array costs about 20 ms on first touch and a 32 MB one about
+    110 ms (medians), and a threshold pair spent up to 16 % of its time in the kernel for
+    them (docs/percolation.md, "Twelfth pass"). The result of a solve with it is a view of
+    these arrays: it is overwritten by the next solve with the same work.
+
+    g, f, d, active: gap, force, search direction and active set of the iteration (flat);
+    rt_old: the transform of the previous residual; sigma, gap, contact: the result's wall
+    reaction, gap and contact mask (grid shaped); u0: the warm start's elastic surface.
+    """
+
+    g: np.ndarray
+    f: np.ndarray
+    d: np.ndarray
+    active: np.ndarray
+    rt_old: np.ndarray
+    sigma: np.ndarray
+    gap: np.ndarray
+    contact: np.ndarray
+    u0: np.ndarray
+
+    @property
+    def shape(self) -> tuple[int, int]:
+        return self.gap.shape
+
+
+def hard_wall_work(shape: tuple[int, int]) -> HardWallWork:
+    """An empty :class:`HardWallWork` for grids of ``shape``."""
+    nx, ny = (int(v) for v in shape)
+    size = nx * ny
+    return HardWallWork(g=np.empty(size), f=np.empty(size), d=np.empty(size),
+                        active=np.empty(size, dtype=bool),
+                        rt_old=np.empty((nx, ny // 2 + 1), dtype=np.complex64),
+                        sigma=np.empty((nx, ny)), gap=np.empty((nx, ny)),
+                        contact=np.empty((nx, ny), dtype=bool), u0=np.empty((nx, ny)))
+
+
 def gfmd(
     heights: np.ndarray,
     lx: float,
@@ -234,6 +277,7 @@ def gfmd(
     use_numba: bool = True,
     minimizer: str = "auto",
     setup: HardWallSetup | None = None,
+    work: HardWallWork | None = None,
 ) -> SolverOutput:
     """Minimise elastic + interaction + load energy; returns a :class:`SolverOutput`.
 
@@ -247,12 +291,15 @@ def gfmd(
     ``minimizer="fire"`` runs FIRE on the hard wall too (the method before CG; benchmarks).
     ``setup``: the hard wall's :class:`HardWallSetup` of these heights, built beforehand
     (default: built by this call; ignored by FIRE).
+    ``work``: the hard wall's :class:`HardWallWork` for this grid: no arrays are allocated,
+    and the output is a view of its arrays (overwritten by the next solve with it). ``u0``
+    may be ``work.u0``. Ignored by FIRE.
     """
     if minimizer not in ("auto", "fire"):
         raise ValueError(f"minimizer must be 'auto' or 'fire', got {minimizer!r}")
     if adhesion is None and minimizer == "auto":
         return _hard_wall(heights, lx, ly, load, tol=tol, max_iter=max_iter, u0=u0,
-                          threads=threads, use_numba=use_numba, setup=setup)
+                          threads=threads, use_numba=use_numba, setup=setup, work=work)
     return _fire(heights, lx, ly, load, tol=tol, max_iter=max_iter, u0=u0, adhesion=adhesion,
                  threads=threads, check_every=check_every, use_numba=use_numba)
 
@@ -269,6 +316,7 @@ def _hard_wall(
     threads: int | None,
     use_numba: bool,
     setup: HardWallSetup | None = None,
+    work: HardWallWork | None = None,
 ) -> SolverOutput:
     """Projected preconditioned CG with a secant step (module docstring, "Hard wall"), its
     transforms in single precision ("Precision")."""
@@ -302,19 +350,22 @@ def _hard_wall(
         load_scale = min(load_scale, load)
     eps = 1e-12 * hscale  # round-off of the FFT round trip: points this close touch
 
+    if work is None:
+        work = hard_wall_work(shape)
+    elif work.shape != shape:
+        raise ValueError(f"work for a {work.shape} grid passed for {shape} points")
+    g, f, d, active, rt_old = work.g, work.f, work.d, work.active, work.rt_old
+    d.fill(0.0)
+    active.fill(False)
+    rt_old.fill(0.0)  # the transform of the previous r
     # the iteration moves the gap g = u - h (u: the elastic surface, centred heights): the
     # wall is g >= 0 and the loops need not read h
     if u0 is not None:
-        g = np.asarray(u0, dtype=np.float64).ravel() - h0
+        np.subtract(np.asarray(u0, dtype=np.float64).ravel(), h0, out=g)
         g -= h
         np.maximum(g, 0.0, out=g)
     else:
-        g = h.max() - h
-
-    f = np.empty(size)
-    d = np.zeros(size)
-    rt_old = np.zeros(plan.spectral_shape, dtype=np.complex64)  # transform of the previous r
-    active = np.zeros(size, dtype=bool)
+        np.subtract(h.max(), h, out=g)
 
     def refresh() -> float:
         """The exact force of u = g + h (a double FFT pair), the active set and r; returns
@@ -410,9 +461,7 @@ def _hard_wall(
         r_sum = update(g, f, d, rout, t, trial, eps, rin, active)
         drift += SINGLE_DRIFT * t * smax / hscale
 
-    sigma = np.empty(shape)
-    contact = np.empty(shape, dtype=bool)
-    gap = np.empty(shape)
+    sigma, gap, contact = work.sigma, work.gap, work.contact
     separation = finish(g, h, f, active, eps, sigma.reshape(-1), gap.reshape(-1),
                         contact.reshape(-1)) / size
     return SolverOutput(pressure=sigma, gap=gap, contact=contact, separation=separation,

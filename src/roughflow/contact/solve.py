@@ -24,7 +24,7 @@ from .adhesion import Adhesion
 from .bearing import solve_bearing
 
 if TYPE_CHECKING:  # gfmd (numba) is imported on first use: the CLI starts faster
-    from .gfmd import HardWallSetup
+    from .gfmd import HardWallSetup, HardWallWork
 
 METHODS = CONTACT_METHODS
 # The repulsive state an adhesive solve starts from: a small load (so that the attraction
@@ -47,6 +47,7 @@ def solve(
     adhesion: Adhesion | None = None,
     threads: int | None = None,
     setup: HardWallSetup | None = None,
+    work: HardWallWork | None = None,
 ) -> ContactResult:
     """Contact of the rigid rough ``surface`` with a flat elastic half-space (E* = 1).
 
@@ -83,6 +84,11 @@ def solve(
     setup:
       :func:`prepare` of this surface, for many elastic gfmd solves of it (load searches):
       the heights' spectrum and the preconditioner are then built once, not per solve.
+      The results are the same as without it.
+    work:
+      :func:`workspace` of this grid, for a sequence of elastic gfmd solves that keep only
+      what they need of each result (threshold searches): the solver allocates nothing, and
+      the result's arrays are the workspace's, **overwritten by the next solve with it**.
       The results are the same as without it.
     """
     if model not in MODELS:
@@ -140,14 +146,17 @@ def solve(
     if setup is not None:
         from .gfmd import HardWallSetup
 
-        if not isinstance(setup, HardWallSetup):
-            raise InputError(f"setup must come from contact.prepare, got {type(setup).__name__}")
-        if model != "elastic" or method != "gfmd":
-            raise InputError(f"setup= is for model='elastic' with method='gfmd', got "
-                             f"model={model!r}, method={method!r}")
+        _require_hard_wall("setup", setup, HardWallSetup, "prepare", model, method)
         if setup.heights is not surface.heights or (setup.lx, setup.ly) != (lx, ly):
             raise InputError("setup was prepared for another surface (contact.prepare(surface) "
                              "of the surface being solved)")
+    if work is not None:
+        from .gfmd import HardWallWork
+
+        _require_hard_wall("work", work, HardWallWork, "workspace", model, method)
+        if work.shape != heights.shape:
+            raise InputError(f"work is for a {work.shape} grid, the surface has shape "
+                             f"{heights.shape}")
     if method == "cg":
         from .cg import polonsky_keer
 
@@ -167,10 +176,13 @@ def solve(
             # acts from the first step; a flat start floats at zero load
             init = solve(surface, max(load, _ADHESIVE_START_LOAD), method="gfmd",
                          tol=_ADHESIVE_START_TOL, threads=threads)
-        u0 = heights + init.gap if init is not None else None
+        u0 = None
+        if init is not None:
+            u0 = np.add(heights, init.gap, out=work.u0 if work is not None else None)
         out = gfmd(
             heights, lx, ly, load, tol=tol, max_iter=int(max_iter), u0=u0,
             adhesion=adhesion if model == "adhesive" else None, threads=threads, setup=setup,
+            work=work,
         )
     if not out.converged:
         raise ConvergenceError(
@@ -191,6 +203,26 @@ def solve(
         method=method,
         separation=float(out.separation),
     )
+
+
+def _require_hard_wall(what: str, value, kind: type, maker: str, model: str,
+                       method: str) -> None:
+    """``setup=`` and ``work=`` come from ``contact.<maker>`` and serve elastic gfmd only."""
+    if not isinstance(value, kind):
+        raise InputError(f"{what} must come from contact.{maker}, got {type(value).__name__}")
+    if model != "elastic" or method != "gfmd":
+        raise InputError(f"{what}= is for model='elastic' with method='gfmd', got "
+                         f"model={model!r}, method={method!r}")
+
+
+def workspace(surface: Surface) -> HardWallWork:
+    """The arrays of elastic gfmd solves of ``surface``'s grid, reused by every solve given
+    ``work=`` (see :func:`solve`; about 9 float64 fields)."""
+    from .gfmd import hard_wall_work
+
+    if not isinstance(surface, Surface):
+        raise InputError(f"surface must be a roughflow Surface, got {type(surface).__name__}")
+    return hard_wall_work(surface.shape)
 
 
 def prepare(surface: Surface, threads: int | None = None) -> HardWallSetup:

@@ -26,6 +26,7 @@ from .labels import check_axis, label
 from .spanning import contact_percolates, percolates, percolates_along, spanning_cells
 from .sweep import (
     BearingBracket,
+    SweepWork,
     bearing_bracket,
     critical_open_count,
     critical_open_count_by_key,
@@ -33,10 +34,12 @@ from .sweep import (
     openness,
     predicted_threshold_by_key,
     predicted_thresholds,
+    sweep_work,
 )
 
 __all__ = [
     "BearingBracket",
+    "SweepWork",
     "ClusterStats",
     "bearing_bracket",
     "check_axis",
@@ -54,6 +57,7 @@ __all__ = [
     "percolation_map",
     "predicted_threshold_by_key",
     "predicted_thresholds",
+    "sweep_work",
     "size_distribution",
     "spanning_cells",
 ]

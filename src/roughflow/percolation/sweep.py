@@ -104,6 +104,34 @@ def _union_find_state(n: int) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
             np.zeros(n, dtype=np.int8))
 
 
+class SweepWork(NamedTuple):
+    """Arrays of :func:`critical_open_count_by_key` on ``n`` cells, reused from call to call
+    by a caller that sweeps many keys of one grid (the threshold search: fresh memory costs
+    about 20 ms per 8 MB on our machines, docs/contact.md "Workspace"): the union-find state
+    (parent, size, flags), the collected cells ``nxt`` and ``part``, a copy of the key
+    (float32 or float64) that is partitioned in place."""
+
+    parent: np.ndarray
+    size: np.ndarray
+    flags: np.ndarray
+    nxt: np.ndarray
+    part: np.ndarray
+
+
+def sweep_work(n: int, dtype=np.float64) -> SweepWork:
+    """An empty :class:`SweepWork` for ``n`` cells and keys of ``dtype``."""
+    return SweepWork(np.empty(n, dtype=np.int32), np.empty(n, dtype=np.int32),
+                     np.empty(n, dtype=np.int8), np.empty(n, dtype=np.int64),
+                     np.empty(n, dtype=dtype))
+
+
+def _reset(work: SweepWork) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    work.parent.fill(-1)
+    work.size.fill(0)
+    work.flags.fill(0)
+    return work.parent, work.size, work.flags
+
+
 def critical_open_count(order: np.ndarray, shape: tuple[int, int], axis: int) -> int:
     """Smallest k such that the first k cells of ``order`` (flat C-order indices into an
     array of ``shape``) form an open set that spans along ``axis`` (4-connected, open
@@ -125,7 +153,8 @@ def critical_open_count(order: np.ndarray, shape: tuple[int, int], axis: int) ->
 _BLOCK_MARGIN = 0.05
 
 
-def critical_open_count_by_key(key: np.ndarray, axis: int, *, expect: float = 0.5) -> int:
+def critical_open_count_by_key(key: np.ndarray, axis: int, *, expect: float = 0.5,
+                               work: SweepWork | None = None) -> int:
     """:func:`critical_open_count` for the order of decreasing ``key`` (cells with a larger
     key open first), without sorting all cells.
 
@@ -135,33 +164,45 @@ def critical_open_count_by_key(key: np.ndarray, axis: int, *, expect: float = 0.
     block that already spans is shrunk and the sweep redone. Same count as
     ``critical_open_count(np.argsort(-key, axis=None), key.shape, axis)`` up to the order of
     equal keys. About 5x faster than that on 1024^2 (argsort and random access dominate
-    the full sweep).
+    the full sweep). ``work``: a :func:`sweep_work` of this size, reused instead of new
+    arrays (same count).
     """
     ax = check_axis(axis)
-    key = np.asarray(key, dtype=np.float64)
+    key = np.asarray(key)
+    if key.dtype not in (np.float32, np.float64):  # float32 (a search's kept q) as it is
+        key = key.astype(np.float64)
     nx, ny = (int(v) for v in key.shape)
     n = nx * ny
     if n >= 2**31:
         raise ValueError(f"grid {nx} x {ny} too large for the int32 union-find")
     flat = key.ravel()
+    if work is not None and (work.part.size != n or work.part.dtype != flat.dtype):
+        raise ValueError(f"sweep work for {work.part.size} {work.part.dtype} keys passed for "
+                         f"{n} {flat.dtype} keys")
     chunk = max(1, int(_BLOCK_MARGIN * n))
     m = int((min(max(float(expect), 0.0), 1.0) - _BLOCK_MARGIN) * n)
     while True:
-        state = _union_find_state(n)
+        state = _union_find_state(n) if work is None else _reset(work)
         if m <= 0:
             rest = np.arange(n)
             done = 0
             break
         # the m-th and the (m + chunk)-th largest key bound the block and the first chunk
         # after it; the block's pass collects that chunk (no mask or gather of all cells)
-        part = np.partition(flat, n - m)
+        if work is None:
+            part = np.partition(flat, n - m)
+        else:
+            part = work.part
+            np.copyto(part, flat)
+            part.partition(n - m)
         cut = part[n - m]
         below = part[: n - m]  # the keys below the block: partitioned again in place
         lo = max(below.size - chunk, 0)
         below.partition(lo)  # (numpy's partition at two kth at once is 4x slower here)
         cut_next = below[lo]
         del part, below
-        nxt = np.empty(n, dtype=np.int64)  # only the pages of the first chunk are touched
+        # only the pages of the first chunk are touched
+        nxt = np.empty(n, dtype=np.int64) if work is None else work.nxt
         done, taken = _join_block(flat, cut, cut_next, nx, ny, ax, nxt, *state)
         if done >= 0:
             take = nxt[:taken]
@@ -273,11 +314,14 @@ def openness(gap: np.ndarray, contact: np.ndarray, pressure: np.ndarray) -> np.n
     return key
 
 
-def predicted_threshold_by_key(key: np.ndarray, axis: int, *, expect: float = 0.5) -> float:
+def predicted_threshold_by_key(key: np.ndarray, axis: int, *, expect: float = 0.5,
+                               work: SweepWork | None = None) -> float:
     """:func:`predicted_thresholds` for one axis from the :func:`openness` key (or any key,
-    larger opens first), via :func:`critical_open_count_by_key`; ``expect`` is the expected
-    open fraction at the threshold (e.g. the state's own open fraction)."""
-    return _area_at_count(critical_open_count_by_key(key, axis, expect=expect), key.size)
+    larger opens first), via :func:`critical_open_count_by_key` (``work``: its
+    :class:`SweepWork`); ``expect`` is the expected open fraction at the threshold (e.g. the
+    state's own open fraction)."""
+    return _area_at_count(critical_open_count_by_key(key, axis, expect=expect, work=work),
+                          key.size)
 
 
 def _area_at_count(k: int, n: int) -> float:

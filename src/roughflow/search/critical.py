@@ -37,7 +37,7 @@ from typing import NamedTuple
 import numpy as np
 
 from roughflow.accuracy import PERIMETER_C, perimeter_term
-from roughflow.contact import ContactResult, prepare, solve
+from roughflow.contact import ContactResult, prepare, solve, workspace
 from roughflow.contact.law import ContactLaw
 from roughflow.defaults import (
     A_C_STAR_PAPER,
@@ -57,11 +57,19 @@ from roughflow.percolation import (
     openness,
     percolates_along,
     predicted_threshold_by_key,
+    sweep_work,
 )
 from roughflow.resources import check_memory
 from roughflow.surface import Surface
 
-from .load import load_for_area, timed_solve, warm_start, warm_start_compliance
+from .load import (
+    CompactState,
+    compact,
+    load_for_area,
+    timed_solve,
+    warm_start,
+    warm_start_compliance,
+)
 
 log = logging.getLogger(__name__)
 
@@ -220,7 +228,7 @@ class _Sample:
     load: float
     area: float
     spans: dict[int, bool]
-    state: ContactResult | None = None
+    state: ContactResult | CompactState | None = None
     predictor: Callable[[int], float] | None = None  # per axis, computed on first use
     perimeter: float = float("nan")
     scout: bool = False  # solved to the loose scout tolerance (SCOUT_TOL_FACTOR)
@@ -366,7 +374,8 @@ def _assemble(samples: list[_Sample], history: list[_Sample], axes, unbracketed:
 def _refine(evaluate: Callable[[float, ContactResult | None, bool], _Sample], axes, *,
             tol: float, first: float, load_range: tuple[float, float], law: ContactLaw,
             options: SearchOptions, model: str, loads_are_pressures: bool,
-            compliance: float | None = None, scouts: bool = False):
+            compliance: float | None = None, scouts: bool = False,
+            start_out: tuple[np.ndarray, np.ndarray] | None = None):
     samples: list[_Sample] = []  # the current states (a re-solved scout replaces its own)
     history: list[_Sample] = []  # every solve in order
     misses = dict.fromkeys(axes, 0)  # consecutive solves that missed the intended side
@@ -374,7 +383,9 @@ def _refine(evaluate: Callable[[float, ContactResult | None, bool], _Sample], ax
     unbracketed: dict = {}
 
     def run(load: float, scout: bool = False) -> None:
-        init = warm_start(samples, load, compliance=compliance) if options.warm_start else None
+        init = None
+        if options.warm_start:
+            init = warm_start(samples, load, compliance=compliance, out=start_out)
         samples.append(evaluate(load, init, scout))
         history.append(samples[-1])
 
@@ -385,7 +396,8 @@ def _refine(evaluate: Callable[[float, ContactResult | None, bool], _Sample], ax
             misses[ax] = misses[ax] + 1 if samples[-1].spans[ax] != want else 0
             expected = None
         for i in _closed_scouts(samples, axes, tol):  # re-solve, then look again
-            samples[i] = evaluate(samples[i].load, samples[i].state, False)
+            own = warm_start([samples[i]], samples[i].load, compliance=compliance, out=start_out)
+            samples[i] = evaluate(samples[i].load, own, False)
             history.append(samples[i])
         todo = _pending(samples, axes, tol, load_range, options.strategy, unbracketed)
         if not todo:
@@ -482,26 +494,40 @@ def threshold(
     check_memory("threshold", shape, what="a threshold search")
     law = ContactLaw(model)
 
+    # Elastic states seen whole are kept as q = gap - c pressure in float32 (CompactState, 4
+    # bytes a cell instead of 17): the search then needs none of a result's arrays once it is
+    # sampled, and its gfmd solves share one workspace instead of allocating (fresh memory
+    # cost up to 16 % of a pair here; docs/percolation.md, "Twelfth pass")
+    lean = model == "elastic" and opts.observe is None
+    compliance = warm_start_compliance(surface)
+    sweeps = sweep_work(heights.size, np.float32) if lean else None  # reused by predictions
+
     def sample(r: ContactResult, load: float, open_first: np.ndarray | None,
                pressure: np.ndarray | None) -> _Sample:
         seen = r if opts.observe is None else opts.observe(r)
         if seen is not r:
             pressure = seen.contact_pressure
-        opn = ~seen.contact
-        spans = percolates_along(opn, axes, periodic=opts.periodic)
+        area = float(seen.area_fraction)
+        spans = percolates_along(~seen.contact, axes, periodic=opts.periodic)
+        # faces per observed cell: independent of the cell size, so a window needs no scaling
+        perimeter = perimeter_term(seen.contact) if model == "elastic" else float("nan")
+        state = compact(r, compliance) if lean else r
         predictor = None
-        if opts.strategy == "predict":
+        if opts.strategy == "predict" and isinstance(state, CompactState):
+            key = state.q  # orders the cells as openness() does; r is not kept (a workspace's)
+
             def predictor(ax: int) -> float:
-                # periodic union-find even with walls: the prediction only aims the solves.
-                # The key is rebuilt per axis (3 ms at 1024^2), not kept: a kept 8 MB array
+                # periodic union-find even with walls: the prediction only aims the solves
+                return predicted_threshold_by_key(key, ax, expect=1.0 - area,
+                                                  work=sweeps)
+        elif opts.strategy == "predict":
+            def predictor(ax: int) -> float:
+                # the key is rebuilt per axis (3 ms at 1024^2), not kept: a kept 8 MB array
                 # per state costs more in fresh pages (about 20 ms on these machines)
                 key = open_first if open_first is not None else openness(seen.gap,
                                                                          seen.contact, pressure)
-                return predicted_threshold_by_key(key, ax,
-                                                  expect=1.0 - float(seen.area_fraction))
-        # faces per observed cell: independent of the cell size, so a window needs no scaling
-        perimeter = perimeter_term(seen.contact) if model == "elastic" else float("nan")
-        return _Sample(load=float(load), area=float(seen.area_fraction), spans=spans, state=r,
+                return predicted_threshold_by_key(key, ax, expect=1.0 - area)
+        return _Sample(load=float(load), area=area, spans=spans, state=state,
                        predictor=predictor, perimeter=perimeter)
 
     if model == "bearing":
@@ -523,8 +549,12 @@ def threshold(
 
     kwargs = {"model": model, "method": opts.method, "adhesion": adhesion, "threads": threads,
               "tol": opts.contact_tol}
+    start_out = None
     if model == "elastic" and opts.method in (None, "gfmd"):  # built once for all solves
         kwargs["setup"] = prepare(surface, threads)
+        if lean:
+            kwargs["work"] = workspace(surface)
+            start_out = (np.empty(shape), np.empty(shape))  # the warm starts' gap, pressure
 
     scout_tol = min(SCOUT_TOL_FACTOR * opts.contact_tol, CONTACT_TOL_MAX)
 
@@ -536,7 +566,7 @@ def threshold(
 
     first = first_pressure(model) if opts.first_pressure is None else float(opts.first_pressure)
     res = _refine(evaluate, axes, tol=tol, first=first, load_range=opts.pressure_range, law=law,
-                  options=opts, model=model, loads_are_pressures=True,
-                  compliance=warm_start_compliance(surface),
-                  scouts=model == "elastic" and scout_tol > opts.contact_tol)
+                  options=opts, model=model, loads_are_pressures=True, compliance=compliance,
+                  scouts=model == "elastic" and scout_tol > opts.contact_tol,
+                  start_out=start_out)
     return res if axis is None else res[axes[0]]
