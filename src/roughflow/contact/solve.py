@@ -217,7 +217,7 @@ def _require_hard_wall(what: str, value, kind: type, maker: str, model: str,
 
 def workspace(surface: Surface) -> HardWallWork:
     """The arrays of elastic gfmd solves of ``surface``'s grid, reused by every solve given
-    ``work=`` (see :func:`solve`; about 9 float64 fields)."""
+    ``work=`` (see :func:`solve`; about 54 bytes per grid point)."""
     from .gfmd import hard_wall_work
 
     if not isinstance(surface, Surface):

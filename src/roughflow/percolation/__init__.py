@@ -39,8 +39,8 @@ from .sweep import (
 
 __all__ = [
     "BearingBracket",
-    "SweepWork",
     "ClusterStats",
+    "SweepWork",
     "bearing_bracket",
     "check_axis",
     "cluster_sizes",
@@ -57,7 +57,7 @@ __all__ = [
     "percolation_map",
     "predicted_threshold_by_key",
     "predicted_thresholds",
-    "sweep_work",
     "size_distribution",
     "spanning_cells",
+    "sweep_work",
 ]

@@ -164,8 +164,8 @@ def critical_open_count_by_key(key: np.ndarray, axis: int, *, expect: float = 0.
     block that already spans is shrunk and the sweep redone. Same count as
     ``critical_open_count(np.argsort(-key, axis=None), key.shape, axis)`` up to the order of
     equal keys. About 5x faster than that on 1024^2 (argsort and random access dominate
-    the full sweep). ``work``: a :func:`sweep_work` of this size, reused instead of new
-    arrays (same count).
+    the full sweep). ``work``: a :func:`sweep_work` of this size and key type, reused
+    instead of new arrays (same count).
     """
     ax = check_axis(axis)
     key = np.asarray(key)
@@ -176,33 +176,31 @@ def critical_open_count_by_key(key: np.ndarray, axis: int, *, expect: float = 0.
     if n >= 2**31:
         raise ValueError(f"grid {nx} x {ny} too large for the int32 union-find")
     flat = key.ravel()
-    if work is not None and (work.part.size != n or work.part.dtype != flat.dtype):
+    if work is None:
+        work = sweep_work(n, flat.dtype)
+    elif work.part.size != n or work.part.dtype != flat.dtype:
         raise ValueError(f"sweep work for {work.part.size} {work.part.dtype} keys passed for "
                          f"{n} {flat.dtype} keys")
     chunk = max(1, int(_BLOCK_MARGIN * n))
     m = int((min(max(float(expect), 0.0), 1.0) - _BLOCK_MARGIN) * n)
     while True:
-        state = _union_find_state(n) if work is None else _reset(work)
+        state = _reset(work)
         if m <= 0:
             rest = np.arange(n)
             done = 0
             break
         # the m-th and the (m + chunk)-th largest key bound the block and the first chunk
         # after it; the block's pass collects that chunk (no mask or gather of all cells)
-        if work is None:
-            part = np.partition(flat, n - m)
-        else:
-            part = work.part
-            np.copyto(part, flat)
-            part.partition(n - m)
+        part = work.part
+        np.copyto(part, flat)
+        part.partition(n - m)
         cut = part[n - m]
         below = part[: n - m]  # the keys below the block: partitioned again in place
         lo = max(below.size - chunk, 0)
         below.partition(lo)  # (numpy's partition at two kth at once is 4x slower here)
         cut_next = below[lo]
         del part, below
-        # only the pages of the first chunk are touched
-        nxt = np.empty(n, dtype=np.int64) if work is None else work.nxt
+        nxt = work.nxt  # only the pages of the first chunk are touched
         done, taken = _join_block(flat, cut, cut_next, nx, ny, ax, nxt, *state)
         if done >= 0:
             take = nxt[:taken]
