@@ -51,6 +51,8 @@ def commands(task: str, n: int, d: str) -> list[str]:
         "contact_cg": ["contact", s, "--pressure", "0.1", "--method", "cg", "-o", o],
         "bearing": ["contact", s, "--model", "bearing", "--area-fraction", "0.3", "-o", o],
         "threshold": ["threshold", s, "-o", o],
+        # the paper's adhesive case (gamma_s = 0.1 v_ela^full, rho = 0.42 lambda_s)
+        "threshold_adhesive": ["threshold", s, "--model", "adhesive", "-o", o],
         "flow": ["flow", c, "-o", o],
         "theory_gap": ["theory", c, "-o", o],
         "theory_spec": ["theory", "--l-over-lambda-r", "4", "--eps-f", repr(16.0 / n),
@@ -66,6 +68,7 @@ def commands(task: str, n: int, d: str) -> list[str]:
 MODEL_TASK = {"surface": "surface", "contact": "contact", "contact_cg": "contact",
               "bearing": "bearing", "flow": "flow", "theory_gap": "theory",
               "theory_spec": "spectrum", "threshold": "threshold",
+              "threshold_adhesive": "threshold_adhesive",
               "scene_threshold": "threshold", "scene_ladder": "ladder"}
 
 
@@ -96,9 +99,9 @@ def main() -> None:
     ap.add_argument("--job-sizes", type=int, nargs="*", default=[128, 256, 512])
     ap.add_argument("--tasks", nargs="+", default=[
         "surface", "contact", "contact_cg", "bearing", "flow", "theory_gap", "theory_spec",
-        "threshold", "scene_threshold", "scene_ladder"])
+        "threshold", "threshold_adhesive", "scene_threshold", "scene_ladder"])
     args = ap.parse_args()
-    heavy = {"threshold", "scene_threshold", "scene_ladder"}
+    heavy = {"threshold", "threshold_adhesive", "scene_threshold", "scene_ladder"}
     base = base_mb()
     print(f"base (imports + 64^2 case): {base:.0f} MB", flush=True)
     rows = []

@@ -118,6 +118,34 @@ def test_memory_model_grows_with_the_grid_and_orders_the_tasks():
         resources.estimate_bytes("nonsense", n)
 
 
+def test_threshold_search_checks_the_model_of_its_states(monkeypatch):
+    # the elastic search keeps 4 bytes a point per state, the adhesive one whole states:
+    # each is checked against its own model before anything is solved (a limit between the
+    # two estimates refuses the adhesive search only)
+    from roughflow.contact import Adhesion
+    from roughflow.search import critical, threshold
+    from roughflow.surface import Surface
+
+    shape = (1024, 1024)
+    elastic = resources.estimate_bytes("threshold", shape[0] * shape[1])
+    adhesive = resources.estimate_bytes("threshold_adhesive", shape[0] * shape[1])
+    assert adhesive > elastic
+    monkeypatch.setattr(resources, "available_bytes", lambda: (elastic + adhesive) // 2)
+
+    class Reached(Exception):
+        pass
+
+    def refine(*args, **kwargs):
+        raise Reached
+
+    monkeypatch.setattr(critical, "_refine", refine)
+    surface = Surface(heights=np.zeros(shape), lx=1.0, ly=1.0)
+    with pytest.raises(ResourceError, match="an adhesive threshold search on a 1024 x 1024"):
+        threshold(surface, model="adhesive", adhesion=Adhesion(surface_energy=1e-4, range=0.01))
+    with pytest.raises(Reached):  # passed the check
+        threshold(surface)
+
+
 def test_check_memory_refuses_with_grid_and_sizes():
     with pytest.raises(ResourceError, match=r"60000 x 60000 grid.*GB.*limit is 1 GB"):
         resources.check_memory("surface", (60000, 60000), limit=10**9)

@@ -52,8 +52,12 @@ def test_cli_threshold_errors(surface_file, tmp_path):
     with pytest.raises(SystemExit) as e:
         main(["threshold", str(path), "--tol", "0", "-o", str(out)])
     assert e.value.code == 2
-    with pytest.raises(SystemExit) as e:
-        main(["threshold", str(path), "--model", "adhesive", "-o", str(out)])
+    with pytest.raises(SystemExit) as e:  # one of the two adhesion values only
+        main(["threshold", str(path), "--model", "adhesive", "--surface-energy", "1e-4",
+              "-o", str(out)])
+    assert e.value.code == 2
+    with pytest.raises(SystemExit) as e:  # adhesion values for a model without adhesion
+        main(["threshold", str(path), "--adhesion-range", "0.01", "-o", str(out)])
     assert e.value.code == 2
     with pytest.raises(SystemExit) as e:  # always percolates below p = 1e-2
         main(["threshold", str(path), "--p-max", "0.01", "-o", str(out)])
@@ -63,3 +67,26 @@ def test_cli_threshold_errors(surface_file, tmp_path):
                  "-o", str(out)]) == 0
     with xr.open_dataset(out) as ds:
         assert np.all(ds["bracketed"].values == 0) and np.all(np.isnan(ds["a_c_star"]))
+
+
+def test_cli_threshold_adhesive_defaults_to_the_papers_case(surface_file, tmp_path):
+    # no --surface-energy/--adhesion-range: the paper's adhesive case, as `roughflow contact`
+    # takes it (gamma_s = 0.1 v_ela^full, rho = 0.42 lambda_s of the file's spec); the file
+    # records them, and a_c* is the API search's with those parameters (deterministic solves)
+    from roughflow.contact import full_contact_energy
+    from roughflow.contact.adhesion import adhesion_for
+
+    s, path = surface_file
+    out = tmp_path / "t.nc"
+    assert main(["threshold", str(path), "--model", "adhesive", "--axis", "y", "--tol", "4e-3",
+                 "-o", str(out)]) == 0
+    ad = adhesion_for(s.heights, s.lx, s.ly, gamma_over_v_full=0.1,
+                      range=0.42 * s.spec.lambda_s)
+    ref = threshold(s, 1, model="adhesive", adhesion=ad, tol=4e-3)
+    with xr.open_dataset(out) as ds:
+        assert ds.attrs["model"] == "adhesive"
+        assert ds.attrs["surface_energy"] == pytest.approx(
+            0.1 * full_contact_energy(s.heights, s.lx, s.ly), rel=1e-12)
+        assert ds.attrs["adhesion_range"] == pytest.approx(0.42 * s.spec.lambda_s, rel=1e-12)
+        assert ds.attrs["adhesion_gamma_over_v_full"] == pytest.approx(0.1, rel=1e-12)
+        assert float(ds["a_c_star"][0]) == ref.a_c_star

@@ -10,7 +10,10 @@ before allocating: ``surface.generate``, ``contact.solve``, ``flow.solve``,
 the Snakemake ``mem_mb`` of a job (:func:`roughflow.scenes.jobs.estimated_memory`).
 
 Tasks: ``surface`` (generate a surface), ``contact`` (one elastic or adhesive solve, GFMD or
-CG), ``bearing``, ``threshold`` (a threshold search: several warm-start states are kept),
+CG), ``bearing``, ``threshold`` (an elastic threshold search: each warm-start state is kept
+as 4 bytes a point; the estimate covers about 35 solves), ``threshold_adhesive`` (an
+adhesive threshold search, or one through an observed window: every state is kept whole,
+17 bytes a point; about 17 solves at 2048^2),
 ``flow`` (Reynolds flow with AMG, the largest per point), ``ladder`` (contact + flow +
 theory per step), ``channels`` (two contacts), ``spectrum`` (Persson theory from a spec),
 ``theory`` (Bruggeman and closed forms of a gap field).
@@ -32,11 +35,12 @@ MB = 1024**2
 #: Fixed cost of a process in bytes: interpreter and libraries (numba's compiler for the
 #: GFMD kernels, scipy.sparse and pyamg for the flow).
 BASE = {"surface": 150 * MB, "contact": 300 * MB, "bearing": 150 * MB, "threshold": 300 * MB,
-        "flow": 350 * MB, "ladder": 400 * MB, "channels": 300 * MB, "spectrum": 150 * MB,
-        "theory": 200 * MB}
+        "threshold_adhesive": 300 * MB, "flow": 350 * MB, "ladder": 400 * MB,
+        "channels": 300 * MB, "spectrum": 150 * MB, "theory": 200 * MB}
 #: Bytes per grid point at the peak (float64 fields, FFT buffers, AMG hierarchy, ...).
-PER_POINT = {"surface": 80, "contact": 160, "bearing": 64, "threshold": 320, "flow": 560,
-             "ladder": 720, "channels": 320, "spectrum": 32, "theory": 200}
+PER_POINT = {"surface": 80, "contact": 160, "bearing": 64, "threshold": 320,
+             "threshold_adhesive": 480, "flow": 560, "ladder": 720, "channels": 320,
+             "spectrum": 32, "theory": 200}
 TASKS = tuple(PER_POINT)
 #: Grids whose arrays need less than this are never refused (the check is for grids that
 #: cannot fit, not for a machine that is momentarily short of memory).

@@ -129,3 +129,41 @@ def add_surface_options(group, flags=tuple(SURFACE_OPTIONS), **overrides) -> Non
         extra = {"choices": defaults.ROLLOFF_FORMS} if flag == "--rolloff" else {"type": kind}
         shown = "" if default is None else f" ({default:g})" if kind is float else f" ({default})"
         group.add_argument(flag, default=default, help=text + shown, **extra)
+
+
+def resolve_adhesion(model: str, surface_energy: float | None, adhesion_range: float | None,
+                     surface, *, flags: tuple[str, str], source: str):
+    """The :class:`~roughflow.contact.Adhesion` of ``--model adhesive`` (None for the other
+    models): both values given, or neither for the paper's adhesive case (gamma_s =
+    ``ADHESION_SURFACE_ENERGY_RATIO`` v_ela^full, rho = ``ADHESION_RANGE_OVER_LAMBDA_S``
+    lambda_s of the surface file's spec). ``flags`` name the two options in errors,
+    ``source`` the surface file."""
+    from roughflow.contact import Adhesion
+    from roughflow.contact.adhesion import adhesion_for
+
+    given = (surface_energy, adhesion_range)
+    both = " and ".join(flags)
+    if model != "adhesive":
+        if any(v is not None for v in given):
+            raise InputError(f"{both} are only for --model adhesive")
+        return None
+    if all(v is None for v in given):
+        if surface.spec is None:
+            raise InputError(f"{source} records no lambda_s (not written by roughflow "
+                             f"surface): give {both}")
+        return adhesion_for(surface.heights, surface.lx, surface.ly,
+                            gamma_over_v_full=defaults.ADHESION_SURFACE_ENERGY_RATIO,
+                            range=defaults.ADHESION_RANGE_OVER_LAMBDA_S * surface.spec.lambda_s)
+    if any(v is None for v in given):
+        raise InputError(f"--model adhesive needs both {both} (or neither, for the paper's "
+                         "adhesive case)")
+    return Adhesion(surface_energy=surface_energy, range=adhesion_range)
+
+
+def adhesion_help(what: str) -> str:
+    """Help of the surface-energy option: the default when neither value is given."""
+    return (f"adhesive model: {what}; without both adhesion options: the paper's adhesive "
+            f"case, gamma_s = {defaults.ADHESION_SURFACE_ENERGY_RATIO} v_ela^full and rho = "
+            f"{defaults.ADHESION_RANGE_OVER_LAMBDA_S} lambda_s (needs a surface file written by "
+            "roughflow surface, which records lambda_s)")
+

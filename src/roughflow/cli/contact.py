@@ -7,15 +7,13 @@ import logging
 import time
 
 from roughflow.defaults import (
-    ADHESION_RANGE_OVER_LAMBDA_S,
-    ADHESION_SURFACE_ENERGY_RATIO,
     CONTACT_METHODS,
     CONTACT_TOL,
     MODELS,
 )
 from roughflow.errors import InputError
 
-from ._common import add_input, add_output
+from ._common import add_input, add_output, adhesion_help, resolve_adhesion
 
 log = logging.getLogger(__name__)
 
@@ -50,37 +48,11 @@ def register(sub: argparse._SubParsersAction) -> None:
     p.add_argument("--max-iter", type=int, default=None,
                    help="iteration cap; not converging by then is an error (exit 3)")
     p.add_argument("--surface-energy", type=float, default=None,
-                   help="adhesive model: surface energy gamma_s (units E* L); without "
-                        "--surface-energy and --range: the paper's adhesive case, gamma_s = "
-                        f"{ADHESION_SURFACE_ENERGY_RATIO} v_ela^full and rho = "
-                        f"{ADHESION_RANGE_OVER_LAMBDA_S} lambda_s (needs a surface file written "
-                        "by roughflow surface, which records lambda_s)")
+                   help=adhesion_help("surface energy gamma_s (units E* L)"))
     p.add_argument("--range", type=float, default=None, dest="adhesion_range",
                    help="adhesive model: range rho of the cosine attraction (units L)")
     add_output(p)
     p.set_defaults(func=run)
-
-
-def _adhesion(args: argparse.Namespace, surface):
-    from roughflow.contact import Adhesion
-    from roughflow.contact.adhesion import adhesion_for
-
-    given = (args.surface_energy, args.adhesion_range)
-    if args.model != "adhesive":
-        if any(v is not None for v in given):
-            raise InputError("--surface-energy and --range are only for --model adhesive")
-        return None
-    if all(v is None for v in given):
-        if surface.spec is None:
-            raise InputError(f"{args.surface} records no lambda_s (not written by roughflow "
-                             "surface): give --surface-energy and --range")
-        return adhesion_for(surface.heights, surface.lx, surface.ly,
-                            gamma_over_v_full=ADHESION_SURFACE_ENERGY_RATIO,
-                            range=ADHESION_RANGE_OVER_LAMBDA_S * surface.spec.lambda_s)
-    if any(v is None for v in given):
-        raise InputError("--model adhesive needs both --surface-energy and --range "
-                         "(or neither, for the paper's adhesive case)")
-    return Adhesion(surface_energy=args.surface_energy, range=args.adhesion_range)
 
 
 def run(args: argparse.Namespace) -> None:
@@ -91,7 +63,8 @@ def run(args: argparse.Namespace) -> None:
     if args.model == "bearing" and args.pressure is not None:
         raise InputError("--model bearing takes --area-fraction, not --pressure")
     surface = surface_from_dataset(args.data["surface"])
-    adhesion = _adhesion(args, surface)
+    adhesion = resolve_adhesion(args.model, args.surface_energy, args.adhesion_range, surface,
+                                flags=("--surface-energy", "--range"), source=args.surface)
     t0 = time.perf_counter()
     result = solve(
         surface, args.pressure, model=args.model, method=args.method,

@@ -14,9 +14,8 @@ from roughflow.defaults import (
     THRESHOLD_STRATEGIES,
     THRESHOLD_TOL,
 )
-from roughflow.errors import InputError
 
-from ._common import add_input, add_output, axis_arg
+from ._common import add_input, add_output, adhesion_help, axis_arg, resolve_adhesion
 
 log = logging.getLogger(__name__)
 
@@ -58,7 +57,7 @@ def register(sub: argparse._SubParsersAction) -> None:
                    help="tolerance of each contact solve, gap error / rms height "
                         f"({THRESHOLD_CONTACT_TOL:g})")
     p.add_argument("--surface-energy", type=float, default=None,
-                   help="adhesive model: surface energy gamma_s in E* L")
+                   help=adhesion_help("surface energy gamma_s in E* L"))
     p.add_argument("--adhesion-range", type=float, default=None,
                    help="adhesive model: range rho of the adhesion in L")
     p.add_argument("--allow-unbracketed", action="store_true",
@@ -73,20 +72,14 @@ def run(args: argparse.Namespace) -> None:
     from roughflow.io import surface_from_dataset, write_dataset
     from roughflow.search import SearchOptions, threshold
 
-    adhesion = None
-    if args.model == "adhesive":
-        if args.surface_energy is None or args.adhesion_range is None:
-            raise InputError("--model adhesive needs --surface-energy and --adhesion-range")
-        from roughflow.contact import Adhesion
-
-        adhesion = Adhesion(surface_energy=args.surface_energy, range=args.adhesion_range)
-    elif args.surface_energy is not None or args.adhesion_range is not None:
-        raise InputError("--surface-energy/--adhesion-range are only for --model adhesive")
+    surface = surface_from_dataset(args.data["surface"])
+    adhesion = resolve_adhesion(args.model, args.surface_energy, args.adhesion_range, surface,
+                                flags=("--surface-energy", "--adhesion-range"),
+                                source=args.surface)
     options = SearchOptions(
         strategy=args.strategy, pressure_range=(args.p_min, args.p_max),
         first_pressure=args.p_guess, contact_tol=args.contact_tol, method=args.method,
         on_unbracketed="nan" if args.allow_unbracketed else "raise")
-    surface = surface_from_dataset(args.data["surface"])
     res = threshold(surface, args.axis, model=args.model, tol=args.tol, adhesion=adhesion,
                     options=options)
     if args.axis is not None:
@@ -94,7 +87,7 @@ def run(args: argparse.Namespace) -> None:
     for ax, r in res.items():
         log.info("a_c*(%s) = %.4f in [%.4f, %.4f] after %d contact solves", "xy"[ax],
                  r.a_c_star, r.a_lo, r.a_hi, r.n_solves)
-    ds = threshold_dataset(res, surface)
+    ds = threshold_dataset(res, surface, adhesion=adhesion)
     ds.attrs["surface_file"] = str(args.surface)
     methods = ["percolation", "bearing" if args.model == "bearing" else args.method or "gfmd"]
     methods += {"elastic": ["perimeter"], "adhesive": ["adhesion"]}.get(args.model, [])

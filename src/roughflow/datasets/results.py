@@ -73,13 +73,18 @@ def contact_dataset(surface: Surface, result: ContactResult,
                "e_star": 1.0, **result.scalars(), **spec_attrs(surface)},
     )
     if adhesion is not None:
-        from roughflow.contact import adhesion_summary
-
-        ds.attrs["surface_energy"] = adhesion.surface_energy
-        ds.attrs["adhesion_range"] = adhesion.range
-        summary = adhesion_summary(surface.heights, surface.lx, surface.ly, adhesion)
-        ds.attrs.update({f"adhesion_{k}": v for k, v in summary.items()})
+        ds.attrs.update(adhesion_attrs(surface, adhesion))
     return ds
+
+
+def adhesion_attrs(surface: Surface, adhesion: Adhesion) -> dict:
+    """The adhesion of an adhesive result as attributes: surface energy, range and the
+    derived numbers of ``contact.adhesion_summary`` (``adhesion_*``)."""
+    from roughflow.contact import adhesion_summary
+
+    summary = adhesion_summary(surface.heights, surface.lx, surface.ly, adhesion)
+    return {"surface_energy": adhesion.surface_energy, "adhesion_range": adhesion.range,
+            **{f"adhesion_{k}": v for k, v in summary.items()}}
 
 
 #: Per-axis variables of a threshold: name -> (units, long_name).
@@ -99,11 +104,14 @@ THRESHOLD_FIELDS = {
 
 
 def threshold_dataset(results: Mapping[int, Threshold], surface: Surface | None = None, *,
-                      solve_log: bool = True) -> xr.Dataset:
+                      solve_log: bool = True, adhesion: Adhesion | None = None) -> xr.Dataset:
     """a_c*, its bracket and its pressures over ``axis`` (the axes in ``results``).
 
-    With ``solve_log`` the contact solves of the search are listed over ``solve``.
+    With ``solve_log`` the contact solves of the search are listed over ``solve``; with
+    ``adhesion`` (and ``surface``) its parameters are attributes, as for a contact.
     """
+    if adhesion is not None and surface is None:
+        raise ValueError("threshold_dataset: adhesion= needs the surface (its summary)")
     axes = sorted(results)
     r = [results[a] for a in axes]
     data = {}
@@ -121,6 +129,8 @@ def threshold_dataset(results: Mapping[int, Threshold], surface: Surface | None 
     )
     if surface is not None:
         ds.attrs.update({"lx": surface.lx, "ly": surface.ly, **spec_attrs(surface)})
+        if adhesion is not None:
+            ds.attrs.update(adhesion_attrs(surface, adhesion))
     if solve_log and r[0].solves:
         s = np.asarray(r[0].solves, dtype=float)
         ds["solve_pressure"] = ("solve", s[:, 0], {"units": PRESSURE_UNITS,

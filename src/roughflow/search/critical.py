@@ -491,14 +491,15 @@ def threshold(
         raise InputError("model='adhesive' needs adhesion=Adhesion(surface_energy=, range=)")
     heights = surface.heights
     shape = heights.shape
-    check_memory("threshold", shape, what="a threshold search")
-    law = ContactLaw(model)
-
     # Elastic states seen whole are kept as q = gap - c pressure in float32 (CompactState, 4
     # bytes a cell instead of 17): the search then needs none of a result's arrays once it is
     # sampled, and its gfmd solves share one workspace instead of allocating (fresh memory
     # cost up to 16 % of a pair here; docs/percolation.md, "Twelfth pass")
     lean = model == "elastic" and opts.observe is None
+    # the adhesive search (and an observed window) keeps every state whole: its own model
+    check_memory("threshold" if lean or model == "bearing" else "threshold_adhesive", shape,
+                 what=f"{'a' if model == 'bearing' else 'an'} {model} threshold search")
+    law = ContactLaw(model)
     compliance = warm_start_compliance(surface)
     sweeps = sweep_work(heights.size, np.float32) if lean else None  # reused by predictions
 
