@@ -586,8 +586,10 @@ def _fire(
             res = r
             if debug and it >= next_log:
                 next_log += SOLVER_LOG_EVERY
+                # the harmonic repulsion has no active set: contact is g < 0 there
+                touching = np.count_nonzero(u < h) if soft else np.count_nonzero(active)
                 log.debug("gfmd step %d: residual %.3e (tol %.1e), dt %.3g, contact %.4f", it,
-                          res, tol, dt, float(np.count_nonzero(active)) / size)
+                          res, tol, dt, touching / size)
     separation = float(u.mean())
     g = np.subtract(u, h, out=f).reshape(shape)
     if not soft:
