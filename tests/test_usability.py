@@ -97,10 +97,12 @@ def test_vv_progress_of_the_default_hard_wall_solver(caplog):
 
 
 def test_vv_progress_of_the_adhesive_solver_reports_its_contact(caplog):
-    """FIRE on the harmonic repulsion has no active set: its progress lines report the
-    contact g < 0 (they said 0.0000 before)."""
+    """The harmonic repulsion has no active set: the adhesive solver's progress lines report
+    the contact g < 0 (FIRE's said 0.0000 before; the CG that replaced it counts g < 0 in
+    its move)."""
     from roughflow.contact import solve
     from roughflow.contact.adhesion import adhesion_for
+    from roughflow.defaults import SOLVER_LOG_EVERY
     from roughflow.surface import SurfaceSpec, generate
 
     s = generate(SurfaceSpec.from_sweep(gamma=1, hurst=0.8, l_over_lambda_r=1, eps_f=1 / 32,
@@ -108,15 +110,17 @@ def test_vv_progress_of_the_adhesive_solver_reports_its_contact(caplog):
     ad = adhesion_for(s.heights, s.lx, s.ly, gamma_over_v_full=0.1,
                       range=0.42 * s.spec.lambda_s)
     with caplog.at_level(logging.DEBUG, logger="roughflow.contact"):
-        res = solve(s, 0.1, model="adhesive", adhesion=ad, tol=1e-8)
-    contact = [float(m.group(1)) for r in caplog.records
-               if (m := re.match(r"gfmd step \d+: residual \S+ \(tol 1\.0e-08\), dt \S+, "
-                                 r"contact (\S+)", r.getMessage()))]
-    assert contact and res.area_fraction > 0.1
-    # the last line comes from within SOLVER_LOG_EVERY steps of the end, with the residual
-    # already near 1e-8: the contact set is settled to a few cells there (a wrong count
-    # would be 0, as before)
-    assert contact[-1] == pytest.approx(res.area_fraction, abs=0.01)
+        res = solve(s, 0.1, model="adhesive", adhesion=ad, tol=1e-10)
+    lines = [(int(m.group(1)), float(m.group(2))) for r in caplog.records
+             if (m := re.match(r"adhesive cg iteration (\d+): residual \S+ \(tol 1\.0e-10\), "
+                               r"step \S+, contact (\S+)", r.getMessage()))]
+    assert res.area_fraction > 0.1
+    assert [i for i, _ in lines] == list(range(SOLVER_LOG_EVERY, res.iterations + 1,
+                                               SOLVER_LOG_EVERY))
+    # the last line comes from within SOLVER_LOG_EVERY iterations of the end, with the
+    # residual already near the tolerance: the contact set is settled to a few cells there
+    # (a wrong count would be 0, as before)
+    assert lines[-1][1] == pytest.approx(res.area_fraction, abs=0.01)
 
 
 def test_log_progress_for_notebooks():

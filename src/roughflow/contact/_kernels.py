@@ -1,7 +1,10 @@
 """Fused numba loops of the GFMD iterations (one pass over memory instead of five to eight).
 
-``wall_forces``, ``reductions``, ``step``: the FIRE step (adhesive model). ``cg_*``: the
-projected conjugate-gradient iteration of the hard wall (``gfmd._hard_wall``). Each has a
+``wall_forces``, ``reductions``, ``step``: the FIRE step (``gfmd._fire``). ``cg_*``: the
+projected conjugate-gradient iteration of the hard wall (``gfmd._hard_wall``). ``adhesive_*``:
+the line search and the step of the nonlinear CG of the harmonic adhesive model
+(``adhesive_cg``); their potential is the one of ``adhesion.Adhesion`` with amp = its
+maximum tension, w = pi / rho and kappa = amp w. Each has a
 numpy twin (suffix ``_np``, selected by ``gfmd(..., use_numba=False)``) with the same outputs,
 used to test the kernels and to benchmark them (docs/contact.md).
 """
@@ -254,6 +257,9 @@ def warm_up() -> None:
     cg_finish(z, z, z, b, 0.0, z.copy(), z.copy(), b.copy())
     max_abs(z)
     max_abs_free(z, b)
+    adhesive_pressures(z, z.copy(), 1.0, 1.0, 1.0)
+    adhesive_line(z, z, 0.0, 1.0, 1.0, 1.0)
+    adhesive_move(z.copy(), z, 0.0, z, z.copy(), z.copy(), 1.0, 1.0, 1.0)
 
 
 def wall_forces_np(fel, u, h, eps, load, f, sigma, active):
@@ -360,3 +366,88 @@ def max_abs_np(a):
 def max_abs_free_np(a, active):
     """numpy version of :func:`max_abs_free`."""
     return float(np.abs(a[~active]).max(initial=0.0))
+
+
+@numba.njit(cache=True, nogil=True)
+def adhesive_pressures(g, sigma, amp, w, rho):  # pragma: no cover - compiled
+    """sigma = -dv/dg at the gaps g; return the number of points in contact (g < 0)."""
+    kappa = amp * w
+    n_contact = 0
+    for i in range(g.size):
+        x = g[i]
+        if x < 0.0:
+            sigma[i] = -kappa * x
+            n_contact += 1
+        elif x < rho:
+            sigma[i] = -amp * np.sin(w * x)
+        else:
+            sigma[i] = 0.0
+    return n_contact
+
+
+@numba.njit(cache=True, nogil=True)
+def adhesive_line(g, d, t, amp, w, rho):  # pragma: no cover - compiled
+    """sum sigma(g + t d) d and sum v''(g + t d) d^2: the interaction's part of the first
+    and second derivative of the energy along d (up to sign)."""
+    kappa = amp * w
+    s1 = 0.0
+    s2 = 0.0
+    for i in range(g.size):
+        di = d[i]
+        x = g[i] + t * di
+        if x < 0.0:
+            s1 -= kappa * x * di
+            s2 += kappa * di * di
+        elif x < rho:
+            s1 -= amp * np.sin(w * x) * di
+            s2 += kappa * np.cos(w * x) * di * di
+    return s1, s2
+
+
+@numba.njit(cache=True, nogil=True)
+def adhesive_move(g, d, t, kd, f, sigma, amp, w, rho):  # pragma: no cover - compiled
+    """g += t d; f += sigma(g) - sigma_old - t K d; sigma = sigma(g); return the number of
+    points in contact."""
+    kappa = amp * w
+    n_contact = 0
+    for i in range(g.size):
+        x = g[i] + t * d[i]
+        g[i] = x
+        if x < 0.0:
+            s = -kappa * x
+            n_contact += 1
+        elif x < rho:
+            s = -amp * np.sin(w * x)
+        else:
+            s = 0.0
+        f[i] += s - sigma[i] - t * kd[i]
+        sigma[i] = s
+    return n_contact
+
+
+def _adhesive_pressure_np(x, amp, w, rho):
+    return np.where(x < 0.0, -amp * w * x, np.where(x < rho, -amp * np.sin(w * np.minimum(
+        np.maximum(x, 0.0), rho)), 0.0))
+
+
+def adhesive_pressures_np(g, sigma, amp, w, rho):
+    """numpy version of :func:`adhesive_pressures`."""
+    np.copyto(sigma, _adhesive_pressure_np(g, amp, w, rho))
+    return int(np.count_nonzero(g < 0.0))
+
+
+def adhesive_line_np(g, d, t, amp, w, rho):
+    """numpy version of :func:`adhesive_line`."""
+    x = g + t * d
+    c = np.where(x < 0.0, amp * w, np.where(x < rho, amp * w * np.cos(w * np.minimum(
+        np.maximum(x, 0.0), rho)), 0.0))
+    return float((_adhesive_pressure_np(x, amp, w, rho) * d).sum()), float((c * d * d).sum())
+
+
+def adhesive_move_np(g, d, t, kd, f, sigma, amp, w, rho):
+    """numpy version of :func:`adhesive_move`."""
+    g += t * d
+    s = _adhesive_pressure_np(g, amp, w, rho)
+    f += s - sigma - t * kd
+    np.copyto(sigma, s)
+    return int(np.count_nonzero(g < 0.0))

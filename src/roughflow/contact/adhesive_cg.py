@@ -1,0 +1,221 @@
+"""Nonlinear conjugate gradients for the harmonic adhesive model (docs/contact.md "Adhesion").
+
+Minimises the elastic energy, the interaction v(g) of ``adhesion.Adhesion`` (harmonic
+repulsion, cosine attraction) and the load's work over the gap g = u - h, the same energy
+and the same residual as mass-weighted FIRE (``gfmd._fire``), which it replaces for this
+model. Each iteration:
+
+1. the preconditioned force z = M^-1 f with the GFMD masses lifted by the mean repulsion
+   stiffness, m(q) = sqrt((z k_min)^2 + k^2) + a_c kappa (below), and the Polak-Ribiere
+   direction d = z + max(beta, 0) d (restarted as d = z when it is not downhill);
+2. K d (one FFT pair); along d the elastic energy is quadratic and the interaction is local,
+   so the line minimum phi'(t) = 0 is found by safeguarded Newton steps on sums over the grid
+   (``_kernels.adhesive_line``) without another transform;
+3. g += t d, and the force is carried: f += sigma(g) - sigma_old - t K d.
+
+Cost per iteration: two FFT pairs (K d and M^-1 f, as a FIRE step), 2-3 passes of the line
+search, one inverse transform per residual check. The carried force is replaced by the
+exact one (one FFT pair) before convergence is accepted.
+
+Why not FIRE (docs/contact.md "Adhesion", *Step count at scale*): FIRE's steps grew with
+the grid at fixed points per lambda_s (35 / 80 / 180 cold at 512^2 / 1024^2 / 2048^2, and
+335 at zero load at 1024^2), with dt at its cap throughout. The calibrated adhesion
+keeps rho a fixed fraction of lambda_s, so kappa = pi^2 gamma_s / (2 rho^2) grows about 3x
+per doubling of n, while the free surface between patches keeps its long-wave stiffness:
+the masses, which know only k(q), leave the problem ever worse conditioned. Lifting the
+masses by the grid mean of the repulsion stiffness, a_c kappa, and taking exact steps along
+conjugate directions instead of FIRE's fixed dt cut that to 25 / 35-45 / about 70 (measured
+on the prototype, same surfaces).
+"""
+
+from __future__ import annotations
+
+import logging
+import math
+
+import numpy as np
+
+from roughflow import fft
+from roughflow.defaults import SOLVER_LOG_EVERY
+
+from . import _kernels as _k
+from ._gfmd_common import Z_MASS, load_scale, residual
+from ._linalg import dot
+from ._result import SolverOutput
+from .adhesion import Adhesion
+from .elastic import compliance, stiffness
+
+#: Line search: stop where |phi'(t)| <= LINE_TOL |phi'(0)|, after at most LINE_MAX passes.
+LINE_TOL = 1e-4
+LINE_MAX = 40
+#: The masses are lifted by REPULSION_MASS a_c kappa (a_c: fraction of points with g < 0)
+#: and rebuilt, restarting the directions, at a residual check where a_c kappa has moved
+#: by more than MASS_UPDATE relative.
+REPULSION_MASS = 1.0
+MASS_UPDATE = 0.25
+
+log = logging.getLogger(__name__)
+
+
+def adhesive_cg(
+    heights: np.ndarray,
+    lx: float,
+    ly: float,
+    load: float,
+    *,
+    adhesion: Adhesion,
+    tol: float,
+    max_iter: int,
+    u0: np.ndarray | None = None,
+    threads: int | None = None,
+    check_every: int = 5,
+    use_numba: bool = True,
+) -> SolverOutput:
+    """Minimise with the harmonic ``adhesion``; arguments and result as ``gfmd.gfmd``
+    (``iterations`` counts CG iterations, the residual is checked every ``check_every``)."""
+    if adhesion.repulsion != "harmonic":
+        raise ValueError(f"adhesive_cg needs the harmonic repulsion, got {adhesion.repulsion!r}")
+    if use_numba:
+        pressures, line, move = _k.adhesive_pressures, _k.adhesive_line, _k.adhesive_move
+    else:
+        pressures, line, move = _k.adhesive_pressures_np, _k.adhesive_line_np, _k.adhesive_move_np
+    shape = heights.shape
+    size = heights.size
+    plan = fft.plan(shape, threads)
+    k = stiffness(shape, lx, ly)
+    kmin = float(k[k > 0].min())
+    k_n = k * (1.0 / size)  # the normalisation of the inverse transform folded in
+    comp_n = compliance(shape, lx, ly) * (1.0 / size)
+    base_mass = np.hypot(Z_MASS * kmin, k)
+    inv_mass_n = np.empty_like(base_mass)
+    h0 = float(heights.mean())
+    h = np.ascontiguousarray(heights - h0, dtype=np.float64).ravel()
+    hscale = math.sqrt(dot(h, h) / size) or 1.0
+    scale = load_scale(kmin, hscale, load, True)
+    amp, rho = adhesion.max_tension, adhesion.range
+    w = math.pi / rho
+    kappa = adhesion.kappa
+
+    if u0 is not None:
+        g = np.asarray(u0, dtype=np.float64).ravel() - h0 - h
+    else:
+        g = (h.max() + 0.5 * rho) - h  # top point at maximum tension
+    sigma = np.empty(size)
+    f = np.empty(size)
+    kd = np.empty(size)
+    z = np.empty(size)
+    d = np.empty(size)
+    real_in = plan.real_in.reshape(-1)
+
+    def exact_force() -> int:
+        """f = -K u + sigma(g) - load from scratch; return the points in contact."""
+        n_contact = pressures(g, sigma, amp, w, rho)
+        np.add(g, h, out=real_in)
+        np.multiply(plan.execute_forward(), k_n, out=plan.spectral_in)
+        np.subtract(sigma, plan.execute_inverse().reshape(-1), out=f)
+        np.subtract(f, load, out=f)
+        return n_contact
+
+    def set_masses(lift: float) -> None:
+        np.add(base_mass, lift, out=inv_mass_n)
+        np.reciprocal(inv_mass_n, out=inv_mass_n)
+        np.multiply(inv_mass_n, 1.0 / size, out=inv_mass_n)
+
+    def precondition(check: bool) -> float:
+        """z = M^-1 f; with ``check`` also return the residual (else inf)."""
+        real_in[:] = f
+        ft = plan.execute_forward()
+        res = residual(plan, ft, comp_n, hscale, scale) if check else math.inf
+        np.multiply(ft, inv_mass_n, out=plan.spectral_in)
+        np.copyto(z, plan.execute_inverse().reshape(-1))
+        return res
+
+    def restart(check: bool) -> tuple[float, float]:
+        res = precondition(check)
+        np.copyto(d, z)
+        return res, dot(f, z)
+
+    lift = REPULSION_MASS * kappa * exact_force() / size
+    set_masses(lift)
+    res, rz = restart(True)
+    exact = True  # f is the exact force, not the carried one
+    t = 1.0
+    it = 0
+    debug = log.isEnabledFor(logging.DEBUG)
+    next_log = SOLVER_LOG_EVERY
+    n_contact = 0
+    while True:
+        if res <= tol:
+            if exact:
+                break
+            # accept only on the exact force (the carried one drifts by round-off)
+            exact_force()
+            res, rz = restart(True)
+            exact = True
+            continue
+        if it >= max_iter:
+            break
+        it += 1
+        fd = dot(f, d)
+        if fd <= 0.0:  # not downhill (beta too large for the nonlinear energy): restart
+            np.copyto(d, z)
+            fd = rz
+        real_in[:] = d
+        np.multiply(plan.execute_forward(), k_n, out=plan.spectral_in)
+        np.copyto(kd, plan.execute_inverse().reshape(-1))
+        t = _line_minimum(line, g, d, fd - dot(sigma, d), dot(d, kd), -fd, t, amp, w, rho)
+        n_contact = move(g, d, t, kd, f, sigma, amp, w, rho)
+        exact = False
+        check = it % check_every == 0 or it == max_iter
+        new_lift = REPULSION_MASS * kappa * n_contact / size
+        if check and abs(new_lift - lift) > MASS_UPDATE * max(new_lift, lift):
+            lift = new_lift
+            set_masses(lift)
+            res, rz = restart(True)
+        else:
+            fz_old = dot(f, z)
+            r = precondition(check)
+            if check:
+                res = r
+            fz = dot(f, z)
+            beta = max((fz - fz_old) / rz, 0.0) if rz > 0 else 0.0
+            rz = fz
+            d *= beta
+            d += z
+        if debug and check and it >= next_log:
+            next_log += SOLVER_LOG_EVERY
+            log.debug("adhesive cg iteration %d: residual %.3e (tol %.1e), step %.3g, "
+                      "contact %.4f", it, res, tol, t, n_contact / size)
+    separation = float(g.mean()) + float(h.mean())
+    contact = (g < 0).reshape(shape)
+    gap = np.maximum(g, 0.0, out=f).reshape(shape)
+    return SolverOutput(pressure=sigma.reshape(shape), gap=gap, contact=contact,
+                        separation=separation, iterations=it, residual=res,
+                        converged=res <= tol)
+
+
+def _line_minimum(line, g, d, a, dkd, slope0, t, amp, w, rho) -> float:
+    """The first minimum t > 0 of the energy along d, from the guess ``t``.
+
+    phi'(t) = -(a - t d.Kd + sum sigma(g + t d) d) with a = (f - sigma).d, and
+    phi''(t) = d.Kd + sum v''(g + t d) d^2; ``slope0`` = phi'(0) < 0. Newton steps inside
+    the bracket [lo, hi] (phi' < 0 at lo, > 0 at hi), bisection when a step leaves it,
+    doubling until phi' turns positive.
+    """
+    lo, hi = 0.0, math.inf
+    for _ in range(LINE_MAX):
+        s1, s2 = line(g, d, t, amp, w, rho)
+        slope = -(a - t * dkd + s1)
+        if abs(slope) <= LINE_TOL * abs(slope0):
+            return t
+        if slope < 0.0:
+            lo = t
+        else:
+            hi = t
+        curv = dkd + s2
+        newton = t - slope / curv if curv > 0.0 else math.nan
+        if math.isinf(hi):
+            t = newton if newton > t else 2.0 * t
+        else:
+            t = newton if lo < newton < hi else 0.5 * (lo + hi)
+    return lo if lo > 0.0 else t
