@@ -13,7 +13,7 @@ model. Each iteration:
    (``_kernels.adhesive_line``) without another transform;
 3. g += t d, and the force is carried: f += sigma(g) - sigma_old - t K d.
 
-Cost per iteration: two FFT pairs (K d and M^-1 f, as a FIRE step), 2-3 passes of the line
+Cost per iteration: two FFT pairs (K d and M^-1 f, as a FIRE step), about 4 passes of the line
 search, one inverse transform per residual check. The carried force is replaced by the
 exact one (one FFT pair) before convergence is accepted.
 
@@ -24,8 +24,9 @@ keeps rho a fixed fraction of lambda_s, so kappa = pi^2 gamma_s / (2 rho^2) grow
 per doubling of n, while the free surface between patches keeps its long-wave stiffness:
 the masses, which know only k(q), leave the problem ever worse conditioned. Lifting the
 masses by the grid mean of the repulsion stiffness, a_c kappa, and taking exact steps along
-conjugate directions instead of FIRE's fixed dt cut that to 25 / 35-45 / about 70 (measured
-on the prototype, same surfaces).
+conjugate directions instead of FIRE's fixed dt cut that to 20 / 30 / 55 iterations at
+p = 0.11 and 100 instead of 335 at zero load (1024^2; benchmarks/bench_adhesive.py, the same
+minima). What is left still grows with n, about as sqrt(kappa).
 """
 
 from __future__ import annotations
