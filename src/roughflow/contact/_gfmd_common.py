@@ -1,15 +1,33 @@
-"""What the minimizers of GFMD share: the q = 0 mass and the residual (docs/physics.md
-Sect. 3.2; definitions in the docstring of ``gfmd``)."""
+"""What the minimizers of GFMD share: the q = 0 mass, the spectral factors and the residual
+(docs/physics.md Sect. 3.2; definitions in the docstring of ``gfmd``)."""
 
 from __future__ import annotations
+
+import functools
 
 import numpy as np
 
 from roughflow import fft
 
+from .elastic import compliance, stiffness
+
 #: q = 0 mass z k_min of m(q) = sqrt((z k_min)^2 + k(q)^2): 3 gave the fewest FIRE steps
 #: cold and warm (1, 3, 10, 30, 100).
 Z_MASS = 3.0
+
+
+@functools.lru_cache(maxsize=2)  # large grids: 3 spectral arrays each
+def spectral_factors(shape: tuple[int, int], lx: float, ly: float):
+    """Read-only spectral factors for one grid: k(q), -k(q)/N, G(q)/N (the 1/N of the
+    unnormalised inverse transform folded in), and the smallest k > 0."""
+    size = shape[0] * shape[1]
+    k = stiffness(shape, lx, ly)
+    kmin = float(k[k > 0].min())
+    neg_k = k * (-1.0 / size)
+    comp = compliance(shape, lx, ly) * (1.0 / size)
+    for a in (k, neg_k, comp):
+        a.setflags(write=False)
+    return k, neg_k, comp, kmin
 
 
 def load_scale(kmin: float, hscale: float, load: float, adhesive: bool) -> float:

@@ -16,6 +16,8 @@ import numpy as np
 
 from roughflow import fft
 
+from .adhesion import Adhesion
+
 
 @numba.njit(cache=True, nogil=True)
 def wall_forces(fel, u, h, eps, load, f, sigma, active):  # pragma: no cover - compiled
@@ -425,29 +427,29 @@ def adhesive_move(g, d, t, kd, f, sigma, amp, w, rho):  # pragma: no cover - com
     return n_contact
 
 
-def _adhesive_pressure_np(x, amp, w, rho):
-    return np.where(x < 0.0, -amp * w * x, np.where(x < rho, -amp * np.sin(w * np.minimum(
-        np.maximum(x, 0.0), rho)), 0.0))
+def _potential_np(amp, rho):
+    """The ``Adhesion`` of the kernels' parameters (max tension amp = pi gamma_s / (2 rho))."""
+    return Adhesion(surface_energy=2.0 * amp * rho / np.pi, range=rho)
 
 
 def adhesive_pressures_np(g, sigma, amp, w, rho):
     """numpy version of :func:`adhesive_pressures`."""
-    np.copyto(sigma, _adhesive_pressure_np(g, amp, w, rho))
+    np.copyto(sigma, _potential_np(amp, rho).pressure(g))
     return int(np.count_nonzero(g < 0.0))
 
 
 def adhesive_line_np(g, d, t, amp, w, rho):
     """numpy version of :func:`adhesive_line`."""
+    potential = _potential_np(amp, rho)
     x = g + t * d
-    c = np.where(x < 0.0, amp * w, np.where(x < rho, amp * w * np.cos(w * np.minimum(
-        np.maximum(x, 0.0), rho)), 0.0))
-    return float((_adhesive_pressure_np(x, amp, w, rho) * d).sum()), float((c * d * d).sum())
+    return (float((potential.pressure(x) * d).sum()),
+            float((potential.curvature(x) * d * d).sum()))
 
 
 def adhesive_move_np(g, d, t, kd, f, sigma, amp, w, rho):
     """numpy version of :func:`adhesive_move`."""
     g += t * d
-    s = _adhesive_pressure_np(g, amp, w, rho)
+    s = _potential_np(amp, rho).pressure(g)
     f += s - sigma - t * kd
     np.copyto(sigma, s)
     return int(np.count_nonzero(g < 0.0))

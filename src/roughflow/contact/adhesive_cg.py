@@ -40,11 +40,10 @@ from roughflow import fft
 from roughflow.defaults import SOLVER_LOG_EVERY
 
 from . import _kernels as _k
-from ._gfmd_common import Z_MASS, load_scale, residual
+from ._gfmd_common import Z_MASS, load_scale, residual, spectral_factors
 from ._linalg import dot
 from ._result import SolverOutput
 from .adhesion import Adhesion
-from .elastic import compliance, stiffness
 
 #: Line search: stop where |phi'(t)| <= LINE_TOL |phi'(0)|, after at most LINE_MAX passes.
 LINE_TOL = 1e-4
@@ -83,10 +82,7 @@ def adhesive_cg(
     shape = heights.shape
     size = heights.size
     plan = fft.plan(shape, threads)
-    k = stiffness(shape, lx, ly)
-    kmin = float(k[k > 0].min())
-    k_n = k * (1.0 / size)  # the normalisation of the inverse transform folded in
-    comp_n = compliance(shape, lx, ly) * (1.0 / size)
+    k, neg_k_n, comp_n, kmin = spectral_factors(tuple(shape), float(lx), float(ly))
     base_mass = np.hypot(Z_MASS * kmin, k)
     inv_mass_n = np.empty_like(base_mass)
     h0 = float(heights.mean())
@@ -112,8 +108,8 @@ def adhesive_cg(
         """f = -K u + sigma(g) - load from scratch; return the points in contact."""
         n_contact = pressures(g, sigma, amp, w, rho)
         np.add(g, h, out=real_in)
-        np.multiply(plan.execute_forward(), k_n, out=plan.spectral_in)
-        np.subtract(sigma, plan.execute_inverse().reshape(-1), out=f)
+        np.multiply(plan.execute_forward(), neg_k_n, out=plan.spectral_in)
+        np.add(sigma, plan.execute_inverse().reshape(-1), out=f)
         np.subtract(f, load, out=f)
         return n_contact
 
@@ -162,8 +158,8 @@ def adhesive_cg(
             np.copyto(d, z)
             fd = rz
         real_in[:] = d
-        np.multiply(plan.execute_forward(), k_n, out=plan.spectral_in)
-        np.copyto(kd, plan.execute_inverse().reshape(-1))
+        np.multiply(plan.execute_forward(), neg_k_n, out=plan.spectral_in)
+        np.negative(plan.execute_inverse().reshape(-1), out=kd)
         t = _line_minimum(line, g, d, fd - dot(sigma, d), dot(d, kd), -fd, t, amp, w, rho)
         n_contact = move(g, d, t, kd, f, sigma, amp, w, rho)
         exact = False

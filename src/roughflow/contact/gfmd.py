@@ -85,12 +85,12 @@ from roughflow import fft
 from roughflow.defaults import SOLVER_LOG_EVERY
 
 from . import _kernels as _k
-from ._gfmd_common import Z_MASS, load_scale, residual
+from ._gfmd_common import Z_MASS, load_scale, residual, spectral_factors
 from ._linalg import dot
 from ._result import SolverOutput
 from .adhesion import Adhesion
 from .adhesive_cg import adhesive_cg
-from .elastic import compliance, stiffness
+from .elastic import stiffness
 
 # FIRE parameters (Bitzek et al. 2006), time in units of 1/omega of the mass-weighted modes.
 # Tuned on 256^2 rough surfaces (a_c 0.1 and 0.4; benchmarks/bench_contact.py): strong
@@ -144,24 +144,10 @@ DRIFT_REFRESH = 0.1
 log = logging.getLogger(__name__)
 
 
-@functools.lru_cache(maxsize=2)  # large grids: 3 spectral arrays each
-def _spectral(shape: tuple[int, int], lx: float, ly: float):
-    """Read-only spectral factors of the hard wall for one grid: k(q), -k(q)/N, G(q)/N (the
-    1/N of the unnormalised inverse transform folded in), and the smallest k > 0."""
-    size = shape[0] * shape[1]
-    k = stiffness(shape, lx, ly)
-    kmin = float(k[k > 0].min())
-    neg_k = k * (-1.0 / size)
-    comp = compliance(shape, lx, ly) * (1.0 / size)
-    for a in (k, neg_k, comp):
-        a.setflags(write=False)
-    return k, neg_k, comp, kmin
-
-
 @functools.lru_cache(maxsize=2)
 def _spectral_single(shape: tuple[int, int], lx: float, ly: float):
     """float32 copies of -k(q)/N and G(q)/N for the single-precision transforms."""
-    _, neg_k, comp, _ = _spectral(shape, lx, ly)
+    _, neg_k, comp, _ = spectral_factors(shape, lx, ly)
     return neg_k.astype(np.float32), comp.astype(np.float32)
 
 
@@ -207,7 +193,7 @@ def hard_wall_setup(heights: np.ndarray, lx: float, ly: float,
     shape = heights.shape
     size = heights.size
     plan = fft.plan(shape, threads)
-    k, _, _, kmin = _spectral(shape, lx, ly)
+    k, _, _, kmin = spectral_factors(shape, lx, ly)
     h0 = float(heights.mean())
     h = np.ascontiguousarray(heights - h0).ravel()
     plan.real_in.reshape(-1)[:] = h
@@ -347,7 +333,7 @@ def _hard_wall(
     rin = plan.real_in.reshape(-1)  # r, then the trial step s
     rout = plan.real_out.reshape(-1)  # z, then -K s
     spec_in = plan.spectral_in
-    _, neg_k, _, kmin = _spectral(shape, lx, ly)
+    _, neg_k, _, kmin = spectral_factors(shape, lx, ly)
     neg_k32, comp32 = _spectral_single(shape, lx, ly)
     if setup is None:
         setup = hard_wall_setup(heights, lx, ly, threads)
@@ -500,7 +486,7 @@ def _fire(
     plan = fft.plan(shape, threads)
     neg_k = stiffness(shape, lx, ly)  # a new array: negated in place below
     kmin = float(neg_k[neg_k > 0].min())
-    comp_n = compliance(shape, lx, ly) * (1.0 / size)
+    comp_n = spectral_factors(shape, lx, ly)[2]
     h0 = float(heights.mean())
     h = np.ascontiguousarray(heights - h0).ravel()
     hscale = math.sqrt(dot(h, h) / size) or 1.0
