@@ -48,13 +48,31 @@ def test_line_kernels_are_the_potentials_derivatives(numba):
     kd = rng.normal(size=g.size)
     f = rng.normal(size=g.size)
     g2, f2, sigma2 = g.copy(), f.copy(), sigma.copy()
-    n_contact = move(g2, d, 0.02, kd, f2, sigma2, amp, w, ad.range)
+    z = rng.normal(size=g.size)
+    n_contact, fz = move(g2, d, 0.02, kd, f2, sigma2, z, amp, w, ad.range)
     new = g + 0.02 * d
     assert n_contact == np.count_nonzero(new < 0)
     np.testing.assert_allclose(g2, new, rtol=1e-15)
     np.testing.assert_allclose(sigma2, ad.pressure(new), rtol=1e-13, atol=1e-16)
     np.testing.assert_allclose(f2, f + ad.pressure(new) - sigma - 0.02 * kd, rtol=1e-12,
                                atol=1e-15)
+    assert fz == pytest.approx(float(f2 @ z), rel=1e-12)
+    # the direction update: d = z + beta d, K d = K z + beta K d, and the line coefficients
+    direction = K.adhesive_direction if numba else K.adhesive_direction_np
+    kz = rng.normal(size=g.size)
+    d2, kd2 = d.copy(), kd.copy()
+    fd, sd, dkd = direction(z, kz, 0.7, d2, kd2, f2, sigma2)
+    np.testing.assert_allclose(d2, z + 0.7 * d, rtol=1e-15)
+    np.testing.assert_allclose(kd2, kz + 0.7 * kd, rtol=1e-15)
+    assert (fd, sd, dkd) == pytest.approx((float(f2 @ d2), float(sigma2 @ d2),
+                                           float(d2 @ kd2)), rel=1e-12)
+    # a restart (beta = 0) must not read the old d: the solver's first one finds
+    # uninitialised memory there, and 0 * nan is nan (a ladder solve hung on it)
+    d3, kd3 = np.full_like(d, np.nan), np.full_like(d, np.inf)
+    fd, sd, dkd = direction(z, kz, 0.0, d3, kd3, f2, sigma2)
+    np.testing.assert_array_equal(d3, z)
+    np.testing.assert_array_equal(kd3, kz)
+    assert np.isfinite([fd, sd, dkd]).all()
 
 
 @pytest.mark.parametrize("load", [0.0, 0.02, 0.11])
@@ -119,6 +137,20 @@ def test_non_convergence_raises_with_its_residual():
     with pytest.raises(ConvergenceError) as err:
         solve(s, 0.05, model="adhesive", adhesion=ad, tol=1e-12, max_iter=3)
     assert err.value.residual > 1e-12 and err.value.iterations == 3
+
+
+def test_a_nan_stops_the_solver_at_once():
+    # A nan in the state never recovers; the solver must hand it back at the next residual
+    # check (then contact.solve raises with it) instead of iterating to max_iter.
+    from roughflow.contact.adhesive_cg import adhesive_cg
+
+    s, ad = _papers_case(128)
+    u0 = np.zeros_like(s.heights)
+    u0[3, 5] = np.nan
+    out = adhesive_cg(s.heights, s.lx, s.ly, 0.05, adhesion=ad, tol=1e-4, max_iter=1000,
+                      u0=u0)
+    assert not out.converged and np.isnan(out.residual)
+    assert out.iterations <= 5
 
 
 def test_cg_needs_the_harmonic_repulsion():

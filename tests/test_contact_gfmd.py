@@ -322,3 +322,42 @@ def test_workspace_gives_the_same_solve_and_is_reused():
         solve(s, 0.2, method="cg", work=work)
     with pytest.raises(InputError, match="contact.workspace"):
         solve(s, 0.2, work=object())
+
+
+@pytest.mark.parametrize("minimizer,adhesion", [
+    ("auto", None), ("auto", "harmonic"), ("fire", "harmonic"), ("auto", "hard")])
+def test_a_non_finite_start_is_refused_naming_it(minimizer, adhesion):
+    from roughflow.contact.adhesion import Adhesion
+    from roughflow.errors import InputError
+
+    s = generate(SurfaceSpec.from_sweep(l_over_lambda_r=4, eps_f=0.125, points_per_lambda_s=4,
+                                        seed=0))
+    ad = None if adhesion is None else Adhesion(1e-4, 1e-2, repulsion=adhesion)
+    u0 = np.full_like(s.heights, s.heights.max())
+    u0[3, 5] = np.nan
+    with pytest.raises(InputError, match=r"u0 has 1 non-finite values, first at \(3, 5\)"):
+        G.gfmd(s.heights, s.lx, s.ly, 0.05, tol=1e-4, max_iter=100, u0=u0, adhesion=ad,
+               minimizer=minimizer)
+
+
+@pytest.mark.parametrize("numba", [True, False])
+def test_a_nan_stops_the_hard_wall_at_its_first_check(numba):
+    # A nan inside the iteration (here a nan start past gfmd's check): the residual must
+    # see it (numba's max_abs skipped nans and reported convergence with a nan gap) and the
+    # loop must stop on it instead of running to max_iter.
+    s = generate(SurfaceSpec.from_sweep(l_over_lambda_r=4, eps_f=0.125, points_per_lambda_s=4,
+                                        seed=0))
+    u0 = np.full_like(s.heights, s.heights.max())
+    u0[3, 5] = np.nan
+    out = G._hard_wall(s.heights, s.lx, s.ly, 0.05, tol=1e-4, max_iter=1000, u0=u0,
+                       threads=1, use_numba=numba, setup=None, work=None)
+    assert not out.converged and np.isnan(out.residual)
+    assert out.iterations <= 2
+    a = np.ones(50)
+    a[7] = np.nan
+    active = np.zeros(50, dtype=bool)
+    max_abs = K.max_abs if numba else K.max_abs_np
+    max_abs_free = K.max_abs_free if numba else K.max_abs_free_np
+    assert np.isnan(max_abs(a)) and np.isnan(max_abs_free(a, active))
+    active[7] = True  # on the active set it is not looked at
+    assert max_abs_free(a, active) == 1.0

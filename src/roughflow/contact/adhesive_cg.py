@@ -6,16 +6,19 @@ and the same residual as mass-weighted FIRE (``gfmd._fire``), which it replaces 
 model. Each iteration:
 
 1. the preconditioned force z = M^-1 f with the GFMD masses lifted by the mean repulsion
-   stiffness, m(q) = sqrt((z k_min)^2 + k^2) + a_c kappa (below), and the Polak-Ribiere
-   direction d = z + max(beta, 0) d (restarted as d = z when it is not downhill);
-2. K d (one FFT pair); along d the elastic energy is quadratic and the interaction is local,
-   so the line minimum phi'(t) = 0 is found by safeguarded Newton steps on sums over the grid
+   stiffness, m(q) = sqrt((z k_min)^2 + k^2) + a_c kappa (below), and K z, both from one
+   forward transform of f; the Polak-Ribiere direction d = z + max(beta, 0) d (restarted as
+   d = z when it is not downhill) and K d = K z + beta K d by the same recurrence, so d is
+   never transformed;
+2. along d the elastic energy is quadratic and the interaction is local, so the line
+   minimum phi'(t) = 0 is found by safeguarded Newton steps on sums over the grid
    (``_kernels.adhesive_line``) without another transform;
 3. g += t d, and the force is carried: f += sigma(g) - sigma_old - t K d.
 
-Cost per iteration: two FFT pairs (K d and M^-1 f, as a FIRE step), about 4 passes of the line
-search, one inverse transform per residual check. The carried force is replaced by the
-exact one (one FFT pair) before convergence is accepted.
+Cost per iteration: three transforms (f forward; z and K z inverse), 2-3 passes of the line
+search, the step and the direction update (fused kernels that also return the dot products
+the next line search and beta need), and one inverse transform per residual check. The
+carried force is replaced by the exact one (one FFT pair) before convergence is accepted.
 
 Why not FIRE (docs/contact.md "Adhesion", *Step count at scale*): FIRE's steps grew with
 the grid at fixed points per lambda_s (35 / 80 / 180 cold at 512^2 / 1024^2 / 2048^2, and
@@ -76,9 +79,11 @@ def adhesive_cg(
     if adhesion.repulsion != "harmonic":
         raise ValueError(f"adhesive_cg needs the harmonic repulsion, got {adhesion.repulsion!r}")
     if use_numba:
-        pressures, line, move = _k.adhesive_pressures, _k.adhesive_line, _k.adhesive_move
+        pressures, line = _k.adhesive_pressures, _k.adhesive_line
+        move, direction = _k.adhesive_move, _k.adhesive_direction
     else:
-        pressures, line, move = _k.adhesive_pressures_np, _k.adhesive_line_np, _k.adhesive_move_np
+        pressures, line = _k.adhesive_pressures_np, _k.adhesive_line_np
+        move, direction = _k.adhesive_move_np, _k.adhesive_direction_np
     shape = heights.shape
     size = heights.size
     plan = fft.plan(shape, threads)
@@ -101,6 +106,8 @@ def adhesive_cg(
     f = np.empty(size)
     kd = np.empty(size)
     z = np.empty(size)
+    kz = np.empty(size)
+    stiff_over_mass_n = np.empty_like(base_mass)
     d = np.empty(size)
     real_in = plan.real_in.reshape(-1)
 
@@ -117,24 +124,28 @@ def adhesive_cg(
         np.add(base_mass, lift, out=inv_mass_n)
         np.reciprocal(inv_mass_n, out=inv_mass_n)
         np.multiply(inv_mass_n, 1.0 / size, out=inv_mass_n)
+        np.multiply(inv_mass_n, k, out=stiff_over_mass_n)
 
     def precondition(check: bool) -> float:
-        """z = M^-1 f; with ``check`` also return the residual (else inf)."""
+        """z = M^-1 f and kz = K z from one forward transform of f; with ``check`` also
+        return the residual (else inf)."""
         real_in[:] = f
-        ft = plan.execute_forward()
+        ft = plan.execute_forward()  # preserved by the inverses below
         res = residual(plan, ft, comp_n, hscale, scale) if check else math.inf
         np.multiply(ft, inv_mass_n, out=plan.spectral_in)
         np.copyto(z, plan.execute_inverse().reshape(-1))
+        np.multiply(ft, stiff_over_mass_n, out=plan.spectral_in)
+        np.copyto(kz, plan.execute_inverse().reshape(-1))
         return res
 
-    def restart(check: bool) -> tuple[float, float]:
+    def restart(check: bool) -> tuple[float, float, tuple[float, float, float]]:
+        """d = z (and K d = K z) from the present force: residual, f.z, line coefficients."""
         res = precondition(check)
-        np.copyto(d, z)
-        return res, dot(f, z)
+        return res, dot(f, z), direction(z, kz, 0.0, d, kd, f, sigma)
 
     lift = REPULSION_MASS * kappa * exact_force() / size
     set_masses(lift)
-    res, rz = restart(True)
+    res, rz, coefficients = restart(True)
     exact = True  # f is the exact force, not the carried one
     t = 1.0
     it = 0
@@ -147,38 +158,33 @@ def adhesive_cg(
                 break
             # accept only on the exact force (the carried one drifts by round-off)
             exact_force()
-            res, rz = restart(True)
+            res, rz, coefficients = restart(True)
             exact = True
             continue
-        if it >= max_iter:
+        if it >= max_iter or math.isnan(res):  # a nan never recovers: report it at once
             break
         it += 1
-        fd = dot(f, d)
+        fd, sd, dkd = coefficients
         if fd <= 0.0:  # not downhill (beta too large for the nonlinear energy): restart
-            np.copyto(d, z)
-            fd = rz
-        real_in[:] = d
-        np.multiply(plan.execute_forward(), neg_k_n, out=plan.spectral_in)
-        np.negative(plan.execute_inverse().reshape(-1), out=kd)
-        t = _line_minimum(line, g, d, fd - dot(sigma, d), dot(d, kd), -fd, t, amp, w, rho)
-        n_contact = move(g, d, t, kd, f, sigma, amp, w, rho)
+            fd, sd, dkd = direction(z, kz, 0.0, d, kd, f, sigma)
+        t = _line_minimum(line, g, d, fd - sd, dkd, -fd, t, amp, w, rho)
+        n_contact, fz_old = move(g, d, t, kd, f, sigma, z, amp, w, rho)
         exact = False
         check = it % check_every == 0 or it == max_iter
         new_lift = REPULSION_MASS * kappa * n_contact / size
         if check and abs(new_lift - lift) > MASS_UPDATE * max(new_lift, lift):
             lift = new_lift
             set_masses(lift)
-            res, rz = restart(True)
+            res, rz, coefficients = restart(True)
         else:
-            fz_old = dot(f, z)
             r = precondition(check)
             if check:
                 res = r
             fz = dot(f, z)
             beta = max((fz - fz_old) / rz, 0.0) if rz > 0 else 0.0
             rz = fz
-            d *= beta
-            d += z
+            # K d by the same recurrence as d: no transform of d
+            coefficients = direction(z, kz, beta, d, kd, f, sigma)
         if debug and check and it >= next_log:
             next_log += SOLVER_LOG_EVERY
             log.debug("adhesive cg iteration %d: residual %.3e (tol %.1e), step %.3g, "

@@ -83,6 +83,7 @@ import numpy as np
 
 from roughflow import fft
 from roughflow.defaults import SOLVER_LOG_EVERY
+from roughflow.errors import require_field
 
 from . import _kernels as _k
 from ._gfmd_common import Z_MASS, load_scale, residual, spectral_factors
@@ -273,7 +274,7 @@ def gfmd(
 
     Hard wall (``adhesion=None``): projected conjugate gradients in the mass metric
     (``iterations`` counts CG iterations, two single-precision FFT pairs each). Harmonic
-    adhesion: nonlinear CG (``adhesive_cg``; iterations of two FFT pairs); adhesion with the
+    adhesion: nonlinear CG (``adhesive_cg``; iterations of three transforms); adhesion with the
     hard wall: mass-weighted FIRE (``iterations`` counts MD steps). Both check the residual
     every ``check_every`` iterations.
     ``u0``: initial elastic surface height (warm start), default a flat surface touching
@@ -289,6 +290,8 @@ def gfmd(
     """
     if minimizer not in ("auto", "fire"):
         raise ValueError(f"minimizer must be 'auto' or 'fire', got {minimizer!r}")
+    if u0 is not None:
+        require_field("u0", u0)  # a nan start would leave every minimizer on nan
     if adhesion is None and minimizer == "auto":
         return _hard_wall(heights, lx, ly, load, tol=tol, max_iter=max_iter, u0=u0,
                           threads=threads, use_numba=use_numba, setup=setup, work=work)
@@ -392,7 +395,9 @@ def _hard_wall(
             drift = 0.0
         ft = plan.execute_forward()  # FFT of r
         imbalance = abs(r_sum) / size / scale
-        if (it > 0 and max(estimate, imbalance) <= check_at) or it >= max_iter:
+        # a nan estimate goes to the exact check at once (which then stops on it)
+        nan_seen = math.isnan(estimate) or math.isnan(imbalance)
+        if (it > 0 and (max(estimate, imbalance) <= check_at or nan_seen)) or it >= max_iter:
             res = residual()
             if res <= tol < res + drift:
                 # converged unless the carried force is off by the whole drift bound: decide
@@ -403,7 +408,7 @@ def _hard_wall(
                 imbalance = abs(r_sum) / size / scale
                 res = residual()
             res += drift  # a bound on the exact force's residual
-            if res <= tol or it >= max_iter:
+            if res <= tol or it >= max_iter or math.isnan(res):  # nan never recovers
                 break
             # next check when the estimate has fallen by the factor still missing
             check_at = max(estimate, imbalance) * tol / res

@@ -63,7 +63,8 @@ def solve(
       ``"cg"``: constrained conjugate gradients on the pressure (Polonsky-Keer), 2 FFT
       pairs per iteration. ``"gfmd"``: Green's function molecular dynamics with mass
       weighting (the paper's method), see ``roughflow.contact.gfmd``: for the hard wall
-      projected conjugate gradients in the mass metric, for adhesion FIRE dynamics.
+      projected conjugate gradients in the mass metric, for the harmonic adhesive model
+      nonlinear conjugate gradients, for adhesion with a hard wall FIRE dynamics.
       Default: ``"gfmd"``. In ``benchmarks/bench_scaling.py`` it needs 25-45 iterations to
       the default tolerance from 512^2 to 4096^2 (docs/contact.md), while the Polonsky-Keer
       iteration count grows with the grid (about 120 at 256^2, 470 at 1024^2, a_c = 0.4);
