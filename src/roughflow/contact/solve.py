@@ -142,6 +142,9 @@ def solve(
             raise InputError(
                 f"init has shape {init.gap.shape} but the surface has shape {heights.shape}"
             )
+        # a nan start would leave the solver on nan: name it before any work
+        require_field("init.gap", init.gap)
+        require_field("init.contact_pressure", init.contact_pressure)
 
     lx, ly = float(surface.lx), float(surface.ly)
     if setup is not None:
