@@ -55,7 +55,7 @@ decides. Same iteration counts as double precision to tol 1e-10 (256^2 - 2048^2,
 docs/contact.md "Single precision"); the residual's own round-off is 1e-8 - 2e-7 relative.
 
 Adhesive model (``adhesion=``, not convex): with the harmonic repulsion (the default),
-nonlinear CG with exact line minima (``adhesive_cg``, 2-3x fewer iterations than FIRE);
+nonlinear CG with exact line minima (``adhesive_cg``, 2-6x fewer iterations than FIRE);
 with ``repulsion="hard"``, mass-weighted FIRE (Bitzek et al., PRL 97, 170201, 2006) with the
 masses m_0 = z k_min, the power f.v and velocity mixing along the acceleration, the cosine
 attraction acting on the free points of the active-set wall above (velocity zeroed on the
