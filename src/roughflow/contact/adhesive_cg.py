@@ -148,9 +148,11 @@ def adhesive_cg(
         return res
 
     def restart(check: bool) -> tuple[float, float, tuple[float, float, float]]:
-        """d = z (and K d = K z) from the present force: residual, f.z, line coefficients."""
+        """d = z (and K d = K z) from the present force: residual, f.z (= f.d), line
+        coefficients."""
         res = precondition(check)
-        return res, dot(f, z), direction(z, kz, 0.0, d, kd, f, sigma)
+        coefficients = direction(z, kz, 0.0, d, kd, f, sigma)
+        return res, coefficients[0], coefficients
 
     lift = REPULSION_MASS * kappa * exact_force() / size
     set_masses(lift)
