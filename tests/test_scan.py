@@ -11,7 +11,7 @@ import pytest
 from roughflow.cli import main
 from roughflow.errors import InputError
 from roughflow.io import read_surface
-from roughflow.scan import detrend, fill_missing, read_scan
+from roughflow.scan import detrend, fill_missing, level_lines, read_scan
 from roughflow.surface import from_scan
 
 ST = pytest.importorskip("SurfaceTopography")
@@ -121,6 +121,75 @@ def test_detrend_removes_plane_and_curvature_exactly():
     quad = tilt + 0.8 * x * x - 0.4 * x * y + 1.1 * y * y
     np.testing.assert_allclose(detrend(rough + quad, 1, 1, "curvature"), rough, atol=1e-12)
     np.testing.assert_array_equal(detrend(rough + quad, 1, 1, "none"), rough + quad)
+
+
+def line_artefacts(shape, axis, seed=5) -> np.ndarray:
+    """Random offsets and tilts of the lines along ``axis`` (scan-line drift of an AFM)."""
+    rng = np.random.default_rng(seed)
+    n_along, n_lines = shape[axis], shape[1 - axis]
+    t = np.linspace(-1, 1, n_along)[:, None]
+    a = 3.0 * rng.normal(size=n_lines) + 2.0 * rng.normal(size=n_lines) * t
+    return a if axis == 0 else a.T
+
+
+@pytest.mark.parametrize("axis, mode", [(0, "lines-x"), (1, "lines-y")])
+def test_line_levelling_removes_line_offsets_and_tilts_exactly(axis, mode):
+    # A levelled surface has zero mean and tilt on every line, so adding any offset and
+    # tilt per line and levelling again gives it back (to round-off); a plane cannot remove
+    # them (the grooves they make stay), and levelling across the lines would not either
+    rough = level_lines(heights(20, 15, seed=3), axis)
+    t = np.linspace(-1, 1, rough.shape[axis])
+    t = t[:, None] if axis == 0 else t[None, :]
+    np.testing.assert_allclose(rough.mean(axis=axis), 0.0, atol=1e-12)
+    np.testing.assert_allclose((rough * t).mean(axis=axis), 0.0, atol=1e-12)
+    scanned = rough + line_artefacts(rough.shape, axis)
+    np.testing.assert_allclose(level_lines(scanned, axis), rough, atol=1e-12)
+    np.testing.assert_array_equal(detrend(scanned, 1, 1, mode), level_lines(scanned, axis))
+    assert np.abs(detrend(scanned, 1, 1, "plane") - rough).max() > 1.0
+    assert np.abs(level_lines(scanned, 1 - axis) - rough).max() > 1.0
+
+
+def test_line_levelling_fits_the_defined_points_only():
+    # Missing points hold anything (here 1e6) and must not enter the fit: on the defined
+    # points the result is that of the same surface without them. A line with a single
+    # defined point loses its height there; a line with none is left as it is (the fill
+    # replaces it afterwards)
+    clean = heights(20, 15, seed=4)
+    defined = np.ones(clean.shape, bool)
+    defined[3:9, 2] = False
+    defined[:, 5] = False
+    defined[:, 6] = False
+    defined[11, 6] = True
+    scanned = np.where(defined, clean + line_artefacts(clean.shape, 0), 1e6)
+    got = level_lines(scanned, 0, defined)
+    ref = level_lines(np.where(defined, clean, 1e6), 0, defined)
+    np.testing.assert_allclose(got[defined], ref[defined], atol=1e-9)
+    full = np.delete(np.arange(15), [2, 5, 6])
+    np.testing.assert_allclose(got[:, full], level_lines(clean, 0)[:, full], atol=1e-9)
+    assert got[11, 6] == 0.0
+    np.testing.assert_array_equal(got[:, 5], scanned[:, 5])
+    # line 2: the mean and tilt of its 14 defined points only
+    ok = defined[:, 2]
+    t = np.linspace(-1, 1, 20)
+    fit = np.polyval(np.polyfit(t[ok], clean[ok, 2], 1), t)
+    np.testing.assert_allclose(got[ok, 2], (clean[:, 2] - fit)[ok], atol=1e-9)
+
+
+def test_scan_lines_levelled_on_import(tmp_path):
+    # `roughflow import --detrend lines-x` levels the lines along x and records it; with
+    # the default plane fit the steps between neighbouring lines (offsets of rms 6 against
+    # unit roughness) stay and more than double the rms gradient
+    rough = level_lines(heights(32, 24, seed=6), 0)
+    np.save(tmp_path / "scan.npy", rough + 2.0 * line_artefacts(rough.shape, 0))
+    kw = {"size": "2um,1.5um", "unit": "um"}
+    s = from_scan(tmp_path / "scan.npy", detrend_mode="lines-x", **kw)
+    assert s.scan.detrend == "lines-x"
+    check_scaled(s, rough * UM, 2 * UM, 1.5 * UM)
+    plane = from_scan(tmp_path / "scan.npy", **kw)
+    assert plane.scan.rms_gradient > 2 * s.scan.rms_gradient
+    main(["import", str(tmp_path / "scan.npy"), "--size", "2um,1.5um", "--unit", "um",
+          "--detrend", "lines-x", "-o", str(tmp_path / "s.nc"), "-q"])
+    np.testing.assert_allclose(read_surface(tmp_path / "s.nc").heights, s.heights, atol=1e-15)
 
 
 @pytest.mark.parametrize("kwargs, match", [

@@ -86,8 +86,9 @@ FLOW_METHODS = ("auto", "rs", "sa", "direct", "cg")
 
 # --- measured scans and leak questions (docs/measured.md) ---------------------------------
 #: Detrending of an imported scan: none, plane (mean and tilt) or curvature (plane plus a
-#: quadratic), fitted to the defined points.
-DETREND_MODES = ("none", "plane", "curvature")
+#: quadratic), fitted to the defined points; or line levelling for scans recorded line by
+#: line (AFM): each line along x (lines-x) or along y (lines-y) loses its own mean and tilt.
+DETREND_MODES = ("none", "plane", "curvature", "lines-x", "lines-y")
 SCAN_DETREND = "plane"
 #: Missing points of a scan: refuse the scan (none), Laplace interpolation from the defined
 #: neighbours (harmonic), or the lowest defined height (min: open, so conservative for leaks).

@@ -8,7 +8,8 @@ refused unless a fill is chosen), and scale to the dimensionless system: lengths
 of L = sqrt(lx ly) of the scan, whose value in metres is ``ScanInfo.length_scale``. The
 scan keeps its own rms gradient, so its pressures are in units of E* (not E* gbar).
 
-The array helpers (:func:`detrend`, :func:`fill_missing`) work on plain numpy arrays.
+The array helpers (:func:`detrend`, :func:`level_lines`, :func:`fill_missing`) work on plain
+numpy arrays.
 """
 
 from __future__ import annotations
@@ -30,13 +31,15 @@ from roughflow.surface import ScanInfo, Surface, rms_gradient
 def detrend(heights: np.ndarray, lx: float, ly: float, mode: str,
             defined: np.ndarray | None = None) -> np.ndarray:
     """``heights`` minus the least-squares fit of ``mode`` over the ``defined`` points:
-    ``"none"`` (nothing removed), ``"plane"`` (mean and tilt) or ``"curvature"`` (plane
-    plus x^2, xy, y^2). Undefined points get the same correction (their values are
-    whatever they hold)."""
+    ``"none"`` (nothing removed), ``"plane"`` (mean and tilt), ``"curvature"`` (plane
+    plus x^2, xy, y^2), or ``"lines-x"`` / ``"lines-y"`` (:func:`level_lines` along x / y).
+    Undefined points get the same correction (their values are whatever they hold)."""
     if mode not in DETREND_MODES:
         raise InputError(f"detrend must be one of {DETREND_MODES}, got {mode!r}")
     if mode == "none":
         return np.array(heights, dtype=np.float64)
+    if mode in ("lines-x", "lines-y"):
+        return level_lines(heights, 0 if mode == "lines-x" else 1, defined)
     nx, ny = heights.shape
     # coordinates scaled to [-1, 1] keep the normal equations well conditioned
     x = np.linspace(-1.0, 1.0, nx)[:, None] * np.ones((1, ny))
@@ -48,6 +51,32 @@ def detrend(heights: np.ndarray, lx: float, ly: float, mode: str,
     ok = np.ones(heights.size, dtype=bool) if defined is None else defined.ravel()
     coef, *_ = np.linalg.lstsq(a[ok], heights.ravel()[ok], rcond=None)
     return heights - (a @ coef).reshape(heights.shape)
+
+
+def level_lines(heights: np.ndarray, axis: int, defined: np.ndarray | None = None
+                ) -> np.ndarray:
+    """``heights`` with every line along ``axis`` (0: x, 1: y) levelled: each line minus
+    the least-squares line (mean and tilt) through its ``defined`` points; a line with one
+    defined point loses its height, one with none is left as it is (it is all missing).
+
+    Scanning probes record a topography line by line, and drift between the lines shifts
+    and tilts each one; the offsets make grooves along the lines that a plane cannot
+    remove. Levelling removes them, and with them whatever the true surface has in the
+    lines' means and tilts (its long waves across the lines): use it only along the scan's
+    fast axis and only where the line artefacts show."""
+    h = np.array(heights, dtype=np.float64)
+    lines = np.moveaxis(h, axis, 0)  # a view: (points along a line, lines)
+    w = (np.ones(lines.shape) if defined is None else
+         np.moveaxis(np.asarray(defined, dtype=bool), axis, 0).astype(np.float64))
+    t = np.linspace(-1.0, 1.0, lines.shape[0])[:, None]  # position along the line
+    n, st, stt = w.sum(0), (w * t).sum(0), (w * t * t).sum(0)
+    sh, sth = (w * lines).sum(0), (w * t * lines).sum(0)
+    det = n * stt - st * st
+    tilted = det > 1e-12 * np.maximum(n * n, 1.0)  # at least two distinct defined points
+    slope = np.where(tilted, (n * sth - st * sh) / np.where(tilted, det, 1.0), 0.0)
+    mean = np.where(n > 0, (sh - slope * st) / np.maximum(n, 1.0), 0.0)
+    lines -= mean + slope * t
+    return h
 
 
 def fill_missing(heights: np.ndarray, missing: np.ndarray, method: str) -> np.ndarray:
@@ -189,7 +218,8 @@ def read_scan(path: str | os.PathLike, *, size=None, unit: str | None = None,
     unit: length unit of the file's lateral sizes and heights where it gives none.
     height_unit: unit of the heights where the file gives none and it differs from
         ``unit``.
-    detrend_mode: ``"none"``, ``"plane"`` or ``"curvature"`` (:func:`detrend`).
+    detrend_mode: ``"none"``, ``"plane"``, ``"curvature"``, ``"lines-x"`` or ``"lines-y"``
+        (:func:`detrend`; the last two level the scan lines, :func:`level_lines`).
     fill: ``"none"`` (a scan with missing points is refused), ``"harmonic"`` or ``"min"``
         (:func:`fill_missing`); the number filled is recorded.
     crop: grid window "i0:i1,j0:j1" kept (e.g. to cut a border of missing points).

@@ -34,7 +34,9 @@ def register(sub: argparse._SubParsersAction) -> None:
                    help="unit of the heights where the file gives none and it differs from "
                         "--unit")
     p.add_argument("--detrend", choices=DETREND_MODES, default=SCAN_DETREND,
-                   help=f"remove a fitted plane or plane + quadratic ({SCAN_DETREND})")
+                   help="remove a fitted plane or plane + quadratic, or level the scan "
+                        "lines along x or y (mean and tilt of each line: line-to-line "
+                        f"offsets of AFM scans) ({SCAN_DETREND})")
     p.add_argument("--fill", choices=FILL_METHODS, default=SCAN_FILL,
                    help="missing points: none refuses a scan that has any; harmonic "
                         "(Laplace interpolation) or min (lowest height: open, conservative "
