@@ -150,10 +150,10 @@ def test_line_levelling_removes_line_offsets_and_tilts_exactly(axis, mode):
 
 
 def test_line_levelling_fits_the_defined_points_only():
-    # Missing points hold anything (here 1e6) and must not enter the fit: on the defined
-    # points the result is that of the same surface without them. A line with a single
-    # defined point loses its height there; a line with none is left as it is (the fill
-    # replaces it afterwards)
+    # Missing points hold anything (here 1e6, and nan on one line) and must not enter the
+    # fit: on the defined points the result is that of the same surface without them. A
+    # line with a single defined point loses its height there; a line with none is left as
+    # it is (the fill replaces it afterwards)
     clean = heights(20, 15, seed=4)
     defined = np.ones(clean.shape, bool)
     defined[3:9, 2] = False
@@ -161,7 +161,9 @@ def test_line_levelling_fits_the_defined_points_only():
     defined[:, 6] = False
     defined[11, 6] = True
     scanned = np.where(defined, clean + line_artefacts(clean.shape, 0), 1e6)
+    scanned[3:9, 2] = np.nan
     got = level_lines(scanned, 0, defined)
+    assert np.isfinite(got[defined]).all()
     ref = level_lines(np.where(defined, clean, 1e6), 0, defined)
     np.testing.assert_allclose(got[defined], ref[defined], atol=1e-9)
     full = np.delete(np.arange(15), [2, 5, 6])
