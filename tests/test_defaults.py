@@ -93,3 +93,13 @@ def test_theory_lines_default_per_model():
     for model, a_star in defaults.A_C_STAR_THEORY.items():
         job = LadderJob(surface=SurfaceParams(), model=model, area_fractions=(0.1,))
         assert job.a_c_star == a_star
+
+
+def test_schema_choices_are_roughflow_choices():
+    # A JSON schema cannot import the Python tuples, so its enums copy them: they must stay
+    # equal, or the workflow would refuse a mode the library offers (or pass one it refuses)
+    schema = yaml.safe_load(SCHEMA.read_text())["$defs"]
+    assert schema["scan_options"]["detrend"]["enum"] == list(defaults.DETREND_MODES)
+    assert schema["scan_options"]["fill"]["enum"] == list(defaults.FILL_METHODS)
+    boundary = schema["measured_study"]["properties"]["boundary"]["enum"]
+    assert boundary == list(defaults.BOUNDARY_METHODS)

@@ -177,6 +177,17 @@ def test_line_levelling_fits_the_defined_points_only():
     np.testing.assert_allclose(got[ok, 2], (clean[:, 2] - fit)[ok], atol=1e-9)
 
 
+def test_line_levelling_refuses_bad_input_naming_it():
+    h = heights()
+    for axis in (2, -1, True, "x"):
+        with pytest.raises(InputError, match="axis"):
+            level_lines(h, axis)
+    with pytest.raises(InputError, match=r"defined has shape \(3, 4\)"):
+        level_lines(h, 0, np.ones((3, 4), bool))
+    with pytest.raises(InputError, match="2D"):
+        level_lines(h[0], 0)
+
+
 def test_scan_lines_levelled_on_import(tmp_path):
     # `roughflow import --detrend lines-x` levels the lines along x and records it; with
     # the default plane fit the steps between neighbouring lines (offsets of rms 6 against

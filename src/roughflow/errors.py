@@ -73,6 +73,15 @@ def require_seeds(name: str, seeds) -> tuple[int, ...]:
     return out
 
 
+def check_axis(axis) -> int:
+    """Return ``axis`` as 0 (x) or 1 (y), or raise :class:`InputError`."""
+    import numpy as np
+
+    if isinstance(axis, (bool, np.bool_)) or axis not in (0, 1):
+        raise InputError(f"axis must be 0 (x) or 1 (y), got {axis!r}")
+    return int(axis)
+
+
 def require_field(name: str, array, *, ndim: int = 2):
     """Return ``array`` as a float64 numpy array, or raise if it has the wrong rank or
     non-finite values."""

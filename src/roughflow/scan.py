@@ -24,7 +24,7 @@ import scipy.sparse as sp
 import scipy.sparse.linalg as spla
 
 from roughflow.defaults import DETREND_MODES, FILL_METHODS, SCAN_DETREND, SCAN_FILL
-from roughflow.errors import InputError
+from roughflow.errors import InputError, check_axis
 from roughflow.surface import ScanInfo, Surface, rms_gradient
 
 
@@ -64,7 +64,13 @@ def level_lines(heights: np.ndarray, axis: int, defined: np.ndarray | None = Non
     remove. Levelling removes them, and with them whatever the true surface has in the
     lines' means and tilts (its long waves across the lines): use it only along the scan's
     fast axis and only where the line artefacts show."""
+    axis = check_axis(axis)
     h = np.array(heights, dtype=np.float64)
+    if h.ndim != 2:
+        raise InputError(f"heights must be a 2D array, got shape {h.shape}")
+    if defined is not None and np.shape(defined) != h.shape:
+        raise InputError(f"defined has shape {np.shape(defined)} but the heights have "
+                         f"shape {h.shape}")
     lines = np.moveaxis(h, axis, 0)  # a view: (points along a line, lines)
     w = (np.ones(lines.shape) if defined is None else
          np.moveaxis(np.asarray(defined, dtype=bool), axis, 0).astype(np.float64))

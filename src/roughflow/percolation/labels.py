@@ -12,7 +12,7 @@ from scipy import ndimage
 from scipy.sparse import coo_matrix
 from scipy.sparse.csgraph import connected_components
 
-from roughflow.errors import InputError
+from roughflow.errors import InputError, check_axis  # noqa: F401 (re-exported)
 
 _STRUCTURES = {
     4: ndimage.generate_binary_structure(2, 1),
@@ -30,13 +30,6 @@ def check_mask(name: str, mask) -> np.ndarray:
     if m.size == 0:
         raise InputError(f"{name} is empty (shape {m.shape})")
     return m
-
-
-def check_axis(axis) -> int:
-    """Return ``axis`` as 0 or 1, or raise :class:`InputError`."""
-    if isinstance(axis, (bool, np.bool_)) or axis not in (0, 1):
-        raise InputError(f"axis must be 0 (x) or 1 (y), got {axis!r}")
-    return int(axis)
 
 
 def check_connectivity(connectivity) -> int:
