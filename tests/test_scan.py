@@ -11,7 +11,13 @@ import pytest
 from roughflow.cli import main
 from roughflow.errors import InputError
 from roughflow.io import read_surface
-from roughflow.scan import detrend, fill_missing, level_lines, read_scan
+from roughflow.scan import (
+    detrend,
+    fill_missing,
+    largest_defined_window,
+    level_lines,
+    read_scan,
+)
 from roughflow.surface import from_scan
 
 ST = pytest.importorskip("SurfaceTopography")
@@ -99,6 +105,84 @@ def test_missing_points_refused_unless_filled(tmp_path):
     # cropping the missing points away needs no fill
     s = from_scan(tmp_path / "m.nc", crop="6:,:")
     assert s.shape == (10, 12) and s.scan.filled == 0 and s.scan.crop == "6:16,0:12"
+
+
+def _largest_by_brute_force(missing: np.ndarray) -> int:
+    """Points of the largest window without a missing point, by trying every window
+    (prefix sums count the missing points of each)."""
+    nx, ny = missing.shape
+    c = np.zeros((nx + 1, ny + 1), int)
+    c[1:, 1:] = missing.cumsum(0).cumsum(1)
+    best = 0
+    for i0 in range(nx):
+        for i1 in range(i0 + 1, nx + 1):
+            for j0 in range(ny):
+                for j1 in range(j0 + 1, ny + 1):
+                    if c[i1, j1] - c[i0, j1] - c[i1, j0] + c[i0, j0] == 0:
+                        best = max(best, (i1 - i0) * (j1 - j0))
+    return best
+
+
+@pytest.mark.parametrize("seed", range(12))
+def test_largest_defined_window_is_the_largest(seed):
+    rng = np.random.default_rng(seed)
+    shape = tuple(rng.integers(3, 11, size=2))
+    missing = rng.random(shape) < rng.choice([0.05, 0.15, 0.3])
+    sx, sy = largest_defined_window(missing)
+    assert not missing[sx, sy].any()
+    assert missing[sx, sy].size == _largest_by_brute_force(missing)
+
+
+def test_largest_defined_window_of_edge_cases():
+    assert largest_defined_window(np.zeros((5, 3), bool)) == (slice(0, 5), slice(0, 3))
+    sx, sy = largest_defined_window(np.ones((4, 4), bool))
+    assert np.zeros((4, 4))[sx, sy].size == 0
+    # a border of missing points, as on a profiler scan of a sample smaller than the field
+    missing = np.ones((20, 16), bool)
+    missing[3:17, 2:13] = False
+    missing[:, 0] = False  # a defined column beside the border does not widen the window
+    assert largest_defined_window(missing) == (slice(3, 17), slice(2, 13))
+    with pytest.raises(InputError, match="2D"):
+        largest_defined_window(np.zeros(5, bool))
+
+
+def test_crop_defined_keeps_the_largest_window_without_missing_points(tmp_path, caplog):
+    h = heights(24, 20)
+    h[:, :3] = np.nan  # a border, as around a sample smaller than the field of view
+    h[21:, :] = np.nan
+    h[10, 12] = np.nan  # and one hole inside
+    np.save(tmp_path / "scan.npy", h)
+    opts = {"size": "1um", "unit": "um"}
+    with pytest.raises(InputError, match=r"largest window without missing points is "
+                                         r"0:21,3:12 .*crop='defined'"):
+        read_scan(tmp_path / "scan.npy", **opts)
+    s = read_scan(tmp_path / "scan.npy", crop="defined", detrend_mode="none", **opts)
+    assert s.scan.crop == "0:21,3:12" and s.scan.filled == 0 and s.shape == (21, 9)
+    check_scaled(s, h[:21, 3:12] * UM, 21 / 24 * UM, 9 / 20 * UM)
+    # the same window given by hand gives the same surface
+    by_hand = read_scan(tmp_path / "scan.npy", crop="0:21,3:12", detrend_mode="none", **opts)
+    np.testing.assert_array_equal(s.heights, by_hand.heights)
+    # a large fill is reported with where the defined window lies; a small one is not
+    with caplog.at_level("WARNING", logger="roughflow.scan"):
+        read_scan(tmp_path / "scan.npy", fill="harmonic", **opts)
+    assert "% of the points are missing and filled" in caplog.text
+    assert "0:21,3:12" in caplog.text
+    caplog.clear()
+    with caplog.at_level("WARNING", logger="roughflow.scan"):
+        read_scan(tmp_path / "scan.npy", fill="harmonic", crop="0:21,3:20", **opts)
+    assert caplog.text == ""  # 1 of 357 points filled
+    # inside a crop given by hand the hint names file indices and no crop='defined'
+    with pytest.raises(InputError, match=r"is 0:10,3:20 \(10 x 17 points, 85 % of the "
+                                         r"points\)$"):
+        read_scan(tmp_path / "scan.npy", crop=":10,:", **opts)
+
+
+def test_crop_defined_refuses_a_window_too_small(tmp_path):
+    h = heights(12, 12)
+    h[::3, :] = np.nan  # defined strips 2 points wide
+    np.save(tmp_path / "scan.npy", h)
+    with pytest.raises(InputError, match="crop='defined'.*at least 4 x 4"):
+        read_scan(tmp_path / "scan.npy", size="1um", unit="um", crop="defined")
 
 
 def test_harmonic_fill_is_exact_for_a_plane_inside():
@@ -212,6 +296,7 @@ def test_scan_lines_levelled_on_import(tmp_path):
     ({"size": "2um", "unit": "kg"}, "not a length"),
     ({"size": "2um", "unit": "um", "crop": "0:2,:"}, "at least 4 x 4"),
     ({"size": "2um", "unit": "um", "crop": "zero"}, "i0:i1,j0:j1"),
+    ({"size": "2um", "unit": "um", "crop": "defined:"}, "'defined'"),
     ({"size": "2um", "unit": "um", "detrend_mode": "cubic"}, "cubic"),
     ({"size": "2um", "unit": "um", "fill": "zero"}, "zero"),
     ({"size": "2um", "unit": "um", "channel": "phase"}, "phase"),
@@ -241,6 +326,17 @@ def test_cli_import_round_trip(tmp_path, capsys):
     direct = from_scan(DATA / "afm-64.npy", size="500nm", unit="nm")
     np.testing.assert_array_equal(s.heights, direct.heights)
     assert s.scan == direct.scan
+
+
+def test_cli_import_crop_defined_prints_the_window(tmp_path, capsys):
+    h = heights(12, 10)
+    h[:2, :] = np.nan
+    np.save(tmp_path / "b.npy", h)
+    assert main(["import", str(tmp_path / "b.npy"), "--size", "1um", "--unit", "um",
+                 "--crop", "defined", "-o", str(tmp_path / "s.nc")]) == 0
+    out = capsys.readouterr().out
+    assert "10 x 10 points" in out and "crop 2:12,0:10" in out
+    assert read_surface(tmp_path / "s.nc").scan.crop == "2:12,0:10"
 
 
 def test_cli_import_refusal_exits_2(tmp_path, capsys):

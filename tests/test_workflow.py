@@ -300,6 +300,9 @@ BAD = {
         ["studies.measured", "nope.npy", "does not exist"]),
     "zero seal width": (lambda c: c["studies"]["measured"].update(seal_width="0mm"),
                         ["studies.measured", "seal_width", "0mm"]),
+    "crop that does not parse": (
+        lambda c: c["studies"]["measured"]["scans"][0].update(crop="0-32,0-32"),
+        ["studies.measured", "crop", "0-32,0-32"]),
     # issue 13 item 5: valid for the schema, but every job would fail
     "adhesive threshold study": (
         lambda c: c["studies"]["threshold_vs_gamma"]["series"][0].update(model=["adhesive"]),

@@ -94,6 +94,12 @@ SCAN_DETREND = "plane"
 #: neighbours (harmonic), or the lowest defined height (min: open, so conservative for leaks).
 FILL_METHODS = ("none", "harmonic", "min")
 SCAN_FILL = "none"
+#: ``crop`` value that keeps the largest grid window of a scan without a missing point.
+SCAN_CROP_DEFINED = "defined"
+#: A fill of more than this fraction of a scan's points is reported (a warning naming the
+#: largest window without missing points): a filled region is smooth (harmonic) or a flat
+#: basin (min), so where it is large it, not the measured surface, shapes the contact.
+SCAN_FILL_WARN_FRACTION = 0.05
 #: How a non-periodic scan meets the periodic solvers (roughflow.boundary): mirror-tiled,
 #: padded by a flat region far below it, an interior window of the scan solved as periodic,
 #: or the scan taken as periodic.

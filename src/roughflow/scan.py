@@ -8,24 +8,35 @@ refused unless a fill is chosen), and scale to the dimensionless system: lengths
 of L = sqrt(lx ly) of the scan, whose value in metres is ``ScanInfo.length_scale``. The
 scan keeps its own rms gradient, so its pressures are in units of E* (not E* gbar).
 
-The array helpers (:func:`detrend`, :func:`level_lines`, :func:`fill_missing`) work on plain
-numpy arrays.
+The array helpers (:func:`detrend`, :func:`level_lines`, :func:`fill_missing`,
+:func:`largest_defined_window`) work on plain numpy arrays.
 """
 
 from __future__ import annotations
 
+import logging
 import math
 import os
 import re
 from pathlib import Path
 
+import numba
 import numpy as np
 import scipy.sparse as sp
 import scipy.sparse.linalg as spla
 
-from roughflow.defaults import DETREND_MODES, FILL_METHODS, SCAN_DETREND, SCAN_FILL
+from roughflow.defaults import (
+    DETREND_MODES,
+    FILL_METHODS,
+    SCAN_CROP_DEFINED,
+    SCAN_DETREND,
+    SCAN_FILL,
+    SCAN_FILL_WARN_FRACTION,
+)
 from roughflow.errors import InputError, check_axis
 from roughflow.surface import ScanInfo, Surface, rms_gradient
+
+log = logging.getLogger(__name__)
 
 
 def detrend(heights: np.ndarray, lx: float, ly: float, mode: str,
@@ -131,24 +142,94 @@ def fill_missing(heights: np.ndarray, missing: np.ndarray, method: str) -> np.nd
     return h
 
 
+@numba.njit(cache=True)
+def _largest_rectangle(defined):
+    """(points, i0, i1, j0, j1) of the largest all-True rectangle of ``defined``: row by
+    row, the runs of defined points ending in each row are a histogram, whose largest
+    rectangle a stack of increasing runs finds in one pass (O(nx ny) in all)."""
+    nx, ny = defined.shape
+    run = np.zeros(ny + 1, np.int64)  # run[ny] stays 0: it empties the stack
+    stack = np.empty(ny + 1, np.int64)
+    best, i0, i1, j0, j1 = 0, 0, 0, 0, 0
+    for i in range(nx):
+        for j in range(ny):
+            run[j] = run[j] + 1 if defined[i, j] else 0
+        top = 0
+        for j in range(ny + 1):
+            while top > 0 and run[stack[top - 1]] >= run[j]:
+                top -= 1
+                height = run[stack[top]]
+                left = stack[top - 1] + 1 if top > 0 else 0
+                if height * (j - left) > best:
+                    best, i0, i1, j0, j1 = height * (j - left), i - height + 1, i + 1, left, j
+            stack[top] = j
+            top += 1
+    return best, i0, i1, j0, j1
+
+
+def largest_defined_window(missing: np.ndarray) -> tuple[slice, slice]:
+    """The grid window (slices along x and y) with the most points and no ``missing`` one;
+    of equal ones the first in row order. Empty slices if every point is missing."""
+    miss = np.asarray(missing, dtype=bool)
+    if miss.ndim != 2:
+        raise InputError(f"missing must be a 2D mask, got shape {miss.shape}")
+    _, i0, i1, j0, j1 = _largest_rectangle(np.ascontiguousarray(~miss))
+    return slice(int(i0), int(i1)), slice(int(j0), int(j1))
+
+
+def _window_text(window: tuple[slice, slice], shape: tuple[int, int]) -> str:
+    """A window as the crop text "i0:i1,j0:j1" with both ends of each slice."""
+    (i0, i1, _), (j0, j1, _) = (w.indices(n) for w, n in zip(window, shape, strict=True))
+    return f"{i0}:{i1},{j0}:{j1}"
+
+
+def _defined_window_hint(missing: np.ndarray, window: tuple[slice, slice] | None,
+                         shape: tuple[int, int]) -> str:
+    """Where the largest window without missing points lies (in the file's grid indices;
+    ``missing`` is the mask inside ``window`` of a scan of ``shape``), for messages."""
+    sx, sy = largest_defined_window(missing)
+    i0, j0 = (0, 0) if window is None else (window[0].indices(shape[0])[0],
+                                            window[1].indices(shape[1])[0])
+    nx, ny = sx.stop - sx.start, sy.stop - sy.start
+    where = f"{sx.start + i0}:{sx.stop + i0},{sy.start + j0}:{sy.stop + j0}"
+    how = (f"; crop={SCAN_CROP_DEFINED!r} (CLI --crop {SCAN_CROP_DEFINED}) keeps it"
+           if window is None else "")
+    return (f"the largest window without missing points is {where} ({nx} x {ny} points, "
+            f"{100 * nx * ny / missing.size:.3g} % of the points{how})")
+
+
 _CROP = re.compile(r"^\s*(\d*)\s*:\s*(\d*)\s*,\s*(\d*)\s*:\s*(\d*)\s*$")
 
 
-def parse_crop(text: str | None, shape: tuple[int, int]) -> tuple[slice, slice] | None:
-    """Grid window "i0:i1,j0:j1" (Python slices, ends may be left out) -> slices."""
-    if text is None or str(text) == "none":
+def check_crop(text: str | None) -> re.Match | None:
+    """The syntax of a crop: None, "none", "defined" (None returned) or "i0:i1,j0:j1"
+    (its match returned); anything else raises :class:`InputError` naming it."""
+    if text is None or str(text).strip() in ("none", SCAN_CROP_DEFINED):
         return None
     m = _CROP.match(str(text))
     if m is None:
-        raise InputError(f"crop must look like 'i0:i1,j0:j1' (grid indices), got {text!r}")
+        raise InputError(f"crop must look like 'i0:i1,j0:j1' (grid indices) or be "
+                         f"{SCAN_CROP_DEFINED!r}, got {text!r}")
+    return m
+
+
+def parse_crop(text: str | None, shape: tuple[int, int]) -> tuple[slice, slice] | None:
+    """Grid window "i0:i1,j0:j1" (Python slices, ends may be left out) -> slices.
+    (``"defined"`` is resolved by :func:`read_scan`, which knows the missing points.)"""
+    m = check_crop(text)
+    if m is None:
+        return None
     v = [int(g) if g else None for g in m.groups()]
     sx, sy = slice(v[0], v[1]), slice(v[2], v[3])
-    nx = len(range(*sx.indices(shape[0])))
-    ny = len(range(*sy.indices(shape[1])))
-    if nx < 4 or ny < 4:
-        raise InputError(f"crop {text!r} leaves {nx} x {ny} points of the {shape[0]} x "
-                         f"{shape[1]} scan; at least 4 x 4 are needed")
+    _check_window((sx, sy), shape, f"crop {text!r}")
     return sx, sy
+
+
+def _check_window(window: tuple[slice, slice], shape: tuple[int, int], what: str) -> None:
+    nx, ny = (len(range(*w.indices(n))) for w, n in zip(window, shape, strict=True))
+    if nx < 4 or ny < 4:
+        raise InputError(f"{what} leaves {nx} x {ny} points of the {shape[0]} x "
+                         f"{shape[1]} scan; at least 4 x 4 are needed")
 
 
 def _length_factor(unit, name: str) -> float:
@@ -229,7 +310,9 @@ def read_scan(path: str | os.PathLike, *, size=None, unit: str | None = None,
         (:func:`detrend`; the last two level the scan lines, :func:`level_lines`).
     fill: ``"none"`` (a scan with missing points is refused), ``"harmonic"`` or ``"min"``
         (:func:`fill_missing`); the number filled is recorded.
-    crop: grid window "i0:i1,j0:j1" kept (e.g. to cut a border of missing points).
+    crop: grid window "i0:i1,j0:j1" kept (e.g. to cut a border of missing points), or
+        ``"defined"``: the largest window without missing points
+        (:func:`largest_defined_window`).
     channel: name or index of the data channel (default: the file's height channel).
     periodic: the scan is periodic (e.g. a simulated one): no boundary treatment later.
 
@@ -270,6 +353,7 @@ def read_scan(path: str | os.PathLike, *, size=None, unit: str | None = None,
     else:
         lx_m, ly_m = _sizes(size, unit)
     vertical = lateral if height_unit is None else _length_factor(height_unit, "height_unit")
+    auto_crop = crop is not None and str(crop).strip() == SCAN_CROP_DEFINED
     window = parse_crop(crop, tuple(ch.nb_grid_pts))
 
     kw = {} if file_size is not None else {"physical_sizes": tuple(float(v) / lateral for v in
@@ -285,18 +369,29 @@ def read_scan(path: str | os.PathLike, *, size=None, unit: str | None = None,
     missing = np.ma.getmaskarray(raw) | ~np.isfinite(np.ma.getdata(raw))
     h = np.array(np.ma.getdata(raw), dtype=np.float64) * vertical
     nx0, ny0 = h.shape
+    if auto_crop:
+        window = largest_defined_window(missing)
+        _check_window(window, h.shape, f"crop={SCAN_CROP_DEFINED!r} (the largest window "
+                      "without missing points)")
     if window is not None:
         h, missing = h[window], missing[window]
         lx_m *= h.shape[0] / nx0
         ly_m *= h.shape[1] / ny0
     n_missing = int(missing.sum())
+    if n_missing == missing.size:
+        raise InputError(f"{str(path)!r} has no defined point in the window kept")
     if n_missing and fill == "none":
         raise InputError(f"{str(path)!r} has {n_missing} missing points "
                          f"({100 * n_missing / missing.size:.2g} % of {h.shape[0]} x "
                          f"{h.shape[1]}): choose a fill ({', '.join(FILL_METHODS[1:])}) "
-                         "or crop them away")
-    if n_missing == missing.size:
-        raise InputError(f"{str(path)!r} has no defined point in the window kept")
+                         "or crop them away; "
+                         + _defined_window_hint(missing, window, (nx0, ny0)))
+    if n_missing > SCAN_FILL_WARN_FRACTION * missing.size:
+        log.warning("%s: %.3g %% of the points are missing and filled (%s): a filled region "
+                    "is smooth (harmonic) or a flat basin (min), and where it is large it, "
+                    "not the measured surface, shapes the contact; %s", path,
+                    100 * n_missing / missing.size, fill,
+                    _defined_window_hint(missing, window, (nx0, ny0)))
     h[missing] = 0.0
     h = detrend(h, lx_m, ly_m, detrend_mode, defined=~missing)
     if n_missing:
@@ -311,9 +406,7 @@ def read_scan(path: str | os.PathLike, *, size=None, unit: str | None = None,
         source=str(path), reader=str(reader.name()), channel=str(ch.name),
         length_scale=length, rms_gradient=rms_gradient(h, lx, ly, periodic=periodic),
         detrend=detrend_mode, fill=fill, filled=n_missing,
-        crop="none" if window is None else
-        f"{window[0].start or 0}:{window[0].stop or nx0},{window[1].start or 0}:"
-        f"{window[1].stop or ny0}",
+        crop="none" if window is None else _window_text(window, (nx0, ny0)),
         periodic=bool(periodic))
     surface = Surface.from_array(h, lx=lx, ly=ly)
     return Surface(heights=surface.heights, lx=surface.lx, ly=surface.ly, scan=info)

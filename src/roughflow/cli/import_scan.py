@@ -4,7 +4,13 @@ from __future__ import annotations
 
 import argparse
 
-from roughflow.defaults import DETREND_MODES, FILL_METHODS, SCAN_DETREND, SCAN_FILL
+from roughflow.defaults import (
+    DETREND_MODES,
+    FILL_METHODS,
+    SCAN_CROP_DEFINED,
+    SCAN_DETREND,
+    SCAN_FILL,
+)
 
 from ._common import add_output
 
@@ -41,9 +47,10 @@ def register(sub: argparse._SubParsersAction) -> None:
                    help="missing points: none refuses a scan that has any; harmonic "
                         "(Laplace interpolation) or min (lowest height: open, conservative "
                         f"for leaks) ({SCAN_FILL})")
-    p.add_argument("--crop", default=None, metavar="I0:I1,J0:J1",
+    p.add_argument("--crop", default=None, metavar="I0:I1,J0:J1|defined",
                    help="keep this grid window (Python slices along x and y), e.g. to cut a "
-                        "border of missing points")
+                        f"border of missing points; {SCAN_CROP_DEFINED}: the largest window "
+                        "without missing points")
     p.add_argument("--channel", default=None,
                    help="data channel by name or index (default: the file's height channel)")
     p.add_argument("--periodic", action="store_true",
@@ -66,4 +73,5 @@ def run(args: argparse.Namespace) -> None:
     print(f"{args.scan}: {s.reader}, channel {s.channel}, {nx} x {ny} points, "
           f"{surface.lx * s.length_scale:.4g} m x {surface.ly * s.length_scale:.4g} m, "
           f"rms height {surface.heights.std() * s.length_scale:.4g} m, rms gradient "
-          f"{s.rms_gradient:.4g}, detrend {s.detrend}, {s.filled} points filled ({s.fill})")
+          f"{s.rms_gradient:.4g}, detrend {s.detrend}, {s.filled} points filled ({s.fill})"
+          + ("" if s.crop == "none" else f", crop {s.crop}"))

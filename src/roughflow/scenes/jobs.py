@@ -328,6 +328,7 @@ class LeakJob:
     kind: str = field(default="leak", init=False)
 
     def __post_init__(self) -> None:
+        from roughflow.scan import check_crop
         from roughflow.units import parse_quantity, parse_range
 
         if not _NAME.fullmatch(str(self.name)):
@@ -342,6 +343,7 @@ class LeakJob:
                     float(part)
                 except ValueError:
                     parse_quantity(part, "length", "size")
+        check_crop(self.crop)
         for key, choices in (("detrend", defaults.DETREND_MODES),
                              ("fill", defaults.FILL_METHODS),
                              ("boundary", defaults.BOUNDARY_METHODS)):
