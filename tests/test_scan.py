@@ -339,6 +339,33 @@ def test_cli_import_crop_defined_prints_the_window(tmp_path, capsys):
     assert read_surface(tmp_path / "s.nc").scan.crop == "2:12,0:10"
 
 
+def test_cli_warns_where_a_scan_is_solved_as_a_periodic_cell(tmp_path, capsys):
+    """contact, threshold and flow solve a periodic cell; only leak treats a scan's edges,
+    so the three say so for a non-periodic scan, and only for one."""
+    np.save(tmp_path / "h.npy", heights(16, 16))
+    for name, extra in (("scan", []), ("periodic", ["--periodic"])):
+        assert main(["import", str(tmp_path / "h.npy"), "--size", "1um", "--unit", "um",
+                     *extra, "-o", str(tmp_path / f"{name}.nc")]) == 0
+    assert main(["surface", "--nx", "16", "--ny", "16", "--lambda-r", "1", "--lambda-s", "0.25",
+                 "-o", str(tmp_path / "gen.nc")]) == 0
+    capsys.readouterr()
+    for name, warned in (("scan", True), ("periodic", False), ("gen", False)):
+        surface, contact = str(tmp_path / f"{name}.nc"), str(tmp_path / f"c_{name}.nc")
+        runs = {"contact": ["contact", surface, "--pressure", "0.05", "-o", contact],
+                "flow": ["flow", contact, "-o", str(tmp_path / f"f_{name}.nc")],
+                "threshold": ["threshold", surface, "--model", "bearing",
+                              "-o", str(tmp_path / f"t_{name}.nc")]}
+        for command, argv in runs.items():
+            assert main(argv) == 0
+            err = capsys.readouterr().err
+            assert ("non-periodic scan" in err) == warned, (name, command, err)
+            assert (f"`roughflow {command}` solves it as a periodic cell" in err) == warned
+    # the bearing contact is local: nothing wraps
+    assert main(["contact", str(tmp_path / "scan.nc"), "--model", "bearing",
+                 "--area-fraction", "0.3", "-o", str(tmp_path / "b.nc")]) == 0
+    assert "non-periodic" not in capsys.readouterr().err
+
+
 def test_cli_import_refusal_exits_2(tmp_path, capsys):
     np.save(tmp_path / "n.npy", np.where(np.eye(8, 6) > 0, np.nan, 1.0))
     with pytest.raises(SystemExit) as exc:

@@ -13,7 +13,13 @@ from roughflow.defaults import (
 )
 from roughflow.errors import InputError
 
-from ._common import add_input, add_output, adhesion_help, resolve_adhesion
+from ._common import (
+    add_input,
+    add_output,
+    adhesion_help,
+    resolve_adhesion,
+    warn_if_nonperiodic_scan,
+)
 
 log = logging.getLogger(__name__)
 
@@ -63,6 +69,9 @@ def run(args: argparse.Namespace) -> None:
     if args.model == "bearing" and args.pressure is not None:
         raise InputError("--model bearing takes --area-fraction, not --pressure")
     surface = surface_from_dataset(args.data["surface"])
+    if args.model != "bearing":  # the bearing model is local: no edges to join
+        warn_if_nonperiodic_scan(None if surface.scan is None else surface.scan.periodic,
+                                 args.surface, "contact")
     adhesion = resolve_adhesion(args.model, args.surface_energy, args.adhesion_range, surface,
                                 flags=("--surface-energy", "--range"), source=args.surface)
     t0 = time.perf_counter()

@@ -8,7 +8,7 @@ from typing import TYPE_CHECKING
 
 from roughflow.defaults import FLOW_METHODS, FLOW_TOL
 
-from ._common import add_input, add_output, axis_arg
+from ._common import add_input, add_output, axis_arg, warn_if_nonperiodic_scan
 
 if TYPE_CHECKING:  # numpy is imported when the command runs, not for --help
     import numpy as np
@@ -65,6 +65,8 @@ def run(args: argparse.Namespace) -> None:
 
     ds_in = args.data["input"]
     gap, contact, lx, ly = _read_gap(ds_in)
+    periodic = ds_in.attrs.get("scan_periodic")
+    warn_if_nonperiodic_scan(None if periodic is None else bool(periodic), args.input, "flow")
     axes = (0, 1) if args.axis is None else (args.axis,)
     results = {}
     for ax in axes:

@@ -15,7 +15,14 @@ from roughflow.defaults import (
     THRESHOLD_TOL,
 )
 
-from ._common import add_input, add_output, adhesion_help, axis_arg, resolve_adhesion
+from ._common import (
+    add_input,
+    add_output,
+    adhesion_help,
+    axis_arg,
+    resolve_adhesion,
+    warn_if_nonperiodic_scan,
+)
 
 log = logging.getLogger(__name__)
 
@@ -73,6 +80,8 @@ def run(args: argparse.Namespace) -> None:
     from roughflow.search import SearchOptions, threshold
 
     surface = surface_from_dataset(args.data["surface"])
+    warn_if_nonperiodic_scan(None if surface.scan is None else surface.scan.periodic,
+                             args.surface, "threshold")
     adhesion = resolve_adhesion(args.model, args.surface_energy, args.adhesion_range, surface,
                                 flags=("--surface-energy", "--adhesion-range"),
                                 source=args.surface)
