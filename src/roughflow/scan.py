@@ -191,7 +191,8 @@ def _defined_window_hint(missing: np.ndarray, window: tuple[slice, slice] | None
     i0, j0 = (0, 0) if window is None else (window[0].indices(shape[0])[0],
                                             window[1].indices(shape[1])[0])
     nx, ny = sx.stop - sx.start, sy.stop - sy.start
-    where = f"{sx.start + i0}:{sx.stop + i0},{sy.start + j0}:{sy.stop + j0}"
+    where = _window_text((slice(sx.start + i0, sx.stop + i0),
+                          slice(sy.start + j0, sy.stop + j0)), shape)
     how = (f"; crop={SCAN_CROP_DEFINED!r} (CLI --crop {SCAN_CROP_DEFINED}) keeps it"
            if window is None else "")
     return (f"the largest window without missing points is {where} ({nx} x {ny} points, "

@@ -113,10 +113,12 @@ def read_inputs(args: argparse.Namespace) -> None:
             args.data[dest] = read_dataset(value, kinds, what=what)
 
 
-def warn_if_nonperiodic_scan(periodic: bool | None, source: str, command: str) -> None:
-    """Warn that ``command`` solves a measured scan that is not periodic (``periodic``
-    False; None: not a scan) as a periodic cell: only ``roughflow leak`` treats its edges."""
-    if periodic is None or periodic:
+def warn_if_nonperiodic_scan(ds, source: str, command: str) -> None:
+    """Warn that ``command`` solves the measured scan of dataset ``ds`` (a surface file or a
+    contact file made from one, with the scan's ``scan_periodic`` attribute) as a periodic
+    cell when the scan is not periodic: only ``roughflow leak`` treats its edges."""
+    periodic = ds.attrs.get("scan_periodic")
+    if periodic is None or bool(periodic):
         return
     logging.getLogger("roughflow.cli").warning(
         "%s holds a non-periodic scan: `roughflow %s` solves it as a periodic cell, whose "

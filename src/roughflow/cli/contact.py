@@ -70,8 +70,7 @@ def run(args: argparse.Namespace) -> None:
         raise InputError("--model bearing takes --area-fraction, not --pressure")
     surface = surface_from_dataset(args.data["surface"])
     if args.model != "bearing":  # the bearing model is local: no edges to join
-        warn_if_nonperiodic_scan(None if surface.scan is None else surface.scan.periodic,
-                                 args.surface, "contact")
+        warn_if_nonperiodic_scan(args.data["surface"], args.surface, "contact")
     adhesion = resolve_adhesion(args.model, args.surface_energy, args.adhesion_range, surface,
                                 flags=("--surface-energy", "--range"), source=args.surface)
     t0 = time.perf_counter()

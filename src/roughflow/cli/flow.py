@@ -65,8 +65,7 @@ def run(args: argparse.Namespace) -> None:
 
     ds_in = args.data["input"]
     gap, contact, lx, ly = _read_gap(ds_in)
-    periodic = ds_in.attrs.get("scan_periodic")
-    warn_if_nonperiodic_scan(None if periodic is None else bool(periodic), args.input, "flow")
+    warn_if_nonperiodic_scan(ds_in, args.input, "flow")
     axes = (0, 1) if args.axis is None else (args.axis,)
     results = {}
     for ax in axes:

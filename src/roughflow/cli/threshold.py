@@ -80,8 +80,7 @@ def run(args: argparse.Namespace) -> None:
     from roughflow.search import SearchOptions, threshold
 
     surface = surface_from_dataset(args.data["surface"])
-    warn_if_nonperiodic_scan(None if surface.scan is None else surface.scan.periodic,
-                             args.surface, "threshold")
+    warn_if_nonperiodic_scan(args.data["surface"], args.surface, "threshold")
     adhesion = resolve_adhesion(args.model, args.surface_energy, args.adhesion_range, surface,
                                 flags=("--surface-energy", "--adhesion-range"),
                                 source=args.surface)
