@@ -205,6 +205,40 @@ def test_flux_balance_of_amg_at_threshold(method):
     assert fr.sigma_flux == pytest.approx(fr.sigma, rel=1e-4)
 
 
+def test_flux_balance_rounds_share_one_hierarchy_and_are_capped(monkeypatch):
+    """The refinement rounds of the state above reuse one AMG hierarchy (rebuilt for each
+    round it cost as much as the round: 1.0-1.3 s at 1024^2), each round stops after
+    REFINE_MAX_ITER iterations (one stuck at round-off ran the solver's 500, 210 s at
+    2048^2, docs/flow.md), and the result counts the iterations of every round."""
+    import roughflow.flow.core as core
+    import roughflow.flow.linsolve as linsolve
+
+    surf = _default_surface(4)
+    th = search.threshold(surf, axis=0, tol=1e-3)
+    r = contact.solve(surf, th.p_lo, tol=1e-8)
+    builds, calls = [], []
+    build, solve_spd = linsolve._amg_preconditioner, core.solve_spd
+
+    def counted_build(*args, **kwargs):
+        builds.append(1)
+        return build(*args, **kwargs)
+
+    def recorded_solve(*args, **kwargs):
+        out = solve_spd(*args, **kwargs)
+        calls.append((kwargs.get("max_iter"), out.iterations))
+        return out
+
+    monkeypatch.setattr(linsolve, "_amg_preconditioner", counted_build)
+    monkeypatch.setattr(core, "solve_spd", recorded_solve)
+    fr = flow.solve(r.gap, 0, method="rs")
+    assert len(calls) >= 2, "this state needs at least one refinement round (2e-4 before)"
+    assert len(builds) == 1
+    assert calls[0][0] is None and all(cap == core.REFINE_MAX_ITER for cap, _ in calls[1:])
+    assert all(its <= core.REFINE_MAX_ITER for _, its in calls[1:])
+    assert fr.iterations == sum(its for _, its in calls)
+    assert 0 <= fr.flux_imbalance < 1e-4
+
+
 def test_contact_load_balance_at_tiny_loads():
     """Regression (GFMD): the stopping residual max|G f| / rms(h) has no q = 0 part, and
     the load imbalance was measured against k_min rms(h) only: at p = 1e-5 the contact

@@ -43,6 +43,18 @@ class LinearSolution:
     method: str
 
 
+@dataclass(frozen=True)
+class Prepared:
+    """What a solve of one matrix builds before it iterates, kept for further solves of the
+    same matrix (the flux-balance refinement of :mod:`roughflow.flow.core` solves it up to
+    five times): the sparse LU of ``"direct"`` or the AMG preconditioner of ``"rs"`` and
+    ``"sa"`` (None for ``"cg"``). Built by :func:`prepare`."""
+
+    method: str
+    lu: spla.SuperLU | None = None
+    preconditioner: spla.LinearOperator | None = None
+
+
 def check_method(method: str | None) -> str:
     m = "auto" if method is None else method
     if m not in METHODS:
@@ -61,29 +73,50 @@ def _amg_preconditioner(a: sp.csr_matrix, method: str) -> spla.LinearOperator:
     return ml.aspreconditioner(cycle="V")
 
 
+def _resolve(method: str | None, n: int) -> str:
+    """The method ``"auto"`` stands for with ``n`` unknowns (else ``method`` itself)."""
+    method = check_method(method)
+    if method != "auto":
+        return method
+    return "direct" if n <= DIRECT_MAX_UNKNOWNS else "rs"
+
+
+def prepare(a: sp.spmatrix, method: str = "auto") -> Prepared:
+    """Factorise (``"direct"``) or build the AMG preconditioner of ``a`` for
+    :func:`solve_spd` (``"auto"`` picks by size, :data:`DIRECT_MAX_UNKNOWNS`)."""
+    method = _resolve(method, a.shape[0])
+    if method == "direct":
+        return Prepared(method, lu=spla.splu(sp.csc_matrix(a), permc_spec="COLAMD"))
+    if method == "cg":
+        return Prepared(method)
+    return Prepared(method, preconditioner=_amg_preconditioner(sp.csr_matrix(a), method))
+
+
 def solve_spd(
     a: sp.csr_matrix, b: np.ndarray, *, tol: float, method: str = "auto",
     max_iter: int | None = None, x0: np.ndarray | None = None, strict: bool = True,
+    prepared: Prepared | None = None,
 ) -> LinearSolution:
     """Solve A x = b for symmetric positive definite A to relative residual ``tol``.
 
     ``x0`` is a starting guess for the iterative methods (a refinement step of the
-    direct one). Raises :class:`ConvergenceError` (with the residual reached) when the
-    tolerance is not met, unless ``strict=False`` (then the best iterate is returned with
-    its residual: used for refinement beyond a tolerance already met).
+    direct one). ``prepared``: :func:`prepare` of the same ``a`` (its method replaces
+    ``method``), built here when None. Raises :class:`ConvergenceError` (with the residual
+    reached) when the tolerance is not met, unless ``strict=False`` (then the best iterate
+    is returned with its residual: used for refinement beyond a tolerance already met).
     """
-    method = check_method(method)
     n = a.shape[0]
-    if method == "auto":
-        method = "direct" if n <= DIRECT_MAX_UNKNOWNS else "rs"
+    method = prepared.method if prepared is not None else _resolve(method, n)
     a_s, b_s = a.tocsr(), b
     bnorm = np.linalg.norm(b_s)
     if bnorm == 0.0:
         return LinearSolution(np.zeros(n), 0.0, 0, method)
+    if prepared is None:
+        prepared = prepare(a_s, method)
 
     iterations = 0
     if method == "direct":
-        lu = spla.splu(a_s.tocsc(), permc_spec="COLAMD")
+        lu = prepared.lu
         y = lu.solve(b_s) if x0 is None else x0 + lu.solve(b_s - a_s @ x0)
         for _refine in range(3):  # iterative refinement until the residual stalls
             r = b_s - a_s @ y
@@ -91,7 +124,7 @@ def solve_spd(
                 break
             y += lu.solve(r)
     else:
-        m = None if method == "cg" else _amg_preconditioner(a_s, method)
+        m = prepared.preconditioner
         if max_iter is None:
             max_iter = MAX_ITER_AMG if m is not None else MAX_ITER_CG
 
