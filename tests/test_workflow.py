@@ -241,18 +241,20 @@ def test_only_requested_targets_run(tmp_path):
     assert counts == {"scene": 4, "aggregate": 1, "figure": 1}
     assert "ladder" not in dry.stdout
     # each job requests the library's memory estimate plus the Snakemake wrapper
-    # (roughflow.scenes.jobs.requested_mem_mb)
+    # (roughflow.scenes.jobs.requested_mem_mb) and the cost model's time with its margin
     from roughflow.scenes import estimated_memory, expand_study
-    from roughflow.scenes.jobs import WRAPPER_MB, requested_mem_mb
+    from roughflow.scenes.jobs import WRAPPER_MB, requested_mem_mb, requested_runtime_min
 
     cfg = yaml.safe_load((wd / "config" / "test.yaml").read_text())["studies"]
     jobs = expand_study("threshold_vs_gamma", cfg["threshold_vs_gamma"])
-    requested = dict(re.findall(r"wildcards: kind=threshold, job=(\S+)\s+resources: .*?"
-                                r"mem_mb=(\d+)", dry.stdout + dry.stderr))
+    requested = {job_id: (minutes, mb) for job_id, minutes, mb in re.findall(
+        r"wildcards: kind=threshold, job=(\S+)\s+resources: .*?runtime=(\d+), mem_mb=(\d+)",
+        dry.stdout + dry.stderr)}
     assert requested.keys() == jobs.keys()
-    for job_id, mb in requested.items():
+    for job_id, (minutes, mb) in requested.items():
         assert int(mb) == requested_mem_mb(jobs[job_id])
         assert int(mb) == WRAPPER_MB + math.ceil(estimated_memory(jobs[job_id]) / 1e6)
+        assert int(minutes) == requested_runtime_min(jobs[job_id])
 
 
 def test_paper_config_dry_run_job_counts(tmp_path):

@@ -1,7 +1,6 @@
 # Config validation and job planning (runs before any job starts).
 
 import json
-import math
 import sys
 from pathlib import Path
 
@@ -40,8 +39,8 @@ from roughflow.resources import total_bytes  # noqa: E402
 from roughflow.scenes import expand_study, study_defaults  # noqa: E402
 from roughflow.scenes.jobs import (  # noqa: E402
     check_plan_memory,
-    estimated_seconds,
     requested_mem_mb,
+    requested_runtime_min,
 )
 
 RESULTS = config.get("results", "results")
@@ -117,8 +116,8 @@ def job_args(wildcards):
 
 
 def runtime_min(wildcards, attempt=1):
-    # three times the cost model of roughflow.scenes.jobs.estimated_seconds (minutes)
-    return attempt * max(2, math.ceil(3 * estimated_seconds(job_of(wildcards)) / 60))
+    # the cost model of roughflow.scenes.jobs with its margin (minutes)
+    return requested_runtime_min(job_of(wildcards), attempt)
 
 
 def mem_mb(wildcards, attempt=1):

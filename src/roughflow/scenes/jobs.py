@@ -630,25 +630,64 @@ def check_plan_memory(jobs: dict[str, dict[str, Job]], limit: int, source: str) 
                 raise ResourceError(f"config studies.{study}: {exc} ({source})") from None
 
 
-# Cost model (CPU seconds on one core of the development machine), calibrated with single
-# runs of `roughflow scene` (see docs/workflow.md): an elastic threshold search costs
-# about 2.4 s per seed at N = 256^2 grid points and grows like N^1.5 (FFTs of N log N
-# times a GFMD step count that grows with the bandwidth lambda_r / lambda_s); a Reynolds
-# solve about 1 s at 256^2, like N^1.1; one warm-started contact solve of a ladder about
-# 0.3 s at 128 x 256, like N^1.25. A rough guide for resource requests and core-hour
-# estimates, not a benchmark.
+# Cost model: CPU seconds on one core of the 2-core development machine, fitted to single
+# `roughflow scene` runs (one thread) of config/paper.yaml's jobs, 0.26 M to 33.5 M points
+# (docs/workflow.md "Cost", 2026-11-26; benchmarks/bench_cost_model.py repeats them). A
+# guide for the workflow's runtime requests and core-hour estimates, not a benchmark.
+#: Start-up of one ``roughflow scene`` process (imports, surface generation, writing).
+COST_START_S = 3.0
+#: An isotropic elastic threshold search (both axes), per N log2(N): 1.1-1.5e-7 s measured.
+COST_THRESHOLD_S = 1.5e-7
+#: Anisotropic searches bracket a_c*(x) and a_c*(y) apart (9 solves where isotropic
+#: searches on large grids share 4-7): measured about 1.7 times the isotropic cost per
+#: point at eps_f = 1/16 (0.6 for a seed whose axes shared their solves).
+COST_ANISOTROPIC_FACTOR = 2.0
+#: Wider bands (eps_f below 1/16) need more contact iterations: cost times
+#: (1 / (16 eps_f))^COST_BAND_EXPONENT (measured at eps_f = 1/64 against 1/16: 1.0
+#: isotropic, 1.4-1.9 for gamma = 4, 8).
+COST_BAND_EXPONENT = 0.25
+#: One Reynolds solve (one axis, AMG-CG), per grid point.
+COST_FLOW_S = 6.5e-6
+#: The contact solves of a ladder step (warm-started load search), per N log2(N), by model.
+COST_LADDER_CONTACT_S = {"elastic": 7e-8, "adhesive": 1.6e-7, "bearing": 0.0}
+#: The bearing model's exact threshold (one sort and sweep), per grid point and seed.
+COST_BEARING_THRESHOLD_S = 8e-7
+
+
+def _threshold_seconds(job: ThresholdJob, n: int) -> float:
+    """CPU seconds of one seed's elastic threshold search (both axes)."""
+    s = job.surface
+    factor = (1.0 if s.gamma == 1 else COST_ANISOTROPIC_FACTOR) \
+        * max(1.0, 1.0 / (16 * s.eps_f)) ** COST_BAND_EXPONENT
+    return COST_THRESHOLD_S * n * math.log2(n) * factor
+
+
 def estimated_seconds(job: Job) -> float:
-    """Estimated CPU seconds of ``job`` (plus ~3 s start-up per job)."""
+    """Estimated CPU seconds of ``job`` (:data:`COST_START_S` included)."""
     n = grid_points(job)
-    if isinstance(job, ChannelsJob):
-        return 3.0 + 20 * 0.3 * (n / 32768) ** 1.25
+    if isinstance(job, ChannelsJob):  # two load searches to the area, two labellings
+        return COST_START_S + 4 * COST_LADDER_CONTACT_S["elastic"] * n * math.log2(n)
     seeds = len(job.seeds)
     if isinstance(job, ThresholdJob):
-        per = 0.05 * n / 65536 if job.model == "bearing" else 2.4 * (n / 65536) ** 1.5
-        return 3.0 + seeds * per
-    flow = 1.0 * (n / 65536) ** 1.1
-    contact = 0.0 if job.model == "bearing" else 0.3 * (n / 32768) ** 1.25
-    if job.model == "adhesive":
-        contact *= 4.0
-    steps = len(job.area_fractions)
-    return 3.0 + seeds * (steps * (2 * flow + contact) + 2 * flow)
+        per = COST_BEARING_THRESHOLD_S * n if job.model == "bearing" \
+            else _threshold_seconds(job, n)
+        return COST_START_S + seeds * per
+    flow = COST_FLOW_S * n
+    contact = COST_LADDER_CONTACT_S[job.model] * n * math.log2(n)
+    steps = len(job.area_fractions)  # each: contact, flow along x and y; plus the reference
+    return COST_START_S + seeds * (steps * (2 * flow + contact) + 2 * flow)
+
+
+#: Snakemake ``runtime`` of a job: this many times its estimate (the model is fitted to
+#: single runs; seeds differ by up to 2x in solves and a busy node slows a job) ...
+RUNTIME_MARGIN = 3.0
+#: ... and never under this many minutes (start-up of a cluster job, small grids).
+RUNTIME_FLOOR_MIN = 2
+
+
+def requested_runtime_min(job: Job, attempt: int = 1) -> int:
+    """Snakemake ``runtime`` (minutes) of ``job``: :data:`RUNTIME_MARGIN` times
+    :func:`estimated_seconds`, at least :data:`RUNTIME_FLOOR_MIN`, times the attempt (a job
+    that a cluster ended for its time limit would only fail again with the same request)."""
+    minutes = math.ceil(RUNTIME_MARGIN * estimated_seconds(job) / 60)
+    return attempt * max(RUNTIME_FLOOR_MIN, minutes)
