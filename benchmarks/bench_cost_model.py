@@ -29,17 +29,10 @@ from pathlib import Path
 
 import yaml
 
-from roughflow.scenes import estimated_memory, expand_study, grid_points
+from roughflow.scenes import estimated_memory, expand_studies, grid_points
 from roughflow.scenes.jobs import estimated_seconds
 
 OUT = Path(__file__).resolve().parents[1] / "results" / "benchmarks"
-
-
-def plan(config: str) -> dict:
-    jobs = {}
-    for name, block in yaml.safe_load(open(config))["studies"].items():
-        jobs.update(expand_study(name, block))
-    return {k: j for k, j in jobs.items() if j.kind != "leak"}
 
 
 def one_per_class(jobs: dict) -> list:
@@ -78,7 +71,8 @@ def main() -> None:
     ap.add_argument("--jobs", nargs="*", default=None, help="job ids instead of one per class")
     ap.add_argument("--tag", default="")
     args = ap.parse_args()
-    jobs = plan(args.config)
+    jobs = {k: j for k, j in expand_studies(yaml.safe_load(open(args.config))["studies"]).items()
+            if j.kind != "leak"}  # a leak job's grid is its scan's
     if args.jobs:
         unknown = [j for j in args.jobs if j not in jobs]
         if unknown:

@@ -18,8 +18,8 @@ from pathlib import Path
 import pytest
 import yaml
 
-from roughflow.scenes import expand_study
-from roughflow.scenes.jobs import estimated_seconds, requested_runtime_min
+from roughflow.scenes import expand_studies
+from roughflow.scenes.jobs import RUNTIME_FLOOR_MIN, estimated_seconds, requested_runtime_min
 
 ROOT = Path(__file__).resolve().parents[1]
 
@@ -49,11 +49,7 @@ MEASURED = {
 
 @pytest.fixture(scope="module")
 def paper_jobs():
-    jobs = {}
-    for name, block in yaml.safe_load((ROOT / "config" / "paper.yaml").read_text())[
-            "studies"].items():
-        jobs.update(expand_study(name, block))
-    return jobs
+    return expand_studies(yaml.safe_load((ROOT / "config" / "paper.yaml").read_text())["studies"])
 
 
 @pytest.mark.parametrize("job_id", sorted(MEASURED))
@@ -73,7 +69,7 @@ def test_cost_model_is_calibrated_to_the_measured_jobs(paper_jobs, job_id):
 
 def test_runtime_request_floor_and_attempts(paper_jobs):
     job = paper_jobs["channels"]  # a few seconds: the floor applies
-    assert requested_runtime_min(job) == 2
+    assert requested_runtime_min(job) == RUNTIME_FLOOR_MIN
     big = paper_jobs["elastic_g8_H0.8_L11.3137_f0.015625_p8_s0_t0.004_c0.0001"]
     assert requested_runtime_min(big, attempt=2) == 2 * requested_runtime_min(big)
 

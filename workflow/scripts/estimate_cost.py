@@ -17,15 +17,8 @@ from pathlib import Path
 import yaml
 
 from roughflow.resources import describe
-from roughflow.scenes import estimated_memory, expand_study, grid_points
+from roughflow.scenes import estimated_memory, expand_studies, grid_points
 from roughflow.scenes.jobs import estimated_seconds
-
-
-def plan(config: str) -> dict:
-    jobs = {}
-    for name, block in yaml.safe_load(open(config))["studies"].items():
-        jobs.update(expand_study(name, block))
-    return jobs
 
 
 def main() -> None:
@@ -33,7 +26,7 @@ def main() -> None:
     ap.add_argument("config", nargs="?", default="config/paper.yaml")
     ap.add_argument("--benchmarks", default=None, help="compare with a finished run")
     args = ap.parse_args()
-    jobs = plan(args.config)
+    jobs = expand_studies(yaml.safe_load(open(args.config))["studies"])
     leaks = [j for j in jobs.values() if j.kind == "leak"]
     if leaks:  # their cost depends on the scans' grids, known only after the import
         print(f"{len(leaks)} measured-scan jobs not estimated (cost set by each scan's grid, "

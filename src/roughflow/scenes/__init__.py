@@ -18,6 +18,7 @@ from .jobs import (
     ThresholdJob,
     check_job_memory,
     estimated_memory,
+    expand_studies,
     expand_study,
     grid_points,
     job_methods,
@@ -27,8 +28,8 @@ from .jobs import (
 _RUNNERS = {"run_threshold": "threshold", "run_ladder": "ladder", "run_channels": "channels"}
 
 __all__ = ["ChannelsJob", "LadderJob", "SurfaceParams", "ThresholdJob", "check_job_memory",
-           "estimated_memory", "expand_study", "grid_points", "job_methods", "run",
-           "study_defaults", *_RUNNERS]
+           "estimated_memory", "expand_studies", "expand_study", "grid_points", "job_methods",
+           "run", "study_defaults", *_RUNNERS]
 
 
 def __getattr__(name: str):

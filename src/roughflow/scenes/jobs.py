@@ -471,6 +471,15 @@ def expand_study(name: str, block: dict) -> dict[str, Job]:
     return jobs
 
 
+def expand_studies(studies: dict) -> dict[str, Job]:
+    """Jobs of every study of a config's ``studies`` block, keyed by job id (a job that
+    two studies share, such as an H = 0.8 threshold point, appears once)."""
+    jobs: dict[str, Job] = {}
+    for name, block in studies.items():
+        jobs.update(expand_study(name, block))
+    return jobs
+
+
 def _expand_measured(block: dict) -> dict[str, Job]:
     """One :class:`LeakJob` per scan; a scan entry's keys override the study's."""
     study = defaults.MEASURED_STUDY
