@@ -90,7 +90,7 @@ def adhesion_attrs(surface: Surface, adhesion: Adhesion) -> dict:
 #: Per-axis variables of a threshold: name -> (units, long_name).
 THRESHOLD_FIELDS = {
     "a_c_star": (DIMENSIONLESS, "percolation threshold a_c* (relative contact area, "
-                                "midpoint of a_lo and a_hi)"),
+                                "estimated between a_lo and a_hi; docs/percolation.md)"),
     "a_c_star_corrected": (DIMENSIONLESS, "a_c* with the perimeter correction of the contact "
                                           "area (first-order grid bias removed; elastic "
                                           "model; docs/accuracy.md)"),
