@@ -185,9 +185,9 @@ class Threshold:
     strategy ``"predict"`` (periodic cells) the root of the first-order predictions of the
     two ends, linear between them (:func:`_weight`), else the midpoint. Pressures are in
     E* gbar (NaN for the bearing model, which is parameterised by the area itself).
-    ``n_solves`` counts the contact solves of the
-    whole search (shared between the axes when both were asked for; scouts and their
-    re-solves each count); ``solves`` lists them in order.
+    ``n_solves`` counts the contact solves of the whole search (shared between the axes when
+    both were asked for; scouts and their re-solves each count); ``solves`` lists them in
+    order.
     ``bracketed`` is False when the allowed pressure range did not contain the threshold
     (only with ``on_unbracketed="nan"``; then ``a_c_star`` is NaN and only the side that
     was found is set).
