@@ -72,7 +72,38 @@ def test_sweep_by_key_equals_the_full_sweep():
                 assert critical_open_count_by_key(key, axis, expect=expect) == full
                 assert critical_open_count_by_key(key, axis, expect=expect, work=work) == full
     with pytest.raises(ValueError, match="sweep work"):
-        critical_open_count_by_key(key, 0, work=sweep_work(key.size, np.float32))
+        critical_open_count_by_key(key, 0, work=sweep_work(key.size + 1))
+
+
+def test_sweep_by_key_with_sampled_cuts_on_large_and_tied_keys():
+    # On grids above _CUT_SAMPLES cells the cuts between block and chunks come from a strided
+    # sample of the keys, so they are only approximate: the count must still be the full
+    # sweep's. Correlated keys (a smoothed field, as a contact state's q is) and keys with
+    # large tie groups (rounded): with ties the count must lie inside the tie group of the
+    # critical cell, i.e. be the first spanning prefix of some order by decreasing key.
+    from scipy.ndimage import gaussian_filter
+
+    from roughflow.percolation import sweep_work
+    from roughflow.percolation.sweep import _CUT_SAMPLES
+
+    rng = np.random.default_rng(11)
+    shape = (256, 192)
+    assert shape[0] * shape[1] >= 2 * _CUT_SAMPLES  # the sample is strided
+    smooth = gaussian_filter(rng.standard_normal(shape), 4.0, mode="wrap")
+    work = sweep_work(smooth.size)
+    for key in (smooth, smooth.astype(np.float32), np.round(smooth * 2000.0)):
+        desc = np.sort(key, axis=None)[::-1]
+        for axis in (0, 1):
+            full = critical_open_count(np.argsort(-key, axis=None, kind="stable"), shape,
+                                       axis)
+            v = desc[full - 1]
+            first, last = int(np.sum(desc > v)) + 1, int(np.sum(desc >= v))
+            for expect in (0.1, 0.4, 0.5, 0.6, 0.95):
+                k = critical_open_count_by_key(key, axis, expect=expect, work=work)
+                if last == first:
+                    assert k == full
+                else:
+                    assert first <= k <= last
 
 
 def test_sweep_by_key_takes_float32_keys_as_they_are():

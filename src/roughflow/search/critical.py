@@ -520,14 +520,14 @@ def threshold(
     # Elastic states seen whole are kept as q = gap - c pressure in float32 (CompactState, 4
     # bytes a cell instead of 17): the search then needs none of a result's arrays once it is
     # sampled, and its gfmd solves share one workspace instead of allocating (fresh memory
-    # cost up to 16 % of a pair here; docs/percolation.md, "Twelfth pass")
+    # cost up to 16 % of a pair here; docs/percolation.md, "Cost of a threshold pair")
     lean = model == "elastic" and opts.observe is None
     # the adhesive search (and an observed window) keeps every state whole: its own model
     check_memory("threshold" if lean or model == "bearing" else "threshold_adhesive", shape,
                  what=f"{'a' if model == 'bearing' else 'an'} {model} threshold search")
     law = ContactLaw(model)
     compliance = warm_start_compliance(surface)
-    sweeps = sweep_work(heights.size, np.float32) if lean else None  # reused by predictions
+    sweeps = sweep_work(heights.size) if lean else None  # reused by predictions
 
     def sample(r: ContactResult, load: float, open_first: np.ndarray | None,
                pressure: np.ndarray | None) -> _Sample:
