@@ -290,8 +290,8 @@ def test_start_check_is_skipped_only_where_the_start_cannot_be_converged(monkeyp
 def test_workspace_gives_the_same_solve_and_is_reused():
     # contact.workspace holds the arrays of the iteration and of the result, reused by every
     # solve given work= (a threshold search keeps only q of each state, so its solves need
-    # not allocate: fresh memory cost 10-16 % of a pair, docs/percolation.md "Twelfth
-    # pass"). The arithmetic is the same on the same values, so the results must be
+    # not allocate: fresh memory cost 10-16 % of a pair, docs/percolation.md "Cost of a
+    # threshold pair"). The arithmetic is the same on the same values, so the results must be
     # bit-identical; the result is a view of the workspace, overwritten by the next solve,
     # and a warm start from the workspace's own result is allowed. A workspace of another
     # grid or for another method is refused before any work.

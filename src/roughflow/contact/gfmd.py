@@ -219,8 +219,8 @@ class HardWallWork:
     whose fresh memory is expensive (transparent huge pages with synchronous compaction, as
     on ours) a fresh 8 MB array costs about 20 ms on first touch and a 32 MB one about
     110 ms (medians), and a threshold pair spent up to 16 % of its time in the kernel for
-    them (docs/percolation.md, "Twelfth pass"). The result of a solve with it is a view of
-    these arrays: it is overwritten by the next solve with the same work.
+    them (docs/percolation.md, "Cost of a threshold pair"). The result of a solve with it
+    is a view of these arrays: it is overwritten by the next solve with the same work.
 
     g, f, d, active: gap, force, search direction and active set of the iteration (flat);
     rt_old: the transform of the previous residual; sigma, gap, contact: the result's wall
