@@ -76,9 +76,10 @@ log = logging.getLogger(__name__)
 
 STRATEGIES = THRESHOLD_STRATEGIES
 
-# Tuning of the target proposal, measured over 20 seeds on 256^2 and 512^2 surfaces
-# (docs/percolation.md): inverse quadratic interpolation and one-sided secant steps did not
-# save solves over these choices.
+# Tuning of the target proposal, measured over 20 seeds on 256^2 and 512^2 surfaces when the
+# search was built: inverse quadratic interpolation and one-sided secant steps did not save
+# solves over these choices (what was tried since: docs/percolation.md, "Cost of a threshold
+# pair").
 #: Consecutive solves on the unintended side of the predicted root before bisecting.
 MISSES_BEFORE_BISECTION = 3
 #: Distance (in units of tol) by which a two-sided target is placed past the predicted root;
