@@ -106,6 +106,19 @@ def test_sweep_by_key_with_sampled_cuts_on_large_and_tied_keys():
                     assert first <= k <= last
 
 
+def test_sweep_by_key_when_infinite_keys_already_span():
+    # Cells with key +inf open before any other; if they span by themselves, no block can be
+    # shrunk below them (every cut is +inf). The sweep must then fall back to the full sort
+    # instead of shrinking forever, and give its count.
+    rng = np.random.default_rng(2)
+    key = rng.random((12, 9))
+    key[:, 4] = np.inf  # a spanning line along x
+    full = critical_open_count(np.argsort(-key, axis=None, kind="stable"), key.shape, 0)
+    assert full == 12
+    for expect in (0.0, 0.5, 1.0):
+        assert critical_open_count_by_key(key, 0, expect=expect) == full
+
+
 def test_sweep_by_key_takes_float32_keys_as_they_are():
     # A threshold search sweeps its kept float32 q (CompactState) without a float64 copy:
     # keys that float32 holds exactly (distinct integers) give the float64 count
