@@ -19,7 +19,10 @@ same run, before and after the solves: ``RealFFT2.forward`` + ``inverse`` (what 
 FFTW executes (what the solver's kernels use). ``--threshold`` adds the cost of the
 critical-area search for both axes (``percolation.threshold``, bisection tol 0.008,
 contact tol 1e-4 as in the default workflow) in cold-solve equivalents: its wall time over
-that of one cold solve at the same contact tolerance. ``--accuracy 256/0 512/0 1024/1``
+that of one cold solve at the same contact tolerance; ``--threshold-seeds`` also splits each
+search into the time inside the minimizer and outside it, with the fit of a solve's time
+to a fixed cost plus one per iteration (docs/percolation.md, "Cost model and floor").
+``--accuracy 256/0 512/0 1024/1``
 instead writes bench_scaling_accuracy.{csv,md}: errors of a_c, mean gap and contact set at
 tol 1e-4, 1e-6, 1e-8 against tol 1e-10, CG and FIRE side by side.
 
@@ -103,6 +106,25 @@ def minimizer(name: str):
         G.gfmd = orig
 
 
+@contextlib.contextmanager
+def solver_clock(log: list[tuple[int, float]]):
+    """Append (iterations, seconds) of every ``gfmd`` call made by ``contact.solve`` to
+    ``log``: what a search spends inside the minimizer, apart from its own work."""
+    orig = G.gfmd
+
+    def timed(*a, **kw):
+        t0 = time.perf_counter()
+        out = orig(*a, **kw)
+        log.append((out.iterations, time.perf_counter() - t0))
+        return out
+
+    G.gfmd = timed
+    try:
+        yield
+    finally:
+        G.gfmd = orig
+
+
 #: Threshold-search variants: the hard-wall minimizer. "fire" is the search as it was before
 #: issue 14, "cg" the present one.
 VARIANTS = {"fire": "fire", "cg": "auto"}
@@ -121,13 +143,21 @@ def threshold_cost(s: Surface, variant: str, tol: float = THRESHOLD_TOL,
             cold = solve(s, first_pressure(), tol=contact_tol)
             colds.append(time.perf_counter() - t0)
         t_cold = statistics.median(colds)
-        t0 = time.perf_counter()
-        res = threshold(s, tol=tol, options=SearchOptions(contact_tol=contact_tol))
-        t_pair = time.perf_counter() - t0
+        solves: list[tuple[int, float]] = []
+        with solver_clock(solves):
+            t0 = time.perf_counter()
+            res = threshold(s, tol=tol, options=SearchOptions(contact_tol=contact_tol))
+            t_pair = time.perf_counter() - t0
+    solver_s = sum(t for _, t in solves)
     return {"variant": variant, "cold_s": t_cold, "cold_iterations": cold.iterations,
             "cold_a_c": cold.area_fraction, "pair_s": t_pair,
             "pair_cold_equivalents": t_pair / t_cold, "solves": res[0].n_solves,
             "pair_iterations": sum(r.iterations for r in res[0].solves),
+            # the cost model of docs/percolation.md: the time inside the minimizer, and each
+            # solve's (iterations, seconds) for the fit of a fixed cost plus one per iteration
+            "solver_s": solver_s, "outside_solver_s": t_pair - solver_s,
+            "solver_cold_equivalents": solver_s / t_cold,
+            "solve_times": solves,
             "a_x": res[0].a_c_star, "a_y": res[1].a_c_star,
             "a_x_corrected": res[0].a_c_star_corrected,
             "a_y_corrected": res[1].a_c_star_corrected}
@@ -139,6 +169,7 @@ def threshold_seeds(n: int, l_over_lambda_r: float, seeds: int, variants: list[s
     median cost, mean corrected a_c* per axis and its shift against the first variant, the
     largest per-seed shift of a_c*."""
     rows = []
+    times: dict[str, list[tuple[int, float]]] = {}
     for seed in range(seeds):
         s = generate(SurfaceSpec.from_sweep(gamma=1, hurst=0.8, l_over_lambda_r=l_over_lambda_r,
                                             eps_f=4 * l_over_lambda_r / n,
@@ -146,6 +177,7 @@ def threshold_seeds(n: int, l_over_lambda_r: float, seeds: int, variants: list[s
         fft.plan(s.shape)
         for v in variants:
             r = {"n": n, "seed": seed, "tol": tol, **threshold_cost(s, v, tol=tol)}
+            times.setdefault(v, []).extend(r.pop("solve_times"))  # not a table column
             print(json.dumps(r), flush=True)
             rows.append(r)
     ref = variants[0]
@@ -159,7 +191,14 @@ def threshold_seeds(n: int, l_over_lambda_r: float, seeds: int, variants: list[s
                "max_cold_equivalents": max(r["pair_cold_equivalents"] for r in sel),
                "median_solves": statistics.median(r["solves"] for r in sel),
                "median_cold_s": statistics.median(r["cold_s"] for r in sel),
-               "median_pair_s": statistics.median(r["pair_s"] for r in sel)}
+               "median_pair_s": statistics.median(r["pair_s"] for r in sel),
+               # with no work outside the minimizer, and the iterations alone
+               "median_solver_cold_equivalents": statistics.median(
+                   r["solver_cold_equivalents"] for r in sel),
+               "median_iterations_cold_equivalents": statistics.median(
+                   r["pair_iterations"] / r["cold_iterations"] for r in sel),
+               "median_outside_solver_s": statistics.median(r["outside_solver_s"] for r in sel),
+               **solve_cost_fit(times[v])}
         for ax in "xy":
             key = f"a_{ax}_corrected"
             out[f"mean_{key}"] = statistics.fmean(r[key] for r in sel)
@@ -168,6 +207,16 @@ def threshold_seeds(n: int, l_over_lambda_r: float, seeds: int, variants: list[s
                                     for r, b in zip(sel, base, strict=True) for ax in "xy")
         summary.append(out)
     return rows, summary
+
+
+def solve_cost_fit(solves: list[tuple[int, float]]) -> dict:
+    """Least-squares fit of a solve's time to a + b iterations over ``solves`` ((iterations,
+    seconds) each): the fixed cost of a solve and the cost of an iteration, in ms."""
+    its, secs = np.array(solves, dtype=float).reshape(-1, 2).T
+    if its.size < 2 or np.ptp(its) == 0:
+        return {"solve_fixed_ms": float("nan"), "iteration_ms": float("nan")}
+    a, b = np.linalg.lstsq(np.column_stack([np.ones_like(its), its]), secs, rcond=None)[0]
+    return {"solve_fixed_ms": 1e3 * a, "iteration_ms": 1e3 * b}
 
 
 def row(n: int, l_over_lambda_r: float, args: argparse.Namespace) -> dict:
