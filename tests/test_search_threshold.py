@@ -414,7 +414,7 @@ def test_compact_states_warm_start_and_predict_like_the_full_ones():
     full = [Point(0.2, r0.area_fraction, r0), Point(0.21, r1.area_fraction, r1)]
     kept = [Point(q.load, q.area, compact(q.state, c)) for q in full]
     assert kept[0].state.q.dtype == np.float32 and kept[0].state.iterations == r0.iterations
-    out = (np.empty(s.shape), np.empty(s.shape))
+    out = (np.empty(s.shape), np.empty(s.shape), np.empty(s.shape, dtype=bool))
     for load in (0.205, 0.23, 0.3):  # inside, extrapolated, carried from one state
         a, b = warm_start(full, load, compliance=c), warm_start(kept, load, compliance=c)
         np.testing.assert_allclose(b.gap, a.gap, rtol=0, atol=1e-6 * h)
@@ -423,9 +423,12 @@ def test_compact_states_warm_start_and_predict_like_the_full_ones():
         assert b.pressure == load and b.area_fraction == pytest.approx(
             float((b.contact_pressure > 0).mean()))
         o = warm_start(kept, load, compliance=c, out=out)
-        assert np.shares_memory(o.gap, out[0]) and np.shares_memory(o.contact_pressure, out[1])
+        assert all(np.shares_memory(a, b) for a, b in
+                   zip((o.gap, o.contact_pressure, o.contact), out, strict=True))
         np.testing.assert_array_equal(o.gap, b.gap)
         np.testing.assert_array_equal(o.contact_pressure, b.contact_pressure)
+        np.testing.assert_array_equal(o.contact, b.contact_pressure > 0)
+        assert o.mean_gap == pytest.approx(float(b.gap.mean()), rel=1e-12)
     own = warm_start(kept[:1], 0.2, compliance=c)  # a scout re-solved from its own state
     np.testing.assert_allclose(own.gap, r0.gap, rtol=0, atol=1e-6 * h)
     for r, q in ((r0, kept[0].state), (r1, kept[1].state)):

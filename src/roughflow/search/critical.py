@@ -400,7 +400,7 @@ def _refine(evaluate: Callable[[float, ContactResult | None, bool], _Sample], ax
             tol: float, first: float, load_range: tuple[float, float], law: ContactLaw,
             options: SearchOptions, model: str, loads_are_pressures: bool,
             compliance: float | None = None, scouts: bool = False,
-            start_out: tuple[np.ndarray, np.ndarray] | None = None):
+            start_out: tuple[np.ndarray, np.ndarray, np.ndarray] | None = None):
     samples: list[_Sample] = []  # the current states (a re-solved scout replaces its own)
     history: list[_Sample] = []  # every solve in order
     misses = dict.fromkeys(axes, 0)  # consecutive solves that missed the intended side
@@ -582,7 +582,8 @@ def threshold(
         kwargs["setup"] = prepare(surface, threads)
         if lean:
             kwargs["work"] = workspace(surface)
-            start_out = (np.empty(shape), np.empty(shape))  # the warm starts' gap, pressure
+            # the warm starts' gap, pressure and contact
+            start_out = (np.empty(shape), np.empty(shape), np.empty(shape, dtype=bool))
 
     scout_tol = min(SCOUT_TOL_FACTOR * opts.contact_tol, CONTACT_TOL_MAX)
 
