@@ -132,6 +132,23 @@ def test_sweep_by_key_takes_float32_keys_as_they_are():
                     critical_open_count_by_key(key, axis, expect=expect)
 
 
+def test_radix_order_of_float32_keys_is_the_stable_argsort():
+    # The chunks of a float32 key are ordered by a radix sort of the keys' bits: it must be
+    # the stable argsort by decreasing key (negative, positive, infinite keys and ties; an
+    # empty and a one-cell chunk; cells in memory order as the sweep collects them)
+    from roughflow.percolation.sweep import _by_decreasing_key
+
+    rng = np.random.default_rng(6)
+    key = (rng.standard_normal(5000) * 10.0).astype(np.float32)
+    key[::3] = np.round(key[::3])  # tie groups
+    key[[10, 20, 30]] = [np.inf, -np.inf, 0.0]
+    key[key == 0] = 0.0  # no -0.0: it is ordered after +0.0, a tie the argsort keeps
+    for n in (0, 1, 7, 2000, 5000):
+        cells = np.sort(rng.choice(key.size, n, replace=False)).astype(np.int32)
+        np.testing.assert_array_equal(_by_decreasing_key(key, cells),
+                                      cells[np.argsort(-key[cells], kind="stable")])
+
+
 def test_sweep_by_key_joins_the_block_across_the_periodic_seam():
     # The block is joined in memory order, each bond once from its later cell; a bond across
     # the periodic seam is looked at from the last row or column. Here the only spanning
