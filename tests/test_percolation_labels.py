@@ -172,14 +172,39 @@ def test_spanning_matches_flood_fill(m, axis):
 
 @settings(max_examples=200, deadline=None)
 @given(arrays(np.bool_, st.tuples(st.integers(1, 9), st.integers(1, 9))), st.booleans())
-def test_percolates_along_both_axes_from_one_labelling(m, periodic):
-    # one labelling, the seams merged per axis: the same answers as one call per axis
-    # (walls across the flow with periodic=False included), checked against the flood fill
+def test_percolates_along_both_axes_in_one_pass(m, periodic):
+    # one seamless union-find pass, each axis's seam joined over the roots afterwards: the
+    # same answers as the labelling of percolates() per axis (walls across the flow with
+    # periodic=False included), checked against the flood fill; also with a reused work
+    from roughflow.percolation import sweep_work
+
     got = percolates_along(m, periodic=periodic)
     assert got == {ax: percolates(m, ax, periodic=periodic) for ax in (0, 1)}
     if periodic:
         assert got == {ax: bool(_flood_spans(m, ax)) for ax in (0, 1)}
     assert percolates_along(m, (1,), periodic=periodic) == {1: got[1]}
+    assert percolates_along(m, periodic=periodic, work=sweep_work(m.size)) == got
+
+
+def test_percolates_along_on_correlated_masks_near_the_threshold():
+    # Long runs of open cells, clusters that span only through a seam, and a work reused
+    # from mask to mask (as a threshold search does, none of its arrays reset): smoothed
+    # random fields cut near their percolation threshold, against the labelling
+    from scipy.ndimage import gaussian_filter
+
+    from roughflow.percolation import sweep_work
+
+    rng = np.random.default_rng(12)
+    work = sweep_work(64 * 48)
+    seen = set()
+    for _ in range(60):
+        field = gaussian_filter(rng.standard_normal((64, 48)), 3.0, mode="wrap")
+        m = field > np.quantile(field, rng.uniform(0.35, 0.65))
+        for periodic in (True, False):
+            got = percolates_along(m, periodic=periodic, work=work)
+            assert got == {ax: percolates(m, ax, periodic=periodic) for ax in (0, 1)}
+            seen.add((got[0], got[1]))
+    assert len(seen) == 4  # every combination of the two axes occurred
 
 
 @settings(max_examples=300, deadline=None)

@@ -10,10 +10,12 @@ cylinder (open in x, periodic in y), and vice versa (docs/physics.md Sect. 4).
 
 from __future__ import annotations
 
+import numba
 import numpy as np
 from scipy import ndimage
 
 from .labels import _STRUCTURES, check_axis, check_connectivity, check_mask, merge_seams
+from .sweep import SweepWork, _find, _link, sweep_work
 
 
 def _periodic_across(axis: int, periodic: bool = True) -> tuple[bool, bool]:
@@ -51,13 +53,115 @@ def percolates(open_mask, axis: int, *, connectivity: int = 4, periodic: bool = 
     return _spanning_labels(m, ax, conn, bool(periodic))[2].size > 0
 
 
+# bits of a cluster's slabs in _spans_4: first / last along x, first / last along y
+_X_ENDS, _Y_ENDS = 3, 12
+
+
+@numba.njit(cache=True)
+def _seam_spans(pairs_a, pairs_b, ends, parent, aux, aux_flags, flags):
+    """Whether the clusters of a seamless union-find (``parent``, slab bits ``flags``) span
+    between the two slabs ``ends`` once the cells ``pairs_a[i]`` and ``pairs_b[i]`` (open,
+    across a periodic seam) are joined: a second union-find over the roots alone (``aux``,
+    ``aux_flags``: scratch arrays indexed by root), leaving the first one as it is."""
+    m = pairs_a.size
+    for i in range(m):  # every root a pair touches, before any join
+        for c in (pairs_a[i], pairs_b[i]):
+            r = _find(parent, c)
+            aux[r] = r
+            aux_flags[r] = flags[r] & ends
+    for i in range(m):
+        a = _find(aux, _find(parent, pairs_a[i]))
+        b = _find(aux, _find(parent, pairs_b[i]))
+        if a != b:
+            aux[b] = a
+            aux_flags[a] |= aux_flags[b]
+            if aux_flags[a] == ends:
+                return True
+    return False
+
+
+@numba.njit(cache=True)
+def _spans_4(open_, nx, ny, periodic, parent, size, flags, aux_flags):
+    """(spans along x, spans along y) of the 4-connected open cells of ``open_`` (flat, C
+    order): one raster pass of a union-find without seams, a row's run of open cells one
+    cluster from its first cell on and joined to the row above once per stretch of open
+    cells there (as ``sweep._join_block``), each root keeping which of the four slabs its
+    cluster touches; then, when ``periodic``, each axis's own seam joined over the roots
+    alone (:func:`_seam_spans`). Arrays of ``nx ny`` cells; none needs resetting."""
+    spans_x = False
+    spans_y = False
+    for ix in range(nx):
+        base = ix * ny
+        root = -1
+        joined_up = False
+        for iy in range(ny):
+            c = base + iy
+            if not open_[c]:
+                root = -1
+                continue
+            if root < 0:
+                f = 0
+                if ix == 0:
+                    f |= 1
+                if ix == nx - 1:
+                    f |= 2
+                if iy == 0:
+                    f |= 4
+                if iy == ny - 1:
+                    f |= 8
+                parent[c] = c
+                size[c] = 1
+                flags[c] = f
+                root = c
+                joined_up = False
+            else:
+                parent[c] = root
+                size[root] += 1
+                if iy == ny - 1:
+                    flags[root] |= 8
+            if ix > 0 and open_[c - ny]:
+                if not joined_up:
+                    root = _link(parent, size, flags, c - ny, root)
+                    joined_up = True
+            else:
+                joined_up = False
+            f = flags[root]
+            spans_x |= (f & _X_ENDS) == _X_ENDS
+            spans_y |= (f & _Y_ENDS) == _Y_ENDS
+        if spans_x and spans_y:
+            return True, True
+    if periodic:
+        aux = size  # the sizes are not needed any more
+        if not spans_x:  # flow along x: periodic in y, seam (ix, 0) - (ix, ny - 1)
+            first = np.arange(nx) * ny
+            last = first + (ny - 1)
+            both = np.flatnonzero(open_[first] & open_[last])
+            spans_x = _seam_spans(first[both], last[both], _X_ENDS, parent, aux, aux_flags,
+                                  flags)
+        if not spans_y:  # flow along y: periodic in x, seam (0, iy) - (nx - 1, iy)
+            first = np.arange(ny)
+            last = first + (nx - 1) * ny
+            both = np.flatnonzero(open_[first] & open_[last])
+            spans_y = _seam_spans(first[both], last[both], _Y_ENDS, parent, aux, aux_flags,
+                                  flags)
+    return spans_x, spans_y
+
+
 def percolates_along(open_mask, axes=(0, 1), *, connectivity: int = 4,
-                     periodic: bool = True) -> dict[int, bool]:
-    """:func:`percolates` along each of ``axes`` from one labelling of ``open_mask`` (the
-    axes differ only in which seam is periodic); ``{axis: spans}``."""
+                     periodic: bool = True, work: SweepWork | None = None) -> dict[int, bool]:
+    """:func:`percolates` along each of ``axes`` at once (the axes differ only in which seam
+    is periodic); ``{axis: spans}``. 4-connected: one union-find pass (:func:`_spans_4`;
+    ``work``: a :func:`~roughflow.percolation.sweep_work` of the grid's size, reused instead
+    of new arrays); 8-connected: one labelling."""
     m = check_mask("open_mask", open_mask)
     axes = tuple(check_axis(ax) for ax in axes)
     conn = check_connectivity(connectivity)
+    if conn == 4:
+        if work is None or work.parent.size != m.size:
+            work = sweep_work(m.size)
+        spans = _spans_4(np.ascontiguousarray(m).reshape(-1), m.shape[0], m.shape[1],
+                         bool(periodic), work.parent, work.size, work.flags, work.nxt)
+        return {ax: bool(spans[ax]) for ax in axes}
     raw = None
     out = {}
     for ax in axes:

@@ -528,7 +528,7 @@ def threshold(
                  what=f"{'a' if model == 'bearing' else 'an'} {model} threshold search")
     law = ContactLaw(model)
     compliance = warm_start_compliance(surface)
-    sweeps = sweep_work(heights.size) if lean else None  # reused by predictions
+    sweeps = sweep_work(heights.size) if lean else None  # predictions and spanning tests
 
     def sample(r: ContactResult, load: float, open_first: np.ndarray | None,
                pressure: np.ndarray | None) -> _Sample:
@@ -536,7 +536,7 @@ def threshold(
         if seen is not r:
             pressure = seen.contact_pressure
         area = float(seen.area_fraction)
-        spans = percolates_along(~seen.contact, axes, periodic=opts.periodic)
+        spans = percolates_along(~seen.contact, axes, periodic=opts.periodic, work=sweeps)
         # faces per observed cell: independent of the cell size, so a window needs no scaling
         perimeter = perimeter_term(seen.contact) if model == "elastic" else float("nan")
         state = compact(r, compliance) if lean else r
