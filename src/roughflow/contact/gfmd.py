@@ -68,8 +68,8 @@ residual. G has no q = 0 part, so the load imbalance |mean f_eff| / min(p, k_min
 enters the maximum as well. FIRE and the adhesive CG check it every ``check_every``
 iterations; the hard-wall CG
 checks it once the free estimate max |z| / rms(h) says it may be below the tolerance (the
-start only if its estimate is within ``START_CHECK`` tolerances, then at the first iteration
-to calibrate the estimate).
+start only if its estimate is within ``START_CHECK`` tolerances), and after a failed check
+once the estimate has fallen by the factor still missing.
 """
 
 from __future__ import annotations
@@ -416,15 +416,19 @@ def _hard_wall(
         z = plan.execute_inverse()
         if it == 0:
             # the start gets its exact check only when the free estimate says it may be
-            # converged (a converged init returns unchanged); otherwise that check is saved
-            # and the first iteration's calibrates the estimate, as before
+            # converged (a converged init returns unchanged). The next check waits for the
+            # estimate to reach the tolerance: an unconditional check at the first iteration,
+            # to calibrate the estimate, cost an inverse FFT per solve and saved no iteration
+            # (1024^2 threshold pairs, 10 seeds: 582 -> 581 iterations, 191 -> 100 checks;
+            # cold solves to 1e-4 - 1e-8 at 512^2 - 2048^2: the same iterations, one check
+            # less; waiting for tol / 1.5 instead: 614 iterations)
             if max(max_free(z.reshape(-1), active) / hscale, imbalance) <= START_CHECK * tol:
                 res = residual()
                 if res <= tol:
                     break
                 rz, roz = precondition(ft, pre, rt_old, spec_in, shape[1])
                 z = plan.execute_inverse()
-            check_at = math.inf
+            check_at = tol
         # Polak-Ribiere, >= 0: restarts itself when the active set changes (and after t = 0)
         beta = max(0.0, (rz - roz) / rz_old) if rz_old > 0 else 0.0
         rz_old = rz
