@@ -456,6 +456,8 @@ def test_compact_states_warm_start_and_predict_like_the_full_ones():
                 critical_open_count_by_key(key, ax, expect=e)
     with pytest.raises(InputError, match="compliance"):
         warm_start(kept, 0.205)
+    with pytest.raises(InputError, match="C-ordered"):  # written through flat views
+        warm_start(kept, 0.205, compliance=c, out=(out[0].T, out[1], out[2]))
 
 
 def test_lean_search_agrees_with_the_search_that_keeps_full_states(monkeypatch):

@@ -5,7 +5,7 @@ drives them is :mod:`roughflow.search`).
 
 - :func:`label`: periodic cluster labelling (4- or 8-connected).
 - :func:`percolates`, :func:`spanning_cells`: does the fluid span along an axis, and which
-  cells carry flow (:func:`percolates_along`: several axes from one labelling);
+  cells carry flow (:func:`percolates_along`: several axes from one pass);
   :func:`contact_percolates`: the dual statement for contact (8-connected).
 - :func:`critical_open_count`, :func:`bearing_bracket`, :func:`predicted_thresholds`:
   exact spanning thresholds of a growing open set (one union-find pass);

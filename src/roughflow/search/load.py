@@ -232,6 +232,11 @@ def _from_q(q0: np.ndarray, q1: np.ndarray, w0: float, w1: float, compliance: fl
     if out is None:
         out = (np.empty(shape), np.empty(shape), np.empty(shape, dtype=bool))
     gap, pressure, contact = out
+    if not all(a.shape == shape and a.flags.c_contiguous and a.dtype == d
+               for a, d in zip(out, (np.float64, np.float64, np.bool_), strict=True)):
+        # the kernel writes through flat views: a copy would swallow the start
+        raise InputError(f"out must be C-ordered float64, float64 and bool arrays of shape "
+                         f"{shape}")
     n, total = _start_kernel(np.ascontiguousarray(q0).ravel(), np.ascontiguousarray(q1).ravel(),
                              float(w0), float(w1), 1.0 / factor, factor / compliance,
                              gap.reshape(-1), pressure.reshape(-1), contact.reshape(-1))
