@@ -22,7 +22,7 @@ from __future__ import annotations
 import math
 from dataclasses import dataclass
 
-from scipy.special import erfinv
+from scipy.special import erf, erfinv
 
 from roughflow.defaults import MODELS
 from roughflow.errors import InputError
@@ -40,6 +40,12 @@ PAPER_ADHESIVE_LOAD_RATIOS = ((0.1, 1 / 8), (0.4, 1 / 4))
 LOAD_BOUNDS = {"elastic": (1e-6, 4.0), "adhesive": (0.0, 4.0), "bearing": (0.0, 1.0)}
 # erfinv diverges at 0 and 1: targets are clipped this far inside
 _AREA_MARGIN = 1e-6
+
+
+def elastic_area(pressure: float) -> float:
+    """a_c = erf(c p) of the elastic law at ``pressure`` (E* gbar): the contact area a cold
+    solve expects (``contact.gfmd`` starts from the flat whose bearing area it is)."""
+    return float(erf(ERF_COEFFICIENT * max(float(pressure), 0.0)))
 
 
 def _adhesive_ratio(area: float) -> float:

@@ -98,9 +98,10 @@ BISECT_STEP = 0.05
 #: side of a bracket) are scouts, solved to this many times the contact tolerance and
 #: re-solved to it from their own states only if they end up as the end of a closed bracket.
 #: At 30 x 1e-4 the area of a state moves by <= 1.1e-4 (1024^2, 3 seeds), far below the
-#: bisection tolerance, and a cold solve takes 17-19 iterations instead of 22-24. Iterations
-#: per pair, 10 seeds at 1024^2: 71.1 with no scouts, 61.6 with a factor 10, 58.2 with 30
-#: (7.2 -> 7.7 solves, the re-solves included).
+#: bisection tolerance, and a cold solve takes 17-19 iterations instead of 22-24 (13-15
+#: instead of 18-20 from the cold start at the law's level, contact.gfmd "Cold start").
+#: Iterations per pair, 10 seeds at 1024^2: 71.1 with no scouts, 61.6 with a factor 10,
+#: 58.2 with 30 (7.2 -> 7.7 solves, the re-solves included; 54.2 with the level start).
 SCOUT_TOL_FACTOR = 30.0
 
 
