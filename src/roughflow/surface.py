@@ -273,10 +273,17 @@ def rms_gradient(heights: np.ndarray, lx: float, ly: float, *, periodic: bool = 
         gx = np.diff(heights, axis=0) * (nx / lx)
         gy = np.diff(heights, axis=1) * (ny / ly)
         return float(np.sqrt(np.mean(gx * gx) + np.mean(gy * gy)))
-    c = fft.rfft2(heights)
+    return spectral_rms_gradient(fft.rfft2(heights), (nx, ny), lx, ly)
+
+
+def spectral_rms_gradient(spectrum: np.ndarray, shape: tuple[int, int], lx: float,
+                          ly: float) -> float:
+    """Rms gradient of a periodic height map of ``shape`` from its (unnormalised) rfft2
+    ``spectrum``: sqrt(sum |q|^2 |h(q)|^2) / N, by Parseval."""
+    nx, ny = shape
     qx, qy = fft.wavevectors(nx, ny, lx, ly)
     w = fft.rfft_weights(ny)
-    return float(np.sqrt((w * (qx**2 + qy**2) * np.abs(c) ** 2).sum()) / (nx * ny))
+    return float(np.sqrt((w * (qx**2 + qy**2) * np.abs(spectrum) ** 2).sum()) / (nx * ny))
 
 
 def _phase_box(spec: SurfaceSpec) -> tuple[np.ndarray, int, int]:

@@ -97,6 +97,7 @@ import numpy as np
 from roughflow import fft
 from roughflow.defaults import SOLVER_LOG_EVERY
 from roughflow.errors import require_field
+from roughflow.surface import spectral_rms_gradient
 
 from . import _kernels as _k
 from ._gfmd_common import Z_MASS, load_scale, residual, spectral_factors
@@ -188,7 +189,11 @@ def mass_floor(hpow: np.ndarray, k: np.ndarray, kmin: float) -> float:
     """H_MASS k_h of the hard-wall masses for the height power ``hpow`` (rfft2 grid, column
     weights included) and stiffness ``k``: k_h = power-weighted mean stiffness, H_MASS from
     the bandwidth ratio k2 / k_h (module constants)."""
-    band = _band(hpow, k)
+    return _floor_of_band(_band(hpow, k), kmin)
+
+
+def _floor_of_band(band: tuple[float, float] | None, kmin: float) -> float:
+    """:func:`mass_floor` from the (k_h, k2 / k_h) of :func:`_band`."""
     if band is None:  # no roughness to set a scale
         return kmin
     k_h, ratio = band
@@ -236,13 +241,12 @@ def hard_wall_setup(heights: np.ndarray, lx: float, ly: float,
     ht = plan.execute_forward()
     wts = fft.rfft_weights(shape[1])
     hpow = wts * (ht.real**2 + ht.imag**2)
-    pre = np.hypot(max(Z_MASS * kmin, mass_floor(hpow, k, kmin)), k)
     band = _band(hpow, k)
+    pre = np.hypot(max(Z_MASS * kmin, _floor_of_band(band, kmin)), k)
     np.reciprocal(pre, out=pre)
     pre *= 1.0 / size
     hscale = math.sqrt(dot(h, h) / size) or 1.0
-    # |grad h|^2 = |q|^2 |h(q)|^2 = 4 k^2 |h(q)|^2 summed over modes (E* = 1 in k), / N^2
-    gbar = 2.0 * math.sqrt(float((hpow * k * k).sum())) / size
+    gbar = spectral_rms_gradient(ht, shape, lx, ly)
     levels = np.sort(np.append(h[:: max(1, size // LEVEL_SAMPLE)], h.max()))
     # writable: the numba kernels would compile a second, read-only signature
     return HardWallSetup(heights=heights, lx=float(lx), ly=float(ly), h0=h0, h=h, pre=pre,
