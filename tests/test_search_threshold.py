@@ -542,6 +542,68 @@ def test_scout_solves_never_end_a_closed_bracket(monkeypatch):
     assert iterations[factor] < iterations[1.0]
 
 
+@pytest.mark.parametrize(("contact_tol", "tol"), [(1e-4, 5e-4), (3e-4, 1e-3)])
+def test_scout_with_a_stale_area_cannot_stall_a_bracket(contact_tol, tol):
+    # Issue 14 (reliability): after a short warm step a scout can stop within 0-1 iterations
+    # on its start's contact set, its area off by up to 2e-3. As the end of a bracket it kept
+    # the bracket from closing while the solves closed in on its load: on this surface the
+    # code before the slope check stopped with "contact area jumps from 0.424454 to
+    # 0.425232 between pressures 0.218400692329 and 0.218400692329" (first case) and from
+    # 0.424561 to 0.426849 (second; checked). Both searches now close, every bracket end is
+    # a full solve, and a_c* agrees with a reference at contact tol 1e-6 (no scout error)
+    # and tol 2.5e-4 to the sum of the two bracket widths (both brackets contain a_c*).
+    s = _surface(seed=10, ppl=4)
+    res = threshold(s, tol=tol, options=SearchOptions(contact_tol=contact_tol))
+    ref = threshold(s, tol=2.5e-4, options=SearchOptions(contact_tol=1e-6))
+    for ax in (0, 1):
+        t = res[ax]
+        assert t.bracketed and t.a_hi - t.a_lo <= tol
+        for p in (t.p_lo, t.p_hi):
+            assert [q for q in t.solves if q.pressure == p][-1].residual <= contact_tol
+        assert abs(t.a_c_star - ref[ax].a_c_star) <= tol + 2.5e-4
+
+
+def test_scout_slope_check_separates_stale_from_exact_brackets():
+    # The check itself on hand-made brackets (load, area): the law scaled through the full
+    # solve at (0.22, 0.42) has slope 1.722 (the erf law's derivative, checked below), so a
+    # scout end 0.3 % higher in load is stale if it claims more than 2 x 1.722 x 0.00066 =
+    # 0.0023 of extra area, and is kept (bracket open, not too steep) otherwise.
+    import math
+
+    from scipy.special import erfinv
+
+    import roughflow.search.critical as critical
+    from roughflow.contact.law import ContactLaw
+
+    law = ContactLaw()
+    e = float(erfinv(0.42))
+    assert law.slope(0.22, 0.42) == pytest.approx(
+        2 / math.sqrt(math.pi) * e / 0.22 * math.exp(-e * e), rel=1e-6)
+    assert ContactLaw("bearing").slope(0.3, 0.3) == 1.0
+    assert math.isnan(law.slope(0.0, 0.3)) and math.isnan(law.slope(0.2, 1.0))
+
+    def sample(load, area, spans, scout):
+        return critical._Sample(load=load, area=area, spans={0: spans}, scout=scout)
+
+    full = sample(0.22, 0.42, True, False)
+    factor = critical.SCOUT_SLOPE_FACTOR
+    step = 0.00066
+    for extra, stale in ((0.9 * factor * 1.722 * step, False),
+                         (1.1 * factor * 1.722 * step, True)):
+        scout = sample(0.22 + step, 0.42 + extra, False, True)
+        assert critical._scouts_to_resolve([full, scout], (0,), 1e-4, law) == (
+            [1] if stale else [])
+    # a closed bracket re-solves its scout end whatever its slope
+    scout = sample(0.22 + step, 0.4201, False, True)
+    assert critical._scouts_to_resolve([full, scout], (0,), 2e-3, law) == [1]
+    # two full solves that steep cannot close by more solves (a warm start already within
+    # the contact tolerance returns unchanged): the search's error then says what to change
+    steep = sample(0.22 + step, 0.42 + 1.1 * factor * 1.722 * step, False, False)
+    assert "tighten contact_tol or loosen tol" in critical._unresolved_hint(full, steep, law)
+    flat = sample(0.22 + step, 0.42 + 0.9 * factor * 1.722 * step, False, False)
+    assert critical._unresolved_hint(full, flat, law) == ""
+
+
 def test_a_bracket_at_most_two_tolerances_wide_is_halved():
     # The midpoint closes such a bracket whichever side the new state falls on, so no
     # prediction is swept for it (issue 14: 6.5 -> 5.7 sweeps per pair at 512^2)

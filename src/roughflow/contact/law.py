@@ -92,3 +92,15 @@ class ContactLaw:
         if 0 < area < 1 and load > 0:
             return load * float(erfinv(t) / erfinv(area))
         return load * (2.0 if target > area else 0.5)
+
+    def slope(self, load: float, area: float) -> float:
+        """da_c/dp of the law made to pass through a solved state (``load``, ``area``) as
+        :meth:`extrapolate` makes it (bearing: 1); nan where that is undefined (an area of 0
+        or 1, the elastic law at zero load)."""
+        if self.model == "bearing":
+            return 1.0
+        h = min(1e-4, 0.5 * area, 0.5 * (1.0 - area))
+        if not h > 0 or (self.model == "elastic" and not load > 0):
+            return math.nan
+        dp = self.extrapolate(area + h, load, area) - self.extrapolate(area - h, load, area)
+        return 2.0 * h / dp if dp > 0 else math.nan

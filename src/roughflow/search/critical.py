@@ -21,9 +21,10 @@ spanning the cell along ``axis`` (open boundaries along it, periodic across).
   of f lies inside the bracket; the solve aims just past it, and plain bisection takes over
   after repeated misses; a bracket at most 2 tol wide is halved. The one-sided solves of
   the elastic model are scouts at a looser contact tolerance (:data:`SCOUT_TOL_FACTOR`),
-  re-solved to the full one only if they end a closed bracket. The same secant root of the
-  final bracket is the reported a_c* (the midpoint only brackets it). ``strategy="bisect"``
-  is plain bisection in a_c with the midpoint, the reference.
+  re-solved to the full one only if they end a closed bracket, or one too steep in a(p)
+  for their areas to be trusted. The same secant root of the final bracket is the reported
+  a_c* (the midpoint only brackets it). ``strategy="bisect"`` is plain bisection in a_c with
+  the midpoint, the reference.
 """
 
 from __future__ import annotations
@@ -96,13 +97,25 @@ ONE_SIDED_OFFSET = 0.5
 BISECT_STEP = 0.05
 #: The one-sided solves of an elastic search (the first one and those that look for the far
 #: side of a bracket) are scouts, solved to this many times the contact tolerance and
-#: re-solved to it from their own states only if they end up as the end of a closed bracket.
+#: re-solved to it from their own states only if they end a closed bracket (or a too steep
+#: one, below).
 #: At 30 x 1e-4 the area of a state moves by <= 1.1e-4 (1024^2, 3 seeds), far below the
 #: bisection tolerance, and a cold solve takes 17-19 iterations instead of 22-24 (13-15
 #: instead of 18-20 from the cold start at the law's level, contact.gfmd "Cold start").
 #: Iterations per pair, 10 seeds at 1024^2: 71.1 with no scouts, 61.6 with a factor 10,
 #: 58.2 with 30 (7.2 -> 7.7 solves, the re-solves included; 54.2 with the level start).
 SCOUT_TOL_FACTOR = 30.0
+#: A scout's area is only as good as its loose tolerance: after a short warm step it can stop
+#: within 0-1 iterations on its start's contact set, its area off by up to 2e-3 (256^2 -
+#: 1024^2, contact tol 1e-4 - 3e-4). At the end of a bracket narrower than that error, it
+#: kept the bracket from closing while the solves closed in on its load, until the search
+#: ran out of solves or reported an area jump (256^2, 30 seeds, tol 5e-4: 1 search in 30
+#: failed; contact tol 3e-4, tol 1e-3: 5 in 30). Such a bracket is far steeper in a(p) than
+#: any real one, so a scout end is also re-solved where the bracket's slope exceeds this
+#: many times that of the contact law scaled through its other end. Brackets with exact
+#: ends measured 0.67-1.27 times the law's slope (285 brackets: 1024^2 tol 2e-3, 512^2 tol
+#: 8e-3, 256^2 tol 2e-3); those with a stale scout end 4-300 times.
+SCOUT_SLOPE_FACTOR = 2.0
 
 
 class ThresholdNotBracketed(InputError):
@@ -334,14 +347,38 @@ def _propose(w: _Work, *, tol: float, misses: int, strategy: str) -> tuple[float
     return max(target, 0.5 * hi.area), True
 
 
-def _closed_scouts(samples: list[_Sample], axes, tol: float) -> list[int]:
-    """Indices of scout states that are an end of a bracket already closed to ``tol``."""
+def _steepness(lo: _Sample, hi: _Sample, law: ContactLaw) -> float:
+    """Slope of a(p) across a bracket over that of the contact law scaled through its full
+    end (the lower one if both are scouts): 0.67-1.27 where both areas are exact
+    (:data:`SCOUT_SLOPE_FACTOR`); nan where the law has none."""
+    ref = lo if hi.scout else hi
+    slope = (hi.area - lo.area) / (hi.load - lo.load) if hi.load > lo.load else math.inf
+    return slope / law.slope(ref.load, ref.area)
+
+
+def _scouts_to_resolve(samples: list[_Sample], axes, tol: float, law: ContactLaw) -> list[int]:
+    """Indices of scout states that end a bracket closed to ``tol`` or one too steep for
+    its area difference to be real (:data:`SCOUT_SLOPE_FACTOR`)."""
     out = set()
     for ax in axes:
         lo, hi = _bracket(samples, ax)
-        if lo is not None and hi is not None and hi.area - lo.area <= tol:
+        if lo is None or hi is None or not (lo.scout or hi.scout):
+            continue
+        if hi.area - lo.area <= tol or _steepness(lo, hi, law) > SCOUT_SLOPE_FACTOR:
             out.update(i for i, q in enumerate(samples) if q.scout and (q is lo or q is hi))
     return sorted(out)
+
+
+def _unresolved_hint(lo: _Sample | None, hi: _Sample | None, law: ContactLaw) -> str:
+    """Why a bracket of full solves may not close: a warm start already within the contact
+    tolerance returns unchanged, with its start's area, so the areas of full solves are
+    only good to what that tolerance resolves."""
+    steep = _steepness(lo, hi, law) if lo is not None and hi is not None else math.nan
+    if not steep > SCOUT_SLOPE_FACTOR:
+        return ""
+    return (f"; its ends differ in area {steep:.3g} times as much as the contact law says "
+            "their loads should, so its width is the contact solves' own area error: tighten "
+            "contact_tol or loosen tol")
 
 
 def _weight(lo: _Sample, hi: _Sample, ax: int, interpolate: bool) -> float:
@@ -421,27 +458,32 @@ def _refine(evaluate: Callable[[float, ContactResult | None, bool], _Sample], ax
             ax, want = expected
             misses[ax] = misses[ax] + 1 if samples[-1].spans[ax] != want else 0
             expected = None
-        for i in _closed_scouts(samples, axes, tol):  # re-solve, then look again
-            own = warm_start([samples[i]], samples[i].load, compliance=compliance, out=start_out)
-            samples[i] = evaluate(samples[i].load, own, False)
-            history.append(samples[i])
+        # a re-solve can move a bracket onto another scout: look again until none is left
+        while resolve := _scouts_to_resolve(samples, axes, tol, law):
+            for i in resolve:
+                own = warm_start([samples[i]], samples[i].load, compliance=compliance,
+                                 out=start_out)
+                samples[i] = evaluate(samples[i].load, own, False)
+                history.append(samples[i])
         todo = _pending(samples, axes, tol, load_range, options.strategy, unbracketed)
         if not todo:
             break
         if len(history) >= options.max_solves:
-            w, ax = max((t.width, t.axis) for t in todo)
+            widest = max(todo, key=lambda t: (t.width, t.axis))
             tried = ", ".join(f"({q.load:.4g}, {q.area:.4g})" for q in samples[-4:])
             raise ConvergenceError(
-                f"threshold along axis {ax} not resolved to tol={tol:g} within "
-                f"max_solves={options.max_solves} contact solves; last (load, a_c): {tried}; "
-                "residual = bracket width", residual=float(w), iterations=len(samples))
+                f"threshold along axis {widest.axis} not resolved to tol={tol:g} within "
+                f"max_solves={options.max_solves} contact solves; last (load, a_c): {tried}"
+                f"{_unresolved_hint(widest.lo, widest.hi, law)}; residual = bracket width",
+                residual=float(widest.width), iterations=len(samples))
         work = _pick(todo)
         lo, hi = work.lo, work.hi
         if lo is not None and hi is not None and hi.load - lo.load <= 1e-12 * hi.load:
             raise ConvergenceError(
                 f"contact area jumps from {lo.area:.6g} to {hi.area:.6g} between pressures "
                 f"{lo.load:.12g} and {hi.load:.12g}: threshold along axis {work.axis} cannot "
-                f"be resolved to tol={tol:g}", residual=float(work.width),
+                f"be resolved to tol={tol:g}{_unresolved_hint(lo, hi, law)}",
+                residual=float(work.width),
                 iterations=len(samples))
         target, want = _propose(work, tol=tol, misses=misses[work.axis],
                                 strategy=options.strategy)
