@@ -1,0 +1,99 @@
+"""Stress test of the elastic threshold search at tight tolerances: which searches close.
+
+Usage:
+    ROUGHFLOW_FFT_THREADS=1 python benchmarks/stress_threshold.py \
+        [--sizes 256] [--seeds 30] [--gammas 1 4] [--contact-tols 1e-4 3e-4 1e-3] \
+        [--tols 2e-3 1e-3 5e-4 2.5e-4] [--tag NAME]
+
+Surfaces: H 0.8, L/lambda_r 4, 4 points per lambda_s (256^2 at eps_f = 1/16), seeds
+0 ... seeds-1. Every (size, gamma, contact tol, tol) runs ``search.threshold`` for both axes
+on every seed and records whether the search closed or how it failed: ``stalled`` (a
+bracket of full solves whose width is the contact solves' own area error: the error says to
+tighten contact_tol), ``area_jump`` or ``out_of_solves`` (anything else). Solve and
+iteration counts are deterministic; there is no timing. Writes
+results/benchmarks/stress_threshold[_TAG].{csv,md}. docs/percolation.md (item 6 of the
+search) quotes it.
+"""
+
+from __future__ import annotations
+
+import argparse
+import csv
+import itertools
+from pathlib import Path
+
+from roughflow.errors import ConvergenceError
+from roughflow.search import SearchOptions, threshold
+from roughflow.surface import SurfaceSpec, generate
+
+OUT = Path(__file__).resolve().parents[1] / "results" / "benchmarks"
+OUTCOMES = ("closed", "stalled", "area_jump", "out_of_solves")
+
+
+def outcome(error: ConvergenceError | None) -> str:
+    """One of :data:`OUTCOMES` for a search that raised ``error`` (None: it closed)."""
+    if error is None:
+        return "closed"
+    text = str(error)
+    if "tighten contact_tol" in text:
+        return "stalled"
+    return "area_jump" if "area jumps" in text else "out_of_solves"
+
+
+def run(n: int, gamma: float, contact_tol: float, tol: float, seeds: int) -> dict:
+    """Outcome counts, solves and iterations (closed searches) of one case."""
+    counts = dict.fromkeys(OUTCOMES, 0)
+    solves = iterations = 0
+    for seed in range(seeds):
+        surface = generate(SurfaceSpec.from_sweep(
+            gamma=gamma, hurst=0.8, l_over_lambda_r=4, eps_f=16 / n, points_per_lambda_s=4,
+            seed=seed))
+        try:
+            res = threshold(surface, tol=tol, options=SearchOptions(contact_tol=contact_tol))
+        except ConvergenceError as exc:
+            counts[outcome(exc)] += 1
+            continue
+        counts["closed"] += 1
+        solves += res[0].n_solves
+        iterations += sum(s.iterations for s in res[0].solves)
+    return {"n": n, "gamma": gamma, "contact_tol": contact_tol, "tol": tol, "seeds": seeds,
+            **counts, "solves": solves, "iterations": iterations}
+
+
+def main() -> None:
+    ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    ap.add_argument("--sizes", type=int, nargs="+", default=[256])
+    ap.add_argument("--seeds", type=int, default=30)
+    ap.add_argument("--gammas", type=float, nargs="+", default=[1.0, 4.0])
+    ap.add_argument("--contact-tols", type=float, nargs="+", default=[1e-4, 3e-4, 1e-3])
+    ap.add_argument("--tols", type=float, nargs="+", default=[2e-3, 1e-3, 5e-4, 2.5e-4])
+    ap.add_argument("--tag", default="")
+    args = ap.parse_args()
+    rows = []
+    for n, gamma, ctol, tol in itertools.product(args.sizes, args.gammas, args.contact_tols,
+                                                 args.tols):
+        rows.append(run(n, gamma, ctol, tol, args.seeds))
+        r = rows[-1]
+        print(f"n={n} gamma={gamma:g} contact_tol={ctol:g} tol={tol:g}: "
+              + ", ".join(f"{k} {r[k]}" for k in OUTCOMES), flush=True)
+    OUT.mkdir(parents=True, exist_ok=True)
+    stem = OUT / ("stress_threshold" + (f"_{args.tag}" if args.tag else ""))
+    with open(stem.with_suffix(".csv"), "w", newline="") as f:
+        w = csv.DictWriter(f, fieldnames=list(rows[0]))
+        w.writeheader()
+        w.writerows(rows)
+    lines = ["| n | gamma | contact tol | tol | closed | stalled (says so) | area jump | "
+             "out of solves | solves per closed search | iterations per closed search |",
+             "|---|---|---|---|---|---|---|---|---|---|"]
+    for r in rows:
+        done = max(r["closed"], 1)
+        lines.append(f"| {r['n']} | {r['gamma']:g} | {r['contact_tol']:g} | {r['tol']:g} | "
+                     f"{r['closed']}/{r['seeds']} | {r['stalled']} | {r['area_jump']} | "
+                     f"{r['out_of_solves']} | {r['solves'] / done:.2f} | "
+                     f"{r['iterations'] / done:.1f} |")
+    stem.with_suffix(".md").write_text("\n".join(lines) + "\n")
+    print(f"wrote {stem}.csv and .md")
+
+
+if __name__ == "__main__":
+    main()
