@@ -48,9 +48,8 @@ import numpy as np
 from roughflow import fft
 from roughflow.contact import gfmd as G
 from roughflow.contact import solve
-from roughflow.contact._kernels import warm_up
 from roughflow.defaults import THRESHOLD_CONTACT_TOL, THRESHOLD_TOL
-from roughflow.search import SearchOptions, first_pressure, threshold
+from roughflow.search import SearchOptions, first_pressure, threshold, warm_up
 from roughflow.surface import Surface, SurfaceSpec, generate
 
 sys.path.insert(0, str(Path(__file__).resolve().parent))

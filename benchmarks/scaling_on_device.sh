@@ -24,7 +24,7 @@ fi
 export PYTHONUNBUFFERED=1 MPLBACKEND=Agg
 { python3 -c "import sys, numpy, numba, scipy, pyfftw; print(sys.version.split()[0], 'numpy', numpy.__version__, 'numba', numba.__version__, 'scipy', scipy.__version__, 'pyfftw', pyfftw.__version__)"
   nproc; lscpu | grep -E "Model name|^CPU\(s\)|L3"; free -g | head -2; } > "$OUT/env.txt" 2>&1
-python3 -c "from roughflow.contact._kernels import warm_up; warm_up()" || exit 1
+python3 -c "from roughflow.search import warm_up; warm_up()" || exit 1  # fill numba's cache once
 ncpu=$(nproc)
 thr() {  # threshold pair cost, one thread on one core
   ROUGHFLOW_FFT_THREADS=1 timeout "$LIMIT" taskset -c "$2" python3 benchmarks/bench_scaling.py \

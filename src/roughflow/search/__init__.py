@@ -5,6 +5,7 @@ contact area a_c* at which fluid percolation stops.
   sequence of contact solves (exact single pass for the bearing model).
 - :class:`LoadSearch`, :func:`load_for_area` (:mod:`.load`): loads for target areas on one
   surface, from the contact law (:mod:`roughflow.contact.law`) and the solved states.
+- :func:`warm_up` (:mod:`.warmup`): compile the search's numba kernels before a timing.
 
 This layer sits above ``contact`` and ``percolation``, which depend on neither it nor
 each other.
@@ -19,6 +20,7 @@ from .critical import (
     threshold,
 )
 from .load import AreaSolve, LoadSearch, Point, load_for_area, warm_start, warm_start_compliance
+from .warmup import warm_up
 
 __all__ = [
     "AreaSolve",
@@ -33,4 +35,5 @@ __all__ = [
     "threshold",
     "warm_start",
     "warm_start_compliance",
+    "warm_up",
 ]
