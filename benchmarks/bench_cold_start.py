@@ -17,8 +17,8 @@ results/benchmarks/cold_start.{csv,md}.
 from __future__ import annotations
 
 import argparse
-import csv
 import itertools
+import sys
 import time
 from pathlib import Path
 
@@ -28,7 +28,9 @@ from roughflow.contact import gfmd as G
 from roughflow.contact.law import ContactLaw
 from roughflow.surface import SurfaceSpec, generate
 
-OUT = Path(__file__).resolve().parents[1] / "results" / "benchmarks"
+sys.path.insert(0, str(Path(__file__).resolve().parent))
+from bench_contact import OUT, write_csv  # noqa: E402
+
 AREAS = (0.01, 0.03, 0.15, 0.4, 0.7, 0.9)
 MAX_ITER = 2000
 
@@ -73,11 +75,7 @@ def main() -> None:
                            s_top=round(t_old, 4), s_level=round(t_lvl, 4))
                 rows.append(row)
                 print(row, flush=True)
-    OUT.mkdir(parents=True, exist_ok=True)
-    with open(OUT / "cold_start.csv", "w", newline="") as fh:
-        w = csv.DictWriter(fh, fieldnames=list(rows[0]))
-        w.writeheader()
-        w.writerows(rows)
+    write_csv("cold_start", rows)
     lines = ["| n | tol | solves | iterations, top start | iterations, law's level | change | "
              "solves with more iterations | largest a_c difference |",
              "|---|---|---|---|---|---|---|---|"]

@@ -221,15 +221,23 @@ def memory(n: int) -> list[dict]:
     return rows
 
 
-def write_table(name: str, rows: list[dict]) -> None:
-    """csv and markdown tables over the union of the rows' keys ("-" where absent)."""
+def write_csv(name: str, rows: list[dict]) -> tuple[list[str], list[list[str]]]:
+    """csv table ``OUT/name.csv`` over the union of the rows' keys ("-" where absent);
+    returns the header and the formatted cells."""
     keys = list(dict.fromkeys(k for r in rows for k in r))
 
     def fmt(v):
         return f"{v:.4g}" if isinstance(v, float) else str(v)
 
     cells = [[fmt(r[k]) if k in r else "-" for k in keys] for r in rows]
+    OUT.mkdir(parents=True, exist_ok=True)
     (OUT / f"{name}.csv").write_text("\n".join(",".join(c) for c in [keys, *cells]) + "\n")
+    return keys, cells
+
+
+def write_table(name: str, rows: list[dict]) -> None:
+    """csv and markdown tables over the union of the rows' keys ("-" where absent)."""
+    keys, cells = write_csv(name, rows)
     md = ["| " + " | ".join(keys) + " |", "|" + "---|" * len(keys)]
     md += ["| " + " | ".join(c) + " |" for c in cells]
     (OUT / f"{name}.md").write_text("\n".join(md) + "\n")

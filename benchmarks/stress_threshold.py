@@ -18,15 +18,17 @@ search) quotes it.
 from __future__ import annotations
 
 import argparse
-import csv
 import itertools
+import sys
 from pathlib import Path
 
 from roughflow.errors import ConvergenceError
 from roughflow.search import SearchOptions, threshold
 from roughflow.surface import SurfaceSpec, generate
 
-OUT = Path(__file__).resolve().parents[1] / "results" / "benchmarks"
+sys.path.insert(0, str(Path(__file__).resolve().parent))
+from bench_contact import OUT, write_csv  # noqa: E402
+
 OUTCOMES = ("closed", "stalled", "area_jump", "out_of_solves")
 
 
@@ -76,12 +78,8 @@ def main() -> None:
         r = rows[-1]
         print(f"n={n} gamma={gamma:g} contact_tol={ctol:g} tol={tol:g}: "
               + ", ".join(f"{k} {r[k]}" for k in OUTCOMES), flush=True)
-    OUT.mkdir(parents=True, exist_ok=True)
     stem = OUT / ("stress_threshold" + (f"_{args.tag}" if args.tag else ""))
-    with open(stem.with_suffix(".csv"), "w", newline="") as f:
-        w = csv.DictWriter(f, fieldnames=list(rows[0]))
-        w.writeheader()
-        w.writerows(rows)
+    write_csv(stem.name, rows)
     lines = ["| n | gamma | contact tol | tol | closed | stalled (says so) | area jump | "
              "out of solves | solves per closed search | iterations per closed search |",
              "|---|---|---|---|---|---|---|---|---|---|"]
