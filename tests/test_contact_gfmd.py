@@ -263,13 +263,16 @@ def test_cold_start_level_sample_spreads_over_the_columns():
     assert G._level_stride(1024 * 1024, 1024) == 65
     assert G._level_stride(3 * 16384, 3) == 4  # coprime with an odd row length too
     assert G._level_stride(100, 10) == 1  # small grids keep every point
+    from roughflow.contact.law import ContactLaw
+
+    law = ContactLaw()
     for seed in (1, 2, 3):
         s = generate(SurfaceSpec.from_sweep(hurst=0.8, l_over_lambda_r=4, eps_f=16 / 1024,
                                             points_per_lambda_s=4, seed=seed))
         setup = G.hard_wall_setup(s.heights, 1.0, 1.0)
         h = setup.h
         for a in (0.05, 0.2, 0.4, 0.6, 0.8):
-            level = setup.levels[round((1 - a) * (setup.levels.size - 1))]
+            level = G.cold_start_level(setup, law.control(a) * setup.gbar)
             assert abs(float((h > level).mean()) - a) <= 0.006, (seed, a)
 
 
