@@ -577,8 +577,8 @@ def test_scout_slope_check_separates_stale_from_exact_brackets():
 
     law = ContactLaw()
     e = float(erfinv(0.42))
-    assert law.slope(0.22, 0.42) == pytest.approx(
-        2 / math.sqrt(math.pi) * e / 0.22 * math.exp(-e * e), rel=1e-6)
+    slope = 2 / math.sqrt(math.pi) * e / 0.22 * math.exp(-e * e)  # 1.722
+    assert law.slope(0.22, 0.42) == pytest.approx(slope, rel=1e-6)
     assert ContactLaw("bearing").slope(0.3, 0.3) == 1.0
     assert math.isnan(law.slope(0.0, 0.3)) and math.isnan(law.slope(0.2, 1.0))
 
@@ -588,8 +588,10 @@ def test_scout_slope_check_separates_stale_from_exact_brackets():
     full = sample(0.22, 0.42, True, False)
     factor = critical.SCOUT_SLOPE_FACTOR
     step = 0.00066
-    for extra, stale in ((0.9 * factor * 1.722 * step, False),
-                         (1.1 * factor * 1.722 * step, True)):
+    # 10 % either side of the limit: the chord over one step differs from the law's
+    # derivative by 5e-4 relative (its curvature over 0.3 % in load)
+    within, beyond = (0.9 * factor * slope * step, 1.1 * factor * slope * step)
+    for extra, stale in ((within, False), (beyond, True)):
         scout = sample(0.22 + step, 0.42 + extra, False, True)
         assert critical._scouts_to_resolve([full, scout], (0,), 1e-4, law) == (
             [1] if stale else [])
@@ -598,9 +600,9 @@ def test_scout_slope_check_separates_stale_from_exact_brackets():
     assert critical._scouts_to_resolve([full, scout], (0,), 2e-3, law) == [1]
     # two full solves that steep cannot close by more solves (a warm start already within
     # the contact tolerance returns unchanged): the search's error then says what to change
-    steep = sample(0.22 + step, 0.42 + 1.1 * factor * 1.722 * step, False, False)
+    steep = sample(0.22 + step, 0.42 + beyond, False, False)
     assert "tighten contact_tol or loosen tol" in critical._unresolved_hint(full, steep, law)
-    flat = sample(0.22 + step, 0.42 + 0.9 * factor * 1.722 * step, False, False)
+    flat = sample(0.22 + step, 0.42 + within, False, False)
     assert critical._unresolved_hint(full, flat, law) == ""
 
 
