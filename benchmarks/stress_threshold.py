@@ -24,6 +24,7 @@ from pathlib import Path
 
 from roughflow.errors import ConvergenceError
 from roughflow.search import SearchOptions, threshold
+from roughflow.search.critical import AREA_JUMP, STALLED_ADVICE
 from roughflow.surface import SurfaceSpec, generate
 
 sys.path.insert(0, str(Path(__file__).resolve().parent))
@@ -37,9 +38,9 @@ def outcome(error: ConvergenceError | None) -> str:
     if error is None:
         return "closed"
     text = str(error)
-    if "tighten contact_tol" in text:
+    if STALLED_ADVICE in text:
         return "stalled"
-    return "area_jump" if "area jumps" in text else "out_of_solves"
+    return "area_jump" if text.startswith(AREA_JUMP) else "out_of_solves"
 
 
 def run(n: int, gamma: float, contact_tol: float, tol: float, seeds: int) -> dict:

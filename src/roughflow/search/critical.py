@@ -117,6 +117,13 @@ SCOUT_TOL_FACTOR = 30.0
 #: 8e-3, 256^2 tol 2e-3); those with a stale scout end 4-300 times.
 SCOUT_SLOPE_FACTOR = 2.0
 
+# What the search's ConvergenceErrors say, named once: benchmarks/stress_threshold.py sorts
+# failed searches by them.
+#: Opens the error of a bracket whose ends are a contact jump apart in load.
+AREA_JUMP = "contact area jumps"
+#: Ends the error of a bracket of full solves that only their own area error keeps open.
+STALLED_ADVICE = "tighten contact_tol or loosen tol"
+
 
 class ThresholdNotBracketed(InputError):
     """The fluid spans (or never spans) over the whole allowed pressure range."""
@@ -377,8 +384,8 @@ def _unresolved_hint(lo: _Sample | None, hi: _Sample | None, law: ContactLaw) ->
     if not steep > SCOUT_SLOPE_FACTOR:
         return ""
     return (f"; its ends differ in area {steep:.3g} times as much as the contact law says "
-            "their loads should, so its width is the contact solves' own area error: tighten "
-            "contact_tol or loosen tol")
+            f"their loads should, so its width is the contact solves' own area error: "
+            f"{STALLED_ADVICE}")
 
 
 def _weight(lo: _Sample, hi: _Sample, ax: int, interpolate: bool) -> float:
@@ -480,7 +487,7 @@ def _refine(evaluate: Callable[[float, ContactResult | None, bool], _Sample], ax
         lo, hi = work.lo, work.hi
         if lo is not None and hi is not None and hi.load - lo.load <= 1e-12 * hi.load:
             raise ConvergenceError(
-                f"contact area jumps from {lo.area:.6g} to {hi.area:.6g} between pressures "
+                f"{AREA_JUMP} from {lo.area:.6g} to {hi.area:.6g} between pressures "
                 f"{lo.load:.12g} and {hi.load:.12g}: threshold along axis {work.axis} cannot "
                 f"be resolved to tol={tol:g}{_unresolved_hint(lo, hi, law)}",
                 residual=float(work.width),
