@@ -1,10 +1,13 @@
 """Test-wide settings: one thread for FFTs and BLAS (the test machines have 2 shared cores;
 multi-threaded OpenBLAS on tiny vectors was measured 100x slower than numpy's sum under load),
-and a non-interactive matplotlib backend."""
+a non-interactive matplotlib backend, and a private FFTW wisdom directory."""
 
+import atexit
 import os
+import shutil
 import subprocess
 import sys
+import tempfile
 from pathlib import Path
 
 import pytest
@@ -13,6 +16,12 @@ from workflow_copy import copy_workflow
 for var, value in (("ROUGHFLOW_FFT_THREADS", "1"), ("OPENBLAS_NUM_THREADS", "1"),
                    ("OMP_NUM_THREADS", "1"), ("MPLBACKEND", "Agg")):
     os.environ.setdefault(var, value)
+
+# FFTW wisdom in a directory of this session's own (shared by the processes it starts, so the
+# workflow runs it compares use the same FFT algorithms), not in the user's cache
+if "ROUGHFLOW_FFTW_WISDOM" not in os.environ:
+    os.environ["ROUGHFLOW_FFTW_WISDOM"] = tempfile.mkdtemp(prefix="roughflow-fftw-")
+    atexit.register(shutil.rmtree, os.environ["ROUGHFLOW_FFTW_WISDOM"], ignore_errors=True)
 
 
 @pytest.fixture(scope="session")

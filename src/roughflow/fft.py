@@ -4,8 +4,9 @@ Every stage that needs FFTs goes through this module. The thread count is an
 argument; its default comes from the environment variable
 ``ROUGHFLOW_FFT_THREADS`` (default 1: on a shared two-core machine one thread is
 usually fastest when the other core is busy). The planner effort comes from
-``ROUGHFLOW_FFTW_EFFORT`` (default ``FFTW_ESTIMATE``; ``FFTW_MEASURE`` plans
-take seconds at 2048^2 but can run faster).
+``ROUGHFLOW_FFTW_EFFORT`` (default ``FFTW_MEASURE``: algorithms picked by timing, with
+the timings kept per machine by :mod:`roughflow.wisdom`; ``FFTW_ESTIMATE`` plans at once
+by heuristics, and its transforms take up to 2.5x as long from 1024^2 on).
 
 Normalisation follows numpy: ``irfft2(rfft2(a)) == a``.
 """
@@ -17,12 +18,16 @@ from functools import lru_cache
 
 import numpy as np
 
+from roughflow import wisdom
 from roughflow.errors import InputError, require_int
 
 #: More FFT threads than this is a typo, not a machine.
 MAX_THREADS = 4096
 
 _EFFORTS = ("FFTW_ESTIMATE", "FFTW_MEASURE", "FFTW_PATIENT", "FFTW_EXHAUSTIVE")
+
+#: The planner effort unless ``ROUGHFLOW_FFTW_EFFORT`` names another.
+DEFAULT_EFFORT = "FFTW_MEASURE"
 
 
 def default_threads() -> int:
@@ -45,8 +50,9 @@ def check_threads(threads: int | None) -> int | None:
     return require_int("threads", threads, minimum=1, maximum=MAX_THREADS)
 
 
-def _effort() -> str:
-    effort = os.environ.get("ROUGHFLOW_FFTW_EFFORT", "FFTW_ESTIMATE")
+def effort() -> str:
+    """FFTW's planner effort from ``ROUGHFLOW_FFTW_EFFORT`` (default :data:`DEFAULT_EFFORT`)."""
+    effort = os.environ.get("ROUGHFLOW_FFTW_EFFORT", DEFAULT_EFFORT)
     if effort not in _EFFORTS:
         raise InputError(f"ROUGHFLOW_FFTW_EFFORT must be one of {_EFFORTS}, got {effort!r}")
     return effort
@@ -68,21 +74,23 @@ class RealFFT2:
         self.shape = (int(nx), int(ny))
         self.spectral_shape = (int(nx), int(ny) // 2 + 1)
         self.threads = threads
-        effort = _effort()
+        planner = effort()
         real, cplx = (np.float32, np.complex64) if single else (np.float64, np.complex128)
+        # planning with FFTW_MEASURE overwrites the buffers: they are filled only after it
         self._real = pyfftw.empty_aligned(self.shape, dtype=real)
         self._cplx = pyfftw.empty_aligned(self.spectral_shape, dtype=cplx)
         self._cplx_in = pyfftw.empty_aligned(self.spectral_shape, dtype=cplx)
         self._real_out = pyfftw.empty_aligned(self.shape, dtype=real)
-        self._fwd = pyfftw.FFTW(
-            self._real, self._cplx, axes=(0, 1), direction="FFTW_FORWARD",
-            flags=(effort,), threads=threads,
-        )
-        # FFTW_DESTROY_INPUT is the default for c2r; the input buffer is private.
-        self._inv = pyfftw.FFTW(
-            self._cplx_in, self._real_out, axes=(0, 1), direction="FFTW_BACKWARD",
-            flags=(effort,), threads=threads,
-        )
+        with wisdom.shared(planner):
+            self._fwd = pyfftw.FFTW(
+                self._real, self._cplx, axes=(0, 1), direction="FFTW_FORWARD",
+                flags=(planner,), threads=threads,
+            )
+            # FFTW_DESTROY_INPUT is the default for c2r; the input buffer is private.
+            self._inv = pyfftw.FFTW(
+                self._cplx_in, self._real_out, axes=(0, 1), direction="FFTW_BACKWARD",
+                flags=(planner,), threads=threads,
+            )
 
     @property
     def real_in(self) -> np.ndarray:

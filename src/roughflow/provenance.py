@@ -3,7 +3,8 @@
 ``roughflow.io.write_dataset`` (the single writer of every netCDF file) adds
 :meth:`Provenance.attrs` to every dataset it writes:
 
-- ``roughflow_version``, ``python_version``, ``backend`` ("cpu"), ``fft_threads``;
+- ``roughflow_version``, ``python_version``, ``backend`` ("cpu"), ``fft_threads``,
+  ``fftw_effort`` (FFTW's planner effort: its algorithms set the round-off);
 - ``command``: the command line (``roughflow contact s.nc ...``) or, for the Python API,
   the process's ``sys.argv``;
 - ``created`` (ISO 8601, UTC) and ``wall_time_s`` (seconds from the start of the command
@@ -30,7 +31,7 @@ from datetime import datetime, timezone
 
 #: Attributes written by :meth:`Provenance.attrs` (never copied from one file into another).
 PROVENANCE_ATTRS = ("roughflow_version", "python_version", "backend", "fft_threads",
-                    "command", "created", "wall_time_s", "history", "references",
+                    "fftw_effort", "command", "created", "wall_time_s", "history", "references",
                     "study_config")
 
 
@@ -64,7 +65,7 @@ class Provenance:
     def attrs(self) -> dict:
         """The netCDF attributes (module docstring)."""
         from roughflow import __version__
-        from roughflow.fft import default_threads
+        from roughflow.fft import default_threads, effort
 
         now = datetime.now(timezone.utc)
         created = now.isoformat(timespec="seconds")
@@ -74,6 +75,7 @@ class Provenance:
             "python_version": platform.python_version(),
             "backend": "cpu",
             "fft_threads": self.threads if self.threads is not None else default_threads(),
+            "fftw_effort": effort(),
             "command": self.command,
             "created": created,
             "history": f"{self.history}\n{line}" if self.history else line,
