@@ -97,6 +97,7 @@ def test_a_directory_that_cannot_be_made_costs_a_warning_not_the_run(tmp_path):
     out = run_plan({wisdom.ENV: str(blocker / "fftw"), "ROUGHFLOW_FFTW_EFFORT": "FFTW_MEASURE"})
     assert "exact True" in out
     assert out.count("FFTW wisdom: cannot use") == 1
+    assert out.count("FFTW wisdom:") == 1  # one warning for one problem
 
 
 def test_a_second_process_waits_for_the_first_to_finish_timing(tmp_path):

@@ -94,7 +94,7 @@ def _load(file: Path) -> None:
 
     try:
         text = file.read_text(encoding="ascii")
-    except FileNotFoundError:
+    except (FileNotFoundError, NotADirectoryError):  # nothing saved (yet)
         return
     try:
         data = json.loads(text)
@@ -127,6 +127,8 @@ def _locked(file: Path) -> Iterator[bool]:
         handle = open(file.with_name(file.name + ".lock"), "a")  # noqa: SIM115 - closed below
     except OSError as err:
         _report(f"cannot use {file.parent}", err)
+        handle = None
+    if handle is None:
         yield False
         return
     try:
@@ -155,13 +157,13 @@ def shared(effort: str) -> Iterator[None]:
     import pyfftw
 
     with _locked(file) as usable:
-        if not usable:
-            yield
-            return
-        try:
+        try:  # a directory this process cannot write may still hold wisdom to read
             _load(file)
         except OSError as err:
             _report(f"cannot read {file}", err)
+        if not usable:
+            yield
+            return
         before = pyfftw.export_wisdom()
         yield
         after = pyfftw.export_wisdom()
