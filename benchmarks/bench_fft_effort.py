@@ -35,6 +35,7 @@ import numpy as np
 
 sys.path.insert(0, str(Path(__file__).resolve().parent))
 from bench_contact import write_table  # noqa: E402
+from bench_scaling import surface  # noqa: E402
 
 EFFORTS = ("FFTW_ESTIMATE", "FFTW_MEASURE")
 
@@ -63,7 +64,6 @@ def solves_worker(n: int, seeds: int) -> dict:
     from roughflow.contact import solve
     from roughflow.search import threshold
     from roughflow.search.critical import first_pressure
-    from roughflow.surface import SurfaceSpec, generate
 
     t0 = time.perf_counter()
     fft.plan((n, n))
@@ -71,8 +71,7 @@ def solves_worker(n: int, seeds: int) -> dict:
     plan_s = time.perf_counter() - t0
     colds, pairs, a_c = [], [], []
     for seed in range(seeds):
-        s = generate(SurfaceSpec.from_sweep(gamma=1, hurst=0.8, l_over_lambda_r=4,
-                                            eps_f=16 / n, points_per_lambda_s=4, seed=seed))
+        s = surface(n, 4.0, seed)
         times = []
         for _ in range(3):
             t0 = time.perf_counter()

@@ -65,10 +65,11 @@ ISSUE_FIRE_STEPS = {(512, 4.0): 35, (1024, 4.0): 45, (2048, 4.0): 55, (4096, 4.0
                     (8192, 4.0): 205, (1024, 1.0): 65}
 
 
-def surface(n: int, l_over_lambda_r: float) -> Surface:
+def surface(n: int, l_over_lambda_r: float, seed: int = 0) -> Surface:
+    """The benchmark's surface: H 0.8, gamma 1, 4 points per lambda_s, eps_f = 4 L/lambda_r / n."""
     return generate(SurfaceSpec.from_sweep(gamma=1, hurst=0.8, l_over_lambda_r=l_over_lambda_r,
                                            eps_f=4 * l_over_lambda_r / n,
-                                           points_per_lambda_s=4, seed=0))
+                                           points_per_lambda_s=4, seed=seed))
 
 
 def fft_pair_ms(n: int, reps: int) -> tuple[float, float]:
@@ -170,9 +171,7 @@ def threshold_seeds(n: int, l_over_lambda_r: float, seeds: int, variants: list[s
     rows = []
     times: dict[str, list[tuple[int, float]]] = {}
     for seed in range(seeds):
-        s = generate(SurfaceSpec.from_sweep(gamma=1, hurst=0.8, l_over_lambda_r=l_over_lambda_r,
-                                            eps_f=4 * l_over_lambda_r / n,
-                                            points_per_lambda_s=4, seed=seed))
+        s = surface(n, l_over_lambda_r, seed)
         fft.plan(s.shape)
         for v in variants:
             r = {"n": n, "seed": seed, "tol": tol, **threshold_cost(s, v, tol=tol)}

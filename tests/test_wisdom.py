@@ -13,6 +13,7 @@ import time
 import pytest
 
 from roughflow import fft, provenance, wisdom
+from roughflow.cli import main
 from roughflow.errors import InputError
 
 SHAPE = (48, 40)  # no other test plans it, so it starts with no wisdom
@@ -137,3 +138,22 @@ def test_datasets_record_the_planner_effort(monkeypatch):
     assert provenance.Provenance().attrs()["fftw_effort"] == "FFTW_ESTIMATE"
     monkeypatch.delenv("ROUGHFLOW_FFTW_EFFORT")
     assert provenance.Provenance().attrs()["fftw_effort"] == fft.DEFAULT_EFFORT
+
+
+@pytest.mark.parametrize(("var", "value"), [("ROUGHFLOW_FFTW_EFFORT", "FFTW_FAST"),
+                                            (wisdom.ENV, ""), ("ROUGHFLOW_FFT_THREADS", "0")])
+def test_the_command_line_refuses_bad_fft_settings_before_any_work(var, value, tmp_path,
+                                                                   monkeypatch, capsys):
+    monkeypatch.setenv(var, value)
+
+    def work(*a, **kw):  # the first FFT would refuse the setting too, but only mid-work
+        raise AssertionError("the command started work")
+
+    monkeypatch.setattr("roughflow.surface.generate", work)
+    out = tmp_path / "s.nc"
+    with pytest.raises(SystemExit) as exc:
+        main(["surface", "--l-over-lambda-r", "4", "--eps-f", "0.25",
+              "--points-per-lambda-s", "2", "-o", str(out)])
+    assert exc.value.code == 2
+    assert var in capsys.readouterr().err
+    assert not out.exists()

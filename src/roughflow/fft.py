@@ -6,7 +6,7 @@ argument; its default comes from the environment variable
 usually fastest when the other core is busy). The planner effort comes from
 ``ROUGHFLOW_FFTW_EFFORT`` (default ``FFTW_MEASURE``: algorithms picked by timing, with
 the timings kept per machine by :mod:`roughflow.wisdom`; ``FFTW_ESTIMATE`` plans at once
-by heuristics, and its transforms take up to 2.5x as long from 1024^2 on).
+by heuristics, and its transforms take 1.4-2.6x as long from 1024^2 on).
 
 Normalisation follows numpy: ``irfft2(rfft2(a)) == a``.
 """
@@ -56,6 +56,15 @@ def effort() -> str:
     if effort not in _EFFORTS:
         raise InputError(f"ROUGHFLOW_FFTW_EFFORT must be one of {_EFFORTS}, got {effort!r}")
     return effort
+
+
+def check_environment() -> None:
+    """:class:`InputError` naming the value unless ``ROUGHFLOW_FFT_THREADS``,
+    ``ROUGHFLOW_FFTW_EFFORT`` and ``ROUGHFLOW_FFTW_WISDOM`` are valid: the command line checks
+    them before any work, not at its first FFT plan."""
+    default_threads()
+    effort()
+    wisdom.directory()
 
 
 class RealFFT2:

@@ -2,7 +2,7 @@
 
 ``FFTW_MEASURE`` (:mod:`roughflow.fft`'s default planner effort) picks each transform's
 algorithm by timing candidates. Here its transforms take 0.4-0.7x the time of
-``FFTW_ESTIMATE``'s heuristic choice from 1024^2 on, but timing costs 0.5 s (1024^2) to 6 s
+``FFTW_ESTIMATE``'s heuristic choice from 1024^2 on, but timing costs 1 s (1024^2) to 18 s
 (2048 x 16384) per shape, and as the choice depends on the timings, two processes can pick
 different algorithms and so round differently. The wisdom file removes both costs: the first
 process that plans a shape times it while holding a lock on the file and saves its choice;

@@ -83,6 +83,7 @@ def _level(args: argparse.Namespace) -> int:
 
 
 def main(argv: list[str] | None = None) -> int:
+    from roughflow.fft import check_environment
     from roughflow.provenance import Provenance, input_history, input_references
 
     argv = sys.argv[1:] if argv is None else list(argv)
@@ -92,6 +93,7 @@ def main(argv: list[str] | None = None) -> int:
     log_progress(_level(args))
     name = f"roughflow {args.command}"
     try:
+        check_environment()  # FFT settings from the environment, before any work
         check_outputs(args)
         read_inputs(args)
         given = [v for v in args.data.values() if v is not None]
