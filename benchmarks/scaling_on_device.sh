@@ -8,19 +8,13 @@
 #     THR_B^2 on core 1, one thread each ($OUT/thrN.log, one JSON row per seed);
 # each stopped after LIMIT_S seconds (the rows printed so far stay in its log). Tables:
 # $OUT/tables.tgz (results/benchmarks). Where pyFFTW is missing, wheels in .whl/ are
-# installed first (see the device tool's notes on carrying wheels).
+# installed first (benchmarks/device_env.sh).
 # Usage: bash benchmarks/scaling_on_device.sh [BIG] [THR_A] [THR_B] [SEEDS] [LIMIT_S]
 #        (default 16384 1024 2048 10 520; BIGCORES / BIGTHREADS override the big run's cores)
 set -u
 BIG=${1:-16384}; TA=${2:-1024}; TB=${3:-2048}; SEEDS=${4:-10}; LIMIT=${5:-520}
 OUT=${OUT:-/tmp/devout}; mkdir -p "$OUT"
-if ! python3 -c "import pyfftw" 2>/dev/null; then
-  python3 -m pip install -q --no-index --no-deps --no-compile --no-cache-dir --upgrade \
-    --target /tmp/site .whl/*.whl || exit 1
-  export PYTHONPATH=/tmp/site:$PWD/src
-else
-  export PYTHONPATH=$PWD/src
-fi
+. benchmarks/device_env.sh
 export PYTHONUNBUFFERED=1 MPLBACKEND=Agg
 { python3 -c "import sys, numpy, numba, scipy, pyfftw; print(sys.version.split()[0], 'numpy', numpy.__version__, 'numba', numba.__version__, 'scipy', scipy.__version__, 'pyfftw', pyfftw.__version__)"
   nproc; lscpu | grep -E "Model name|^CPU\(s\)|L3"; free -g | head -2; } > "$OUT/env.txt" 2>&1

@@ -33,6 +33,9 @@ PAPER_SIZE_FACTOR = 4.0
 #: Contact methods: mass-weighted GFMD (the default; hard wall: projected CG in the mass
 #: metric, adhesion: FIRE) and Polonsky-Keer CG on the pressure.
 CONTACT_METHODS = ("gfmd", "cg")
+#: Where the elastic gfmd solves run: "cpu" (numpy, pyFFTW, numba) or "cupy" (a CUDA GPU,
+#: roughflow.gpu).
+BACKENDS = ("cpu", "cupy")
 #: Residual of a single contact solve: largest gap error over the rms height.
 CONTACT_TOL = 1e-6
 #: Solver steps between two DEBUG progress lines of a contact solve (roughflow -vv).

@@ -67,7 +67,57 @@ def check_environment() -> None:
     wisdom.directory()
 
 
-class RealFFT2:
+class PlanPair:
+    """What a forward/inverse pair of real 2D FFT plans offers on top of its two executes
+    and its four buffers (``_real``, ``_cplx``, ``_cplx_in``, ``_real_out``): the buffers by
+    role, and transforms of given arrays. Shared by :class:`RealFFT2` (pyFFTW) and
+    ``roughflow.gpu.CupyRealFFT2`` (cuFFT)."""
+
+    shape: tuple[int, int]
+
+    @property
+    def real_in(self) -> np.ndarray:
+        """Input buffer of :meth:`execute_forward` (solvers write into it directly)."""
+        return self._real
+
+    @property
+    def spectral_out(self) -> np.ndarray:
+        """Output buffer of :meth:`execute_forward`."""
+        return self._cplx
+
+    @property
+    def spectral_in(self) -> np.ndarray:
+        """Input buffer of :meth:`execute_inverse` (destroyed by it)."""
+        return self._cplx_in
+
+    @property
+    def real_out(self) -> np.ndarray:
+        """Output buffer of :meth:`execute_inverse`."""
+        return self._real_out
+
+    def execute_forward(self) -> np.ndarray:
+        """Forward transform of :attr:`real_in` (preserved) into :attr:`spectral_out`, no copies."""
+        raise NotImplementedError
+
+    def execute_inverse(self) -> np.ndarray:
+        """Unnormalised inverse of :attr:`spectral_in` into :attr:`real_out` (the caller folds
+        1/(nx ny) into its spectral factors: one pass over memory less than :meth:`inverse`)."""
+        raise NotImplementedError
+
+    def forward(self, a: np.ndarray) -> np.ndarray:
+        """Unnormalised forward transform (numpy's ``rfft2`` convention)."""
+        self._real[...] = a
+        return self.execute_forward()
+
+    def inverse(self, c: np.ndarray) -> np.ndarray:
+        """Inverse transform normalised by 1/(nx ny) (numpy's ``irfft2``)."""
+        self._cplx_in[...] = c
+        self.execute_inverse()
+        self._real_out *= 1.0 / (self.shape[0] * self.shape[1])
+        return self._real_out
+
+
+class RealFFT2(PlanPair):
     """A forward/inverse pair of real 2D FFT plans for one shape.
 
     ``forward(a)`` and ``inverse(c)`` return views of internal buffers that
@@ -101,48 +151,12 @@ class RealFFT2:
                 flags=(planner,), threads=threads,
             )
 
-    @property
-    def real_in(self) -> np.ndarray:
-        """Input buffer of :meth:`execute_forward` (solvers write into it directly)."""
-        return self._real
-
-    @property
-    def spectral_out(self) -> np.ndarray:
-        """Output buffer of :meth:`execute_forward`."""
-        return self._cplx
-
-    @property
-    def spectral_in(self) -> np.ndarray:
-        """Input buffer of :meth:`execute_inverse` (destroyed by it)."""
-        return self._cplx_in
-
-    @property
-    def real_out(self) -> np.ndarray:
-        """Output buffer of :meth:`execute_inverse`."""
-        return self._real_out
-
     def execute_forward(self) -> np.ndarray:
-        """Forward transform of :attr:`real_in` (preserved) into :attr:`spectral_out`, no copies."""
         self._fwd.execute()
         return self._cplx
 
     def execute_inverse(self) -> np.ndarray:
-        """Unnormalised inverse of :attr:`spectral_in` into :attr:`real_out` (the caller folds
-        1/(nx ny) into its spectral factors: one pass over memory less than :meth:`inverse`)."""
         self._inv.execute()
-        return self._real_out
-
-    def forward(self, a: np.ndarray) -> np.ndarray:
-        """Unnormalised forward transform (numpy's ``rfft2`` convention)."""
-        self._real[...] = a
-        self._fwd.execute()
-        return self._cplx
-
-    def inverse(self, c: np.ndarray) -> np.ndarray:
-        """Inverse transform normalised by 1/(nx ny) (numpy's ``irfft2``)."""
-        self._cplx_in[...] = c
-        self._inv.execute()
-        self._real_out *= 1.0 / (self.shape[0] * self.shape[1])
         return self._real_out
 
 

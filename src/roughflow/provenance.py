@@ -3,7 +3,8 @@
 ``roughflow.io.write_dataset`` (the single writer of every netCDF file) adds
 :meth:`Provenance.attrs` to every dataset it writes:
 
-- ``roughflow_version``, ``python_version``, ``backend`` ("cpu"), ``fft_threads``,
+- ``roughflow_version``, ``python_version``, ``backend`` ("cpu", or the CuPy version and GPU
+  model of ``--backend cupy``), ``fft_threads``,
   ``fftw_effort`` (FFTW's planner effort: its algorithms set the round-off);
 - ``command``: the command line (``roughflow contact s.nc ...``) or, for the Python API,
   the process's ``sys.argv``;
@@ -40,7 +41,8 @@ class Provenance:
     """How a dataset is being made. ``started``: ``time.time()`` when the work began
     (None: no wall time); ``threads``: FFT threads (None: ``ROUGHFLOW_FFT_THREADS`` or
     1); ``history``: the CF history of the inputs; ``references``: keys of
-    :data:`roughflow.citation.REFERENCES`; ``study_config``: JSON of a study block."""
+    :data:`roughflow.citation.REFERENCES`; ``study_config``: JSON of a study block;
+    ``backend``: where the solves ran (``roughflow.gpu.describe``)."""
 
     command: str = field(default_factory=lambda: "python " + shlex.join(sys.argv))
     started: float | None = None
@@ -48,6 +50,7 @@ class Provenance:
     history: str = ""
     references: tuple[str, ...] = ()
     study_config: str = ""
+    backend: str = "cpu"
 
     @classmethod
     def for_command(cls, argv: list[str]) -> Provenance:
@@ -73,7 +76,7 @@ class Provenance:
         out = {
             "roughflow_version": __version__,
             "python_version": platform.python_version(),
-            "backend": "cpu",
+            "backend": self.backend,
             "fft_threads": self.threads if self.threads is not None else default_threads(),
             "fftw_effort": effort(),
             "command": self.command,

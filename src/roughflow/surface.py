@@ -28,6 +28,7 @@ import numpy as np
 from roughflow import defaults, fft
 from roughflow.defaults import ROLLOFF_FORMS
 from roughflow.errors import MAX_SEED, InputError, require_finite, require_int, require_positive
+from roughflow.gpu import array_module
 
 
 def paper_l_over_lambda_r(gamma: float) -> float:
@@ -281,9 +282,10 @@ def spectral_rms_gradient(spectrum: np.ndarray, shape: tuple[int, int], lx: floa
     """Rms gradient of a periodic height map of ``shape`` from its (unnormalised) rfft2
     ``spectrum``: sqrt(sum |q|^2 |h(q)|^2) / N, by Parseval."""
     nx, ny = shape
-    qx, qy = fft.wavevectors(nx, ny, lx, ly)
-    w = fft.rfft_weights(ny)
-    return float(np.sqrt((w * (qx**2 + qy**2) * np.abs(spectrum) ** 2).sum()) / (nx * ny))
+    xp = array_module(spectrum)  # numpy, or CuPy for a spectrum on the GPU
+    qx, qy = (xp.asarray(q) for q in fft.wavevectors(nx, ny, lx, ly))
+    w = xp.asarray(fft.rfft_weights(ny))
+    return float(xp.sqrt((w * (qx**2 + qy**2) * xp.abs(spectrum) ** 2).sum())) / (nx * ny)
 
 
 def _phase_box(spec: SurfaceSpec) -> tuple[np.ndarray, int, int]:

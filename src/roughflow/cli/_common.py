@@ -128,6 +128,23 @@ def warn_if_nonperiodic_scan(ds, source: str, command: str) -> None:
         source, command, defaults.BOUNDARY)
 
 
+def add_backend(parser: argparse.ArgumentParser) -> None:
+    """``--backend {cpu,cupy}``: where the elastic gfmd solves run (``roughflow.gpu``)."""
+    parser.add_argument("--backend", choices=defaults.BACKENDS, default="cpu",
+                        help="cpu, or cupy: the elastic gfmd solves on a CUDA GPU (needs CuPy: "
+                             "roughflow[gpu]) (cpu)")
+
+
+def on_backend(args: argparse.Namespace) -> None:
+    """Check ``--backend`` (CuPy and a GPU) before any work and record it in
+    ``args.provenance``."""
+    from dataclasses import replace
+
+    from roughflow.gpu import describe
+
+    args.provenance = replace(args.provenance, backend=describe(args.backend))
+
+
 def axis_arg(value: str) -> int | None:
     """Parse ``x``, ``y`` or ``both`` into 0, 1 or None."""
     if value not in AXES:

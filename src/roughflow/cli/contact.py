@@ -14,9 +14,11 @@ from roughflow.defaults import (
 from roughflow.errors import InputError
 
 from ._common import (
+    add_backend,
     add_input,
     add_output,
     adhesion_help,
+    on_backend,
     resolve_adhesion,
     warn_if_nonperiodic_scan,
 )
@@ -57,6 +59,7 @@ def register(sub: argparse._SubParsersAction) -> None:
                    help=adhesion_help("surface energy gamma_s (units E* L)"))
     p.add_argument("--range", type=float, default=None, dest="adhesion_range",
                    help="adhesive model: range rho of the cosine attraction (units L)")
+    add_backend(p)
     add_output(p)
     p.set_defaults(func=run)
 
@@ -66,6 +69,7 @@ def run(args: argparse.Namespace) -> None:
     from roughflow.datasets import contact_dataset
     from roughflow.io import surface_from_dataset, write_dataset
 
+    on_backend(args)  # CuPy and a GPU, before any work
     if args.model == "bearing" and args.pressure is not None:
         raise InputError("--model bearing takes --area-fraction, not --pressure")
     surface = surface_from_dataset(args.data["surface"])
@@ -77,7 +81,7 @@ def run(args: argparse.Namespace) -> None:
     result = solve(
         surface, args.pressure, model=args.model, method=args.method,
         area_fraction=args.area_fraction, tol=args.tol, max_iter=args.max_iter,
-        adhesion=adhesion,
+        adhesion=adhesion, backend=args.backend,
     )
     log.info("%s contact (%s) on %d x %d: p = %.6g -> a_c = %.5f (%d iterations, residual "
              "%.1e, %.2f s)", result.model, result.method, *surface.shape, result.pressure,

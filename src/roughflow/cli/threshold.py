@@ -16,10 +16,12 @@ from roughflow.defaults import (
 )
 
 from ._common import (
+    add_backend,
     add_input,
     add_output,
     adhesion_help,
     axis_arg,
+    on_backend,
     resolve_adhesion,
     warn_if_nonperiodic_scan,
 )
@@ -70,6 +72,7 @@ def register(sub: argparse._SubParsersAction) -> None:
     p.add_argument("--allow-unbracketed", action="store_true",
                    help="write NaN (bracketed=0) instead of failing when the pressure range "
                         "does not contain the threshold")
+    add_backend(p)
     add_output(p)
     p.set_defaults(func=run)
 
@@ -79,6 +82,7 @@ def run(args: argparse.Namespace) -> None:
     from roughflow.io import surface_from_dataset, write_dataset
     from roughflow.search import SearchOptions, threshold
 
+    on_backend(args)  # CuPy and a GPU, before any work
     surface = surface_from_dataset(args.data["surface"])
     warn_if_nonperiodic_scan(args.data["surface"], args.surface, "threshold")
     adhesion = resolve_adhesion(args.model, args.surface_energy, args.adhesion_range, surface,
@@ -89,7 +93,7 @@ def run(args: argparse.Namespace) -> None:
         first_pressure=args.p_guess, contact_tol=args.contact_tol, method=args.method,
         on_unbracketed="nan" if args.allow_unbracketed else "raise")
     res = threshold(surface, args.axis, model=args.model, tol=args.tol, adhesion=adhesion,
-                    options=options)
+                    options=options, backend=args.backend)
     if args.axis is not None:
         res = {args.axis: res}
     for ax, r in res.items():

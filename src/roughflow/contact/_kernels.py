@@ -15,6 +15,7 @@ import numba
 import numpy as np
 
 from roughflow import fft
+from roughflow.gpu import array_module
 
 from .adhesion import Adhesion
 
@@ -304,79 +305,100 @@ def step_np(u, v, a, h, c1, c2, dt):
 
 
 def _trial_step(g, d, alpha):
-    """The trial step s = max(g + alpha d, 0) - g of :func:`cg_direction` (numpy)."""
-    s = np.maximum(g + alpha * d, 0.0)
+    """The trial step s = max(g + alpha d, 0) - g of :func:`cg_direction` (numpy or CuPy)."""
+    s = g + alpha * d
+    s = array_module(g).maximum(s, 0.0, out=s)
     s -= g
     return s
 
 
+def _amax(a) -> float:
+    """max(a) as a float, 0 for an empty array (CuPy's max has no ``initial``); nan if any
+    element is nan."""
+    return float(a.max()) if a.size else 0.0
+
+
+# The twins below serve the CuPy backend as well (``roughflow.gpu``): they take the array
+# module from their arrays and keep every array on its device; floats come back to the host.
+
+
 def cg_update_np(g, f, d, fks, t, alpha, eps, r, active):
-    """numpy version of :func:`cg_update`."""
+    """numpy (or CuPy) version of :func:`cg_update`."""
+    xp = array_module(g)
     if t != 0.0:
         g += t * _trial_step(g, d, alpha)
-        np.maximum(g, 0.0, out=g)
-        f += t * fks.astype(np.float64)
-    np.logical_and(g <= eps, f < 0.0, out=active)
-    np.copyto(r, f, casting="same_kind")
-    r[active] = 0.0
-    return float(np.where(active, 0.0, f).sum())
+        xp.maximum(g, 0.0, out=g)
+        f += t * fks.astype(xp.float64)
+    xp.logical_and(g <= eps, f < 0.0, out=active)
+    r[...] = xp.where(active, 0.0, f)
+    return float(xp.where(active, 0.0, f).sum())
 
 
 def cg_precondition_np(rt, pre, rt_old, out, ny):
-    """numpy version of :func:`cg_precondition`."""
-    w = fft.rfft_weights(ny)
-    np.multiply(rt, pre, out=out, casting="same_kind")
-    re, im = rt.real.astype(np.float64), rt.imag.astype(np.float64)
-    rz = float((w * pre * (re**2 + im**2)).sum())
-    roz = float((w * pre * (rt_old.real * re + rt_old.imag * im)).sum())
-    np.copyto(rt_old, rt)
+    """numpy (or CuPy) version of :func:`cg_precondition`."""
+    xp = array_module(rt)
+    w = xp.asarray(fft.rfft_weights(ny))
+    out[...] = rt * pre
+    re, im = rt.real.astype(xp.float64), rt.imag.astype(xp.float64)
+    wp = w * pre
+    rz = float((wp * (re * re + im * im)).sum())
+    roz = float((wp * (rt_old.real * re + rt_old.imag * im)).sum())
+    rt_old[...] = rt
     return rz, roz
 
 
 def cg_direction_np(z, d, g, f, beta, alpha, s_in, active):
-    """numpy version of :func:`cg_direction`."""
-    zmax = float(np.abs(np.where(active, 0.0, z)).max(initial=0.0))
+    """numpy (or CuPy) version of :func:`cg_direction`."""
+    xp = array_module(z)
+    zfree = xp.where(active, 0.0, z.astype(xp.float64))
+    zmax = _amax(xp.abs(zfree))
     d *= beta
-    d += z
-    d[active] = 0.0
-    nclip = int(np.count_nonzero(g + alpha * d < 0.0))
+    d += zfree
+    d[...] = xp.where(active, 0.0, d)
+    nclip = int(xp.count_nonzero(g + alpha * d < 0.0))
     s = _trial_step(g, d, alpha)
-    np.copyto(s_in, s, casting="same_kind")
-    fs = float(np.einsum("i,i->", f, s))
-    return nclip, fs, zmax, float(np.abs(s).max(initial=0.0))
+    s_in[...] = s
+    fs = float(xp.dot(f, s)) if xp is not np else float(np.einsum("i,i->", f, s))
+    return nclip, fs, zmax, _amax(xp.abs(s))
 
 
 def cg_feasible_np(g, d, alpha):
-    """numpy version of :func:`cg_feasible`."""
+    """numpy (or CuPy) version of :func:`cg_feasible`."""
+    xp = array_module(g)
     s = _trial_step(g, d, alpha)
     neg = s < 0.0
-    return float((g[neg] / -s[neg]).min()) if neg.any() else np.inf
+    if not bool(neg.any()):
+        return np.inf
+    return float(xp.where(neg, g / xp.where(neg, -s, 1.0), xp.inf).min())
 
 
 def cg_stiffness_np(st, neg_k, out, ny):
-    """numpy version of :func:`cg_stiffness`."""
-    np.multiply(st, neg_k, out=out)
-    re, im = st.real.astype(np.float64), st.imag.astype(np.float64)
-    return -float((fft.rfft_weights(ny) * neg_k.astype(np.float64) * (re**2 + im**2)).sum())
+    """numpy (or CuPy) version of :func:`cg_stiffness`."""
+    xp = array_module(st)
+    out[...] = st * neg_k
+    re, im = st.real.astype(xp.float64), st.imag.astype(xp.float64)
+    w = xp.asarray(fft.rfft_weights(ny))
+    return -float((w * neg_k.astype(xp.float64) * (re * re + im * im)).sum())
 
 
 def cg_finish_np(g, h, f, active, eps, sigma, gap, contact):
-    """numpy version of :func:`cg_finish`."""
-    np.copyto(sigma, np.where(active, -f, 0.0))
-    np.copyto(gap, g)
-    np.logical_or(active, gap <= eps, out=contact)
-    gap[contact] = 0.0
+    """numpy (or CuPy) version of :func:`cg_finish`."""
+    xp = array_module(g)
+    sigma[...] = xp.where(active, -f, 0.0)
+    xp.logical_or(active, g <= eps, out=contact)
+    gap[...] = xp.where(contact, 0.0, g)
     return float(g.sum() + h.sum())
 
 
 def max_abs_np(a):
-    """numpy version of :func:`max_abs`."""
-    return float(np.abs(a).max(initial=0.0))
+    """numpy (or CuPy) version of :func:`max_abs`."""
+    return _amax(array_module(a).abs(a))
 
 
 def max_abs_free_np(a, active):
-    """numpy version of :func:`max_abs_free`."""
-    return float(np.abs(a[~active]).max(initial=0.0))
+    """numpy (or CuPy) version of :func:`max_abs_free`."""
+    xp = array_module(a)
+    return _amax(xp.where(active, 0.0, xp.abs(a)))
 
 
 @numba.njit(cache=True, nogil=True)

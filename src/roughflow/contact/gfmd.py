@@ -94,7 +94,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from roughflow import fft
+from roughflow import fft, gpu
 from roughflow.defaults import SOLVER_LOG_EVERY
 from roughflow.errors import require_field
 from roughflow.surface import spectral_rms_gradient
@@ -232,25 +232,37 @@ class HardWallSetup:
 
 
 def hard_wall_setup(heights: np.ndarray, lx: float, ly: float,
-                    threads: int | None = None) -> HardWallSetup:
-    """The :class:`HardWallSetup` of ``heights`` (cell ``lx`` x ``ly``)."""
+                    threads: int | None = None, backend: str = "cpu") -> HardWallSetup:
+    """The :class:`HardWallSetup` of ``heights`` (cell ``lx`` x ``ly``); ``backend="cupy"``:
+    the heights' transform and the preconditioner built on the GPU, ``h`` and ``pre`` CuPy
+    arrays (the per-shape spectral factors still come from the host)."""
     shape = heights.shape
     size = heights.size
-    plan = fft.plan(shape, threads)
     k, _, _, kmin = spectral_factors(shape, lx, ly)
     h0 = float(heights.mean())
-    h = np.ascontiguousarray(heights - h0).ravel()
+    if gpu.check_backend(backend) == "cupy":
+        xp = gpu.cupy()
+        plan = gpu.plan(shape)
+        k = _device_factors(shape, lx, ly)[3]
+        h = xp.asarray(heights).ravel() - h0
+        hscale = math.sqrt(float(xp.dot(h, h)) / size) or 1.0
+    else:
+        xp = np
+        plan = fft.plan(shape, threads)
+        h = np.ascontiguousarray(heights - h0).ravel()
+        hscale = math.sqrt(dot(h, h) / size) or 1.0
     plan.real_in.reshape(-1)[:] = h
     ht = plan.execute_forward()
-    wts = fft.rfft_weights(shape[1])
+    wts = xp.asarray(fft.rfft_weights(shape[1]))
     hpow = wts * (ht.real**2 + ht.imag**2)
     band = _band(hpow, k)
-    pre = np.hypot(max(Z_MASS * kmin, _floor_of_band(band, kmin)), k)
-    np.reciprocal(pre, out=pre)
+    pre = xp.hypot(max(Z_MASS * kmin, _floor_of_band(band, kmin)), k)
+    xp.reciprocal(pre, out=pre)
     pre *= 1.0 / size
-    hscale = math.sqrt(dot(h, h) / size) or 1.0
     gbar = spectral_rms_gradient(ht, shape, lx, ly)
-    levels = np.sort(np.append(h[::_level_stride(size, shape[1])], h.max()))
+    # the same sample on either backend: h = heights - h0 is exact arithmetic on the host too
+    flat = heights.ravel()
+    levels = np.sort(np.append(flat[::_level_stride(size, shape[1])] - h0, flat.max() - h0))
     # writable: the numba kernels would compile a second, read-only signature
     return HardWallSetup(heights=heights, lx=float(lx), ly=float(ly), h0=h0, h=h, pre=pre,
                          hscale=hscale, gbar=gbar, levels=levels,
@@ -311,15 +323,32 @@ class HardWallWork:
         return self.gap.shape
 
 
-def hard_wall_work(shape: tuple[int, int]) -> HardWallWork:
-    """An empty :class:`HardWallWork` for grids of ``shape``."""
+def hard_wall_work(shape: tuple[int, int], xp=np) -> HardWallWork:
+    """An empty :class:`HardWallWork` for grids of ``shape`` (``xp``: the array module,
+    ``cupy`` for the GPU backend)."""
     nx, ny = (int(v) for v in shape)
     size = nx * ny
-    return HardWallWork(g=np.empty(size), f=np.empty(size), d=np.empty(size),
-                        active=np.empty(size, dtype=bool),
-                        rt_old=np.empty((nx, ny // 2 + 1), dtype=np.complex64),
-                        sigma=np.empty((nx, ny)), gap=np.empty((nx, ny)),
-                        contact=np.empty((nx, ny), dtype=bool), u0=np.empty((nx, ny)))
+    return HardWallWork(g=xp.empty(size), f=xp.empty(size), d=xp.empty(size),
+                        active=xp.empty(size, dtype=bool),
+                        rt_old=xp.empty((nx, ny // 2 + 1), dtype=np.complex64),
+                        sigma=xp.empty((nx, ny)), gap=xp.empty((nx, ny)),
+                        contact=xp.empty((nx, ny), dtype=bool), u0=xp.empty((nx, ny)))
+
+
+@functools.lru_cache(maxsize=1)  # large grids: four spectral arrays in GPU memory
+def _device_factors(shape: tuple[int, int], lx: float, ly: float):
+    """-k(q)/N in double and single precision, G(q)/N in single and k(q), on the GPU."""
+    cp = gpu.cupy()
+    k, neg_k, _, _ = spectral_factors(shape, lx, ly)
+    neg_k32, comp32 = _spectral_single(shape, lx, ly)
+    return cp.asarray(neg_k), cp.asarray(neg_k32), cp.asarray(comp32), cp.asarray(k)
+
+
+@functools.lru_cache(maxsize=1)  # the last setup's arrays stay on the GPU for its next solve
+def _on_device(setup: HardWallSetup):
+    """``setup``'s h and pre as CuPy arrays (copied once for a setup built on the CPU)."""
+    cp = gpu.cupy()
+    return cp.asarray(setup.h), cp.asarray(setup.pre)
 
 
 def gfmd(
@@ -338,6 +367,7 @@ def gfmd(
     minimizer: str = "auto",
     setup: HardWallSetup | None = None,
     work: HardWallWork | None = None,
+    backend: str = "cpu",
 ) -> SolverOutput:
     """Minimise elastic + interaction + load energy; returns a :class:`SolverOutput`.
 
@@ -357,14 +387,21 @@ def gfmd(
     ``work``: the hard wall's :class:`HardWallWork` for this grid: no arrays are allocated,
     and the output is a view of its arrays (overwritten by the next solve with it). ``u0``
     may be ``work.u0``. Ignored by FIRE.
+    ``backend``: ``"cpu"`` or ``"cupy"`` (:mod:`roughflow.gpu`; the hard wall only): the same
+    iteration with CuPy arrays, cuFFT and the CUDA forms of the fused kernels
+    (``_cuda_kernels``; ``use_numba=False``: the kernels' array-module twins); ``work`` then
+    holds CuPy arrays, and the output is copied to numpy.
     """
     if minimizer not in ("auto", "fire"):
         raise ValueError(f"minimizer must be 'auto' or 'fire', got {minimizer!r}")
+    if backend != "cpu" and (adhesion is not None or minimizer != "auto"):
+        raise ValueError(f"backend={backend!r} serves the hard wall's CG only")
     if u0 is not None:
         require_field("u0", u0)  # a nan start would leave every minimizer on nan
     if adhesion is None and minimizer == "auto":
         return _hard_wall(heights, lx, ly, load, tol=tol, max_iter=max_iter, u0=u0,
-                          threads=threads, use_numba=use_numba, setup=setup, work=work)
+                          threads=threads, use_numba=use_numba, setup=setup, work=work,
+                          backend=backend)
     if adhesion is not None and adhesion.repulsion == "harmonic" and minimizer == "auto":
         return adhesive_cg(heights, lx, ly, load, adhesion=adhesion, tol=tol,
                            max_iter=max_iter, u0=u0, threads=threads,
@@ -386,10 +423,17 @@ def _hard_wall(
     use_numba: bool,
     setup: HardWallSetup | None = None,
     work: HardWallWork | None = None,
+    backend: str = "cpu",
 ) -> SolverOutput:
     """Projected preconditioned CG with a secant step (module docstring, "Hard wall"), its
-    transforms in single precision ("Precision")."""
-    if use_numba:
+    transforms in single precision ("Precision"); on the GPU with ``backend="cupy"``."""
+    on_gpu = gpu.check_backend(backend) == "cupy"
+    if use_numba and on_gpu:
+        from . import _cuda_kernels
+
+        update, precondition, direction, feasible, stiffness, finish, max_abs, max_free = (
+            _cuda_kernels.HARD_WALL)
+    elif use_numba:
         update, precondition, direction, feasible, stiffness, finish, max_abs, max_free = (
             _k.cg_update, _k.cg_precondition, _k.cg_direction, _k.cg_feasible,
             _k.cg_stiffness, _k.cg_finish, _k.max_abs, _k.max_abs_free)
@@ -399,8 +443,14 @@ def _hard_wall(
             _k.cg_stiffness_np, _k.cg_finish_np, _k.max_abs_np, _k.max_abs_free_np)
     shape = heights.shape
     size = heights.size
-    exact = fft.plan(shape, threads)  # double: the force of the start and of each refresh
-    plan = fft.plan(shape, threads, single=True)  # float32: everything else
+    if on_gpu:
+        xp = gpu.cupy()
+        exact = gpu.plan(shape)  # double: the force of the start and of each refresh
+        plan = gpu.plan(shape, single=True)  # float32: everything else
+    else:
+        xp = np
+        exact = fft.plan(shape, threads)
+        plan = fft.plan(shape, threads, single=True)
     # the kernels read and write the plans' buffers directly; 1/size (the normalisation of
     # the inverse transform) is folded into the spectral factors
     rin = plan.real_in.reshape(-1)  # r, then the trial step s
@@ -408,17 +458,23 @@ def _hard_wall(
     spec_in = plan.spectral_in
     _, neg_k, _, kmin = spectral_factors(shape, lx, ly)
     neg_k32, comp32 = _spectral_single(shape, lx, ly)
+    if on_gpu:
+        neg_k, neg_k32, comp32, _ = _device_factors(shape, lx, ly)
     if setup is None:
-        setup = hard_wall_setup(heights, lx, ly, threads)
+        setup = hard_wall_setup(heights, lx, ly, threads, backend)
     elif setup.h.size != size or (setup.lx, setup.ly) != (lx, ly):
         raise ValueError(f"setup of a {setup.lx} x {setup.ly} cell with {setup.h.size} points "
                          f"passed for {shape} points on {lx} x {ly}")
     h0, h, pre, hscale = setup.h0, setup.h, setup.pre, setup.hscale
+    if on_gpu and gpu.array_module(h) is np:
+        h, pre = _on_device(setup)
+    elif not on_gpu and gpu.array_module(h) is not np:
+        raise ValueError("setup built on the GPU (backend='cupy') passed to a CPU solve")
     scale = load_scale(kmin, hscale, load, False)
     eps = 1e-12 * hscale  # round-off of the FFT round trip: points this close touch
 
     if work is None:
-        work = hard_wall_work(shape)
+        work = hard_wall_work(shape, xp)
     elif work.shape != shape:
         raise ValueError(f"work for a {work.shape} grid passed for {shape} points")
     g, f, d, active, rt_old = work.g, work.f, work.d, work.active, work.rt_old
@@ -428,24 +484,24 @@ def _hard_wall(
     # the iteration moves the gap g = u - h (u: the elastic surface, centred heights): the
     # wall is g >= 0 and the loops need not read h
     if u0 is not None:
-        np.subtract(np.asarray(u0, dtype=np.float64).ravel(), h0, out=g)
+        xp.subtract(xp.asarray(u0, dtype=np.float64).ravel(), h0, out=g)
         g -= h
-        np.maximum(g, 0.0, out=g)
+        xp.maximum(g, 0.0, out=g)
     else:
-        np.subtract(cold_start_level(setup, load), h, out=g)
-        np.maximum(g, 0.0, out=g)
+        xp.subtract(cold_start_level(setup, load), h, out=g)
+        xp.maximum(g, 0.0, out=g)
 
     def refresh() -> float:
         """The exact force of u = g + h (a double FFT pair), the active set and r; returns
         sum(r)."""
-        np.add(g, h, out=exact.real_in.reshape(-1))
-        np.multiply(exact.execute_forward(), neg_k, out=exact.spectral_in)
-        np.subtract(exact.execute_inverse().reshape(-1), load, out=f)
+        xp.add(g, h, out=exact.real_in.reshape(-1))
+        xp.multiply(exact.execute_forward(), neg_k, out=exact.spectral_in)
+        xp.subtract(exact.execute_inverse().reshape(-1), load, out=f)
         return update(g, f, d, rout, 0.0, 0.0, eps, rin, active)
 
     def residual() -> float:
         """max |G r| / rms(h) from the transform ``ft`` of r (one inverse FFT)."""
-        np.multiply(ft, comp32, out=spec_in)
+        xp.multiply(ft, comp32, out=spec_in)
         plan.execute_inverse()
         return max(max_abs(rout) / hscale, imbalance)
 
@@ -509,7 +565,7 @@ def _hard_wall(
         if debug and it % SOLVER_LOG_EVERY == 0:
             log.debug("hard-wall cg iteration %d: residual estimate %.3e (tol %.1e), "
                       "trial step %.3g, contact %.4f", it, max(estimate, imbalance), tol,
-                      alpha, float(np.count_nonzero(active)) / size)
+                      alpha, float(xp.count_nonzero(active)) / size)
         trial = alpha  # update() recomputes the trial step s from d and this alpha
         sks = stiffness(plan.execute_forward(), neg_k32, spec_in, shape[1])
         plan.execute_inverse()  # -K s
@@ -538,8 +594,9 @@ def _hard_wall(
     sigma, gap, contact = work.sigma, work.gap, work.contact
     separation = finish(g, h, f, active, eps, sigma.reshape(-1), gap.reshape(-1),
                         contact.reshape(-1)) / size
-    return SolverOutput(pressure=sigma, gap=gap, contact=contact, separation=separation,
-                        iterations=it, residual=res, converged=res <= tol)
+    return SolverOutput(pressure=gpu.to_host(sigma), gap=gpu.to_host(gap),
+                        contact=gpu.to_host(contact), separation=separation, iterations=it,
+                        residual=res, converged=res <= tol)
 
 
 def _fire(

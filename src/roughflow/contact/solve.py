@@ -8,7 +8,7 @@ from typing import TYPE_CHECKING
 
 import numpy as np
 
-from roughflow.defaults import CONTACT_METHODS, CONTACT_TOL, CONTACT_TOL_MAX, MODELS
+from roughflow.defaults import BACKENDS, CONTACT_METHODS, CONTACT_TOL, CONTACT_TOL_MAX, MODELS
 from roughflow.errors import (
     ConvergenceError,
     InputError,
@@ -16,6 +16,7 @@ from roughflow.errors import (
     require_finite,
     require_positive,
 )
+from roughflow.gpu import array_module, check_backend
 from roughflow.resources import check_memory
 from roughflow.surface import Surface
 
@@ -48,6 +49,7 @@ def solve(
     threads: int | None = None,
     setup: HardWallSetup | None = None,
     work: HardWallWork | None = None,
+    backend: str = "cpu",
 ) -> ContactResult:
     """Contact of the rigid rough ``surface`` with a flat elastic half-space (E* = 1).
 
@@ -91,12 +93,23 @@ def solve(
       what they need of each result (threshold searches): the solver allocates nothing, and
       the result's arrays are the workspace's, **overwritten by the next solve with it**.
       The results are the same as without it.
+    backend:
+      ``"cpu"`` (default) or ``"cupy"``: the elastic gfmd solve on a CUDA GPU through CuPy
+      (:mod:`roughflow.gpu`), the same algorithm and tolerance; the result's arrays are
+      numpy. Not with ``work=`` (its arrays live on the CPU).
     """
     if model not in MODELS:
         raise InputError(f"model must be one of {MODELS}, got {model!r}")
     if not isinstance(surface, Surface):
         raise InputError(f"surface must be a roughflow Surface, got {type(surface).__name__}")
     heights = require_field("surface heights", surface.heights)
+    if backend != "cpu":
+        gpu_ok = model == "elastic" and method in (None, "gfmd") and work is None
+        if backend in BACKENDS and not gpu_ok:
+            raise InputError(f"backend={backend!r} serves model='elastic' with method='gfmd' "
+                             f"and no work=, got model={model!r}, method={method!r}"
+                             + (", work=" if work is not None else ""))
+        check_backend(backend)
     check_memory("bearing" if model == "bearing" else "contact", heights.shape,
                  what=f"a {model} contact solve")
     if model == "bearing":
@@ -154,6 +167,9 @@ def solve(
         if setup.heights is not surface.heights or (setup.lx, setup.ly) != (lx, ly):
             raise InputError("setup was prepared for another surface (contact.prepare(surface) "
                              "of the surface being solved)")
+        if backend == "cpu" and array_module(setup.h) is not np:
+            raise InputError("setup was prepared with backend='cupy'; solve with "
+                             "backend='cupy' or prepare(surface) for the CPU")
     if work is not None:
         from .gfmd import HardWallWork
 
@@ -186,7 +202,7 @@ def solve(
         out = gfmd(
             heights, lx, ly, load, tol=tol, max_iter=int(max_iter), u0=u0,
             adhesion=adhesion if model == "adhesive" else None, threads=threads, setup=setup,
-            work=work,
+            work=work, backend=backend,
         )
     if not out.converged:
         raise ConvergenceError(
@@ -229,14 +245,16 @@ def workspace(surface: Surface) -> HardWallWork:
     return hard_wall_work(surface.shape)
 
 
-def prepare(surface: Surface, threads: int | None = None) -> HardWallSetup:
+def prepare(surface: Surface, threads: int | None = None, backend: str = "cpu") -> HardWallSetup:
     """What every elastic gfmd solve of ``surface`` derives from its heights alone (centred
     heights, rms height, preconditioner), built once for ``solve(..., setup=)``. Valid while
-    the heights are not modified."""
+    the heights are not modified. ``backend="cupy"``: built on the GPU, for solves with
+    ``backend="cupy"`` (a CPU-built one serves them too, copied to the GPU once)."""
     from .gfmd import hard_wall_setup
 
     if not isinstance(surface, Surface):
         raise InputError(f"surface must be a roughflow Surface, got {type(surface).__name__}")
+    check_backend(backend)
     heights = require_field("surface heights", surface.heights)
-    setup = hard_wall_setup(heights, float(surface.lx), float(surface.ly), threads)
+    setup = hard_wall_setup(heights, float(surface.lx), float(surface.ly), threads, backend)
     return dataclasses.replace(setup, heights=surface.heights)  # the array solve() checks

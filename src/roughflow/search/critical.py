@@ -53,6 +53,7 @@ from roughflow.defaults import (
     THRESHOLD_TOL_MAX,
 )
 from roughflow.errors import ConvergenceError, InputError, require_positive
+from roughflow.gpu import check_backend
 from roughflow.percolation import (
     bearing_bracket,
     check_axis,
@@ -540,6 +541,7 @@ def threshold(
     adhesion=None,
     options: SearchOptions | None = None,
     threads: int | None = None,
+    backend: str = "cpu",
 ) -> Threshold | dict[int, Threshold]:
     """Critical contact area a_c* for fluid flow along ``axis`` (0 = x, 1 = y).
 
@@ -548,6 +550,7 @@ def threshold(
     (default), ``"adhesive"`` (needs ``adhesion=Adhesion(...)``) or ``"bearing"``.
     ``options``: :class:`SearchOptions` (strategy, pressure range, contact tolerance, ...).
     Every contact solve logs one line (load, area, iterations, residual, seconds) at INFO.
+    ``backend="cupy"``: the elastic gfmd solves on a CUDA GPU (``contact.solve``'s backend).
     """
     if not isinstance(surface, Surface):
         raise InputError(f"surface must be a roughflow Surface, got {type(surface).__name__}")
@@ -566,6 +569,10 @@ def threshold(
                          f"{opts.pressure_range!r}")
     if model == "adhesive" and adhesion is None:
         raise InputError("model='adhesive' needs adhesion=Adhesion(surface_energy=, range=)")
+    if backend != "cpu" and (model != "elastic" or opts.method not in (None, "gfmd")):
+        raise InputError(f"backend={backend!r} serves the elastic model with method 'gfmd', "
+                         f"got model={model!r}, method={opts.method!r}")
+    on_gpu = check_backend(backend) == "cupy"
     heights = surface.heights
     shape = heights.shape
     # Elastic states seen whole are kept as q = gap - c pressure in float32 (CompactState, 4
@@ -626,12 +633,13 @@ def threshold(
         return res if axis is None else res[axes[0]]
 
     kwargs = {"model": model, "method": opts.method, "adhesion": adhesion, "threads": threads,
-              "tol": opts.contact_tol}
+              "tol": opts.contact_tol, "backend": backend}
     start_out = None
     if model == "elastic" and opts.method in (None, "gfmd"):  # built once for all solves
-        kwargs["setup"] = prepare(surface, threads)
+        kwargs["setup"] = prepare(surface, threads, backend)
         if lean:
-            kwargs["work"] = workspace(surface)
+            if not on_gpu:  # on the GPU the solver's arrays come from CuPy's memory pool
+                kwargs["work"] = workspace(surface)
             # the warm starts' gap, pressure and contact
             start_out = (np.empty(shape), np.empty(shape), np.empty(shape, dtype=bool))
 

@@ -1,0 +1,113 @@
+"""The optional CuPy backend: the array module, and cuFFT plans with the buffer interface of
+:class:`roughflow.fft.RealFFT2`.
+
+The CPU (numpy, pyFFTW, numba) is the default and never imports CuPy. A solver that takes
+``backend="cupy"`` runs the same algorithm on the GPU: its arrays are ``cupy`` arrays, its
+transforms the plans below, and its fused loops the array-module twins of the numba kernels
+(``contact._kernels``, suffix ``_np``). Install with ``pip install "roughflow[gpu]"`` (CuPy
+for CUDA 12; on CUDA 13 install ``cupy-cuda13x`` instead).
+"""
+
+from __future__ import annotations
+
+from functools import lru_cache
+from types import ModuleType
+
+import numpy as np
+
+from roughflow.defaults import BACKENDS
+from roughflow.errors import InputError
+from roughflow.fft import PlanPair
+
+
+def check_backend(backend: str) -> str:
+    """``backend`` or :class:`InputError` naming it; for ``"cupy"`` also unless CuPy imports
+    and sees a GPU (checked before any work)."""
+    if backend not in BACKENDS:
+        raise InputError(f"backend must be one of {BACKENDS}, got {backend!r}")
+    if backend == "cupy":
+        cupy()
+    return backend
+
+
+@lru_cache(maxsize=1)
+def cupy() -> ModuleType:
+    """The ``cupy`` module, or :class:`InputError` saying what is missing."""
+    try:
+        import cupy as cp
+    except ImportError as exc:
+        raise InputError(
+            f"backend='cupy' needs CuPy ({exc}); install roughflow[gpu] or the cupy-cudaXXx "
+            "wheel matching your CUDA"
+        ) from None
+    try:
+        count = cp.cuda.runtime.getDeviceCount()
+    except Exception as exc:  # CUDA driver or runtime missing: CuPy imports but cannot run
+        raise InputError(f"backend='cupy': CuPy cannot reach a CUDA GPU ({exc})") from None
+    if count < 1:
+        raise InputError("backend='cupy': CuPy sees no CUDA GPU")
+    return cp
+
+
+def describe(backend: str) -> str:
+    """Where ``backend``'s solves run, for provenance: ``"cpu"``, or e.g.
+    ``"cupy 14.2.0 on NVIDIA H200"`` (the round-off depends on the GPU model)."""
+    if check_backend(backend) == "cpu":
+        return "cpu"
+    cp = cupy()
+    name = cp.cuda.runtime.getDeviceProperties(cp.cuda.Device().id)["name"]
+    name = name.decode() if isinstance(name, bytes) else str(name)
+    return f"cupy {cp.__version__} on {name}"
+
+
+def array_module(a) -> ModuleType:
+    """``cupy`` for a CuPy array, else ``numpy`` (CuPy is imported only for its arrays)."""
+    if type(a).__module__.split(".")[0] == "cupy":
+        return cupy()
+    return np
+
+
+def to_host(a) -> np.ndarray:
+    """A numpy array of ``a`` (a copy from the GPU for a CuPy array, ``a`` itself otherwise)."""
+    if array_module(a) is np:
+        return a
+    return a.get()
+
+
+class CupyRealFFT2(PlanPair):
+    """A forward/inverse pair of real 2D cuFFT plans for one shape, with the buffers and the
+    conventions of :class:`roughflow.fft.RealFFT2` (``execute_inverse`` destroys its input);
+    ``single``: float32 / complex64."""
+
+    def __init__(self, shape: tuple[int, int], single: bool = False):
+        cp = cupy()
+        from cupy.cuda import cufft
+        from cupyx.scipy.fftpack import get_fft_plan
+
+        nx, ny = shape
+        self.shape = (int(nx), int(ny))
+        self.spectral_shape = (int(nx), int(ny) // 2 + 1)
+        real, cplx = (np.float32, np.complex64) if single else (np.float64, np.complex128)
+        self._real = cp.zeros(self.shape, dtype=real)
+        self._cplx = cp.zeros(self.spectral_shape, dtype=cplx)
+        self._cplx_in = cp.zeros(self.spectral_shape, dtype=cplx)
+        self._real_out = cp.zeros(self.shape, dtype=real)
+        self._fwd = get_fft_plan(self._real, axes=(0, 1), value_type="R2C")
+        self._inv = get_fft_plan(self._cplx_in, shape=self.shape, axes=(0, 1),
+                                 value_type="C2R")
+        self._forward_dir = cufft.CUFFT_FORWARD
+        self._inverse_dir = cufft.CUFFT_INVERSE
+
+    def execute_forward(self):
+        self._fwd.fft(self._real, self._cplx, self._forward_dir)
+        return self._cplx
+
+    def execute_inverse(self):
+        self._inv.fft(self._cplx_in, self._real_out, self._inverse_dir)
+        return self._real_out
+
+
+@lru_cache(maxsize=4)
+def plan(shape: tuple[int, int], single: bool = False) -> CupyRealFFT2:
+    """Cached :class:`CupyRealFFT2` for ``shape`` (buffers shared, as ``fft.plan``'s)."""
+    return CupyRealFFT2(tuple(shape), single)
