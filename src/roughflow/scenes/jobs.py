@@ -641,20 +641,19 @@ def check_plan_memory(jobs: dict[str, dict[str, Job]], limit: int, source: str) 
 
 # Cost model: CPU seconds on one core of the 2-core development machine, fitted to single
 # `roughflow scene` runs (one thread) of config/paper.yaml's jobs, 0.26 M to 33.5 M points
-# (docs/workflow.md "Cost", 2026-11-26; benchmarks/bench_cost_model.py repeats them). A
-# guide for the workflow's runtime requests and core-hour estimates, not a benchmark.
+# (docs/workflow.md "Cost": threshold searches 2026-11-27 with FFTW_MEASURE plans, ladders
+# 2026-11-26; benchmarks/bench_cost_model.py repeats them). A guide for the workflow's
+# runtime requests and core-hour estimates, not a benchmark.
 #: Start-up of one ``roughflow scene`` process (imports, surface generation, writing).
 COST_START_S = 3.0
-#: An isotropic elastic threshold search (both axes), per N log2(N): 1.1-1.5e-7 s measured.
-COST_THRESHOLD_S = 1.5e-7
+#: An isotropic elastic threshold search (both axes), per N log2(N): 4.3-8.7e-8 s measured
+#: (the wider band eps_f = 1/64 at the low end; it needed more iterations under ESTIMATE
+#: plans, 1.4-1.9x at gamma 4 and 8, and no longer does: 0.9-1.45x).
+COST_THRESHOLD_S = 8e-8
 #: Anisotropic searches bracket a_c*(x) and a_c*(y) apart (9 solves where isotropic
-#: searches on large grids share 4-7): measured about 1.7 times the isotropic cost per
-#: point at eps_f = 1/16 (0.6 for a seed whose axes shared their solves).
+#: searches on large grids share 4-7): measured 1.2-1.8 times the isotropic cost per point
+#: at gamma 2, 2.0 at gamma 4, 1.8-2.7 at gamma 8.
 COST_ANISOTROPIC_FACTOR = 2.0
-#: Wider bands (eps_f below 1/16) need more contact iterations: cost times
-#: (1 / (16 eps_f))^COST_BAND_EXPONENT (measured at eps_f = 1/64 against 1/16: 1.0
-#: isotropic, 1.4-1.9 for gamma = 4, 8).
-COST_BAND_EXPONENT = 0.25
 #: One Reynolds solve (one axis, AMG-CG), per grid point.
 COST_FLOW_S = 6.5e-6
 #: The contact solves of a ladder step (warm-started load search), per N log2(N), by model.
@@ -665,9 +664,7 @@ COST_BEARING_THRESHOLD_S = 8e-7
 
 def _threshold_seconds(job: ThresholdJob, n: int) -> float:
     """CPU seconds of one seed's elastic threshold search (both axes)."""
-    s = job.surface
-    factor = (1.0 if s.gamma == 1 else COST_ANISOTROPIC_FACTOR) \
-        * max(1.0, 1.0 / (16 * s.eps_f)) ** COST_BAND_EXPONENT
+    factor = 1.0 if job.surface.gamma == 1 else COST_ANISOTROPIC_FACTOR
     return COST_THRESHOLD_S * n * math.log2(n) * factor
 
 
