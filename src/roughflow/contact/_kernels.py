@@ -6,7 +6,8 @@ the line search and the step of the nonlinear CG of the harmonic adhesive model
 (``adhesive_cg``); their potential is the one of ``adhesion.Adhesion`` with amp = its
 maximum tension, w = pi / rho and kappa = amp w. Each has a
 numpy twin (suffix ``_np``, selected by ``gfmd(..., use_numba=False)``) with the same outputs,
-used to test the kernels and to benchmark them (docs/contact.md).
+used to test the kernels and to benchmark them (docs/contact.md); the hard wall's twins also
+run on CuPy arrays, against which ``_cuda_kernels`` (the GPU's fused forms) are tested.
 """
 
 from __future__ import annotations
@@ -358,6 +359,7 @@ def cg_direction_np(z, d, g, f, beta, alpha, s_in, active):
     nclip = int(xp.count_nonzero(g + alpha * d < 0.0))
     s = _trial_step(g, d, alpha)
     s_in[...] = s
+    # einsum on the CPU: a BLAS dot oversubscribes shared cores (``_linalg``)
     fs = float(xp.dot(f, s)) if xp is not np else float(np.einsum("i,i->", f, s))
     return nclip, fs, zmax, _amax(xp.abs(s))
 
