@@ -305,3 +305,36 @@ def test_cli_threshold_backend_cupy_records_the_gpu(surface_file, tmp_path):
                  "-o", str(out)]) in (0, None)
     with xr.open_dataset(out) as ds:
         assert ds.attrs["backend"].startswith("cupy ") and " on " in ds.attrs["backend"]
+
+
+def test_gpu_memory_is_checked_before_any_work(rough, monkeypatch):
+    # the model (256 B a point, the peak of CuPy's pool measured 184-256 B from 1024^2 to
+    # 16384^2) against the GPU's free memory plus the pool's unused blocks: a 2048^2 solve
+    # (1.1 GB) is refused on a GPU with 0.5 GB free, before the solver runs; a stand-in for
+    # CuPy reports the memory, so this runs without a GPU
+    from types import SimpleNamespace
+
+    from roughflow.contact import gfmd as G
+    from roughflow.errors import ResourceError
+    from roughflow.search import threshold
+    from roughflow.surface import Surface
+
+    pool = SimpleNamespace(total_bytes=lambda: 300 * 2**20, used_bytes=lambda: 100 * 2**20)
+    fake = SimpleNamespace(
+        cuda=SimpleNamespace(runtime=SimpleNamespace(getDeviceCount=lambda: 1,
+                                                     memGetInfo=lambda: (300 * 2**20, 8e10))),
+        get_default_memory_pool=lambda: pool)
+    monkeypatch.setattr(gpu, "cupy", lambda: fake)
+    assert gpu.available_bytes() == 500 * 2**20
+
+    def fail(*args, **kwargs):
+        raise AssertionError("the solver ran")
+
+    monkeypatch.setattr(G, "gfmd", fail)
+    monkeypatch.setattr(G, "hard_wall_setup", fail)
+    big = Surface(heights=np.zeros((2048, 2048)), lx=1.0, ly=1.0)
+    refusal = r"on the GPU on a 2048 x 2048 grid .* 1\.14 GB of GPU memory, but the GPU has 524 MB"
+    for call in (lambda: solve(big, 0.1, backend="cupy"),
+                 lambda: threshold(big, backend="cupy")):
+        with pytest.raises(ResourceError, match=refusal):
+            call()

@@ -49,6 +49,24 @@ def cupy() -> ModuleType:
     return cp
 
 
+def available_bytes() -> int:
+    """GPU memory a solve can use: the device's free memory plus what CuPy's pool holds
+    unused."""
+    cp = cupy()
+    free, _ = cp.cuda.runtime.memGetInfo()
+    pool = cp.get_default_memory_pool()
+    return int(free + pool.total_bytes() - pool.used_bytes())
+
+
+def check_memory(shape: tuple[int, int], what: str) -> None:
+    """:class:`roughflow.errors.ResourceError` before any work if ``what`` on a grid of
+    ``shape`` needs more GPU memory than :func:`available_bytes` (model: the task
+    ``gpu_contact`` of :mod:`roughflow.resources`)."""
+    from roughflow.resources import check_memory as check
+
+    check("gpu_contact", shape, limit=available_bytes(), what=what)
+
+
 def describe(backend: str) -> str:
     """Where ``backend``'s solves run, for provenance: ``"cpu"``, or e.g.
     ``"cupy 14.2.0 on NVIDIA H200"`` (the round-off depends on the GPU model)."""

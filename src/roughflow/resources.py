@@ -16,7 +16,11 @@ adhesive threshold search, or one through an observed window: every state is kep
 17 bytes a point; about 17 solves at 2048^2),
 ``flow`` (Reynolds flow with AMG, the largest per point), ``ladder`` (contact + flow +
 theory per step), ``channels`` (two contacts), ``spectrum`` (Persson theory from a spec),
-``theory`` (Bruggeman and closed forms of a gap field).
+``theory`` (Bruggeman and closed forms of a gap field), ``gpu_contact`` (the GPU memory of an
+elastic gfmd solve with ``backend="cupy"``, also each solve of a threshold search there:
+the peak of CuPy's memory pool, 184-256 B per point from 1024^2 to 16384^2 on an H200,
+docs/contact.md "GPU backend"; checked against the GPU's free memory,
+``roughflow.gpu.available_bytes``).
 
 What there is: the memory the kernel reports available (``MemAvailable``) within the
 process's cgroup limit (a SLURM job's allocation), plus what this process already holds,
@@ -36,11 +40,12 @@ MB = 1024**2
 #: GFMD kernels, scipy.sparse and pyamg for the flow).
 BASE = {"surface": 150 * MB, "contact": 300 * MB, "bearing": 150 * MB, "threshold": 300 * MB,
         "threshold_adhesive": 300 * MB, "flow": 350 * MB, "ladder": 400 * MB,
-        "channels": 300 * MB, "spectrum": 150 * MB, "theory": 200 * MB}
+        "channels": 300 * MB, "spectrum": 150 * MB, "theory": 200 * MB,
+        "gpu_contact": 64 * MB}
 #: Bytes per grid point at the peak (float64 fields, FFT buffers, AMG hierarchy, ...).
 PER_POINT = {"surface": 80, "contact": 160, "bearing": 64, "threshold": 320,
              "threshold_adhesive": 480, "flow": 560, "ladder": 720, "channels": 320,
-             "spectrum": 32, "theory": 200}
+             "spectrum": 32, "theory": 200, "gpu_contact": 256}
 TASKS = tuple(PER_POINT)
 #: Grids whose arrays need less than this are never refused (the check is for grids that
 #: cannot fit, not for a machine that is momentarily short of memory).
@@ -127,10 +132,15 @@ def check_memory(task: str, shape: tuple[int, ...] | int, *, limit: int | None =
         return need
     have = available_bytes() if limit is None else limit
     if have is not None and need > have:
-        source = (f"the limit is {describe(have)}" if limit is not None
-                  else f"this machine has {describe(have)} available")
+        on_gpu = task.startswith("gpu")
+        if on_gpu:
+            source = f"the GPU has {describe(have)} free"
+        elif limit is not None:
+            source = f"the limit is {describe(have)}"
+        else:
+            source = f"this machine has {describe(have)} available"
         raise ResourceError(
             f"{what or f'a {task} computation'} on a {grid} needs about {describe(need)} of "
-            f"memory, but {source}; use a coarser grid (fewer points per lambda_s, a larger "
-            "eps_f or a smaller L/lambda_r)")
+            f"{'GPU ' if on_gpu else ''}memory, but {source}; use a coarser grid (fewer points "
+            "per lambda_s, a larger eps_f or a smaller L/lambda_r)")
     return need

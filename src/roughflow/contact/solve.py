@@ -17,6 +17,7 @@ from roughflow.errors import (
     require_positive,
 )
 from roughflow.gpu import array_module, check_backend
+from roughflow.gpu import check_memory as gpu_check_memory
 from roughflow.resources import check_memory
 from roughflow.surface import Surface
 
@@ -110,6 +111,7 @@ def solve(
                              f"and no work=, got model={model!r}, method={method!r}"
                              + (", work=" if work is not None else ""))
         check_backend(backend)
+        gpu_check_memory(heights.shape, "an elastic contact solve on the GPU")
     check_memory("bearing" if model == "bearing" else "contact", heights.shape,
                  what=f"a {model} contact solve")
     if model == "bearing":

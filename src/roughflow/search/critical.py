@@ -54,6 +54,7 @@ from roughflow.defaults import (
 )
 from roughflow.errors import ConvergenceError, InputError, require_positive
 from roughflow.gpu import check_backend
+from roughflow.gpu import check_memory as gpu_check_memory
 from roughflow.percolation import (
     bearing_bracket,
     check_axis,
@@ -573,6 +574,8 @@ def threshold(
         raise InputError(f"backend={backend!r} serves the elastic model with method 'gfmd', "
                          f"got model={model!r}, method={opts.method!r}")
     on_gpu = check_backend(backend) == "cupy"
+    if on_gpu:
+        gpu_check_memory(surface.shape, "the contact solves of a threshold search on the GPU")
     heights = surface.heights
     shape = heights.shape
     # Elastic states seen whole are kept as q = gap - c pressure in float32 (CompactState, 4
