@@ -53,11 +53,11 @@ from roughflow import fft, gpu
 from roughflow.contact import gfmd as G
 from roughflow.contact import solve
 from roughflow.defaults import THRESHOLD_CONTACT_TOL
-from roughflow.search import SearchOptions, first_pressure, threshold, warm_up
+from roughflow.search import first_pressure, warm_up
 
 sys.path.insert(0, str(Path(__file__).resolve().parent))
 from bench_contact import write_table  # noqa: E402
-from bench_scaling import LOAD, TOL, solver_clock, surface  # noqa: E402
+from bench_scaling import LOAD, TOL, surface, threshold_cost  # noqa: E402
 
 
 def _sync() -> None:
@@ -100,30 +100,22 @@ def timed(s, setup, repeats: int, **kwargs):
 
 
 def threshold_row(s, tol: float, repeats: int, **kwargs) -> dict:
-    """The threshold pair's cost on one backend (module docstring)."""
-    colds = []
-    for _ in range(4):  # the first creates the plans (and compiles the kernels)
-        t0 = time.perf_counter()
-        cold = solve(s, first_pressure(), tol=THRESHOLD_CONTACT_TOL, **kwargs)
-        colds.append(time.perf_counter() - t0)
-    t_cold = statistics.median(colds[1:])
-    options = SearchOptions(contact_tol=THRESHOLD_CONTACT_TOL)
-    pairs, inside, res = [], [], None
-    for _ in range(repeats):
-        solves: list[tuple[int, float]] = []
-        with solver_clock(solves):
-            t0 = time.perf_counter()
-            res = threshold(s, tol=tol, options=options, **kwargs)
-            pairs.append(time.perf_counter() - t0)
-        inside.append(sum(t for _, t in solves))
-    t_pair = statistics.median(pairs)
-    return {"cold_s": round(t_cold, 4), "cold_iterations": cold.iterations,
-            "pair_s": round(t_pair, 4), "pair_cold_equivalents": round(t_pair / t_cold, 2),
+    """The threshold pair's cost on one backend (module docstring): medians of
+    ``bench_scaling.threshold_cost`` over ``repeats`` runs."""
+    solve(s, first_pressure(), tol=THRESHOLD_CONTACT_TOL, **kwargs)  # plans, kernels
+    runs = [threshold_cost(s, "cg", tol, **kwargs) for _ in range(repeats)]
+
+    def median(key: str) -> float:
+        return statistics.median(r[key] for r in runs)
+
+    return {"cold_s": round(median("cold_s"), 4), "cold_iterations": runs[-1]["cold_iterations"],
+            "pair_s": round(median("pair_s"), 4),
+            "pair_cold_equivalents": round(median("pair_cold_equivalents"), 2),
             # the search's own work (percolation, warm starts, predictions: on the CPU)
-            "solver_s": round(statistics.median(inside), 4),
-            "outside_solver_s": round(t_pair - statistics.median(inside), 4),
-            "solves": res[0].n_solves, "a_x": round(res[0].a_c_star, 6),
-            "a_y": round(res[1].a_c_star, 6)}
+            "solver_s": round(median("solver_s"), 4),
+            "outside_solver_s": round(median("outside_solver_s"), 4),
+            "solves": runs[-1]["solves"], "a_x": round(runs[-1]["a_x"], 6),
+            "a_y": round(runs[-1]["a_y"], 6)}
 
 
 def main() -> None:

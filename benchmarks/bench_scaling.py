@@ -131,22 +131,22 @@ VARIANTS = {"fire": "fire", "cg": "auto"}
 
 
 def threshold_cost(s: Surface, variant: str, tol: float = THRESHOLD_TOL,
-                   contact_tol: float = THRESHOLD_CONTACT_TOL) -> dict:
+                   contact_tol: float = THRESHOLD_CONTACT_TOL, **kwargs) -> dict:
     """The two-axis threshold search in cold-solve equivalents: its wall time over that of one
     cold solve of the same surface at a_c about 0.4 (the search's first pressure) and the
     search's contact tolerance (median of :data:`COLD_REPEATS`), both with the variant's
-    minimizer."""
+    minimizer; ``kwargs`` go to both (``threads``, ``backend``)."""
     with minimizer(VARIANTS[variant]):
         colds = []
         for _ in range(COLD_REPEATS):  # the unit is short: a median of 3 tames the noise
             t0 = time.perf_counter()
-            cold = solve(s, first_pressure(), tol=contact_tol)
+            cold = solve(s, first_pressure(), tol=contact_tol, **kwargs)
             colds.append(time.perf_counter() - t0)
         t_cold = statistics.median(colds)
         solves: list[tuple[int, float]] = []
         with solver_clock(solves):
             t0 = time.perf_counter()
-            res = threshold(s, tol=tol, options=SearchOptions(contact_tol=contact_tol))
+            res = threshold(s, tol=tol, options=SearchOptions(contact_tol=contact_tol), **kwargs)
             t_pair = time.perf_counter() - t0
     solver_s = sum(t for _, t in solves)
     return {"variant": variant, "cold_s": t_cold, "cold_iterations": cold.iterations,

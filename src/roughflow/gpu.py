@@ -3,8 +3,9 @@
 
 The CPU (numpy, pyFFTW, numba) is the default and never imports CuPy. A solver that takes
 ``backend="cupy"`` runs the same algorithm on the GPU: its arrays are ``cupy`` arrays, its
-transforms the plans below, and its fused loops the array-module twins of the numba kernels
-(``contact._kernels``, suffix ``_np``). Install with ``pip install "roughflow[gpu]"`` (CuPy
+transforms the plans below, and its fused loops the CUDA forms of the numba kernels
+(``contact._cuda_kernels``; their array-module twins, ``contact._kernels``, suffix ``_np``,
+run on either device). Install with ``pip install "roughflow[gpu]"`` (CuPy
 for CUDA 12; on CUDA 13 install ``cupy-cuda13x`` instead).
 """
 
@@ -18,14 +19,21 @@ import numpy as np
 from roughflow.defaults import BACKENDS
 from roughflow.errors import InputError
 from roughflow.fft import PlanPair
+from roughflow.resources import check_memory as _check_memory
 
 
-def check_backend(backend: str) -> str:
-    """``backend`` or :class:`InputError` naming it; for ``"cupy"`` also unless CuPy imports
-    and sees a GPU (checked before any work)."""
+def check_backend(backend: str, model: str = "elastic", method: str | None = None,
+                  work: bool = False) -> str:
+    """``backend`` or :class:`InputError` naming it (checked before any work): the GPU serves
+    the elastic model's gfmd solves without a CPU workspace (``work``) only, and needs CuPy
+    to import and see a GPU."""
     if backend not in BACKENDS:
         raise InputError(f"backend must be one of {BACKENDS}, got {backend!r}")
     if backend == "cupy":
+        if model != "elastic" or method not in (None, "gfmd") or work:
+            raise InputError(f"backend={backend!r} serves model='elastic' with method='gfmd' "
+                             f"and no work=, got model={model!r}, method={method!r}"
+                             + (", work=" if work else ""))
         cupy()
     return backend
 
@@ -62,9 +70,7 @@ def check_memory(shape: tuple[int, int], what: str) -> None:
     """:class:`roughflow.errors.ResourceError` before any work if ``what`` on a grid of
     ``shape`` needs more GPU memory than :func:`available_bytes` (model: the task
     ``gpu_contact`` of :mod:`roughflow.resources`)."""
-    from roughflow.resources import check_memory as check
-
-    check("gpu_contact", shape, limit=available_bytes(), what=what)
+    _check_memory("gpu_contact", shape, limit=available_bytes(), what=what)
 
 
 def describe(backend: str) -> str:

@@ -20,13 +20,13 @@ from roughflow import gpu
 
 from . import _kernels
 
+#: Threads per block (the CUDA source's BLOCK, its shared-memory reduction's width).
 BLOCK = 256
-#: Blocks of a launch at most (about 4 resident blocks per multiprocessor on an H100).
+#: Blocks of a launch at most: about one wave on an H100 or H200 (132 multiprocessors, 8
+#: resident blocks of 256 threads each).
 MAX_BLOCKS = 1024
 
-_SOURCE = r"""
-#define BLOCK 256
-
+_SOURCE = f"#define BLOCK {BLOCK}\n" + r"""
 // max that keeps a nan (as numpy's max and the numba kernels: a residual must not skip one)
 __device__ __forceinline__ double maxnan(double a, double b) { return (b > a || b != b) ? b : a; }
 // max(x, 0) that keeps a nan, as Python's max(x, 0.0) in the numba kernels
@@ -175,25 +175,20 @@ def _module():
     return cp.RawModule(code=_SOURCE, options=("--std=c++14",))
 
 
-def _run(name: str, n: int, nresults: int, *args) -> np.ndarray:
-    """Launch kernel ``name`` over n elements; its per-block partials, (nresults, blocks),
-    on the host."""
+def _run(name: str, n: int, nresults: int, *args, extra: tuple = ()) -> np.ndarray:
+    """Launch kernel ``name`` over n elements (its arguments: ``args``, n, ``extra``, the
+    partials); its per-block partials, (nresults, blocks), on the host."""
     cp = gpu.cupy()
     blocks = max(1, min(MAX_BLOCKS, math.ceil(n / BLOCK)))
     part = cp.empty(nresults * blocks, dtype=np.float64)
-    _module().get_function(name)((blocks,), (BLOCK,), (*args, np.int64(n), part))
+    _module().get_function(name)((blocks,), (BLOCK,), (*args, np.int64(n), *extra, part))
     return part.get().reshape(nresults, blocks)
 
 
 def _run_spectral(name: str, a, nresults: int, ny: int, *args) -> np.ndarray:
-    """As :func:`_run` for the spectral kernels, which also take (nh, ny) after n."""
-    cp = gpu.cupy()
-    n = a.size
-    blocks = max(1, min(MAX_BLOCKS, math.ceil(n / BLOCK)))
-    part = cp.empty(nresults * blocks, dtype=np.float64)
-    _module().get_function(name)(
-        (blocks,), (BLOCK,), (*args, np.int64(n), np.int32(a.shape[1]), np.int32(ny), part))
-    return part.get().reshape(nresults, blocks)
+    """:func:`_run` over the rfft2 grid of ``a``: the spectral kernels also take the row
+    length nh and ``ny`` (for the column weights)."""
+    return _run(name, a.size, nresults, *args, extra=(np.int32(a.shape[1]), np.int32(ny)))
 
 
 def cg_update(g, f, d, fks, t, alpha, eps, r, active):

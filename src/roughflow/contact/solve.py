@@ -8,7 +8,7 @@ from typing import TYPE_CHECKING
 
 import numpy as np
 
-from roughflow.defaults import BACKENDS, CONTACT_METHODS, CONTACT_TOL, CONTACT_TOL_MAX, MODELS
+from roughflow.defaults import CONTACT_METHODS, CONTACT_TOL, CONTACT_TOL_MAX, MODELS
 from roughflow.errors import (
     ConvergenceError,
     InputError,
@@ -104,13 +104,7 @@ def solve(
     if not isinstance(surface, Surface):
         raise InputError(f"surface must be a roughflow Surface, got {type(surface).__name__}")
     heights = require_field("surface heights", surface.heights)
-    if backend != "cpu":
-        gpu_ok = model == "elastic" and method in (None, "gfmd") and work is None
-        if backend in BACKENDS and not gpu_ok:
-            raise InputError(f"backend={backend!r} serves model='elastic' with method='gfmd' "
-                             f"and no work=, got model={model!r}, method={method!r}"
-                             + (", work=" if work is not None else ""))
-        check_backend(backend)
+    if check_backend(backend, model, method, work is not None) == "cupy":
         gpu_check_memory(heights.shape, "an elastic contact solve on the GPU")
     check_memory("bearing" if model == "bearing" else "contact", heights.shape,
                  what=f"a {model} contact solve")

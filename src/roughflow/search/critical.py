@@ -570,10 +570,7 @@ def threshold(
                          f"{opts.pressure_range!r}")
     if model == "adhesive" and adhesion is None:
         raise InputError("model='adhesive' needs adhesion=Adhesion(surface_energy=, range=)")
-    if backend != "cpu" and (model != "elastic" or opts.method not in (None, "gfmd")):
-        raise InputError(f"backend={backend!r} serves the elastic model with method 'gfmd', "
-                         f"got model={model!r}, method={opts.method!r}")
-    on_gpu = check_backend(backend) == "cupy"
+    on_gpu = check_backend(backend, model, opts.method) == "cupy"
     if on_gpu:
         gpu_check_memory(surface.shape, "the contact solves of a threshold search on the GPU")
     heights = surface.heights
