@@ -8,7 +8,9 @@ median wall time of ``--repeats`` runs, CG iterations, peak traced memory (one
 extra untimed run under tracemalloc, which sees numpy/scipy buffers), sigma and
 its relative difference to our RS result.
 
-Solvers: ours with RS-AMG (default) and SA-AMG preconditioning; scipy's direct
+Solvers: ours with RS-AMG (default), RS-AMG with pyamg's default smoothing (a symmetric
+Gauss-Seidel sweep before and after each coarse-grid correction, twice ours) and SA-AMG
+preconditioning; scipy's direct
 SuperLU (our assembly, COLAMD; n <= --direct-max); CG without preconditioner
 (our assembly, n <= --cg-max, capped at 20 000 iterations); reynoldsflow with
 ``scipy.amg-rs`` (its default), ``scipy.amg-sa`` and ``scipy-spsolve`` (n <= --direct-max).
@@ -47,9 +49,17 @@ def bearing_gap(heights: np.ndarray, a_c: float) -> np.ndarray:
     return np.maximum(d - heights, 0.0)
 
 
-def ours(method):
+def ours(method, smoothers=None):
+    """Our solver; ``smoothers``: the RS V-cycle's smoothing instead of
+    ``linsolve.RS_SMOOTHERS`` (``{}``: pyamg's default, a symmetric sweep on both sides)."""
     def run(gap):
-        r = solve(gap, 0, tol=1e-8, method=method)
+        kept = linsolve.RS_SMOOTHERS
+        if smoothers is not None:
+            linsolve.RS_SMOOTHERS = smoothers
+        try:
+            r = solve(gap, 0, tol=1e-8, method=method)
+        finally:
+            linsolve.RS_SMOOTHERS = kept
         return r.sigma, r.iterations
     return run
 
@@ -96,8 +106,8 @@ def main() -> None:
     ap.add_argument("--cg-iters", type=int, default=5000,
                     help="iteration cap of unpreconditioned CG (5000)")
     ap.add_argument("--solvers", nargs="+", default=None,
-                    help="only these solvers (ours-rs ours-sa scipy-splu cg-noprec rf-amg-rs "
-                         "rf-amg-sa rf-spsolve)")
+                    help="only these solvers (ours-rs ours-rs-symmetric ours-sa scipy-splu "
+                         "cg-noprec rf-amg-rs rf-amg-sa rf-spsolve)")
     ap.add_argument("--tag", default="", help="suffix of the output files")
     ap.add_argument("--report", nargs="+", metavar="CSV", default=None,
                     help="no runs: merge these CSV files into bench_flow{tag}.md/.png")
@@ -133,6 +143,7 @@ def main() -> None:
         for a_c in args.ac:
             gap = bearing_gap(h, a_c)
             cases = [("ours-rs", ours("rs"), args.repeats, True),
+                     ("ours-rs-symmetric", ours("rs", smoothers={}), args.repeats, False),
                      ("ours-sa", ours("sa"), args.repeats, False)]
             if n <= args.direct_max:
                 cases.append(("scipy-splu", ours("direct"), args.repeats, False))

@@ -10,7 +10,8 @@ factor: at 1e-8 it is about 1e-11 on bearing gaps.
 Methods (chosen by measurement, see ``benchmarks/bench_flow.py`` and docs/flow.md):
 
 - ``"rs"``: CG preconditioned by one V-cycle of classical Ruge-Stueben AMG with
-  second-pass coarsening (``CF=("RS", {"second_pass": True})``); the default for
+  second-pass coarsening (``CF=("RS", {"second_pass": True})``) and one Gauss-Seidel sweep
+  before and after each coarse-grid correction (:data:`RS_SMOOTHERS`); the default for
   large systems.
 - ``"sa"``: CG preconditioned by smoothed-aggregation AMG.
 - ``"direct"``: sparse LU (SuperLU, COLAMD ordering); the default
@@ -62,12 +63,22 @@ def check_method(method: str | None) -> str:
     return m
 
 
+#: Smoothing of the RS V-cycle: one forward Gauss-Seidel sweep before the coarse-grid
+#: correction and one backward sweep after it. The backward sweep is the adjoint of the
+#: forward one, so the V-cycle stays a symmetric operator, as CG needs. pyamg's default, a
+#: symmetric sweep (forward and backward) on both sides, does twice the smoothing for the
+#: same 10-17 CG iterations; one sweep each took 0.73-0.93x the time of a whole flow solve
+#: at 1024^2 (docs/flow.md, "Linear solver").
+RS_SMOOTHERS = {"presmoother": ("gauss_seidel", {"sweep": "forward"}),
+                "postsmoother": ("gauss_seidel", {"sweep": "backward"})}
+
+
 def _amg_preconditioner(a: sp.csr_matrix, method: str) -> spla.LinearOperator:
     import pyamg
 
     if method == "rs":
         ml = pyamg.ruge_stuben_solver(a, CF=("RS", {"second_pass": True}), max_coarse=500,
-                                      coarse_solver="splu")
+                                      coarse_solver="splu", **RS_SMOOTHERS)
     else:
         ml = pyamg.smoothed_aggregation_solver(a, max_coarse=500, coarse_solver="splu")
     return ml.aspreconditioner(cycle="V")

@@ -641,9 +641,10 @@ def check_plan_memory(jobs: dict[str, dict[str, Job]], limit: int, source: str) 
 
 # Cost model: CPU seconds on one core of the 2-core development machine, fitted to single
 # `roughflow scene` runs (one thread) of config/paper.yaml's jobs, 0.26 M to 33.5 M points
-# (docs/workflow.md "Cost": threshold searches 2026-11-27 with FFTW_MEASURE plans, ladders
-# 2026-11-26; benchmarks/bench_cost_model.py repeats them). A guide for the workflow's
-# runtime requests and core-hour estimates, not a benchmark.
+# (docs/workflow.md "Cost", all on 2026-11-27: threshold searches with FFTW_MEASURE plans,
+# ladders with one Gauss-Seidel sweep each side of the AMG V-cycle;
+# benchmarks/bench_cost_model.py repeats them). A guide for the workflow's runtime requests
+# and core-hour estimates, not a benchmark.
 #: Start-up of one ``roughflow scene`` process (imports, surface generation, writing).
 COST_START_S = 3.0
 #: An isotropic elastic threshold search (both axes), per N log2(N): 4.3-8.7e-8 s measured
@@ -654,8 +655,10 @@ COST_THRESHOLD_S = 8e-8
 #: searches on large grids share 4-7): measured 1.2-1.8 times the isotropic cost per point
 #: at gamma 2, 2.0 at gamma 4, 1.8-2.7 at gamma 8.
 COST_ANISOTROPIC_FACTOR = 2.0
-#: One Reynolds solve (one axis, AMG-CG), per grid point.
-COST_FLOW_S = 6.5e-6
+#: One Reynolds solve (one axis, AMG-CG), per grid point: 3.1-3.55e-6 s measured in the
+#: three 2048^2 ladders (6.5e-6 fitted to runs of 2026-11-26, before the lighter smoothing
+#: and on a slower day of the shared machine).
+COST_FLOW_S = 3.5e-6
 #: The contact solves of a ladder step (warm-started load search), per N log2(N), by model.
 COST_LADDER_CONTACT_S = {"elastic": 7e-8, "adhesive": 1.6e-7, "bearing": 0.0}
 #: The bearing model's exact threshold (one sort and sweep), per grid point and seed.
