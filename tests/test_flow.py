@@ -177,6 +177,36 @@ def test_non_percolating_gives_zero_without_solve(monkeypatch):
         solve(g, 1)
 
 
+@pytest.mark.parametrize("method", ["direct", "rs"])
+def test_gaps_below_float64_resolution_are_closed(monkeypatch, method):
+    """A cell with u^3 at most FLOW_CLOSED_BELOW (1e-16) of the largest carries no flow (left
+    open, such cells from warm-started contact solves stalled RS-CG on a 1024^2 ladder
+    state). A row of them across x blocks flow along x, without a solve; along y that row
+    carries nothing, so sigma_y is the open rows' share, 19/20 of u0^3 / 12 (exact: the rows
+    have the same linear pressure, no flux crosses between them; 1e-12 is round-off)."""
+    from roughflow.defaults import FLOW_CLOSED_BELOW
+
+    u0 = 0.5
+    tiny = u0 * (0.5 * FLOW_CLOSED_BELOW) ** (1 / 3)  # u^3 half the floor
+    g = np.full((20, 16), u0)
+    g[9, :] = tiny
+    along_y = solve(g, 1, method=method)
+    assert along_y.sigma == pytest.approx(sigma_of(u0) * 19 / 20, rel=1e-12)
+    assert np.isnan(along_y.pressure[9]).all()
+    monkeypatch.setattr(flow_core, "solve_spd", lambda *a, **k: pytest.fail("solver called"))
+    blocked = solve(g, 0, method=method)
+    assert blocked.sigma == 0.0 and not blocked.percolating
+    # a row 10x above the floor stays open and sets sigma_x: the series (harmonic) mean of
+    # the 20 rows, exact for this discretisation (test_stripes_...); 1e-6 allows the
+    # round-off of a system whose conductivities span 15 decades
+    monkeypatch.undo()
+    g[9, :] = u0 * (10 * FLOW_CLOSED_BELOW) ** (1 / 3)
+    open_row = solve(g, 0, method=method)
+    assert open_row.percolating
+    series = 20 / (19 / sigma_of(u0) + 1 / sigma_of(g[9, 0]))
+    assert open_row.sigma == pytest.approx(series, rel=1e-6)
+
+
 def test_isolated_pools_do_not_change_sigma(heights):
     g = bearing_gap(heights, 0.2)
     rng = np.random.default_rng(1)

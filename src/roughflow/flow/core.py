@@ -19,7 +19,7 @@ from dataclasses import dataclass, replace
 
 import numpy as np
 
-from roughflow.defaults import FLOW_TOL, FLOW_TOL_MAX
+from roughflow.defaults import FLOW_CLOSED_BELOW, FLOW_TOL, FLOW_TOL_MAX
 from roughflow.errors import InputError, require_field, require_positive
 from roughflow.percolation import spanning_cells
 from roughflow.resources import check_memory
@@ -168,9 +168,12 @@ def solve(
     ``tol``: relative residual of the linear solve, at most ``FLOW_TOL_MAX`` (refined
     further, down to round-off, until |Q_in - Q_out| / Q <= ``tol``); ``method``: None/"auto"
     (direct up to 70k unknowns, else "rs"), "rs", "sa", "direct" or "cg" (see
-    :mod:`roughflow.flow.linsolve`). A gap whose open cells (u > 0) do not connect
-    the two reservoirs gives sigma = 0 without a solve. ``periodic``: the cell is periodic
-    across the flow (default), or closed by walls there (False: a non-periodic scan).
+    :mod:`roughflow.flow.linsolve`). Open cells are those whose u^3 exceeds
+    ``FLOW_CLOSED_BELOW`` (1e-16, :mod:`roughflow.defaults`) of the largest among the cells
+    that connect the reservoirs; a gap whose open cells do not connect the two reservoirs
+    gives sigma = 0 without a solve.
+    ``periodic``: the cell is periodic across the flow (default), or closed by walls there
+    (False: a non-periodic scan).
     Raises ``InputError`` for
     bad input and ``ConvergenceError`` if the solver misses ``tol``.
     """
@@ -191,6 +194,12 @@ def solve(
     sigma_local = g**3 / (12.0 * eta)
     open_mask = sigma_local > 0  # a gap so small that u^3 underflows is closed
     active = spanning_cells(open_mask, ax, periodic=periodic)
+    if active.any():
+        # so is one below float64's resolution of the largest conductivity that carries
+        # flow (pools that carry none must not move the floor)
+        unresolved = active & (sigma_local <= FLOW_CLOSED_BELOW * sigma_local[active].max())
+        if unresolved.any():
+            active = spanning_cells(active & ~unresolved, ax, periodic=periodic)
 
     nan = np.full(g.shape, np.nan)
     zeros = np.zeros(g.shape)
