@@ -8,9 +8,10 @@ median wall time of ``--repeats`` runs, CG iterations, peak traced memory (one
 extra untimed run under tracemalloc, which sees numpy/scipy buffers), sigma and
 its relative difference to our RS result.
 
-Solvers: ours with RS-AMG (default), RS-AMG with pyamg's default smoothing (a symmetric
-Gauss-Seidel sweep before and after each coarse-grid correction, twice ours) and SA-AMG
-preconditioning; scipy's direct
+Solvers: ours with RS-AMG (default), the same with pyamg's own V-cycle (identical
+arithmetic, plus a residual norm before and after each cycle), RS-AMG with pyamg's default
+smoothing (a symmetric Gauss-Seidel sweep before and after each coarse-grid correction,
+twice ours) and SA-AMG preconditioning; scipy's direct
 SuperLU (our assembly, COLAMD; n <= --direct-max); CG without preconditioner
 (our assembly, n <= --cg-max, capped at 20 000 iterations); reynoldsflow with
 ``scipy.amg-rs`` (its default), ``scipy.amg-sa`` and ``scipy-spsolve`` (n <= --direct-max).
@@ -49,17 +50,25 @@ def bearing_gap(heights: np.ndarray, a_c: float) -> np.ndarray:
     return np.maximum(d - heights, 0.0)
 
 
-def ours(method, smoothers=None):
+def _pyamg_cycle(ml, smoothers=None):
+    return ml.aspreconditioner(cycle="V")
+
+
+def ours(method, smoothers=None, pyamg_cycle=False):
     """Our solver; ``smoothers``: the RS V-cycle's smoothing instead of
-    ``linsolve.RS_SMOOTHERS`` (``{}``: pyamg's default, a symmetric sweep on both sides)."""
+    ``linsolve.RS_SMOOTHERS`` (``{}``: pyamg's default, a symmetric sweep on both sides);
+    ``pyamg_cycle``: pyamg's own V-cycle instead of ``linsolve.rs_vcycle`` (the same
+    arithmetic with a residual norm before and after each cycle)."""
     def run(gap):
-        kept = linsolve.RS_SMOOTHERS
+        kept = linsolve.RS_SMOOTHERS, linsolve.rs_vcycle
         if smoothers is not None:
             linsolve.RS_SMOOTHERS = smoothers
+        if pyamg_cycle:
+            linsolve.rs_vcycle = _pyamg_cycle
         try:
             r = solve(gap, 0, tol=1e-8, method=method)
         finally:
-            linsolve.RS_SMOOTHERS = kept
+            linsolve.RS_SMOOTHERS, linsolve.rs_vcycle = kept
         return r.sigma, r.iterations
     return run
 
@@ -106,8 +115,8 @@ def main() -> None:
     ap.add_argument("--cg-iters", type=int, default=5000,
                     help="iteration cap of unpreconditioned CG (5000)")
     ap.add_argument("--solvers", nargs="+", default=None,
-                    help="only these solvers (ours-rs ours-rs-symmetric ours-sa scipy-splu "
-                         "cg-noprec rf-amg-rs rf-amg-sa rf-spsolve)")
+                    help="only these solvers (ours-rs ours-rs-pyamg-cycle ours-rs-symmetric "
+                         "ours-sa scipy-splu cg-noprec rf-amg-rs rf-amg-sa rf-spsolve)")
     ap.add_argument("--tag", default="", help="suffix of the output files")
     ap.add_argument("--report", nargs="+", metavar="CSV", default=None,
                     help="no runs: merge these CSV files into bench_flow{tag}.md/.png")
@@ -143,6 +152,7 @@ def main() -> None:
         for a_c in args.ac:
             gap = bearing_gap(h, a_c)
             cases = [("ours-rs", ours("rs"), args.repeats, True),
+                     ("ours-rs-pyamg-cycle", ours("rs", pyamg_cycle=True), args.repeats, False),
                      ("ours-rs-symmetric", ours("rs", smoothers={}), args.repeats, False),
                      ("ours-sa", ours("sa"), args.repeats, False)]
             if n <= args.direct_max:
