@@ -63,19 +63,21 @@ def _adhesion_attrs(surface: Surface, adhesion, lambda_s: float, job: LadderJob)
             "adhesion_range": adhesion.range, "adhesion_repulsion": adhesion.repulsion}
 
 
-def _contact_ladder(surface: Surface, job: LadderJob, threads: int | None, adhesion=None):
+def contact_ladder(surface: Surface, job: LadderJob, threads: int | None, adhesion=None):
     """Yield (target, ContactResult, corrected area) along the job's area ladder.
 
     The targets are met in the perimeter-corrected area for the elastic model (the
-    continuum estimate, :func:`_corrected_area`), in the cell count otherwise."""
+    continuum estimate, :func:`_corrected_area`), in the cell count otherwise. The adhesive
+    model uses ``adhesion``, or the job's own on this surface when None."""
     if job.model == "bearing":
         for a in job.area_fractions:
             res = contact.solve(surface, model="bearing", area_fraction=a)
             yield a, res, _corrected_area(res, job.model)
         return
     kw = {"model": job.model, "threads": threads}
-    if adhesion is not None:
-        kw["adhesion"] = adhesion
+    if job.model == "adhesive":
+        kw["adhesion"] = (_adhesion(surface, job, surface.spec.lambda_s) if adhesion is None
+                          else adhesion)
     if job.model == "elastic":  # built once for all solves of the ladder
         kw["setup"] = contact.prepare(surface, threads)
 
@@ -147,7 +149,7 @@ def run_ladder(job: LadderJob, *, threads: int | None = None) -> xr.Dataset:
             if i == 0:
                 adhesion_attrs = _adhesion_attrs(surface, adhesion, spec.lambda_s, job)
         for k, (target, c, a_cont) in enumerate(
-                _contact_ladder(surface, job, threads, adhesion)):
+                contact_ladder(surface, job, threads, adhesion)):
             r["area_fraction"][i, k] = c.area_fraction
             r["area_fraction_corrected"][i, k] = a_cont
             r["pressure"][i, k] = c.pressure

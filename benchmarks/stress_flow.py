@@ -1,0 +1,203 @@
+"""Stress test of the Reynolds solver on whole contact ladders: which flow solves converge.
+
+Usage:
+    ROUGHFLOW_FFT_THREADS=1 python benchmarks/stress_flow.py \
+        [--l-over-lambda-r 4] [--eps-f 0.0625] [--models elastic bearing adhesive] \
+        [--gammas 1 2] [--hursts 0.8 0.3] [--seeds 0 1 2 3] [--areas 0.01 ... 0.44] \
+        [--no-reference] [--tag NAME]
+
+Each case (model, gamma, H, seed) is a surface with 8 points per lambda_s and L/lambda_r
+times max(sqrt(gamma), 1/sqrt(gamma)), as in the paper's cells (L/lambda_r 4 and eps_f
+1/16: 512^2 at gamma 1, 512 x 1024 at gamma 2; 8 and 1/16: 1024^2), walked along an area
+ladder exactly as the ladder scene does (:func:`roughflow.scenes.ladder.contact_ladder`).
+At every state and axis where the fluid percolates, ``flow.solve`` runs with its default
+method (RS-AMG CG above 70 000 unknowns) and, unless ``--no-reference``, with the direct
+solver as the reference for sigma. A row records the outcome (``converged`` or the
+ConvergenceError's residual), CG iterations, residual, flux imbalance, the time of each
+solve, sigma and its relative difference from the direct solve, and the decades spanned by
+the flowing cells' u^3. The gap of a failed solve is kept in
+``results/benchmarks/stress_flow_gaps/`` to reproduce it. Rows are appended as they come (an
+interrupted run keeps its rows). Writes
+results/benchmarks/stress_flow[_TAG].{csv,md}; docs/flow.md quotes it.
+"""
+
+from __future__ import annotations
+
+import argparse
+import itertools
+import math
+import sys
+import time
+from pathlib import Path
+
+import numpy as np
+
+from roughflow import flow, percolation
+from roughflow.errors import ConvergenceError
+from roughflow.scenes.jobs import LadderJob, SurfaceParams
+from roughflow.scenes.ladder import contact_ladder
+from roughflow.surface import generate
+
+sys.path.insert(0, str(Path(__file__).resolve().parent))
+from bench_contact import OUT  # noqa: E402
+
+#: the paper's ladder and three steps past the elastic a_c* (about 0.42), where the flowing
+#: clusters are thinnest
+AREAS = (0.01, 0.03, 0.05, 0.1, 0.15, 0.2, 0.25, 0.3, 0.33, 0.36, 0.38, 0.4, 0.42, 0.44)
+
+
+def _solve(gap, ax, lx, ly, method):
+    """(FlowResult or None, seconds, residual reached, error text)."""
+    t0 = time.perf_counter()
+    try:
+        res = flow.solve(gap, ax, lx=lx, ly=ly, method=method)
+    except ConvergenceError as exc:
+        return None, time.perf_counter() - t0, exc.residual, str(exc)
+    return res, time.perf_counter() - t0, res.residual, ""
+
+
+def _decades(gap: np.ndarray, ax: int) -> float:
+    """log10 of max/min u^3 over the cells that connect the reservoirs."""
+    active = percolation.spanning_cells(gap > 0, ax)
+    u3 = gap[active] ** 3
+    u3 = u3[u3 > 0]
+    return float(np.log10(u3.max() / u3.min())) if u3.size else math.nan
+
+
+def run_case(size: float, eps_f: float, model: str, gamma: float, hurst: float, seed: int,
+             areas, reference: bool, gaps_dir: Path):
+    """Yield one row per (state, axis) of one ladder; ``size`` is L/lambda_r of the isotropic
+    surface, scaled by max(sqrt(gamma), 1/sqrt(gamma)) as in the paper's anisotropic cells."""
+    params = SurfaceParams(gamma=gamma, hurst=hurst, eps_f=eps_f, points_per_lambda_s=8,
+                           l_over_lambda_r=size * max(math.sqrt(gamma), 1 / math.sqrt(gamma)))
+    job = LadderJob(surface=params, model=model, seeds=(seed,), area_fractions=tuple(areas))
+    surface = generate(params.spec(seed))
+    lx, ly = surface.lx, surface.ly
+    n = "x".join(str(k) for k in surface.shape)
+    for target, c, _ in contact_ladder(surface, job, 1):
+        open_mask = ~np.asarray(c.contact, dtype=bool)
+        for ax in (0, 1):
+            if not percolation.percolates(open_mask, ax):
+                continue
+            res, t, residual, error = _solve(c.gap, ax, lx, ly, None)
+            row = {"n": n, "model": model, "gamma": gamma, "hurst": hurst, "seed": seed,
+                   "target": target, "a_c": float(c.area_fraction), "axis": "xy"[ax],
+                   "outcome": "converged" if res is not None else "failed",
+                   "method": res.method if res is not None else "-",
+                   "iterations": res.iterations if res is not None else -1,
+                   "residual": residual,
+                   "imbalance": res.flux_imbalance if res is not None else math.nan,
+                   "seconds": t, "sigma": res.sigma if res is not None else math.nan,
+                   "u3_decades": _decades(c.gap, ax)}
+            if reference:
+                ref, t_ref, _, ref_error = _solve(c.gap, ax, lx, ly, "direct")
+                row["seconds_direct"] = t_ref
+                row["sigma_direct"] = ref.sigma if ref is not None else math.nan
+                row["sigma_rel_diff"] = (abs(row["sigma"] - ref.sigma) / ref.sigma
+                                         if ref is not None and ref.sigma > 0 else math.nan)
+                if ref_error:
+                    row["outcome"] += " (direct failed)"
+            if error:
+                gaps_dir.mkdir(parents=True, exist_ok=True)
+                name = f"{model}_g{gamma:g}_H{hurst:g}_s{seed}_{n}_a{target:g}_{'xy'[ax]}.npy"
+                np.save(gaps_dir / name, c.gap)
+                row["gap_file"] = name
+            yield row
+
+
+def _append(path: Path, row: dict, keys: list[str]) -> None:
+    def fmt(v):
+        return f"{v:.6g}" if isinstance(v, float) else str(v)
+
+    new = not path.exists()
+    with path.open("a") as f:
+        if new:
+            f.write(",".join(keys) + "\n")
+        f.write(",".join(fmt(row.get(k, "-")) for k in keys) + "\n")
+
+
+KEYS = ["n", "model", "gamma", "hurst", "seed", "target", "a_c", "axis", "outcome", "method",
+        "iterations", "residual", "imbalance", "seconds", "sigma", "u3_decades",
+        "seconds_direct", "sigma_direct", "sigma_rel_diff", "gap_file"]
+
+
+def summary(rows: list[dict]) -> str:
+    """Markdown table: per (n, model, gamma, H) the solves, failures and worst cases."""
+    lines = ["| grid | model | gamma | H | ladders | solves | failed | CG iterations median / max "
+             "| largest sigma difference from direct | largest u^3 span (decades) |",
+             "|---|---|---|---|---|---|---|---|---|---|"]
+    groups = {}
+    for r in rows:
+        groups.setdefault((r["n"], r["model"], r["gamma"], r["hurst"]), []).append(r)
+    for (n, model, gamma, hurst), rs in groups.items():
+        its = [r["iterations"] for r in rs if r["outcome"].startswith("converged")]
+        diffs = [d for r in rs if isinstance(d := r.get("sigma_rel_diff"), float)
+                 and math.isfinite(d)]
+        failed = sum(not r["outcome"].startswith("converged") for r in rs)
+        lines.append(
+            f"| {n} | {model} | {gamma:g} | {hurst:g} | {len({r['seed'] for r in rs})} | "
+            f"{len(rs)} | {failed} | {np.median(its) if its else math.nan:.0f} / "
+            f"{max(its) if its else -1} | {max(diffs) if diffs else math.nan:.2g} | "
+            f"{max(r['u3_decades'] for r in rs):.1f} |")
+    return "\n".join(lines) + "\n"
+
+
+def read_rows(path: Path) -> list[dict]:
+    """The rows of a csv written by this script (numbers parsed)."""
+    lines = path.read_text().splitlines()
+    keys = lines[0].split(",")
+
+    def parse(k: str, v: str):
+        if k in ("model", "axis", "outcome", "method", "gap_file", "n") or v == "-":
+            return v
+        return int(v) if k in ("seed", "iterations") else float(v)
+
+    return [{k: parse(k, v) for k, v in zip(keys, line.split(","), strict=True)}
+            for line in lines[1:]]
+
+
+def main() -> None:
+    ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    ap.add_argument("--l-over-lambda-r", type=float, default=4.0)
+    ap.add_argument("--eps-f", type=float, default=0.0625)
+    ap.add_argument("--models", nargs="+", default=["elastic", "bearing", "adhesive"])
+    ap.add_argument("--gammas", type=float, nargs="+", default=[1.0, 2.0])
+    ap.add_argument("--hursts", type=float, nargs="+", default=[0.8, 0.3])
+    ap.add_argument("--seeds", type=int, nargs="+", default=[0, 1, 2, 3])
+    ap.add_argument("--areas", type=float, nargs="+", default=list(AREAS))
+    ap.add_argument("--no-reference", action="store_true", help="skip the direct solves")
+    ap.add_argument("--tag", default="")
+    ap.add_argument("--summarize", type=Path, nargs="+", metavar="CSV",
+                    help="only write the summary table of these csv files (e.g. of runs that "
+                         "were stopped) to stress_flow[_TAG].md")
+    args = ap.parse_args()
+    if args.summarize:
+        md = OUT / ("stress_flow" + (f"_{args.tag}" if args.tag else "") + ".md")
+        # runs that covered the same ladder count each of its solves once
+        unique = {(r["n"], r["model"], r["gamma"], r["hurst"], r["seed"], r["target"],
+                   r["axis"]): r for f in args.summarize for r in read_rows(f)}
+        md.write_text(summary(list(unique.values())))
+        print(f"wrote {md}")
+        return
+    stem = OUT / ("stress_flow" + (f"_{args.tag}" if args.tag else ""))
+    csv = stem.with_suffix(".csv")
+    OUT.mkdir(parents=True, exist_ok=True)
+    csv.unlink(missing_ok=True)
+    rows = []
+    for model, gamma, hurst, seed in itertools.product(args.models, args.gammas, args.hursts,
+                                                       args.seeds):
+        t0 = time.perf_counter()
+        for row in run_case(args.l_over_lambda_r, args.eps_f, model, gamma, hurst, seed,
+                            args.areas, not args.no_reference, OUT / "stress_flow_gaps"):
+            rows.append(row)
+            _append(csv, row, KEYS)
+            if row["outcome"] != "converged":
+                print(f"  {row['outcome']}: {row}", flush=True)
+        print(f"{model} gamma={gamma:g} H={hurst:g} seed={seed}: {time.perf_counter() - t0:.0f} s",
+              flush=True)
+    stem.with_suffix(".md").write_text(summary(rows))
+    print(f"wrote {csv} and .md")
+
+
+if __name__ == "__main__":
+    main()
