@@ -127,15 +127,22 @@ def rs_vcycle(ml, smoothers: dict | None = None) -> spla.LinearOperator:
     return spla.LinearOperator((n, n), matvec=apply, rmatvec=apply, dtype=np.float64)
 
 
+def rs_hierarchy(a: sp.csr_matrix, smoothers: dict | None = None):
+    """pyamg's RS hierarchy of ``a`` as method ``"rs"`` builds it (smoothing as
+    :func:`rs_vcycle`'s ``smoothers``)."""
+    import pyamg
+
+    smoothers = RS_SMOOTHERS if smoothers is None else smoothers
+    return pyamg.ruge_stuben_solver(a, CF=("RS", {"second_pass": True}), max_coarse=500,
+                                    coarse_solver="splu", **smoothers)
+
+
 def _amg_preconditioner(a: sp.csr_matrix, method: str) -> spla.LinearOperator:
     import pyamg
 
     if method == "rs":
-        ml = pyamg.ruge_stuben_solver(a, CF=("RS", {"second_pass": True}), max_coarse=500,
-                                      coarse_solver="splu", **RS_SMOOTHERS)
-        return rs_vcycle(ml)
-    else:
-        ml = pyamg.smoothed_aggregation_solver(a, max_coarse=500, coarse_solver="splu")
+        return rs_vcycle(rs_hierarchy(a))
+    ml = pyamg.smoothed_aggregation_solver(a, max_coarse=500, coarse_solver="splu")
     return ml.aspreconditioner(cycle="V")
 
 
