@@ -8,8 +8,10 @@ median wall time of ``--repeats`` runs, CG iterations, peak traced memory (one
 extra untimed run under tracemalloc, which sees numpy/scipy buffers), sigma and
 its relative difference to our RS result.
 
-Solvers: ours with RS-AMG (default), the same with pyamg's own V-cycle (identical
-arithmetic, plus a residual norm before and after each cycle), RS-AMG with pyamg's default
+Solvers: ours with RS-AMG (default), the same on the hierarchy pyamg builds itself (the
+same kernels with pyamg's copies and conversions between them), the same with pyamg's
+own hierarchy and V-cycle (identical arithmetic, plus a residual norm before and after
+each cycle), RS-AMG with pyamg's default
 smoothing (a symmetric Gauss-Seidel sweep before and after each coarse-grid correction,
 twice ours) and SA-AMG preconditioning; scipy's direct
 SuperLU (our assembly, COLAMD; n <= --direct-max); CG without preconditioner
@@ -38,7 +40,7 @@ os.environ.setdefault("ROUGHFLOW_FFT_THREADS", "1")
 
 import numpy as np  # noqa: E402
 
-from roughflow.flow import linsolve, solve  # noqa: E402
+from roughflow.flow import amg, linsolve, solve  # noqa: E402
 from roughflow.surface import SurfaceSpec, generate  # noqa: E402
 
 OUT = Path(__file__).resolve().parents[1] / "results" / "benchmarks"
@@ -54,21 +56,25 @@ def _pyamg_cycle(ml, smoothers=None):
     return ml.aspreconditioner(cycle="V")
 
 
-def ours(method, smoothers=None, pyamg_cycle=False):
+def ours(method, smoothers=None, pyamg_cycle=False, pyamg_setup=False):
     """Our solver; ``smoothers``: the RS V-cycle's smoothing instead of
-    ``linsolve.RS_SMOOTHERS`` (``{}``: pyamg's default, a symmetric sweep on both sides);
-    ``pyamg_cycle``: pyamg's own V-cycle instead of ``linsolve.rs_vcycle`` (the same
-    arithmetic with a residual norm before and after each cycle)."""
+    ``amg.RS_SMOOTHERS`` (``{}``: pyamg's default, a symmetric sweep on both sides);
+    ``pyamg_setup``: pyamg's own build of the RS hierarchy instead of ``amg.rs_hierarchy``
+    (the same kernels, with pyamg's copies and conversions between them);
+    ``pyamg_cycle``: pyamg's hierarchy and its own V-cycle instead of ``amg.rs_vcycle`` (the
+    same arithmetic with a residual norm before and after each cycle)."""
     def run(gap):
-        kept = linsolve.RS_SMOOTHERS, linsolve.rs_vcycle
+        kept = amg.RS_SMOOTHERS, amg.rs_vcycle, amg.rs_hierarchy
         if smoothers is not None:
-            linsolve.RS_SMOOTHERS = smoothers
+            amg.RS_SMOOTHERS = smoothers
+        if pyamg_setup or pyamg_cycle:
+            amg.rs_hierarchy = amg.pyamg_rs_hierarchy
         if pyamg_cycle:
-            linsolve.rs_vcycle = _pyamg_cycle
+            amg.rs_vcycle = _pyamg_cycle
         try:
             r = solve(gap, 0, tol=1e-8, method=method)
         finally:
-            linsolve.RS_SMOOTHERS, linsolve.rs_vcycle = kept
+            amg.RS_SMOOTHERS, amg.rs_vcycle, amg.rs_hierarchy = kept
         return r.sigma, r.iterations
     return run
 
@@ -115,7 +121,8 @@ def main() -> None:
     ap.add_argument("--cg-iters", type=int, default=5000,
                     help="iteration cap of unpreconditioned CG (5000)")
     ap.add_argument("--solvers", nargs="+", default=None,
-                    help="only these solvers (ours-rs ours-rs-pyamg-cycle ours-rs-symmetric "
+                    help="only these solvers (ours-rs ours-rs-pyamg-setup ours-rs-pyamg-cycle "
+                         "ours-rs-symmetric "
                          "ours-sa scipy-splu cg-noprec rf-amg-rs rf-amg-sa rf-spsolve)")
     ap.add_argument("--tag", default="", help="suffix of the output files")
     ap.add_argument("--report", nargs="+", metavar="CSV", default=None,
@@ -152,6 +159,7 @@ def main() -> None:
         for a_c in args.ac:
             gap = bearing_gap(h, a_c)
             cases = [("ours-rs", ours("rs"), args.repeats, True),
+                     ("ours-rs-pyamg-setup", ours("rs", pyamg_setup=True), args.repeats, False),
                      ("ours-rs-pyamg-cycle", ours("rs", pyamg_cycle=True), args.repeats, False),
                      ("ours-rs-symmetric", ours("rs", smoothers={}), args.repeats, False),
                      ("ours-sa", ours("sa"), args.repeats, False)]

@@ -159,28 +159,68 @@ def test_rs_preconditioner_is_symmetric_positive_definite(heights):
     assert x @ mx > 0 and y @ my > 0
 
 
+def _reynolds_matrix(heights, a_c):
+    from roughflow.flow.assembly import assemble, face_transmissibilities
+    from roughflow.percolation import spanning_cells
+
+    s = sigma_of(bearing_gap(heights, a_c))
+    act = spanning_cells(s > 0, 0)
+    n = heights.shape[0]
+    matrix, _, _ = assemble(face_transmissibilities(np.where(act, s, 0.0), 1 / n, 1 / n), act)
+    return matrix.tocsr()
+
+
 @pytest.mark.parametrize("smoothers", [None, {}], ids=["ours", "pyamg-default"])
 def test_rs_vcycle_is_pyamgs_cycle_bit_for_bit(heights, smoothers):
     """Our V-cycle only drops pyamg's per-call residual norms and argument checks: on the
     same hierarchy it must return pyamg's preconditioned vector exactly (same kernels in the
     same order), for our one-sweep smoothing and for pyamg's symmetric default ({})."""
-    from roughflow.flow import linsolve
-    from roughflow.flow.assembly import assemble, face_transmissibilities
-    from roughflow.percolation import spanning_cells
+    from roughflow.flow import amg
 
-    s = sigma_of(bearing_gap(heights, 0.2))
-    act = spanning_cells(s > 0, 0)
-    n = heights.shape[0]
-    matrix, _, _ = assemble(face_transmissibilities(np.where(act, s, 0.0), 1 / n, 1 / n), act)
-    ml = linsolve.rs_hierarchy(matrix.tocsr(), smoothers)
+    matrix = _reynolds_matrix(heights, 0.2)
+    ml = amg.pyamg_rs_hierarchy(matrix, smoothers)
     assert len(ml.levels) >= 3  # the cycle recurses through more than one coarse level
     b = np.random.default_rng(1).standard_normal(matrix.shape[0])
-    ours = linsolve.rs_vcycle(ml, smoothers).matvec(b)
+    ours = amg.rs_vcycle(ml, smoothers).matvec(b)
     assert np.array_equal(ours, ml.aspreconditioner(cycle="V").matvec(b))
 
 
+@pytest.mark.parametrize("explicit_zeros", [False, True])
+def test_rs_hierarchy_is_pyamgs(heights, explicit_zeros):
+    """Our set-up calls pyamg's kernels with its own bookkeeping between them, so it must
+    give pyamg's hierarchy: the same C/F splitting on every level (the splitting depends on
+    the order of each row's strong connections, which is why ours sorts them), the same
+    interpolation pattern and, up to summation order, the same weights and coarse matrices.
+    Classical weights divide by a_ii plus the weak connections, which nearly cancel on rows
+    whose conductances span decades: reordered sums differ there by up to 7e-11 relative
+    (measured at 512^2); 1e-9 leaves room and still catches any change of the formula or of
+    the pattern (those move weights by O(1)). The cycles then agree to round-off. With
+    explicit zeros in A (which pyamg drops from the strength pattern) as well."""
+    from roughflow.flow import amg
+
+    matrix = _reynolds_matrix(heights, 0.3)
+    if explicit_zeros:  # zero some off-diagonal entries but keep them stored
+        rows = np.repeat(np.arange(matrix.shape[0]), np.diff(matrix.indptr))
+        off = np.flatnonzero(rows != matrix.indices)
+        matrix.data[off[::7]] = 0.0
+    ref = amg.pyamg_rs_hierarchy(matrix)
+    ours = amg.rs_hierarchy(matrix)
+    assert len(ours.levels) == len(ref.levels) >= 3
+    for mine, theirs in zip(ours.levels[:-1], ref.levels[:-1], strict=True):
+        assert np.array_equal(mine.splitting.astype(bool), theirs.splitting)
+        p, q = mine.P.tocsr(), theirs.P.tocsr()
+        p.sort_indices()
+        q.sort_indices()
+        assert np.array_equal(p.indptr, q.indptr) and np.array_equal(p.indices, q.indices)
+        np.testing.assert_allclose(p.data, q.data, rtol=1e-9)
+    assert ours.levels[-1].A.shape == ref.levels[-1].A.shape
+    b = np.random.default_rng(2).standard_normal(matrix.shape[0])
+    x, y = amg.rs_vcycle(ours).matvec(b), amg.rs_vcycle(ref).matvec(b)
+    assert np.linalg.norm(x - y) <= 1e-9 * np.linalg.norm(y)
+
+
 def test_rs_vcycle_refuses_smoothers_it_does_not_implement():
-    from roughflow.flow.linsolve import rs_vcycle
+    from roughflow.flow.amg import rs_vcycle
 
     with pytest.raises(ValueError, match="jacobi"):
         rs_vcycle(None, {"presmoother": ("jacobi", {})})

@@ -42,9 +42,12 @@ BASE = {"surface": 150 * MB, "contact": 300 * MB, "bearing": 150 * MB, "threshol
         "threshold_adhesive": 300 * MB, "flow": 350 * MB, "ladder": 400 * MB,
         "channels": 300 * MB, "spectrum": 150 * MB, "theory": 200 * MB,
         "gpu_contact": 64 * MB}
-#: Bytes per grid point at the peak (float64 fields, FFT buffers, AMG hierarchy, ...).
+#: Bytes per grid point at the peak (float64 fields, FFT buffers, AMG hierarchy, ...). The
+#: ladder's comes from the paper config's own ladders (12 steps at 2048^2 and 2048 x 4096:
+#: 840-920 B a point between 1024^2 and 2048^2), not from the short ladders of
+#: bench_memory.py (579 B), docs/workflow.md "Memory".
 PER_POINT = {"surface": 80, "contact": 160, "bearing": 64, "threshold": 320,
-             "threshold_adhesive": 480, "flow": 560, "ladder": 720, "channels": 320,
+             "threshold_adhesive": 480, "flow": 560, "ladder": 1100, "channels": 320,
              "spectrum": 32, "theory": 200, "gpu_contact": 256}
 TASKS = tuple(PER_POINT)
 #: Grids whose arrays need less than this are never refused (the check is for grids that

@@ -10,9 +10,8 @@ factor: at 1e-8 it is about 1e-11 on bearing gaps.
 Methods (chosen by measurement, see ``benchmarks/bench_flow.py`` and docs/flow.md):
 
 - ``"rs"``: CG preconditioned by one V-cycle of classical Ruge-Stueben AMG with
-  second-pass coarsening (``CF=("RS", {"second_pass": True})``) and one Gauss-Seidel sweep
-  before and after each coarse-grid correction (:data:`RS_SMOOTHERS`, cycled by
-  :func:`rs_vcycle`); the default for large systems.
+  second-pass coarsening and one Gauss-Seidel sweep before and after each coarse-grid
+  correction (:mod:`roughflow.flow.amg`); the default for large systems.
 - ``"sa"``: CG preconditioned by smoothed-aggregation AMG.
 - ``"direct"``: sparse LU (SuperLU, COLAMD ordering); the default
   for small systems.
@@ -29,6 +28,7 @@ import scipy.sparse.linalg as spla
 
 from roughflow.defaults import FLOW_METHODS as METHODS
 from roughflow.errors import ConvergenceError, InputError
+from roughflow.flow import amg
 
 #: below this many unknowns ``"auto"`` uses the direct solver (measured crossover)
 DIRECT_MAX_UNKNOWNS = 70_000
@@ -63,86 +63,12 @@ def check_method(method: str | None) -> str:
     return m
 
 
-#: Smoothing of the RS V-cycle: one forward Gauss-Seidel sweep before the coarse-grid
-#: correction and one backward sweep after it. The backward sweep is the adjoint of the
-#: forward one, so the V-cycle stays a symmetric operator, as CG needs. pyamg's default, a
-#: symmetric sweep (forward and backward) on both sides, does twice the smoothing for the
-#: same 10-17 CG iterations; one sweep each took 0.73-0.93x the time of a whole flow solve
-#: at 1024^2 (docs/flow.md, "Linear solver").
-RS_SMOOTHERS = {"presmoother": ("gauss_seidel", {"sweep": "forward"}),
-                "postsmoother": ("gauss_seidel", {"sweep": "backward"})}
-
-
-#: pyamg's smoother of a level when RS_SMOOTHERS names none (ruge_stuben_solver's default)
-_PYAMG_DEFAULT_SMOOTHER = ("gauss_seidel", {"sweep": "symmetric"})
-_SWEEP_ORDER = {"forward": (False,), "backward": (True,), "symmetric": (False, True)}
-
-
-def _sweeps(spec) -> tuple[bool, ...]:
-    """The Gauss-Seidel sweeps (True: backward) of one pyamg smoother spec."""
-    name, opts = spec if isinstance(spec, tuple) else (spec, {})
-    sweep = opts.get("sweep", "forward")
-    if name != "gauss_seidel" or set(opts) - {"sweep"} or sweep not in _SWEEP_ORDER:
-        raise ValueError(f"rs_vcycle smooths with plain Gauss-Seidel sweeps only, got {spec!r}")
-    return _SWEEP_ORDER[sweep]
-
-
-def rs_vcycle(ml, smoothers: dict | None = None) -> spla.LinearOperator:
-    """One V-cycle of the RS hierarchy ``ml`` from a zero guess, smoothed as ``smoothers``
-    (pyamg's presmoother/postsmoother keywords; :data:`RS_SMOOTHERS` when None). It is the
-    arithmetic of ``ml.aspreconditioner(cycle="V")`` bit for bit (tested), without what
-    pyamg's cycle adds to each call, a third of its time at 1024^2: the residual norm before
-    and after the cycle (two extra products with the finest matrix, three norms) and the
-    argument checks of every smoothing sweep."""
-    from pyamg import amg_core
-
-    smoothers = RS_SMOOTHERS if smoothers is None else smoothers
-    pre = _sweeps(smoothers.get("presmoother", _PYAMG_DEFAULT_SMOOTHER))
-    post = _sweeps(smoothers.get("postsmoother", _PYAMG_DEFAULT_SMOOTHER))
-    levels = [(lv.A, lv.P, lv.R) for lv in ml.levels[:-1]]
-    coarsest, coarse_solve = ml.levels[-1].A, ml.coarse_solver
-
-    def smooth(a, x, b, sweeps) -> None:
-        n = a.shape[0]
-        for backward in sweeps:
-            start, stop, step = (n - 1, -1, -1) if backward else (0, n, 1)
-            amg_core.gauss_seidel(a.indptr, a.indices, a.data, x, b, start, stop, step)
-
-    def apply(b: np.ndarray) -> np.ndarray:
-        b = np.ascontiguousarray(b, dtype=np.float64).ravel()
-        down = []
-        for a, _, r in levels:
-            x = np.zeros(a.shape[0])
-            smooth(a, x, b, pre)
-            down.append((x, b))
-            b = r @ (b - a @ x)
-        x = np.ravel(coarse_solve(coarsest, b))
-        for (a, p, _), (xk, bk) in zip(reversed(levels), reversed(down), strict=True):
-            xk += p @ x
-            smooth(a, xk, bk, post)
-            x = xk
-        return x
-
-    n = ml.levels[0].A.shape[0]
-    return spla.LinearOperator((n, n), matvec=apply, rmatvec=apply, dtype=np.float64)
-
-
-def rs_hierarchy(a: sp.csr_matrix, smoothers: dict | None = None):
-    """pyamg's RS hierarchy of ``a`` as method ``"rs"`` builds it (smoothing as
-    :func:`rs_vcycle`'s ``smoothers``)."""
-    import pyamg
-
-    smoothers = RS_SMOOTHERS if smoothers is None else smoothers
-    return pyamg.ruge_stuben_solver(a, CF=("RS", {"second_pass": True}), max_coarse=500,
-                                    coarse_solver="splu", **smoothers)
-
-
 def _amg_preconditioner(a: sp.csr_matrix, method: str) -> spla.LinearOperator:
+    if method == "rs":
+        return amg.rs_vcycle(amg.rs_hierarchy(a))
     import pyamg
 
-    if method == "rs":
-        return rs_vcycle(rs_hierarchy(a))
-    ml = pyamg.smoothed_aggregation_solver(a, max_coarse=500, coarse_solver="splu")
+    ml = pyamg.smoothed_aggregation_solver(a, max_coarse=amg.MAX_COARSE, coarse_solver="splu")
     return ml.aspreconditioner(cycle="V")
 
 

@@ -1,8 +1,8 @@
 """The load for a target contact area, from the contact law and the states solved so far.
 
 Used by the threshold search, the pressure ladder, the channels scene and the benchmarks.
-A search keeps its solved states (load, area, contact result). The next load for a target
-area is
+A search keeps its solved states (load, area, and the contact result or, with a compliance,
+only what its warm starts read). The next load for a target area is
 
 1. interpolated linearly in (load, area) between the two solves that straddle the target;
 2. else extrapolated linearly from the two solves nearest to it on its side, when they
@@ -116,9 +116,10 @@ def load_for_area(target: float, points: Sequence[SolvedPoint], law: ContactLaw,
 
 @dataclass(frozen=True, eq=False)
 class CompactState:
-    """What a threshold search keeps of a solved elastic state: q = gap - c pressure (the
-    warm starts' variable, c = ``compliance``) in float32, 4 bytes a cell instead of the 17
-    of a :class:`ContactResult`, plus the solve's diagnostics. gap = max(q, 0) and pressure =
+    """What a threshold search, and a :class:`LoadSearch` with a compliance, keeps of a solved
+    state: q = gap - c pressure (the warm starts' variable, c = ``compliance``) in float32,
+    4 bytes a cell instead of the 17 of a :class:`ContactResult`, plus the solve's
+    diagnostics. gap = max(q, 0) and pressure =
     max(-q, 0) / c are rebuilt from it (exactly where the state is in contact or open: the
     solver's gap is 0 in contact and its pressure 0 off it), and q orders the cells as the
     prediction key ``percolation.openness`` does. Its float32 rounding (6e-8 relative) moves
@@ -292,7 +293,8 @@ class LoadSearch:
     ``solve(load, init)`` runs one contact solve; ``measure(result)`` gives the area the
     targets refer to (default the cell count ``area_fraction``; the ladder uses the
     perimeter-corrected area). ``bounds`` default to the law's :attr:`ContactLaw.bounds`.
-    ``compliance``: passed to :func:`warm_start` (:func:`warm_start_compliance`).
+    ``compliance``: passed to :func:`warm_start` (:func:`warm_start_compliance`); the
+    search then keeps its states as :class:`CompactState`.
     """
 
     def __init__(self, solve: Callable[[float, ContactResult | None], ContactResult],
@@ -309,6 +311,7 @@ class LoadSearch:
             raise InputError(f"load bounds must be finite and increasing, got {bounds!r}")
         self.measure = measure or (lambda r: float(r.area_fraction))
         self.points: list[Point] = []
+        self._latest: ContactResult | None = None  # the last solve whole (out-of-reach targets)
 
     def solve_for(self, target: float, tol: float, *,
                   max_solves: int = MAX_SOLVES_PER_TARGET) -> AreaSolve:
@@ -328,7 +331,8 @@ class LoadSearch:
                                                               compliance=self.compliance),
                               what=f"target a_c {target:.4g}, solve {n}")
             area = self.measure(res)
-            self.points.append(Point(load=float(load), area=area, state=res))
+            self.points.append(Point(load=float(load), area=area, state=self._kept(res)))
+            self._latest = res
             miss = abs(area - target)
             if best is None or miss < best[0]:
                 best = (miss, res, area)
@@ -336,8 +340,23 @@ class LoadSearch:
                 break
         if best is None:  # out of reach before any new solve: the closest earlier one
             q = min(self.points, key=lambda q: abs(q.area - target))
-            best = (abs(q.area - target), q.state, q.area)
+            res = self._latest if q is self.points[-1] else q.state
+            if isinstance(res, CompactState):  # solved again from itself
+                n = 1
+                res = timed_solve(self._solve, q.load,
+                                  warm_start([q], q.load, compliance=self.compliance),
+                                  what=f"target a_c {target:.4g} out of reach, closest again")
+            best = (abs(q.area - target), res, q.area)
         return AreaSolve(result=best[1], area=best[2], met=best[0] <= tol, solves=n)
+
+    def _kept(self, res: ContactResult) -> ContactResult | CompactState:
+        """What the search keeps of a solved state for its warm starts: with ``compliance``
+        only q (:class:`CompactState`, 4 bytes a cell instead of 17), which is all such warm
+        starts read. The paper's ladders of 12 steps solve 12 (elastic) to 16 (adhesive)
+        states at 1024^2; kept whole, they were most of the 0.5-0.8 GB by which the 2048^2
+        ladders overran their memory estimate (docs/workflow.md "Memory"). Only the state a
+        target returns is needed whole, and it is returned."""
+        return res if self.compliance is None else compact(res, self.compliance)
 
     def _out_of_reach(self, target: float) -> bool:
         """A solve at a bound already lies on the target's far side."""
