@@ -189,6 +189,35 @@ def test_cli_scene_threshold_and_bad_input(tmp_path, capsys):
     assert not (tmp_path / "bad.nc").exists()
 
 
+def test_a_failed_ladder_flow_solve_keeps_its_gap_and_no_dataset(tmp_path, capsys,
+                                                                 monkeypatch):
+    """A Reynolds solve of a ladder that does not converge ends the job with exit status 3
+    and no dataset, and leaves OUTPUT.failed.npz with the gap, axis and cell that reproduce
+    it (a near-threshold failure of the paper's largest ladder was lost for want of it)."""
+    import roughflow.flow
+    from roughflow.errors import ConvergenceError
+
+    def failing(gap, axis, **kw):
+        raise ConvergenceError("Reynolds solver (rs) did not reach relative residual 1e-08",
+                               residual=7.5e-7, iterations=500)
+
+    monkeypatch.setattr(roughflow.flow, "solve", failing)
+    out = tmp_path / "ladder.nc"
+    with pytest.raises(SystemExit) as exc:
+        main(["scene", "ladder", "--model", "bearing", "--l-over-lambda-r", "2", "--eps-f",
+              "0.125", "--points-per-lambda-s", "2", "--seeds", "3", "--area-fractions", "0.2",
+              "-o", str(out)])
+    assert exc.value.code == 3
+    assert not out.exists()
+    err = capsys.readouterr().err
+    assert "residual 7.500e-07" in err and "ladder.nc.failed.npz" in err
+    saved = np.load(tmp_path / "ladder.nc.failed.npz")
+    surface = generate(TINY.spec(3))
+    assert saved["gap"].shape == surface.shape and saved["gap"].min() == 0.0
+    assert int(saved["axis"]) == 0 and int(saved["seed"]) == 3
+    assert float(saved["target"]) == 0.2 and float(saved["lx"]) == surface.lx
+
+
 def _forbid(*_, **__):
     raise AssertionError("this job must not call this solver")
 

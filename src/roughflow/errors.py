@@ -16,12 +16,15 @@ class ResourceError(InputError):
 
 
 class ConvergenceError(RuntimeError):
-    """A solver did not reach its tolerance; carries the residual it reached."""
+    """A solver did not reach its tolerance; carries the residual it reached, and ``inputs``:
+    the arrays and values that reproduce the failed solve, where a caller that knows them
+    adds them (the ladder scene: ``flow.solve(gap, axis, lx=, ly=)``), else None."""
 
     def __init__(self, message: str, *, residual: float, iterations: int):
         super().__init__(f"{message} (residual {residual:.3e} after {iterations} iterations)")
         self.residual = residual
         self.iterations = iterations
+        self.inputs: dict | None = None
 
 
 def require_finite(name: str, value: float) -> float:

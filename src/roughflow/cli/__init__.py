@@ -82,6 +82,20 @@ def _level(args: argparse.Namespace) -> int:
     return {0: logging.WARNING, 1: logging.INFO}.get(args.verbose, logging.DEBUG)
 
 
+def _save_failed(exc: ConvergenceError, args: argparse.Namespace) -> str:
+    """Save the inputs of a failed solve beside the output the command would have written
+    (``OUTPUT.failed.npz``, never mistaken for a result); the message's tail naming it."""
+    output = getattr(args, "output", None)
+    if not exc.inputs or output is None:
+        return ""
+    import numpy as np
+
+    path = f"{output}.failed.npz"
+    np.savez(path, **exc.inputs)
+    keys = ", ".join(k for k in exc.inputs if k != "gap")
+    return f"; the failed solve's gap and {keys} are saved in {path}"
+
+
 def main(argv: list[str] | None = None) -> int:
     from roughflow.fft import check_environment
     from roughflow.provenance import Provenance, input_history, input_references
@@ -107,7 +121,7 @@ def main(argv: list[str] | None = None) -> int:
     except InputError as exc:
         parser.exit(2, f"{name}: error: {exc}\n")
     except ConvergenceError as exc:
-        parser.exit(3, f"{name}: solver did not converge: {exc}\n")
+        parser.exit(3, f"{name}: solver did not converge: {exc}{_save_failed(exc, args)}\n")
     except MemoryError:
         parser.exit(4, f"{name}: out of memory (the estimate of roughflow.resources fitted "
                        "the available memory, which other processes may have taken since)\n")

@@ -32,6 +32,7 @@ from roughflow.datasets.units import (
     SIGMA_UNITS,
 )
 from roughflow.defaults import CONTACT_TOL
+from roughflow.errors import ConvergenceError
 from roughflow.search import LoadSearch, warm_start_compliance
 from roughflow.surface import Surface, generate
 
@@ -165,7 +166,12 @@ def run_ladder(job: LadderJob, *, threads: int | None = None) -> xr.Dataset:
                     r["flow_iterations"][i, k, ax] = 0
                     r["flow_residual"][i, k, ax] = 0.0
                     continue
-                fr = flow.solve(c.gap, ax, lx=lx, ly=ly)
+                try:
+                    fr = flow.solve(c.gap, ax, lx=lx, ly=ly)
+                except ConvergenceError as exc:  # keep what reproduces it (the CLI saves it)
+                    exc.inputs = {"gap": c.gap, "axis": ax, "lx": lx, "ly": ly, "seed": seed,
+                                  "target": target}
+                    raise
                 r["sigma"][i, k, ax] = fr.sigma
                 r["flow_residual"][i, k, ax] = fr.residual
                 r["flow_iterations"][i, k, ax] = fr.iterations
