@@ -104,7 +104,7 @@ MEASURED_PEAK_MB = {
     "elastic_g8_H0.8_L11.3137_f0.015625_p8_s0_t0.004_c0.0001": 8428,   # threshold, 2048 x 16384
     "elastic_g1_H0.8_L16_f0.0625_p8_s0_51cf43": 3697,                  # ladder, 2048^2
     "adhesive_g1_H0.8_L16_f0.0625_p8_s0_008f9f": 3967,                 # ladder, 2048^2
-    "elastic_g2_H0.8_L22.6274_f0.0625_p8_s0_1f5e9e": 7954,             # ladder, 2048 x 4096
+    "elastic_g2_H0.8_L22.6274_f0.0625_p8_s0_1f5e9e": 8008,             # ladder, 2048 x 4096
 }
 
 
