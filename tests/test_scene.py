@@ -193,7 +193,8 @@ def test_a_failed_ladder_flow_solve_keeps_its_gap_and_no_dataset(tmp_path, capsy
                                                                  monkeypatch):
     """A Reynolds solve of a ladder that does not converge ends the job with exit status 3
     and no dataset, and leaves OUTPUT.failed.npz with the gap, axis and cell that reproduce
-    it (a near-threshold failure of the paper's largest ladder was lost for want of it)."""
+    it (a near-threshold failure of the paper's largest ladder was lost for want of it). A
+    later run that succeeds (Snakemake's retry) removes it."""
     import roughflow.flow
     from roughflow.errors import ConvergenceError
 
@@ -216,6 +217,12 @@ def test_a_failed_ladder_flow_solve_keeps_its_gap_and_no_dataset(tmp_path, capsy
     assert saved["gap"].shape == surface.shape and saved["gap"].min() == 0.0
     assert int(saved["axis"]) == 0 and int(saved["seed"]) == 3
     assert float(saved["target"]) == 0.2 and float(saved["lx"]) == surface.lx
+    saved.close()
+    monkeypatch.undo()
+    assert main(["scene", "ladder", "--model", "bearing", "--l-over-lambda-r", "2", "--eps-f",
+                 "0.125", "--points-per-lambda-s", "2", "--seeds", "3", "--area-fractions",
+                 "0.2", "-o", str(out)]) == 0
+    assert out.exists() and not (tmp_path / "ladder.nc.failed.npz").exists()
 
 
 def _forbid(*_, **__):

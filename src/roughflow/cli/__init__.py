@@ -22,6 +22,7 @@ import logging
 import pkgutil
 import sys
 from dataclasses import replace
+from pathlib import Path
 
 from roughflow import __version__
 from roughflow.errors import ConvergenceError, InputError
@@ -82,15 +83,21 @@ def _level(args: argparse.Namespace) -> int:
     return {0: logging.WARNING, 1: logging.INFO}.get(args.verbose, logging.DEBUG)
 
 
-def _save_failed(exc: ConvergenceError, args: argparse.Namespace) -> str:
-    """Save the inputs of a failed solve beside the output the command would have written
-    (``OUTPUT.failed.npz``, never mistaken for a result); the message's tail naming it."""
+def _failed_path(args: argparse.Namespace) -> Path | None:
+    """Where a command keeps the inputs of a solve that did not converge: beside the output
+    it would have written, ``OUTPUT.failed.npz`` (never mistaken for a result)."""
     output = getattr(args, "output", None)
-    if not exc.inputs or output is None:
+    return None if output is None else Path(f"{output}.failed.npz")
+
+
+def _save_failed(exc: ConvergenceError, args: argparse.Namespace) -> str:
+    """Save the inputs of a failed solve (:func:`_failed_path`); the message's tail naming
+    the file."""
+    path = _failed_path(args)
+    if not exc.inputs or path is None:
         return ""
     import numpy as np
 
-    path = f"{output}.failed.npz"
     np.savez(path, **exc.inputs)
     keys = ", ".join(k for k in exc.inputs if k != "gap")
     return f"; the failed solve's gap and {keys} are saved in {path}"
@@ -118,6 +125,9 @@ def main(argv: list[str] | None = None) -> int:
         args.provenance = replace(provenance, history=input_history(*single),
                                   references=input_references(*single, *listed))
         args.func(args)
+        stale = _failed_path(args)
+        if stale is not None:  # an earlier failed attempt's inputs no longer apply
+            stale.unlink(missing_ok=True)
     except InputError as exc:
         parser.exit(2, f"{name}: error: {exc}\n")
     except ConvergenceError as exc:
