@@ -34,6 +34,7 @@ import numpy as np
 
 from roughflow import flow, percolation
 from roughflow.errors import ConvergenceError
+from roughflow.flow.linsolve import DIRECT_MAX_UNKNOWNS
 from roughflow.scenes.jobs import LadderJob, SurfaceParams
 from roughflow.scenes.ladder import contact_ladder
 from roughflow.surface import generate
@@ -54,6 +55,20 @@ def _solve(gap, ax, lx, ly, method):
     except ConvergenceError as exc:
         return None, time.perf_counter() - t0, exc.residual, str(exc)
     return res, time.perf_counter() - t0, res.residual, ""
+
+
+#: the outcome of a solve that AMG did not converge and ``auto`` retried with the direct solver
+FELL_BACK = "converged (fell back to direct)"
+
+
+def _outcome(res) -> str:
+    """``converged``, ``failed`` or :data:`FELL_BACK` (a system above
+    ``DIRECT_MAX_UNKNOWNS`` solved directly)."""
+    if res is None:
+        return "failed"
+    if res.method == "direct" and res.n_active > DIRECT_MAX_UNKNOWNS:
+        return FELL_BACK
+    return "converged"
 
 
 def _decades(gap: np.ndarray, ax: int) -> float:
@@ -82,7 +97,7 @@ def run_case(size: float, eps_f: float, model: str, gamma: float, hurst: float, 
             res, t, residual, error = _solve(c.gap, ax, lx, ly, None)
             row = {"n": n, "model": model, "gamma": gamma, "hurst": hurst, "seed": seed,
                    "target": target, "a_c": float(c.area_fraction), "axis": "xy"[ax],
-                   "outcome": "converged" if res is not None else "failed",
+                   "outcome": _outcome(res),
                    "method": res.method if res is not None else "-",
                    "iterations": res.iterations if res is not None else -1,
                    "residual": residual,
@@ -123,20 +138,22 @@ KEYS = ["n", "model", "gamma", "hurst", "seed", "target", "a_c", "axis", "outcom
 
 def summary(rows: list[dict]) -> str:
     """Markdown table: per (n, model, gamma, H) the solves, failures and worst cases."""
-    lines = ["| grid | model | gamma | H | ladders | solves | failed | CG iterations median / max "
+    lines = ["| grid | model | gamma | H | ladders | solves | failed | fell back to direct "
+             "| CG iterations median / max "
              "| largest sigma difference from direct | largest u^3 span (decades) |",
-             "|---|---|---|---|---|---|---|---|---|---|"]
+             "|---|---|---|---|---|---|---|---|---|---|---|"]
     groups = {}
     for r in rows:
         groups.setdefault((r["n"], r["model"], r["gamma"], r["hurst"]), []).append(r)
     for (n, model, gamma, hurst), rs in groups.items():
-        its = [r["iterations"] for r in rs if r["outcome"].startswith("converged")]
+        its = [r["iterations"] for r in rs if r["outcome"] == "converged"]
+        fell_back = sum(r["outcome"] == FELL_BACK for r in rs)
         diffs = [d for r in rs if isinstance(d := r.get("sigma_rel_diff"), float)
                  and math.isfinite(d)]
         failed = sum(not r["outcome"].startswith("converged") for r in rs)
         lines.append(
             f"| {n} | {model} | {gamma:g} | {hurst:g} | {len({r['seed'] for r in rs})} | "
-            f"{len(rs)} | {failed} | {np.median(its) if its else math.nan:.0f} / "
+            f"{len(rs)} | {failed} | {fell_back} | {np.median(its) if its else math.nan:.0f} / "
             f"{max(its) if its else -1} | {max(diffs) if diffs else math.nan:.2g} | "
             f"{max(r['u3_decades'] for r in rs):.1f} |")
     return "\n".join(lines) + "\n"
@@ -171,6 +188,7 @@ def main() -> None:
                     help="only write the summary table of these csv files (e.g. of runs that "
                          "were stopped) to stress_flow[_TAG].md")
     args = ap.parse_args()
+    OUT.mkdir(parents=True, exist_ok=True)
     if args.summarize:
         md = OUT / ("stress_flow" + (f"_{args.tag}" if args.tag else "") + ".md")
         # runs that covered the same ladder count each of its solves once
@@ -181,7 +199,6 @@ def main() -> None:
         return
     stem = OUT / ("stress_flow" + (f"_{args.tag}" if args.tag else ""))
     csv = stem.with_suffix(".csv")
-    OUT.mkdir(parents=True, exist_ok=True)
     csv.unlink(missing_ok=True)
     rows = []
     for model, gamma, hurst, seed in itertools.product(args.models, args.gammas, args.hursts,

@@ -228,7 +228,7 @@ def test_non_percolating_gives_zero_without_solve(monkeypatch):
     def boom(*args, **kwargs):
         raise AssertionError("the linear solver must not be called")
 
-    monkeypatch.setattr(flow_core, "solve_spd", boom)
+    monkeypatch.setattr(flow_core, "solve_prepared", boom)
     g = np.full((20, 16), 0.5)
     g[9, :] = 0.0  # a contact line across x blocks flow along x
     r = solve(g, 0)
@@ -256,7 +256,7 @@ def test_gaps_below_float64_resolution_are_closed(monkeypatch, method):
     along_y = solve(g, 1, method=method)
     assert along_y.sigma == pytest.approx(sigma_of(u0) * 19 / 20, rel=1e-12)
     assert np.isnan(along_y.pressure[9]).all()
-    monkeypatch.setattr(flow_core, "solve_spd", lambda *a, **k: pytest.fail("solver called"))
+    monkeypatch.setattr(flow_core, "solve_prepared", lambda *a, **k: pytest.fail("solver called"))
     blocked = solve(g, 0, method=method)
     assert blocked.sigma == 0.0 and not blocked.percolating
     # a row 10x above the floor stays open and sets sigma_x: the series (harmonic) mean of
@@ -300,6 +300,38 @@ def test_convergence_failure_raises_with_residual(heights):
     with pytest.raises(ConvergenceError) as exc:
         solve_spd(a, b, tol=1e-10, method="cg", max_iter=3)
     assert exc.value.residual > 1e-10 and exc.value.iterations == 3
+
+
+@pytest.fixture(scope="module")
+def amg_sized_gap():
+    """A bearing gap (a_c 0.3) of a 384^2 surface: about 100 000 unknowns, so that ``auto``
+    picks RS-AMG (above ``DIRECT_MAX_UNKNOWNS``)."""
+    h = generate(SurfaceSpec.from_sweep(points_per_lambda_s=6, seed=3)).heights
+    assert h.shape == (384, 384)
+    return bearing_gap(h, 0.3)
+
+
+def test_auto_falls_back_to_direct_when_amg_does_not_converge(amg_sized_gap, monkeypatch):
+    import roughflow.flow.linsolve as linsolve
+
+    reference = solve(amg_sized_gap, 0, method="direct")
+    assert reference.n_active > linsolve.DIRECT_MAX_UNKNOWNS
+    assert solve(amg_sized_gap, 0).method == "rs"
+    # an AMG solve that cannot converge (the near-threshold stalls of docs/flow.md "Direct
+    # fallback" need a 2048 x 4096 grid; caps of 2 iterations stand in for them)
+    monkeypatch.setattr(linsolve, "MAX_ITER_AMG", 2)
+    monkeypatch.setattr(linsolve, "AMG_ITER_BEFORE_FALLBACK", 2)
+    with pytest.raises(ConvergenceError):
+        solve(amg_sized_gap, 0, method="rs")  # an explicit method is never replaced
+    r = solve(amg_sized_gap, 0)
+    assert r.method == "direct" and r.residual <= 1e-8
+    assert r.iterations >= 2  # the AMG iterations spent count
+    # the same factorisation and right-hand side as the reference: equal to round-off
+    assert r.sigma == pytest.approx(reference.sigma, rel=1e-12)
+    # where the factorisation would not fit, the AMG failure is raised, naming the fallback
+    monkeypatch.setattr(linsolve, "headroom_bytes", lambda: 1)
+    with pytest.raises(ConvergenceError, match="direct fallback would need"):
+        solve(amg_sized_gap, 0)
 
 
 @pytest.mark.parametrize(

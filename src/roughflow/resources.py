@@ -50,6 +50,14 @@ PER_POINT = {"surface": 80, "contact": 160, "bearing": 64, "threshold": 320,
              "threshold_adhesive": 480, "flow": 560, "ladder": 1100, "channels": 320,
              "spectrum": 32, "theory": 200, "gpu_contact": 256}
 TASKS = tuple(PER_POINT)
+#: Bytes per unknown of a sparse LU (SuperLU, COLAMD) of a Reynolds system: the flow
+#: solver's fallback when AMG-CG does not converge (``roughflow.flow.linsolve``). Measured on
+#: the paper config's largest ladder (2048 x 4096, a_c 0.25-0.38, 4.2-6.3 million unknowns):
+#: 33-48 nonzeros of L + U per unknown, about 25 bytes of peak memory each; a whole process
+#: holding the system and its LU peaked at 0.98-1.07 kB per unknown near a_c* (a_c 0.33-0.38,
+#: where AMG stalled), 1.16 kB at a_c 0.30 and 1.34 kB at 0.25; rounded up from the largest
+#: (docs/flow.md "Direct fallback").
+FLOW_LU_BYTES_PER_UNKNOWN = 1500
 #: Grids whose arrays need less than this are never refused (the check is for grids that
 #: cannot fit, not for a machine that is momentarily short of memory).
 SMALL = 64 * MB
@@ -107,6 +115,13 @@ def available_bytes() -> int | None:
     have = avail + _own_rss()
     limit = _cgroup_limit()
     return min(have, limit) if limit is not None else have
+
+
+def headroom_bytes() -> int | None:
+    """Memory this process can still allocate beside what it holds (within the cgroup
+    limit); None if unknown."""
+    have = available_bytes()
+    return None if have is None else max(have - _own_rss(), 0)
 
 
 def describe(nbytes: float) -> str:

@@ -25,7 +25,7 @@ from roughflow.percolation import spanning_cells
 from roughflow.resources import check_memory
 
 from .assembly import Faces, assemble, face_transmissibilities
-from .linsolve import check_method, prepare, solve_spd
+from .linsolve import check_method, solve_prepared, solve_spd
 
 
 @dataclass(frozen=True)
@@ -128,9 +128,8 @@ def _solve_flux_balanced(matrix, rhs, cells, act, faces: Faces, *, tol: float, m
     """
     # one factorisation or AMG hierarchy for every round: near a_c* its set-up cost as
     # much as the iterations of a round (1.0-1.3 s of 2-4 s a round at 1024^2)
-    prepared = prepare(matrix, method)
+    sol, prepared = solve_prepared(matrix, rhs, tol=tol, method=method)
     cap = REFINE_MAX_ITER if prepared.preconditioner is not None else None
-    sol = solve_spd(matrix, rhs, tol=tol, prepared=prepared)
     spent = sol.iterations  # every round's iterations, a rejected one's as well
     for round_ in range(rounds + 1):
         q = np.zeros(act.shape)

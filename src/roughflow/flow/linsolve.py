@@ -16,11 +16,17 @@ Methods (chosen by measurement, see ``benchmarks/bench_flow.py`` and docs/flow.m
 - ``"direct"``: sparse LU (SuperLU, COLAMD ordering); the default
   for small systems.
 - ``"cg"``: CG without preconditioner (benchmark reference; slow).
+
+With ``"auto"``, an AMG solve that does not converge is retried by the direct solver where
+its factorisation fits in memory (:func:`solve_prepared`): near a_c*, on the paper config's
+largest grids, RS-CG can stall on conductivities that span 16 decades, while the clusters
+are thin enough there for a sparse LU (docs/flow.md "Direct fallback").
 """
 
 from __future__ import annotations
 
-from dataclasses import dataclass
+import logging
+from dataclasses import dataclass, replace
 
 import numpy as np
 import scipy.sparse as sp
@@ -29,10 +35,18 @@ import scipy.sparse.linalg as spla
 from roughflow.defaults import FLOW_METHODS as METHODS
 from roughflow.errors import ConvergenceError, InputError
 from roughflow.flow import amg
+from roughflow.resources import FLOW_LU_BYTES_PER_UNKNOWN, describe, headroom_bytes
+
+log = logging.getLogger(__name__)
 
 #: below this many unknowns ``"auto"`` uses the direct solver (measured crossover)
 DIRECT_MAX_UNKNOWNS = 70_000
 MAX_ITER_AMG = 500
+#: AMG-CG iterations after which ``"auto"`` retries with the direct solver (where its
+#: factorisation fits; :func:`solve_prepared`). First solves that converged took at most
+#: 98 (near a_c* on the paper config's 2048 x 4096 grid; 8-15 elsewhere), and the stalls
+#: measured there ran the full 500 to residuals of 1e-5 - 1e-7 (docs/flow.md "Direct fallback").
+AMG_ITER_BEFORE_FALLBACK = 200
 MAX_ITER_CG = 20_000
 
 
@@ -144,3 +158,43 @@ def solve_spd(
             residual=residual, iterations=iterations,
         )
     return LinearSolution(y, residual, iterations, method)
+
+
+def solve_prepared(a: sp.csr_matrix, b: np.ndarray, *, tol: float,
+                   method: str = "auto") -> tuple[LinearSolution, Prepared]:
+    """:func:`prepare` and :func:`solve_spd` of ``a x = b``, returning the solution and what
+    was prepared (for further solves of the same matrix).
+
+    With ``method="auto"``, an AMG solve is retried by the direct solver when it has not
+    converged after :data:`AMG_ITER_BEFORE_FALLBACK` iterations, if the factorisation fits
+    beside what this process held before the AMG set-up (``FLOW_LU_BYTES_PER_UNKNOWN`` per
+    unknown, :mod:`roughflow.resources`); the AMG iterations spent count in the result's.
+    Where it does not fit, AMG gets its full :data:`MAX_ITER_AMG` and raises
+    :class:`ConvergenceError` as an explicit method does (naming the memory the fallback
+    would have needed).
+    """
+    method = check_method(method)
+    need = FLOW_LU_BYTES_PER_UNKNOWN * a.shape[0]
+    have = headroom_bytes()  # before the AMG hierarchy, which is freed before the LU
+    fits = have is None or need <= have
+    prepared = prepare(a, method)
+    fallback = method == "auto" and prepared.method != "direct"
+    try:
+        sol = solve_spd(a, b, tol=tol, prepared=prepared,
+                        max_iter=AMG_ITER_BEFORE_FALLBACK if fallback and fits else None)
+        return sol, prepared
+    except ConvergenceError as exc:
+        if not fallback:
+            raise
+        if not fits:
+            raise ConvergenceError(
+                f"Reynolds solver ({prepared.method}) did not reach relative residual {tol:g}, "
+                f"and its direct fallback would need about {describe(need)} more memory than "
+                f"the {describe(have)} available", residual=exc.residual,
+                iterations=exc.iterations) from None
+        failed = exc.with_traceback(None)  # its frames would keep the AMG hierarchy alive
+    del prepared
+    log.warning("%s; retrying with the direct solver (%d unknowns)", failed, a.shape[0])
+    prepared = prepare(a, "direct")
+    sol = solve_spd(a, b, tol=tol, prepared=prepared)
+    return replace(sol, iterations=sol.iterations + failed.iterations), prepared
