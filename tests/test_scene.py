@@ -117,6 +117,8 @@ def test_ladder_scene_flow_only_where_percolating():
     # at 80 % bearing contact (threshold 1/2) nothing percolates: sigma = 0, not solved
     assert np.all(perc[2] == 0) and np.all(sig[2] == 0) and np.all(
         ds["flow_iterations"].sel(seed=0).values[2] == 0)
+    # which solver gave sigma: the sparse LU on these small grids, nothing where not solved
+    np.testing.assert_array_equal(ds["flow_direct"].sel(seed=0).values, [[1, 1], [1, 1], [0, 0]])
     assert np.all(perc[0] == 1) and np.all(sig[0] > 0)
     # the ladder's conductance is the flow stage's (same gap: bearing is deterministic)
     from roughflow import contact
@@ -169,6 +171,26 @@ def test_aggregate_outer_join_keeps_missing_as_nan(tmp_path):
         for c in ("gamma", "eps_t", "eps_f", "hurst"):
             assert "_FillValue" not in raw[c].attrs
     assert np.isnan(back["n_solves"].sel(gamma=2.0, seed=2)).all()
+
+
+def test_ladder_records_the_flow_solver_and_combines_with_files_that_do_not(monkeypatch):
+    import roughflow.flow.linsolve as linsolve
+
+    job = LadderJob(surface=TINY, model="bearing", seeds=(1,), area_fractions=(0.05, 0.3),
+                    a_c_star=0.5, a_c_star_alt=0.4)
+    direct = run_ladder(job)
+    monkeypatch.setattr(linsolve, "DIRECT_MAX_UNKNOWNS", 0)  # auto picks AMG on any grid
+    amg = run_ladder(job)
+    assert (direct["flow_direct"] == 1).all() and (amg["flow_direct"] == 0).all()
+    # the same sigma either way (both solve to the flow tolerance; the dissipation's error
+    # is quadratic in the 1e-8 residual)
+    np.testing.assert_allclose(amg["sigma"], direct["sigma"], rtol=1e-10)
+    # job files written before the variable existed still combine: NaN where it is missing
+    older = run_ladder(LadderJob(surface=TINY, model="bearing", seeds=(2,),
+                                 area_fractions=(0.05, 0.3), a_c_star=0.5, a_c_star_alt=0.4))
+    out = combine([direct, older.drop_vars("flow_direct")])
+    assert np.isnan(out["flow_direct"].sel(seed=2)).all()
+    assert (out["flow_direct"].sel(seed=1) == 1).all()
 
 
 def test_combine_rejects_empty():

@@ -122,8 +122,10 @@ def combine(datasets: Sequence[xr.Dataset], sources: Sequence[str] | None = None
         out = datasets[0].copy()
     else:
         try:
-            out = xr.combine_by_coords(list(datasets), join="outer",
-                                       combine_attrs="drop_conflicts", data_vars="all")
+            # compat and coords as today's defaults, which xarray is about to change
+            out = xr.combine_by_coords(list(datasets), join="outer", compat="no_conflicts",
+                                       coords="different", combine_attrs="drop_conflicts",
+                                       data_vars="all")
         except ValueError as exc:
             log.info("combine_by_coords failed (%s); merging instead", exc)
             out = xr.merge(list(datasets), join="outer", compat="no_conflicts",

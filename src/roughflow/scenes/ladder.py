@@ -128,6 +128,7 @@ def run_ladder(job: LadderJob, *, threads: int | None = None) -> xr.Dataset:
     r["sigma"] = np.full((ns, nk, 2), np.nan)
     r["flow_residual"] = np.full((ns, nk, 2), np.nan)
     r["flow_iterations"] = np.full((ns, nk, 2), -1, dtype=np.int64)
+    r["flow_direct"] = np.full((ns, nk, 2), -1, dtype=np.int64)
     r["percolating"] = np.full((ns, nk, 2), -1, dtype=np.int64)
     r["sigma_emt"] = np.full((ns, nk, len(EMT_FORMS), 2), np.nan)
     r["sigma_ref"] = np.full((ns, 2), np.nan)
@@ -164,6 +165,7 @@ def run_ladder(job: LadderJob, *, threads: int | None = None) -> xr.Dataset:
                 if not perc:  # not solved: no fluid path, sigma = 0 exactly
                     r["sigma"][i, k, ax] = 0.0
                     r["flow_iterations"][i, k, ax] = 0
+                    r["flow_direct"][i, k, ax] = 0
                     r["flow_residual"][i, k, ax] = 0.0
                     continue
                 try:
@@ -175,6 +177,7 @@ def run_ladder(job: LadderJob, *, threads: int | None = None) -> xr.Dataset:
                 r["sigma"][i, k, ax] = fr.sigma
                 r["flow_residual"][i, k, ax] = fr.residual
                 r["flow_iterations"][i, k, ax] = fr.iterations
+                r["flow_direct"][i, k, ax] = int(fr.method == "direct")
             th = _theory(c.gap, ~open_mask, c.area_fraction if math.isnan(a_cont) else a_cont,
                          job)
             r["sigma_emt"][i, k] = (
@@ -212,6 +215,9 @@ def run_ladder(job: LadderJob, *, threads: int | None = None) -> xr.Dataset:
                              "relative residual of the flow solve"),
         "flow_iterations": var(r["flow_iterations"], ska, DIMENSIONLESS,
                                "iterations of the flow solve"),
+        "flow_direct": var(r["flow_direct"], ska, DIMENSIONLESS,
+                           "1: the flow solve was the sparse LU (small systems, or the fallback "
+                           "of an AMG solve that did not converge), 0: AMG-CG or no solve"),
         "sigma_emt": var(r["sigma_emt"], ("seed", "step", "emt", "axis"), SIGMA_UNITS,
                          "Bruggeman effective-medium conductance"),
         "sigma_closed_form": var(r["sigma_closed_form"], sk, SIGMA_UNITS,
