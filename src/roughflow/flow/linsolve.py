@@ -174,11 +174,12 @@ def solve_prepared(a: sp.csr_matrix, b: np.ndarray, *, tol: float,
     would have needed).
     """
     method = check_method(method)
+    fallback = method == "auto" and _resolve(method, a.shape[0]) != "direct"
     need = FLOW_LU_BYTES_PER_UNKNOWN * a.shape[0]
-    have = headroom_bytes()  # before the AMG hierarchy, which is freed before the LU
+    # measured before the AMG hierarchy, which is freed before the LU; only where it matters
+    have = headroom_bytes() if fallback else None
     fits = have is None or need <= have
     prepared = prepare(a, method)
-    fallback = method == "auto" and prepared.method != "direct"
     try:
         sol = solve_spd(a, b, tol=tol, prepared=prepared,
                         max_iter=AMG_ITER_BEFORE_FALLBACK if fallback and fits else None)
