@@ -13,8 +13,9 @@ same kernels with pyamg's copies and conversions between them), the same with py
 own hierarchy and V-cycle (identical arithmetic, plus a residual norm before and after
 each cycle), RS-AMG with pyamg's default
 smoothing (a symmetric Gauss-Seidel sweep before and after each coarse-grid correction,
-twice ours) and SA-AMG preconditioning; scipy's direct
-SuperLU (our assembly, COLAMD; n <= --direct-max); CG without preconditioner
+twice ours) and SA-AMG preconditioning; our direct solver
+(``"direct"``: QDLDL's LDL^T with AMD ordering, n <= --direct-max); ``"auto"`` (whichever of the
+two ``roughflow.flow.linsolve.choose`` picks for the state); CG without preconditioner
 (our assembly, n <= --cg-max, capped at 20 000 iterations); reynoldsflow with
 ``scipy.amg-rs`` (its default), ``scipy.amg-sa`` and ``scipy-spsolve`` (n <= --direct-max).
 
@@ -123,7 +124,7 @@ def main() -> None:
     ap.add_argument("--solvers", nargs="+", default=None,
                     help="only these solvers (ours-rs ours-rs-pyamg-setup ours-rs-pyamg-cycle "
                          "ours-rs-symmetric "
-                         "ours-sa scipy-splu cg-noprec rf-amg-rs rf-amg-sa rf-spsolve)")
+                         "ours-sa ours-direct ours-auto cg-noprec rf-amg-rs rf-amg-sa rf-spsolve)")
     ap.add_argument("--tag", default="", help="suffix of the output files")
     ap.add_argument("--report", nargs="+", metavar="CSV", default=None,
                     help="no runs: merge these CSV files into bench_flow{tag}.md/.png")
@@ -162,9 +163,10 @@ def main() -> None:
                      ("ours-rs-pyamg-setup", ours("rs", pyamg_setup=True), args.repeats, False),
                      ("ours-rs-pyamg-cycle", ours("rs", pyamg_cycle=True), args.repeats, False),
                      ("ours-rs-symmetric", ours("rs", smoothers={}), args.repeats, False),
-                     ("ours-sa", ours("sa"), args.repeats, False)]
+                     ("ours-sa", ours("sa"), args.repeats, False),
+                     ("ours-auto", ours("auto"), args.repeats, False)]
             if n <= args.direct_max:
-                cases.append(("scipy-splu", ours("direct"), args.repeats, False))
+                cases.append(("ours-direct", ours("direct"), args.repeats, False))
             if n <= args.cg_max:
                 cases.append(("cg-noprec", ours("cg"), 1, False))
             if have_peer:

@@ -11,10 +11,11 @@ times max(sqrt(gamma), 1/sqrt(gamma)), as in the paper's cells (L/lambda_r 4 and
 1/16: 512^2 at gamma 1, 512 x 1024 at gamma 2; 8 and 1/16: 1024^2), walked along an area
 ladder exactly as the ladder scene does (:func:`roughflow.scenes.ladder.contact_ladder`).
 At every state and axis where the fluid percolates, ``flow.solve`` runs with its default
-method (RS-AMG CG above 70 000 unknowns) and, unless ``--no-reference``, with the direct
-solver as the reference for sigma. A row records the outcome (``converged`` or the
-ConvergenceError's residual), CG iterations, residual, flux imbalance, the time of each
-solve, sigma and its relative difference from the direct solve, and the decades spanned by
+method (``auto``: RS-AMG CG or the direct solver, ``roughflow.flow.linsolve.choose``) and,
+unless ``--no-reference``, with the other of the two as the reference for sigma. A row records
+the outcome (``converged``, converged after falling back to the direct solver, or the
+ConvergenceError's residual), the method, CG iterations, residual, flux imbalance, the time of
+each solve, sigma and its relative difference from the reference, and the decades spanned by
 the flowing cells' u^3. The gap of a failed solve is kept in
 ``results/benchmarks/stress_flow_gaps/`` to reproduce it. Rows are appended as they come (an
 interrupted run keeps its rows). Writes
@@ -34,7 +35,6 @@ import numpy as np
 
 from roughflow import flow, percolation
 from roughflow.errors import ConvergenceError
-from roughflow.flow.linsolve import DIRECT_MAX_UNKNOWNS
 from roughflow.scenes.jobs import LadderJob, SurfaceParams
 from roughflow.scenes.ladder import contact_ladder
 from roughflow.surface import generate
@@ -62,11 +62,11 @@ FELL_BACK = "converged (fell back to direct)"
 
 
 def _outcome(res) -> str:
-    """``converged``, ``failed`` or :data:`FELL_BACK` (a system above
-    ``DIRECT_MAX_UNKNOWNS`` solved directly)."""
+    """``converged``, ``failed`` or :data:`FELL_BACK` (a direct solve that counts AMG
+    iterations: those spent before the fallback)."""
     if res is None:
         return "failed"
-    if res.method == "direct" and res.n_active > DIRECT_MAX_UNKNOWNS:
+    if res.method == "direct" and res.iterations > 0:
         return FELL_BACK
     return "converged"
 
@@ -103,15 +103,18 @@ def run_case(size: float, eps_f: float, model: str, gamma: float, hurst: float, 
                    "residual": residual,
                    "imbalance": res.flux_imbalance if res is not None else math.nan,
                    "seconds": t, "sigma": res.sigma if res is not None else math.nan,
+                   "flowing_fraction": res.n_active / c.gap.size if res is not None else math.nan,
                    "u3_decades": _decades(c.gap, ax)}
             if reference:
-                ref, t_ref, _, ref_error = _solve(c.gap, ax, lx, ly, "direct")
-                row["seconds_direct"] = t_ref
-                row["sigma_direct"] = ref.sigma if ref is not None else math.nan
+                other = "rs" if row["method"] == "direct" else "direct"
+                ref, t_ref, _, ref_error = _solve(c.gap, ax, lx, ly, other)
+                row["reference"] = other
+                row["seconds_reference"] = t_ref
+                row["sigma_reference"] = ref.sigma if ref is not None else math.nan
                 row["sigma_rel_diff"] = (abs(row["sigma"] - ref.sigma) / ref.sigma
                                          if ref is not None and ref.sigma > 0 else math.nan)
                 if ref_error:
-                    row["outcome"] += " (direct failed)"
+                    row["outcome"] += f" ({other} failed)"
             if error:
                 gaps_dir.mkdir(parents=True, exist_ok=True)
                 name = f"{model}_g{gamma:g}_H{hurst:g}_s{seed}_{n}_a{target:g}_{'xy'[ax]}.npy"
@@ -132,28 +135,31 @@ def _append(path: Path, row: dict, keys: list[str]) -> None:
 
 
 KEYS = ["n", "model", "gamma", "hurst", "seed", "target", "a_c", "axis", "outcome", "method",
-        "iterations", "residual", "imbalance", "seconds", "sigma", "u3_decades",
-        "seconds_direct", "sigma_direct", "sigma_rel_diff", "gap_file"]
+        "iterations", "residual", "imbalance", "seconds", "sigma", "flowing_fraction", "u3_decades",
+        "reference", "seconds_reference", "sigma_reference", "sigma_rel_diff", "gap_file"]
 
 
 def summary(rows: list[dict]) -> str:
     """Markdown table: per (n, model, gamma, H) the solves, failures and worst cases."""
-    lines = ["| grid | model | gamma | H | ladders | solves | failed | fell back to direct "
-             "| CG iterations median / max "
-             "| largest sigma difference from direct | largest u^3 span (decades) |",
-             "|---|---|---|---|---|---|---|---|---|---|---|"]
+    lines = ["| grid | model | gamma | H | ladders | solves | failed | direct (chosen) "
+             "| fell back to direct | CG iterations median / max (AMG solves) "
+             "| largest sigma difference between RS and direct | largest u^3 span (decades) |",
+             "|---|---|---|---|---|---|---|---|---|---|---|---|"]
     groups = {}
     for r in rows:
         groups.setdefault((r["n"], r["model"], r["gamma"], r["hurst"]), []).append(r)
     for (n, model, gamma, hurst), rs in groups.items():
-        its = [r["iterations"] for r in rs if r["outcome"] == "converged"]
+        its = [r["iterations"] for r in rs
+               if r["outcome"] == "converged" and r["method"] != "direct"]
+        chosen = sum(r["outcome"] == "converged" and r["method"] == "direct" for r in rs)
         fell_back = sum(r["outcome"] == FELL_BACK for r in rs)
         diffs = [d for r in rs if isinstance(d := r.get("sigma_rel_diff"), float)
                  and math.isfinite(d)]
         failed = sum(not r["outcome"].startswith("converged") for r in rs)
         lines.append(
             f"| {n} | {model} | {gamma:g} | {hurst:g} | {len({r['seed'] for r in rs})} | "
-            f"{len(rs)} | {failed} | {fell_back} | {np.median(its) if its else math.nan:.0f} / "
+            f"{len(rs)} | {failed} | {chosen} | {fell_back} | "
+            f"{np.median(its) if its else math.nan:.0f} / "
             f"{max(its) if its else -1} | {max(diffs) if diffs else math.nan:.2g} | "
             f"{max(r['u3_decades'] for r in rs):.1f} |")
     return "\n".join(lines) + "\n"
@@ -165,7 +171,7 @@ def read_rows(path: Path) -> list[dict]:
     keys = lines[0].split(",")
 
     def parse(k: str, v: str):
-        if k in ("model", "axis", "outcome", "method", "gap_file", "n") or v == "-":
+        if k in ("model", "axis", "outcome", "method", "reference", "gap_file", "n") or v == "-":
             return v
         return int(v) if k in ("seed", "iterations") else float(v)
 
@@ -182,7 +188,7 @@ def main() -> None:
     ap.add_argument("--hursts", type=float, nargs="+", default=[0.8, 0.3])
     ap.add_argument("--seeds", type=int, nargs="+", default=[0, 1, 2, 3])
     ap.add_argument("--areas", type=float, nargs="+", default=list(AREAS))
-    ap.add_argument("--no-reference", action="store_true", help="skip the direct solves")
+    ap.add_argument("--no-reference", action="store_true", help="skip the reference solves")
     ap.add_argument("--tag", default="")
     ap.add_argument("--summarize", type=Path, nargs="+", metavar="CSV",
                     help="only write the summary table of these csv files (e.g. of runs that "

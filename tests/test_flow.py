@@ -303,12 +303,42 @@ def test_convergence_failure_raises_with_residual(heights):
 
 
 @pytest.fixture(scope="module")
-def amg_sized_gap():
-    """A bearing gap (a_c 0.3) of a 384^2 surface: about 100 000 unknowns, so that ``auto``
-    picks RS-AMG (above ``DIRECT_MAX_UNKNOWNS``)."""
+def amg_sized_heights():
+    """A 384^2 surface: its bearing gaps have 70 000 - 140 000 unknowns, above
+    ``DIRECT_MAX_UNKNOWNS``."""
     h = generate(SurfaceSpec.from_sweep(points_per_lambda_s=6, seed=3)).heights
     assert h.shape == (384, 384)
-    return bearing_gap(h, 0.3)
+    return h
+
+
+@pytest.fixture(scope="module")
+def amg_sized_gap(amg_sized_heights):
+    """A bearing gap at a_c 0.1 of the 384^2 surface: about 125 000 unknowns, 85 % of the
+    cells, so that ``auto`` picks RS-AMG."""
+    return bearing_gap(amg_sized_heights, 0.1)
+
+
+def test_auto_picks_the_direct_solver_for_thin_clusters(amg_sized_heights, monkeypatch):
+    """Beyond ``DIRECT_MAX_UNKNOWNS`` unknowns, ``auto`` takes the LDL^T factorisation where
+    at most ``DIRECT_MAX_FLOWING_FRACTION`` of the cells carry flow (there it took 0.3-1.1x
+    RS's time, docs/flow.md "Direct solver") and it fits in memory, else RS."""
+    import roughflow.flow.linsolve as linsolve
+
+    thin = bearing_gap(amg_sized_heights, 0.35)  # near the bearing model's a_c* of 0.4
+    open_ = bearing_gap(amg_sized_heights, 0.05)
+    r_thin, r_open = solve(thin, 0), solve(open_, 0)
+    cells = thin.size
+    assert r_thin.n_active > linsolve.DIRECT_MAX_UNKNOWNS
+    assert r_thin.n_active / cells <= linsolve.DIRECT_MAX_FLOWING_FRACTION
+    assert r_open.n_active / cells > linsolve.DIRECT_MAX_FLOWING_FRACTION
+    assert (r_thin.method, r_open.method) == ("direct", "rs")
+    # both solve to the flow tolerance; sigma (from the dissipation) agrees to its square
+    for gap, r in ((thin, r_thin), (open_, r_open)):
+        other = solve(gap, 0, method="rs" if r.method == "direct" else "direct")
+        assert r.sigma == pytest.approx(other.sigma, rel=1e-10)
+    # a factorisation that would not fit leaves the thin state to RS
+    monkeypatch.setattr(linsolve, "headroom_bytes", lambda: 1)
+    assert solve(thin, 0).method == "rs"
 
 
 def test_auto_falls_back_to_direct_when_amg_does_not_converge(amg_sized_gap, monkeypatch):

@@ -180,6 +180,7 @@ def test_ladder_records_the_flow_solver_and_combines_with_files_that_do_not(monk
                     a_c_star=0.5, a_c_star_alt=0.4)
     direct = run_ladder(job)
     monkeypatch.setattr(linsolve, "DIRECT_MAX_UNKNOWNS", 0)  # auto picks AMG on any grid
+    monkeypatch.setattr(linsolve, "DIRECT_MAX_FLOWING_FRACTION", 0.0)  # and any state
     amg = run_ladder(job)
     assert (direct["flow_direct"] == 1).all() and (amg["flow_direct"] == 0).all()
     # the same sigma either way (both solve to the flow tolerance; the dissipation's error

@@ -44,20 +44,21 @@ BASE = {"surface": 150 * MB, "contact": 300 * MB, "bearing": 150 * MB, "threshol
         "gpu_contact": 64 * MB}
 #: Bytes per grid point at the peak (float64 fields, FFT buffers, AMG hierarchy, ...). The
 #: ladder's comes from the paper config's own ladders (12 steps at 2048^2 and 2048 x 4096:
-#: 840-920 B a point between 1024^2 and 2048^2), not from the short ladders of
-#: bench_memory.py (579 B), docs/workflow.md "Memory".
+#: 840-920 B a point between 1024^2 and 2048^2; 1200 since the direct flow solver for thin
+#: clusters, whose 2048 x 4096 bearing ladder peaked at 8635 MB), not from the short ladders
+#: of bench_memory.py (579 B), docs/workflow.md "Memory".
 PER_POINT = {"surface": 80, "contact": 160, "bearing": 64, "threshold": 320,
-             "threshold_adhesive": 480, "flow": 560, "ladder": 1100, "channels": 320,
+             "threshold_adhesive": 480, "flow": 560, "ladder": 1200, "channels": 320,
              "spectrum": 32, "theory": 200, "gpu_contact": 256}
 TASKS = tuple(PER_POINT)
-#: Bytes per unknown of a sparse LU (SuperLU, COLAMD) of a Reynolds system: the flow
-#: solver's fallback when AMG-CG does not converge (``roughflow.flow.linsolve``). Measured on
-#: the paper config's largest ladder (2048 x 4096, a_c 0.25-0.38, 4.2-6.3 million unknowns):
-#: 33-48 nonzeros of L + U per unknown, about 25 bytes of peak memory each; a whole process
-#: holding the system and its LU peaked at 0.98-1.07 kB per unknown near a_c* (a_c 0.33-0.38,
-#: where AMG stalled), 1.16 kB at a_c 0.30 and 1.34 kB at 0.25; rounded up from the largest
-#: (docs/flow.md "Direct fallback").
-FLOW_LU_BYTES_PER_UNKNOWN = 1500
+#: Bytes per unknown of the direct Reynolds solve (QDLDL's LDL^T, minimum degree ordering),
+#: checked against the memory this process can still allocate before
+#: ``roughflow.flow.linsolve`` takes that solver beyond small systems or falls back to it.
+#: Measured peaks of a flow solve in a fresh process: 655-700 B per unknown, the whole process
+#: included, at 2048 x 4096 where at most 3/4 of the cells flow (900 B with 89 % flowing);
+#: above the process's start at 1024^2, 700-1160 B (the most with every cell open); rounded
+#: up from the largest (docs/flow.md "Direct solver").
+FLOW_LDL_BYTES_PER_UNKNOWN = 1200
 #: Grids whose arrays need less than this are never refused (the check is for grids that
 #: cannot fit, not for a machine that is momentarily short of memory).
 SMALL = 64 * MB

@@ -128,7 +128,8 @@ def _solve_flux_balanced(matrix, rhs, cells, act, faces: Faces, *, tol: float, m
     """
     # one factorisation or AMG hierarchy for every round: near a_c* its set-up cost as
     # much as the iterations of a round (1.0-1.3 s of 2-4 s a round at 1024^2)
-    sol, prepared = solve_prepared(matrix, rhs, tol=tol, method=method)
+    sol, prepared = solve_prepared(matrix, rhs, tol=tol, method=method,
+                                   flowing_fraction=cells.size / act.size)
     cap = REFINE_MAX_ITER if prepared.preconditioner is not None else None
     spent = sol.iterations  # every round's iterations, a rejected one's as well
     for round_ in range(rounds + 1):
@@ -166,10 +167,11 @@ def solve(
     ``lx``, ``ly``: cell lengths (``ly`` defaults to ``lx``); ``eta``: viscosity;
     ``tol``: relative residual of the linear solve, at most ``FLOW_TOL_MAX`` (refined
     further, down to round-off, until |Q_in - Q_out| / Q <= ``tol``); ``method``: None/"auto"
-    (direct up to 70k unknowns, else "rs"), "rs", "sa", "direct" or "cg" (see
-    :mod:`roughflow.flow.linsolve`). Open cells are those whose u^3 exceeds
-    ``FLOW_CLOSED_BELOW`` (1e-16, :mod:`roughflow.defaults`) of the largest among the cells
-    that connect the reservoirs; a gap whose open cells do not connect the two reservoirs
+    (direct up to 70k unknowns or where at most 3/4 of the cells carry flow, else "rs"),
+    "rs", "sa", "direct" or "cg" (see :mod:`roughflow.flow.linsolve`). Open cells are
+    those whose u^3 exceeds ``FLOW_CLOSED_BELOW`` (1e-16, :mod:`roughflow.defaults`) of the
+    largest among the cells that connect the reservoirs; a gap whose open cells do not
+    connect the two reservoirs
     gives sigma = 0 without a solve.
     ``periodic``: the cell is periodic across the flow (default), or closed by walls there
     (False: a non-periodic scan).

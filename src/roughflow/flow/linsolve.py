@@ -11,16 +11,19 @@ Methods (chosen by measurement, see ``benchmarks/bench_flow.py`` and docs/flow.m
 
 - ``"rs"``: CG preconditioned by one V-cycle of classical Ruge-Stueben AMG with
   second-pass coarsening and one Gauss-Seidel sweep before and after each coarse-grid
-  correction (:mod:`roughflow.flow.amg`); the default for large systems.
+  correction (:mod:`roughflow.flow.amg`); the default where most cells carry flow.
 - ``"sa"``: CG preconditioned by smoothed-aggregation AMG.
-- ``"direct"``: sparse LU (SuperLU, COLAMD ordering); the default
-  for small systems.
+- ``"direct"``: sparse Cholesky-type LDL^T factorisation (QDLDL, approximate minimum
+  degree ordering; no pivoting is needed for this SPD M-matrix); the default for small
+  systems and for thin flowing clusters, near a_c*, where its fill is small.
 - ``"cg"``: CG without preconditioner (benchmark reference; slow).
 
-With ``"auto"``, an AMG solve that does not converge is retried by the direct solver where
-its factorisation fits in memory (:func:`solve_prepared`): near a_c*, on the paper config's
-largest grids, RS-CG can stall on conductivities that span 16 decades, while the clusters
-are thin enough there for a sparse LU (docs/flow.md "Direct fallback").
+``"auto"`` (:func:`choose`) takes the direct solver up to :data:`DIRECT_MAX_UNKNOWNS`
+unknowns, and beyond where the flowing cells are at most
+:data:`DIRECT_MAX_FLOWING_FRACTION` of the grid and the factorisation fits in memory;
+otherwise RS. An RS solve that does not converge is retried by the direct solver where it
+fits (:func:`solve_prepared`): near a_c*, on the paper config's largest grids, RS-CG can
+stall on conductivities that span 16 decades (docs/flow.md "Direct solver").
 """
 
 from __future__ import annotations
@@ -29,18 +32,25 @@ import logging
 from dataclasses import dataclass, replace
 
 import numpy as np
+import qdldl
 import scipy.sparse as sp
 import scipy.sparse.linalg as spla
 
 from roughflow.defaults import FLOW_METHODS as METHODS
 from roughflow.errors import ConvergenceError, InputError
 from roughflow.flow import amg
-from roughflow.resources import FLOW_LU_BYTES_PER_UNKNOWN, describe, headroom_bytes
+from roughflow.resources import FLOW_LDL_BYTES_PER_UNKNOWN, describe, headroom_bytes
 
 log = logging.getLogger(__name__)
 
-#: below this many unknowns ``"auto"`` uses the direct solver (measured crossover)
+#: up to this many unknowns ``"auto"`` uses the direct solver: 0.5-1.3x RS's time there
+#: (1.3 with every cell open), and no iteration that could stall (docs/flow.md)
 DIRECT_MAX_UNKNOWNS = 70_000
+#: beyond it, ``"auto"`` uses the direct solver where the unknowns (the cells that carry
+#: flow) are at most this fraction of the grid's cells, if the factorisation fits in memory:
+#: there it took 0.3-1.1x RS's time (median 0.7) on elastic and bearing gaps from 384^2 to
+#: 2048 x 4096, and 1.1-10x where more cells flow (docs/flow.md "Direct solver")
+DIRECT_MAX_FLOWING_FRACTION = 0.75
 MAX_ITER_AMG = 500
 #: AMG-CG iterations after which ``"auto"`` retries with the direct solver (where its
 #: factorisation fits; :func:`solve_prepared`). First solves that converged took at most
@@ -62,11 +72,11 @@ class LinearSolution:
 class Prepared:
     """What a solve of one matrix builds before it iterates, kept for further solves of the
     same matrix (the flux-balance refinement of :mod:`roughflow.flow.core` solves it up to
-    five times): the sparse LU of ``"direct"`` or the AMG preconditioner of ``"rs"`` and
+    five times): the LDL^T factorisation of ``"direct"`` or the AMG preconditioner of ``"rs"`` and
     ``"sa"`` (None for ``"cg"``). Built by :func:`prepare`."""
 
     method: str
-    lu: spla.SuperLU | None = None
+    factor: qdldl.Solver | None = None
     preconditioner: spla.LinearOperator | None = None
 
 
@@ -86,20 +96,36 @@ def _amg_preconditioner(a: sp.csr_matrix, method: str) -> spla.LinearOperator:
     return ml.aspreconditioner(cycle="V")
 
 
-def _resolve(method: str | None, n: int) -> str:
-    """The method ``"auto"`` stands for with ``n`` unknowns (else ``method`` itself)."""
+def direct_fits(n: int) -> tuple[bool, int, int | None]:
+    """Whether the direct factorisation of ``n`` unknowns fits beside what this process
+    holds (``FLOW_LDL_BYTES_PER_UNKNOWN`` each, :mod:`roughflow.resources`); also the bytes
+    it needs and those available (None: unknown, taken as fitting)."""
+    need = FLOW_LDL_BYTES_PER_UNKNOWN * n
+    have = headroom_bytes()
+    return have is None or need <= have, need, have
+
+
+def choose(method: str | None, n: int, flowing_fraction: float | None = None) -> str:
+    """The method ``"auto"`` stands for with ``n`` unknowns that are ``flowing_fraction`` of
+    the grid's cells (None: unknown; then by size only), else ``method`` itself."""
     method = check_method(method)
     if method != "auto":
         return method
-    return "direct" if n <= DIRECT_MAX_UNKNOWNS else "rs"
+    if n <= DIRECT_MAX_UNKNOWNS:
+        return "direct"
+    if flowing_fraction is not None and flowing_fraction <= DIRECT_MAX_FLOWING_FRACTION:
+        return "direct" if direct_fits(n)[0] else "rs"
+    return "rs"
 
 
-def prepare(a: sp.spmatrix, method: str = "auto") -> Prepared:
+def prepare(a: sp.spmatrix, method: str = "auto",
+            flowing_fraction: float | None = None) -> Prepared:
     """Factorise (``"direct"``) or build the AMG preconditioner of ``a`` for
-    :func:`solve_spd` (``"auto"`` picks by size, :data:`DIRECT_MAX_UNKNOWNS`)."""
-    method = _resolve(method, a.shape[0])
+    :func:`solve_spd` (``"auto"``: :func:`choose`)."""
+    method = choose(method, a.shape[0], flowing_fraction)
     if method == "direct":
-        return Prepared(method, lu=spla.splu(sp.csc_matrix(a), permc_spec="COLAMD"))
+        # QDLDL reads the upper triangle of a CSC matrix (A is symmetric)
+        return Prepared(method, factor=qdldl.Solver(sp.triu(a, format="csc"), upper=True))
     if method == "cg":
         return Prepared(method)
     return Prepared(method, preconditioner=_amg_preconditioner(sp.csr_matrix(a), method))
@@ -119,7 +145,7 @@ def solve_spd(
     is returned with its residual: used for refinement beyond a tolerance already met).
     """
     n = a.shape[0]
-    method = prepared.method if prepared is not None else _resolve(method, n)
+    method = prepared.method if prepared is not None else choose(method, n)
     a_s, b_s = a.tocsr(), b
     bnorm = np.linalg.norm(b_s)
     if bnorm == 0.0:
@@ -129,13 +155,13 @@ def solve_spd(
 
     iterations = 0
     if method == "direct":
-        lu = prepared.lu
-        y = lu.solve(b_s) if x0 is None else x0 + lu.solve(b_s - a_s @ x0)
+        f = prepared.factor
+        y = f.solve(b_s) if x0 is None else x0 + f.solve(b_s - a_s @ x0)
         for _refine in range(3):  # iterative refinement until the residual stalls
             r = b_s - a_s @ y
             if np.linalg.norm(r) <= tol * bnorm:
                 break
-            y += lu.solve(r)
+            y += f.solve(r)
     else:
         m = prepared.preconditioner
         if max_iter is None:
@@ -160,26 +186,26 @@ def solve_spd(
     return LinearSolution(y, residual, iterations, method)
 
 
-def solve_prepared(a: sp.csr_matrix, b: np.ndarray, *, tol: float,
-                   method: str = "auto") -> tuple[LinearSolution, Prepared]:
+def solve_prepared(a: sp.csr_matrix, b: np.ndarray, *, tol: float, method: str = "auto",
+                   flowing_fraction: float | None = None) -> tuple[LinearSolution, Prepared]:
     """:func:`prepare` and :func:`solve_spd` of ``a x = b``, returning the solution and what
-    was prepared (for further solves of the same matrix).
+    was prepared (for further solves of the same matrix). ``flowing_fraction``: the
+    unknowns' share of the grid's cells, for :func:`choose`.
 
     With ``method="auto"``, an AMG solve is retried by the direct solver when it has not
     converged after :data:`AMG_ITER_BEFORE_FALLBACK` iterations, if the factorisation fits
-    beside what this process held before the AMG set-up (``FLOW_LU_BYTES_PER_UNKNOWN`` per
-    unknown, :mod:`roughflow.resources`); the AMG iterations spent count in the result's.
-    Where it does not fit, AMG gets its full :data:`MAX_ITER_AMG` and raises
-    :class:`ConvergenceError` as an explicit method does (naming the memory the fallback
-    would have needed).
+    beside what this process held before the AMG set-up (:func:`direct_fits`); the AMG
+    iterations spent count in the result's. Where it does not fit, AMG gets its full
+    :data:`MAX_ITER_AMG` and raises :class:`ConvergenceError` as an explicit method does
+    (naming the memory the fallback would have needed).
     """
     method = check_method(method)
-    fallback = method == "auto" and _resolve(method, a.shape[0]) != "direct"
-    need = FLOW_LU_BYTES_PER_UNKNOWN * a.shape[0]
-    # measured before the AMG hierarchy, which is freed before the LU; only where it matters
-    have = headroom_bytes() if fallback else None
-    fits = have is None or need <= have
-    prepared = prepare(a, method)
+    chosen = choose(method, a.shape[0], flowing_fraction)
+    fallback = method == "auto" and chosen != "direct"
+    # measured before the AMG hierarchy, which is freed before the factorisation; only
+    # where it matters
+    fits, need, have = direct_fits(a.shape[0]) if fallback else (True, 0, None)
+    prepared = prepare(a, chosen)
     try:
         sol = solve_spd(a, b, tol=tol, prepared=prepared,
                         max_iter=AMG_ITER_BEFORE_FALLBACK if fallback and fits else None)

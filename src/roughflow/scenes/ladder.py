@@ -216,8 +216,9 @@ def run_ladder(job: LadderJob, *, threads: int | None = None) -> xr.Dataset:
         "flow_iterations": var(r["flow_iterations"], ska, DIMENSIONLESS,
                                "iterations of the flow solve"),
         "flow_direct": var(r["flow_direct"], ska, DIMENSIONLESS,
-                           "1: the flow solve was the sparse LU (small systems, or the fallback "
-                           "of an AMG solve that did not converge), 0: AMG-CG or no solve"),
+                           "1: the flow solve was the direct LDL^T solver (small systems, thin "
+                           "flowing clusters, or the fallback of an AMG solve that did not "
+                           "converge), 0: AMG-CG or no solve"),
         "sigma_emt": var(r["sigma_emt"], ("seed", "step", "emt", "axis"), SIGMA_UNITS,
                          "Bruggeman effective-medium conductance"),
         "sigma_closed_form": var(r["sigma_closed_form"], sk, SIGMA_UNITS,
