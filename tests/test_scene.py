@@ -8,6 +8,7 @@ import xarray as xr
 
 from roughflow.aggregate import aggregate, combine, load
 from roughflow.cli import build_parser, main
+from roughflow.defaults import FLOW_TOL
 from roughflow.errors import InputError
 from roughflow.io import write_dataset
 from roughflow.scenes import (
@@ -183,14 +184,21 @@ def test_ladder_records_the_flow_solver_and_combines_with_files_that_do_not(monk
     monkeypatch.setattr(linsolve, "DIRECT_MAX_FLOWING_FRACTION", 0.0)  # and any state
     amg = run_ladder(job)
     assert (direct["flow_direct"] == 1).all() and (amg["flow_direct"] == 0).all()
+    # the flux imbalance of each solve (a check the sigma from the dissipation does not make):
+    # the solves are balanced to the flow tolerance; 0 where no solve ran
+    for ds in (direct, amg):
+        imbalance = ds["flow_imbalance"].values
+        assert np.isfinite(imbalance).all() and (imbalance <= FLOW_TOL).all()
+        assert (imbalance[ds["percolating"].values == 0] == 0).all()
     # the same sigma either way (both solve to the flow tolerance; the dissipation's error
     # is quadratic in the 1e-8 residual)
     np.testing.assert_allclose(amg["sigma"], direct["sigma"], rtol=1e-10)
     # job files written before the variable existed still combine: NaN where it is missing
     older = run_ladder(LadderJob(surface=TINY, model="bearing", seeds=(2,),
                                  area_fractions=(0.05, 0.3), a_c_star=0.5, a_c_star_alt=0.4))
-    out = combine([direct, older.drop_vars("flow_direct")])
+    out = combine([direct, older.drop_vars(["flow_direct", "flow_imbalance"])])
     assert np.isnan(out["flow_direct"].sel(seed=2)).all()
+    assert np.isnan(out["flow_imbalance"].sel(seed=2)).all()
     assert (out["flow_direct"].sel(seed=1) == 1).all()
 
 

@@ -127,6 +127,7 @@ def run_ladder(job: LadderJob, *, threads: int | None = None) -> xr.Dataset:
     r["contact_iterations"] = np.full((ns, nk), -1, dtype=np.int64)
     r["sigma"] = np.full((ns, nk, 2), np.nan)
     r["flow_residual"] = np.full((ns, nk, 2), np.nan)
+    r["flow_imbalance"] = np.full((ns, nk, 2), np.nan)
     r["flow_iterations"] = np.full((ns, nk, 2), -1, dtype=np.int64)
     r["flow_direct"] = np.full((ns, nk, 2), -1, dtype=np.int64)
     r["percolating"] = np.full((ns, nk, 2), -1, dtype=np.int64)
@@ -167,6 +168,7 @@ def run_ladder(job: LadderJob, *, threads: int | None = None) -> xr.Dataset:
                     r["flow_iterations"][i, k, ax] = 0
                     r["flow_direct"][i, k, ax] = 0
                     r["flow_residual"][i, k, ax] = 0.0
+                    r["flow_imbalance"][i, k, ax] = 0.0
                     continue
                 try:
                     fr = flow.solve(c.gap, ax, lx=lx, ly=ly)
@@ -176,6 +178,7 @@ def run_ladder(job: LadderJob, *, threads: int | None = None) -> xr.Dataset:
                     raise
                 r["sigma"][i, k, ax] = fr.sigma
                 r["flow_residual"][i, k, ax] = fr.residual
+                r["flow_imbalance"][i, k, ax] = fr.flux_imbalance
                 r["flow_iterations"][i, k, ax] = fr.iterations
                 r["flow_direct"][i, k, ax] = int(fr.method == "direct")
             th = _theory(c.gap, ~open_mask, c.area_fraction if math.isnan(a_cont) else a_cont,
@@ -213,6 +216,9 @@ def run_ladder(job: LadderJob, *, threads: int | None = None) -> xr.Dataset:
                            "fluid percolates along axis (1/0)"),
         "flow_residual": var(r["flow_residual"], ska, DIMENSIONLESS,
                              "relative residual of the flow solve"),
+        "flow_imbalance": var(r["flow_imbalance"], ska, DIMENSIONLESS,
+                              "relative flux imbalance |Q_in - Q_out| / Q of the flow solve "
+                              "(0 without a solve)"),
         "flow_iterations": var(r["flow_iterations"], ska, DIMENSIONLESS,
                                "iterations of the flow solve"),
         "flow_direct": var(r["flow_direct"], ska, DIMENSIONLESS,
