@@ -242,9 +242,12 @@ def plot(rows, path):
     fig, axes = plt.subplots(1, 2, figsize=(11, 4.5))
     solvers = sorted({r["solver"] for r in rows})
     colors = {s: plt.cm.tab10(i) for i, s in enumerate(solvers)}
-    for ax, a_c_set in zip(axes, ([0.1, 0.3], [0.38, 0.45]), strict=True):
+    # the measured contact fractions, the lower half in the left panel, the upper in the right
+    fractions = sorted({r["a_c"] for r in rows})
+    half = (len(fractions) + 1) // 2
+    for ax, a_c_set in zip(axes, (fractions[:half], fractions[half:]), strict=True):
         for solver in solvers:
-            for a_c, ls in zip(a_c_set, ("-", "--"), strict=True):
+            for a_c, ls in zip(a_c_set, ("-", "--", ":", "-."), strict=False):
                 pts = sorted((r["n"] ** 2, r["time_s"]) for r in rows
                              if r["solver"] == solver and r["a_c"] == a_c
                              and np.isfinite(r["time_s"]))
@@ -253,10 +256,15 @@ def plot(rows, path):
                     ax.loglog(x, y, ls, marker="o", color=colors[solver],
                               label=f"{solver} a_c={a_c}")
         cells = np.array(sorted({r["n"] ** 2 for r in rows}), float)
-        ax.loglog(cells, cells / cells[0] * 0.5, ":", color="gray", label="linear")
+        t0 = np.nanmedian([r["time_s"] for r in rows if r["n"] ** 2 == cells[0]])
+        ax.loglog(cells, cells / cells[0] * t0, "-", lw=3, alpha=0.3, color="gray",
+                  label="linear in cells")
         ax.set_xlabel("cells")
         ax.set_ylabel("wall time, one axis (s)")
-        ax.set_title(f"a_c = {a_c_set[0]} (solid), {a_c_set[1]} (dashed)")
+        styles = ("solid", "dashed", "dotted", "dash-dot")
+        ax.set_title(", ".join(f"a_c = {a} ({st})" for a, st in zip(a_c_set, styles,
+                                                                       strict=False)),
+                     fontsize=8)
         ax.legend(fontsize=6, ncol=2)
     fig.tight_layout()
     fig.savefig(path, dpi=120)

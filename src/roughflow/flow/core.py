@@ -171,8 +171,7 @@ def solve(
     "rs", "sa", "direct" or "cg" (see :mod:`roughflow.flow.linsolve`). Open cells are
     those whose u^3 exceeds ``FLOW_CLOSED_BELOW`` (1e-16, :mod:`roughflow.defaults`) of the
     largest among the cells that connect the reservoirs; a gap whose open cells do not
-    connect the two reservoirs
-    gives sigma = 0 without a solve.
+    connect the two reservoirs gives sigma = 0 without a solve.
     ``periodic``: the cell is periodic across the flow (default), or closed by walls there
     (False: a non-periodic scan).
     Raises ``InputError`` for

@@ -43,13 +43,15 @@ from roughflow.resources import FLOW_LDL_BYTES_PER_UNKNOWN, describe, headroom_b
 
 log = logging.getLogger(__name__)
 
-#: up to this many unknowns ``"auto"`` uses the direct solver: 0.5-1.3x RS's time there
-#: (1.3 with every cell open), and no iteration that could stall (docs/flow.md)
+#: up to this many unknowns ``"auto"`` uses the direct solver: 0.4-1.6x RS's time there
+#: (the most with every cell open; tens of milliseconds), and no iteration that could stall
+#: (docs/flow.md "Direct solver")
 DIRECT_MAX_UNKNOWNS = 70_000
 #: beyond it, ``"auto"`` uses the direct solver where the unknowns (the cells that carry
 #: flow) are at most this fraction of the grid's cells, if the factorisation fits in memory:
-#: there it took 0.3-1.1x RS's time (median 0.7) on elastic and bearing gaps from 384^2 to
-#: 2048 x 4096, and 1.1-10x where more cells flow (docs/flow.md "Direct solver")
+#: there it took 0.09-1.33x RS's time on elastic and bearing gaps from 128^2 to 2048 x 4096
+#: (above 1 only near the limit on grids up to 1024^2), and up to 10x where more cells flow
+#: (docs/flow.md "Direct solver")
 DIRECT_MAX_FLOWING_FRACTION = 0.75
 MAX_ITER_AMG = 500
 #: AMG-CG iterations after which ``"auto"`` retries with the direct solver (where its
