@@ -80,9 +80,11 @@ def _decades(gap: np.ndarray, ax: int) -> float:
 
 
 def run_case(size: float, eps_f: float, model: str, gamma: float, hurst: float, seed: int,
-             areas, reference: bool, gaps_dir: Path):
+             areas, reference: bool, gaps_dir: Path, keep_above: float | None = None):
     """Yield one row per (state, axis) of one ladder; ``size`` is L/lambda_r of the isotropic
-    surface, scaled by max(sqrt(gamma), 1/sqrt(gamma)) as in the paper's anisotropic cells."""
+    surface, scaled by max(sqrt(gamma), 1/sqrt(gamma)) as in the paper's anisotropic cells.
+    The gap of a failed solve is kept in ``gaps_dir``, and so is one whose flux imbalance (by
+    either solver) exceeds ``keep_above``."""
     params = SurfaceParams(gamma=gamma, hurst=hurst, eps_f=eps_f, points_per_lambda_s=8,
                            l_over_lambda_r=size * max(math.sqrt(gamma), 1 / math.sqrt(gamma)))
     job = LadderJob(surface=params, model=model, seeds=(seed,), area_fractions=tuple(areas))
@@ -111,11 +113,14 @@ def run_case(size: float, eps_f: float, model: str, gamma: float, hurst: float, 
                 row["reference"] = other
                 row["seconds_reference"] = t_ref
                 row["sigma_reference"] = ref.sigma if ref is not None else math.nan
+                row["imbalance_reference"] = ref.flux_imbalance if ref is not None else math.nan
+                row["iterations_reference"] = ref.iterations if ref is not None else -1
                 row["sigma_rel_diff"] = (abs(row["sigma"] - ref.sigma) / ref.sigma
                                          if ref is not None and ref.sigma > 0 else math.nan)
                 if ref_error:
                     row["outcome"] += f" ({other} failed)"
-            if error:
+            imbalances = [row["imbalance"], row.get("imbalance_reference", math.nan)]
+            if error or (keep_above is not None and max(imbalances) > keep_above):
                 gaps_dir.mkdir(parents=True, exist_ok=True)
                 name = f"{model}_g{gamma:g}_H{hurst:g}_s{seed}_{n}_a{target:g}_{'xy'[ax]}.npy"
                 np.save(gaps_dir / name, c.gap)
@@ -136,7 +141,8 @@ def _append(path: Path, row: dict, keys: list[str]) -> None:
 
 KEYS = ["n", "model", "gamma", "hurst", "seed", "target", "a_c", "axis", "outcome", "method",
         "iterations", "residual", "imbalance", "seconds", "sigma", "flowing_fraction", "u3_decades",
-        "reference", "seconds_reference", "sigma_reference", "sigma_rel_diff", "gap_file"]
+        "reference", "seconds_reference", "sigma_reference", "sigma_rel_diff",
+        "imbalance_reference", "iterations_reference", "gap_file"]
 
 
 def summary(rows: list[dict]) -> str:
@@ -173,7 +179,7 @@ def read_rows(path: Path) -> list[dict]:
     def parse(k: str, v: str):
         if k in ("model", "axis", "outcome", "method", "reference", "gap_file", "n") or v == "-":
             return v
-        return int(v) if k in ("seed", "iterations") else float(v)
+        return int(v) if k in ("seed", "iterations", "iterations_reference") else float(v)
 
     return [{k: parse(k, v) for k, v in zip(keys, line.split(","), strict=True)}
             for line in lines[1:]]
@@ -190,6 +196,8 @@ def main() -> None:
     ap.add_argument("--areas", type=float, nargs="+", default=list(AREAS))
     ap.add_argument("--no-reference", action="store_true", help="skip the reference solves")
     ap.add_argument("--tag", default="")
+    ap.add_argument("--keep-above", type=float, metavar="IMBALANCE",
+                    help="also keep the gaps whose flux imbalance exceeds this")
     ap.add_argument("--summarize", type=Path, nargs="+", metavar="CSV",
                     help="only write the summary table of these csv files (e.g. of runs that "
                          "were stopped) to stress_flow[_TAG].md")
@@ -211,7 +219,8 @@ def main() -> None:
                                                        args.seeds):
         t0 = time.perf_counter()
         for row in run_case(args.l_over_lambda_r, args.eps_f, model, gamma, hurst, seed,
-                            args.areas, not args.no_reference, OUT / "stress_flow_gaps"):
+                            args.areas, not args.no_reference, OUT / "stress_flow_gaps",
+                            args.keep_above):
             rows.append(row)
             _append(csv, row, KEYS)
             if row["outcome"] != "converged":
