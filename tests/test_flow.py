@@ -364,6 +364,70 @@ def test_auto_falls_back_to_direct_when_amg_does_not_converge(amg_sized_gap, mon
         solve(amg_sized_gap, 0)
 
 
+def test_dissipation_error_is_the_energy_norm_of_the_pressure_error(heights):
+    """sigma comes from the dissipation Q(p) = sum over faces of T (delta p)^2, the energy of
+    the assembled system: Q(p* + e) = Q(p*) + e^T A e for every pressure error e in the
+    unknowns. That is what makes sigma's error quadratic in e, and what the certificate of a
+    direct solve whose fluxes do not balance computes (r^T A^-1 r with r = -A e). Both sides
+    are sums of about 10^4 terms of either sign: 1e-9 of Q is 10^5 times their round-off and
+    far below a change of the formula (a missing face kind moves it by O(1))."""
+    from roughflow.flow.assembly import assemble, face_transmissibilities
+    from roughflow.percolation import spanning_cells
+
+    s = bearing_gap(heights, 0.3) ** 3 / 12.0
+    act = spanning_cells(s > 0, 0)
+    faces = face_transmissibilities(np.where(act, s, 0.0), 1 / 128, 1 / 128)
+    matrix, rhs, cells = assemble(faces, act)
+    exact = solve_spd(matrix, rhs, tol=1e-14, method="direct").x
+
+    def dissipation(x):
+        q = np.zeros(act.shape)
+        q.ravel()[cells] = x
+        return flow_core._dissipation(faces, q)
+
+    q_star = dissipation(exact)
+    e = 1e-3 * np.random.default_rng(4).standard_normal(exact.size)
+    assert dissipation(exact + e) - q_star == pytest.approx(e @ (matrix @ e), rel=1e-9)
+    assert q_star == pytest.approx(solve(bearing_gap(heights, 0.3), 0).sigma, rel=1e-12)
+
+
+def test_unbalanced_fluxes_are_checked_by_the_direct_solver(amg_sized_gap, monkeypatch,
+                                                            caplog):
+    """A solve that meets its residual but leaves |Q_in - Q_out| / Q above
+    ``FLOW_IMBALANCE_MAX`` is checked: ``auto`` solves an AMG one again directly, and a
+    direct solve raises unless its dissipation's error r^T A^-1 r / Q is at most
+    ``FLOW_SIGMA_RTOL``; an AMG solve that cannot be checked (an explicit method, or no
+    memory for the factorisation) is returned with a warning. The stall that needs it (RS on
+    the paper's largest grid at a_c 0.40, y: imbalance 1.0, sigma 2.85 times too large)
+    takes a 2048 x 4096 grid; a limit below this gap's RS imbalance (about 2e-10; the
+    direct solve's 7e-12, its dissipation's error about 1e-24) stands in for it."""
+    import roughflow.flow.linsolve as linsolve
+
+    reference = solve(amg_sized_gap, 0, method="direct")
+    rs = solve(amg_sized_gap, 0, method="rs")
+    assert reference.flux_imbalance < 1e-11 < rs.flux_imbalance
+    monkeypatch.setattr(flow_core, "FLOW_IMBALANCE_MAX", 1e-11)
+    with caplog.at_level("WARNING", logger="roughflow.flow.core"):
+        r = solve(amg_sized_gap, 0)
+        assert "checking with the direct solver" in caplog.text
+        assert r.method == "direct" and r.iterations >= rs.iterations
+        assert r.sigma == pytest.approx(reference.sigma, rel=1e-12)
+        caplog.clear()
+        assert solve(amg_sized_gap, 0, method="rs").sigma == rs.sigma
+        assert "is not checked (no direct solve: method='rs')" in caplog.text
+        caplog.clear()
+        monkeypatch.setattr(linsolve, "headroom_bytes", lambda: 1)
+        assert solve(amg_sized_gap, 0).method == "rs"
+        assert "more memory than" in caplog.text
+    # a direct solve above the limit whose dissipation is certified is returned ...
+    monkeypatch.setattr(flow_core, "FLOW_IMBALANCE_MAX", 1e-13)
+    assert solve(amg_sized_gap, 0, method="direct").sigma == reference.sigma
+    # ... and one whose dissipation is not certified raises
+    monkeypatch.setattr(flow_core, "FLOW_SIGMA_RTOL", 0.0)
+    with pytest.raises(ConvergenceError, match="dissipation is uncertain"):
+        solve(amg_sized_gap, 0, method="direct")
+
+
 @pytest.mark.parametrize(
     ("gap", "kwargs", "match"),
     [
