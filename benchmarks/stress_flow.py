@@ -145,12 +145,19 @@ KEYS = ["n", "model", "gamma", "hurst", "seed", "target", "a_c", "axis", "outcom
         "imbalance_reference", "iterations_reference", "gap_file"]
 
 
+def _largest(values) -> float:
+    """The largest finite float among ``values`` (NaN if none)."""
+    finite = [v for v in values if isinstance(v, float) and math.isfinite(v)]
+    return max(finite) if finite else math.nan
+
+
 def summary(rows: list[dict]) -> str:
     """Markdown table: per (n, model, gamma, H) the solves, failures and worst cases."""
     lines = ["| grid | model | gamma | H | ladders | solves | failed | direct (chosen) "
              "| fell back to direct | CG iterations median / max (AMG solves) "
-             "| largest sigma difference between RS and direct | largest u^3 span (decades) |",
-             "|---|---|---|---|---|---|---|---|---|---|---|---|"]
+             "| largest sigma difference between RS and direct "
+             "| largest flux imbalance, direct / RS | largest u^3 span (decades) |",
+             "|---|---|---|---|---|---|---|---|---|---|---|---|---|"]
     groups = {}
     for r in rows:
         groups.setdefault((r["n"], r["model"], r["gamma"], r["hurst"]), []).append(r)
@@ -162,11 +169,15 @@ def summary(rows: list[dict]) -> str:
         diffs = [d for r in rs if isinstance(d := r.get("sigma_rel_diff"), float)
                  and math.isfinite(d)]
         failed = sum(not r["outcome"].startswith("converged") for r in rs)
+        worst = {m: _largest([r["imbalance"] for r in rs if r["method"] == m]
+                             + [r.get("imbalance_reference") for r in rs
+                                if r.get("reference") == m]) for m in ("direct", "rs")}
         lines.append(
             f"| {n} | {model} | {gamma:g} | {hurst:g} | {len({r['seed'] for r in rs})} | "
             f"{len(rs)} | {failed} | {chosen} | {fell_back} | "
             f"{np.median(its) if its else math.nan:.0f} / "
             f"{max(its) if its else -1} | {max(diffs) if diffs else math.nan:.2g} | "
+            f"{worst['direct']:.2g} / {worst['rs']:.2g} | "
             f"{max(r['u3_decades'] for r in rs):.1f} |")
     return "\n".join(lines) + "\n"
 

@@ -213,13 +213,14 @@ def _balanced_solution(matrix, rhs, cells, act, faces: Faces, *, tol: float,
     if first.balanced or first.certified:
         return first
     if first.solution.method != "direct":
-        fits, need, have = direct_fits(matrix.shape[0])
-        if method != "auto" or not fits:
-            why = (f"method={method!r}" if method != "auto" else
-                   f"its factorisation would need about {describe(need)} more memory than "
-                   f"the {describe(have)} available")
-            log.warning("%s: sigma = %.6g is not checked (no direct solve: %s)",
-                        _unbalanced(first), first.dissipation, why)
+        why = f"method={method!r}"
+        if method == "auto":
+            fits, need, have = direct_fits(matrix.shape[0])
+            why = "" if fits else (f"its factorisation would need about {describe(need)} more "
+                                   f"memory than the {describe(have)} available")
+        if why:
+            log.warning("%s: its sigma is not checked (no direct solve: %s)",
+                        _unbalanced(first), why)
             return first
         log.warning("%s; checking with the direct solver (%d unknowns)", _unbalanced(first),
                     matrix.shape[0])
