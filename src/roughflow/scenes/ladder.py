@@ -224,7 +224,7 @@ def run_ladder(job: LadderJob, *, threads: int | None = None) -> xr.Dataset:
         "flow_direct": var(r["flow_direct"], ska, DIMENSIONLESS,
                            "1: the flow solve was the direct LDL^T solver (small systems, thin "
                            "flowing clusters, or the fallback of an AMG solve that did not "
-                           "converge), 0: AMG-CG or no solve"),
+                           "converge or balance the fluxes), 0: AMG-CG or no solve"),
         "sigma_emt": var(r["sigma_emt"], ("seed", "step", "emt", "axis"), SIGMA_UNITS,
                          "Bruggeman effective-medium conductance"),
         "sigma_closed_form": var(r["sigma_closed_form"], sk, SIGMA_UNITS,
