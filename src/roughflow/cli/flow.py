@@ -36,8 +36,10 @@ def register(sub: argparse._SubParsersAction) -> None:
     p.add_argument("--tol", type=float, default=FLOW_TOL,
                    help=f"relative residual of the linear solve ({FLOW_TOL:g})")
     p.add_argument("--method", choices=FLOW_METHODS, default="auto",
-                   help="linear solver: auto (direct for small systems, else rs), rs "
-                        "(Ruge-Stueben AMG + CG), sa (smoothed aggregation + CG), direct, cg")
+                   help="linear solver: auto (direct for small systems and thin flowing "
+                        "clusters, else rs; an AMG result whose fluxes do not balance "
+                        "is solved again directly), rs (Ruge-Stueben AMG + CG), sa (smoothed "
+                        "aggregation + CG), direct (LDL^T), cg")
     add_output(p, "--plot", dest="plot", required=False, suffixes=(".png", ".pdf", ".svg"),
                metavar="FILE.png",
                help="also draw the flux magnitude over the contact map (one panel per axis)")
