@@ -87,14 +87,14 @@ FLOW_TOL_MAX = 1e-2
 #: at ``tol``, and end at round-off). The residual norm cannot see a solve that missed the
 #: flux through the last constriction: RS met it with an imbalance of 1.0 and a sigma 2.85
 #: times too large on the paper config's largest grid. Solves at round-off end above it too
-#: (3e-2 at the last percolating step of a bearing gap, sigma equal to 1e-11), hence a check
+#: (3e-2 at the last percolating step of a bearing gap, sigma equal to 8e-12), hence a check
 #: rather than a failure (docs/flow.md "Flux check").
 FLOW_IMBALANCE_MAX = 1e-2
 #: Largest relative error of sigma that the check accepts: the dissipation's error
 #: r^T A^-1 r / Q, computed with the direct solver's factorisation. On near-threshold states
 #: of the stress walks (1024^2 - 2048 x 4096) a direct solve's is 2e-13 - 3.5e-6, at round-off
-#: (a refinement step moves it by its own size); 1e-4 in sigma is 1e-4 in ln sigma, 3000
-#: times below the seed-to-seed spread of ln sigma near a_c* (docs/accuracy.md).
+#: (a refinement step moves it by its own size); 1e-4 in sigma is 1e-4 in ln sigma, at least
+#: 3000 times below its seed-to-seed spread (0.33 - 1.34 at a_c 0.2 - 0.35, docs/accuracy.md).
 FLOW_SIGMA_RTOL = 1e-4
 #: A cell whose local conductivity u^3 / (12 eta) is at most this fraction of the largest
 #: carries no flow: float64 cannot resolve it beside the largest (a gap below 4.6e-6 of the
@@ -105,8 +105,7 @@ FLOW_SIGMA_RTOL = 1e-4
 #: (docs/flow.md "Unresolved gaps").
 FLOW_CLOSED_BELOW = 1e-16
 #: Linear solvers of the flow: auto (direct for small systems and thin flowing clusters,
-#: else rs), Ruge-Stueben AMG
-#: + CG, smoothed aggregation + CG, sparse direct, plain CG.
+#: else rs), Ruge-Stueben AMG + CG, smoothed aggregation + CG, sparse direct, plain CG.
 FLOW_METHODS = ("auto", "rs", "sa", "direct", "cg")
 
 # --- measured scans and leak questions (docs/measured.md) ---------------------------------
