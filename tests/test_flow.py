@@ -399,7 +399,7 @@ def test_unbalanced_fluxes_are_checked_by_the_direct_solver(amg_sized_gap, monke
     direct solve raises unless its dissipation's error r^T A^-1 r / Q is at most
     ``FLOW_SIGMA_RTOL``; an AMG solve that cannot be checked (an explicit method, or no
     memory for the factorisation) is returned with a warning. The stall that needs it (RS on
-    the paper's largest grid at a_c 0.40, y: imbalance 1.0, sigma 2.85 times too large)
+    the paper's largest grid at a_c 0.414, y: imbalance 1.0, sigma 2.5 times too large)
     takes a 2048 x 4096 grid; a limit below this gap's RS imbalance (about 2e-10; the
     direct solve's 7e-12, its dissipation's error about 1e-24) stands in for it."""
     import roughflow.flow.linsolve as linsolve

@@ -199,8 +199,8 @@ def _balanced_solution(matrix, rhs, cells, act, faces: Faces, *, tol: float,
 
     Near a_c* the flux is many decades below ||b||, so the residual norm cannot tell a solve
     that missed the flux through the last constriction: an RS solve on the paper config's
-    largest grid (a_c 0.40, y) met its residual with |Q_in - Q_out| / Q = 1.0 and a sigma
-    2.85 times the direct solve's. But solves at round-off end there too (every solver at
+    largest grid (a_c 0.414, y) met its residual with |Q_in - Q_out| / Q = 1.0 and a sigma
+    2.5 times the direct solve's. But solves at round-off end there too (every solver at
     the last percolating step of a bearing gap: 3e-2, with sigma equal to 8e-12), so the
     imbalance only raises the question (docs/flow.md "Flux check"). A direct solve answers
     it with its dissipation's error r^T A^-1 r, one more solve with the factorisation, and

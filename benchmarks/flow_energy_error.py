@@ -1,0 +1,106 @@
+"""How far is an AMG-CG iterate's sigma from the exact one, and could CG itself tell?
+
+Usage:
+    ROUGHFLOW_FFT_THREADS=1 python benchmarks/flow_energy_error.py GAP.npy [--iterations 220]
+
+``GAP.npy``: a gap kept by ``stress_flow.py --keep-above`` (its name ends in ``_x`` or ``_y``,
+the flow axis). sigma comes from the dissipation D(p), and D(p_k) - D(p*) = ||e_k||_A^2 is
+the energy error of the CG iterate p_k (docs/flow.md "Flux check"). This script solves the
+state directly for D(p*), then runs preconditioned CG with the RS V-cycle from zero and
+records, every iteration, the relative residual, the true relative error of sigma
+(D(p_k) - D(p*)) / D(p*), and the Hestenes-Stiefel estimate of that error from the next d
+iterations, sum_{j=k}^{k+d-1} alpha_j r_j.z_j / D(p*) (exact in exact arithmetic as d grows,
+a lower bound otherwise). Writes results/benchmarks/flow_energy_error_<gap name>.md.
+"""
+
+from __future__ import annotations
+
+import argparse
+import math
+import sys
+import time
+from pathlib import Path
+
+import numpy as np
+
+from roughflow.defaults import FLOW_CLOSED_BELOW
+from roughflow.flow.assembly import assemble, face_transmissibilities
+from roughflow.flow.core import _dissipation
+from roughflow.flow.linsolve import prepare
+from roughflow.percolation import spanning_cells
+
+sys.path.insert(0, str(Path(__file__).resolve().parent))
+from bench_contact import OUT  # noqa: E402
+
+DELAYS = (5, 10, 20)
+
+
+def main() -> None:
+    ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    ap.add_argument("gap", type=Path)
+    ap.add_argument("--iterations", type=int, default=220)
+    args = ap.parse_args()
+    gap = np.load(args.gap)
+    axis = 1 if args.gap.stem.endswith("_y") else 0
+    s = gap**3 / 12.0
+    act = spanning_cells(s > 0, axis)  # the cells flow.solve keeps (docs/flow.md)
+    act = spanning_cells(act & ~(s <= FLOW_CLOSED_BELOW * s[act].max()), axis)
+    if axis == 1:
+        s, act = s.T, act.T
+    faces = face_transmissibilities(np.where(act, s, 0.0), 1 / s.shape[0], 1 / s.shape[1])
+    a, b, cells = assemble(faces, act)
+    a = a.tocsr()
+
+    def dissipation(x):
+        q = np.zeros(act.shape)
+        q.ravel()[cells] = x
+        return _dissipation(faces, q)
+
+    t0 = time.perf_counter()
+    factor = prepare(a, "direct").factor
+    exact = factor.solve(b)
+    exact += factor.solve(b - a @ exact)
+    d_star = dissipation(exact)
+    del factor
+    print(f"{args.gap.name}: {a.shape[0]} unknowns, D* = {d_star:.6e} "
+          f"({time.perf_counter() - t0:.1f} s)", flush=True)
+
+    m = prepare(a, "rs").preconditioner
+    x = np.zeros(a.shape[0])
+    r = b.copy()
+    z = m.matvec(r)
+    p = z.copy()
+    rz = r @ z
+    bnorm = np.linalg.norm(b)
+    terms, errors, residuals = [], [], []
+    for _ in range(args.iterations):
+        errors.append((dissipation(x) - d_star) / d_star)
+        residuals.append(np.linalg.norm(b - a @ x) / bnorm)
+        ap_ = a @ p
+        alpha = rz / (p @ ap_)
+        x += alpha * p
+        r -= alpha * ap_
+        terms.append(alpha * rz / d_star)  # = ||e_k||_A^2 - ||e_k+1||_A^2, relative
+        z = m.matvec(r)
+        rz_new = r @ z
+        p = z + (rz_new / rz) * p
+        rz = rz_new
+        if residuals[-1] < 1e-15:
+            break
+
+    head = ("| iteration | relative residual | true error of sigma | "
+            + " | ".join(f"estimate, d = {d}" for d in DELAYS) + " |")
+    lines = [f"{args.gap.name}: {a.shape[0]} unknowns", "", head,
+             "|" + "---|" * (3 + len(DELAYS))]
+    for k in range(0, len(errors), 5):
+        est = [sum(terms[k:k + d]) if k + d <= len(terms) else math.nan for d in DELAYS]
+        lines.append(f"| {k} | {residuals[k]:.2e} | {errors[k]:+.2e} | "
+                     + " | ".join(f"{e:.2e}" for e in est) + " |")
+    text = "\n".join(lines) + "\n"
+    print(text)
+    OUT.mkdir(parents=True, exist_ok=True)
+    (OUT / f"flow_energy_error_{args.gap.stem}.md").write_text(text)
+
+
+if __name__ == "__main__":
+    main()
