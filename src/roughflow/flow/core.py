@@ -47,7 +47,8 @@ class FlowResult:
     flux_x, flux_y: (nx, ny) cell-centred flux density -sigma grad p (volume flow
         per unit width per unit dp), the mean of the two face values in each direction.
     residual: relative residual ||b - A p|| / ||b|| of the linear system (<= ``tol``).
-    flux_imbalance: |Q_in - Q_out| / Q, a check of the solve (0 without a solve).
+    flux_imbalance: |Q_in - Q_out| / Q, a check of the solve (0 without a solve); above
+        ``FLOW_IMBALANCE_MAX`` sigma was checked, or a warning says it could not be.
     iterations: CG iterations, those of every flux-balance round included (0 for a direct
         solve or when no solve was needed).
     percolating: whether the open cells connect the two reservoirs.
