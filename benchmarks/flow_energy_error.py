@@ -23,11 +23,9 @@ from pathlib import Path
 
 import numpy as np
 
-from roughflow.defaults import FLOW_CLOSED_BELOW
 from roughflow.flow.assembly import assemble, face_transmissibilities
-from roughflow.flow.core import _dissipation
+from roughflow.flow.core import _dissipation, flowing_cells
 from roughflow.flow.linsolve import prepare
-from roughflow.percolation import spanning_cells
 
 sys.path.insert(0, str(Path(__file__).resolve().parent))
 from bench_contact import OUT  # noqa: E402
@@ -43,8 +41,7 @@ def main() -> None:
     gap = np.load(args.gap)
     axis = 1 if args.gap.stem.endswith("_y") else 0
     s = gap**3 / 12.0
-    act = spanning_cells(s > 0, axis)  # the cells flow.solve keeps (docs/flow.md)
-    act = spanning_cells(act & ~(s <= FLOW_CLOSED_BELOW * s[act].max()), axis)
+    act = flowing_cells(s, axis)  # the unknowns of flow.solve
     if axis == 1:
         s, act = s.T, act.T
     faces = face_transmissibilities(np.where(act, s, 0.0), 1 / s.shape[0], 1 / s.shape[1])

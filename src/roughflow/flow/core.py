@@ -237,6 +237,21 @@ def _balanced_solution(matrix, rhs, cells, act, faces: Faces, *, tol: float,
         residual=sol.residual, iterations=sol.iterations)
 
 
+def flowing_cells(sigma_local: np.ndarray, axis: int, *, periodic: bool = True) -> np.ndarray:
+    """The cells that carry flow along ``axis`` (0 or 1): open (u^3 > 0), above
+    ``FLOW_CLOSED_BELOW`` of the largest conductivity among the cells that connect the two
+    reservoirs, and still connecting them."""
+    # a gap so small that u^3 underflows is closed
+    active = spanning_cells(sigma_local > 0, axis, periodic=periodic)
+    if active.any():
+        # so is one below float64's resolution of the largest conductivity that carries
+        # flow (pools that carry none must not move the floor)
+        unresolved = active & (sigma_local <= FLOW_CLOSED_BELOW * sigma_local[active].max())
+        if unresolved.any():
+            active = spanning_cells(active & ~unresolved, axis, periodic=periodic)
+    return active
+
+
 def solve(
     gap,
     axis,
@@ -280,14 +295,7 @@ def solve(
     nx, ny = g.shape
     hx, hy = lx / nx, ly / ny
     sigma_local = g**3 / (12.0 * eta)
-    open_mask = sigma_local > 0  # a gap so small that u^3 underflows is closed
-    active = spanning_cells(open_mask, ax, periodic=periodic)
-    if active.any():
-        # so is one below float64's resolution of the largest conductivity that carries
-        # flow (pools that carry none must not move the floor)
-        unresolved = active & (sigma_local <= FLOW_CLOSED_BELOW * sigma_local[active].max())
-        if unresolved.any():
-            active = spanning_cells(active & ~unresolved, ax, periodic=periodic)
+    active = flowing_cells(sigma_local, ax, periodic=periodic)
 
     nan = np.full(g.shape, np.nan)
     zeros = np.zeros(g.shape)
