@@ -14,9 +14,10 @@ At every state and axis where the fluid percolates, ``flow.solve`` runs with its
 method (``auto``: RS-AMG CG or the direct solver, ``roughflow.flow.linsolve.choose``) and,
 unless ``--no-reference``, with the other of the two as the reference for sigma. A row records
 the outcome (``converged``, converged after falling back to the direct solver, or the
-ConvergenceError's residual), the method, CG iterations, residual, flux imbalance, the time of
-each solve, sigma and its relative difference from the reference, and the decades spanned by
-the flowing cells' u^3. The gap of a failed solve is kept in
+ConvergenceError's residual), the method, CG iterations, residual, flux imbalance and what
+round-off alone leaves of it (``FlowResult.imbalance_floor``), the time of each solve, sigma
+and its relative difference from the reference, and the decades spanned by the flowing
+cells' u^3. The gap of a failed solve is kept in
 ``results/benchmarks/stress_flow_gaps/`` to reproduce it. Rows are appended as they come (an
 interrupted run keeps its rows). Writes
 results/benchmarks/stress_flow[_TAG].{csv,md}; docs/flow.md quotes it.
@@ -104,6 +105,7 @@ def run_case(size: float, eps_f: float, model: str, gamma: float, hurst: float, 
                    "iterations": res.iterations if res is not None else -1,
                    "residual": residual,
                    "imbalance": res.flux_imbalance if res is not None else math.nan,
+                   "imbalance_floor": res.imbalance_floor if res is not None else math.nan,
                    "seconds": t, "sigma": res.sigma if res is not None else math.nan,
                    "flowing_fraction": res.n_active / c.gap.size if res is not None else math.nan,
                    "u3_decades": _decades(c.gap, ax)}
@@ -114,6 +116,8 @@ def run_case(size: float, eps_f: float, model: str, gamma: float, hurst: float, 
                 row["seconds_reference"] = t_ref
                 row["sigma_reference"] = ref.sigma if ref is not None else math.nan
                 row["imbalance_reference"] = ref.flux_imbalance if ref is not None else math.nan
+                row["imbalance_floor_reference"] = (ref.imbalance_floor if ref is not None
+                                                    else math.nan)
                 row["iterations_reference"] = ref.iterations if ref is not None else -1
                 row["sigma_rel_diff"] = (abs(row["sigma"] - ref.sigma) / ref.sigma
                                          if ref is not None and ref.sigma > 0 else math.nan)
@@ -142,7 +146,8 @@ def _append(path: Path, row: dict, keys: list[str]) -> None:
 KEYS = ["n", "model", "gamma", "hurst", "seed", "target", "a_c", "axis", "outcome", "method",
         "iterations", "residual", "imbalance", "seconds", "sigma", "flowing_fraction", "u3_decades",
         "reference", "seconds_reference", "sigma_reference", "sigma_rel_diff",
-        "imbalance_reference", "iterations_reference", "gap_file"]
+        "imbalance_reference", "iterations_reference", "gap_file", "imbalance_floor",
+        "imbalance_floor_reference"]
 
 
 def _largest(values) -> float:
@@ -151,13 +156,22 @@ def _largest(values) -> float:
     return max(finite) if finite else math.nan
 
 
+def _ratio(row: dict, suffix: str) -> float:
+    """A solve's flux imbalance over its round-off floor (NaN where not recorded)."""
+    imbalance, floor = row.get("imbalance" + suffix), row.get("imbalance_floor" + suffix)
+    if isinstance(imbalance, float) and isinstance(floor, float) and floor > 0:
+        return imbalance / floor
+    return math.nan
+
+
 def summary(rows: list[dict]) -> str:
     """Markdown table: per (n, model, gamma, H) the solves, failures and worst cases."""
     lines = ["| grid | model | gamma | H | ladders | solves | failed | direct (chosen) "
              "| fell back to direct | CG iterations median / max (AMG solves) "
              "| largest sigma difference between RS and direct "
-             "| largest flux imbalance, direct / RS | largest u^3 span (decades) |",
-             "|---|---|---|---|---|---|---|---|---|---|---|---|---|"]
+             "| largest flux imbalance, direct / RS "
+             "| largest imbalance / round-off floor, direct / RS | largest u^3 span (decades) |",
+             "|---|---|---|---|---|---|---|---|---|---|---|---|---|---|"]
     groups = {}
     for r in rows:
         groups.setdefault((r["n"], r["model"], r["gamma"], r["hurst"]), []).append(r)
@@ -172,12 +186,16 @@ def summary(rows: list[dict]) -> str:
         worst = {m: _largest([r["imbalance"] for r in rs if r["method"] == m]
                              + [r.get("imbalance_reference") for r in rs
                                 if r.get("reference") == m]) for m in ("direct", "rs")}
+        over_floor = {m: _largest([_ratio(r, "") for r in rs if r["method"] == m]
+                                  + [_ratio(r, "_reference") for r in rs
+                                     if r.get("reference") == m]) for m in ("direct", "rs")}
         lines.append(
             f"| {n} | {model} | {gamma:g} | {hurst:g} | {len({r['seed'] for r in rs})} | "
             f"{len(rs)} | {failed} | {chosen} | {fell_back} | "
             f"{np.median(its) if its else math.nan:.0f} / "
             f"{max(its) if its else -1} | {max(diffs) if diffs else math.nan:.2g} | "
             f"{worst['direct']:.2g} / {worst['rs']:.2g} | "
+            f"{over_floor['direct']:.2g} / {over_floor['rs']:.2g} | "
             f"{max(r['u3_decades'] for r in rs):.1f} |")
     return "\n".join(lines) + "\n"
 

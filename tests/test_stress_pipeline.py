@@ -205,38 +205,34 @@ def test_flux_balance_of_amg_at_threshold(method):
     assert fr.sigma_flux == pytest.approx(fr.sigma, rel=1e-4)
 
 
-def test_flux_balance_rounds_share_one_hierarchy_and_are_capped(monkeypatch):
-    """The refinement rounds of the state above reuse one AMG hierarchy (rebuilt for each
-    round it cost as much as the round: 1.0-1.3 s at 1024^2), each round stops after
-    REFINE_MAX_ITER iterations (one stuck at round-off ran the solver's 500, 210 s at
-    2048^2, docs/flow.md), and the result counts the iterations of every round."""
-    import roughflow.flow.core as core
+def test_flux_balance_is_one_cg_run_on_one_hierarchy(monkeypatch):
+    """At the state above the flow solve balances the fluxes in one CG run (no restart,
+    which throws away the Krylov space: restarted rounds of 50 iterations were still 10 % off
+    in sigma after 409 on the paper config's largest grid, where one run converged after
+    about 125, docs/flow.md "Flux check"), on one AMG hierarchy (rebuilt per round it cost
+    as much as the round, 1.0-1.3 s at 1024^2), and reports every iteration it took."""
     import roughflow.flow.linsolve as linsolve
 
     surf = _default_surface(4)
     th = search.threshold(surf, axis=0, tol=1e-3)
     r = contact.solve(surf, th.p_lo, tol=1e-8)
-    builds, calls = [], []
-    build, solve_spd = linsolve._amg_preconditioner, core.solve_spd
+    builds, runs = [], []
+    build, pcg = linsolve._amg_preconditioner, linsolve.pcg
 
     def counted_build(*args, **kwargs):
         builds.append(1)
         return build(*args, **kwargs)
 
-    def recorded_solve(*args, **kwargs):
-        out = solve_spd(*args, **kwargs)
-        calls.append((kwargs.get("max_iter"), out.iterations))
-        return out
+    def recorded_pcg(*args, **kwargs):
+        x, iterations = pcg(*args, **kwargs)
+        runs.append(iterations)
+        return x, iterations
 
     monkeypatch.setattr(linsolve, "_amg_preconditioner", counted_build)
-    monkeypatch.setattr(core, "solve_spd", recorded_solve)  # the rounds
-    monkeypatch.setattr(linsolve, "solve_spd", recorded_solve)  # the first solve
+    monkeypatch.setattr(linsolve, "pcg", recorded_pcg)
     fr = flow.solve(r.gap, 0, method="rs")
-    assert len(calls) >= 2, "this state needs at least one refinement round (2e-4 before)"
-    assert len(builds) == 1
-    assert calls[0][0] is None and all(cap == core.REFINE_MAX_ITER for cap, _ in calls[1:])
-    assert all(its <= core.REFINE_MAX_ITER for _, its in calls[1:])
-    assert fr.iterations == sum(its for _, its in calls)
+    assert len(builds) == 1 and len(runs) == 1
+    assert fr.iterations == runs[0] > 0
     assert 0 <= fr.flux_imbalance < 1e-4
 
 

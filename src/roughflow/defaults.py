@@ -83,8 +83,8 @@ FLOW_TOL = 1e-8
 #: agree to ``tol``, so a looser one gives no usable flux balance (``tol`` 1e6 gave sigma
 #: 1e4 times too large after zero iterations).
 FLOW_TOL_MAX = 1e-2
-#: |Q_in - Q_out| / Q above which a flow solve's sigma is checked (its refinement rounds aim
-#: at ``tol``, and end at round-off). The residual norm cannot see a solve that missed the
+#: |Q_in - Q_out| / Q above which a flow solve's sigma is checked (its solve aims at ``tol``,
+#: and ends at round-off). The residual norm cannot see a solve that missed the
 #: flux through the last constriction: RS met it with an imbalance of 1.0 and a sigma 2.5
 #: times too large on the paper config's largest grid. Solves at round-off end above it too
 #: (3e-2 at the last percolating step of a bearing gap, sigma equal to 8e-12), hence a check

@@ -49,8 +49,10 @@ class FlowResult:
     residual: relative residual ||b - A p|| / ||b|| of the linear system (<= ``tol``).
     flux_imbalance: |Q_in - Q_out| / Q, a check of the solve (0 without a solve); above
         ``FLOW_IMBALANCE_MAX`` sigma was checked, or a warning says it could not be.
-    iterations: CG iterations, those of every flux-balance round included (0 for a direct
-        solve or when no solve was needed).
+    imbalance_floor: the |Q_in - Q_out| / Q that float64 round-off alone leaves this
+        solution (0 without a solve): an imbalance near it says nothing about sigma.
+    iterations: CG iterations, those spent balancing the fluxes and before a fallback to
+        the direct solver included (0 for a direct solve or when no solve was needed).
     percolating: whether the open cells connect the two reservoirs.
     axis: flow axis (0 = x, 1 = y); method: linear solver used ("none" if none);
     sigma_flux: the boundary-flux estimate of sigma (less accurate, for comparison);
@@ -69,6 +71,7 @@ class FlowResult:
     method: str = "none"
     sigma_flux: float = 0.0
     n_active: int = 0
+    imbalance_floor: float = 0.0
 
 
 _AXES = {0: 0, 1: 1, "x": 0, "y": 1}
@@ -114,13 +117,6 @@ def _dissipation(faces: Faces, q: np.ndarray) -> float:
     )
 
 
-#: CG iterations a flux-balance refinement round may take. A round that converges takes
-#: 4-26 (measured near a_c* at 1024^2 and 2048^2); one still short of its tolerance after
-#: this many is stuck at round-off: uncapped, such rounds ran the solver's 500 iterations
-#: (210-220 s at 2048^2) and ended at a residual no better than they started from.
-REFINE_MAX_ITER = 50
-
-
 @dataclass(frozen=True)
 class _Balanced:
     """A solve of the Reynolds system with its flux check: the linear solution, the pressure
@@ -144,48 +140,75 @@ class _Balanced:
         return self.excess is not None and self.excess <= FLOW_SIGMA_RTOL
 
 
+def _flux_balance(faces: Faces, act: np.ndarray, cells: np.ndarray, x: np.ndarray):
+    """(pressure on the grid, 0 in inactive cells; dissipation Q(p); |Q_in - Q_out| / Q(p))
+    of the unknowns ``x``."""
+    q = np.zeros(act.shape)
+    q.ravel()[cells] = x
+    dissipation = _dissipation(faces, q)
+    q_in = float(np.sum(faces.t_in * (1.0 - q[0])))
+    q_out = float(np.sum(faces.t_out * q[-1]))
+    return q, dissipation, abs(q_in - q_out) / dissipation
+
+
+#: how far above :func:`_imbalance_floor` an AMG solve's imbalance must end for it to raise
+ROUNDOFF_MARGIN = 10
+
+
+def _imbalance_floor(matrix, rhs, x: np.ndarray, dissipation: float) -> float:
+    """The |Q_in - Q_out| / Q that round-off alone leaves a solution ``x``.
+
+    Q_in - Q_out is the sum of the residual b - A x, and each entry of a residual computed in
+    float64 carries round-off of about eps (|A| |x| + |b|)_i; their root sum of squares over
+    Q. Solves driven to round-off ended at 0.1 - 1.5 of it (128^2 - 2048 x 4096), while the
+    RS iterate that met its residual with sigma 2.5 times too large (2048 x 4096, a_c 0.414,
+    y) was about 2000 times above it (docs/flow.md "Flux check")."""
+    size = np.abs(x)
+    # |A| = 2 diag(A) - A: the Reynolds matrix has no positive off-diagonal entry
+    w = 2.0 * matrix.diagonal() * size - matrix @ size + np.abs(rhs)
+    return float(np.finfo(np.float64).eps * np.linalg.norm(w) / dissipation)
+
+
 def _solve_flux_balanced(matrix, rhs, cells, act, faces: Faces, *, tol: float, method: str,
                          rounds: int = 4) -> _Balanced:
-    """Solve to ||b - A x|| <= tol ||b|| (else :class:`ConvergenceError`), then refine
-    while the flux imbalance |Q_in - Q_out| / Q exceeds ``tol`` and the residual still falls.
+    """Solve to ||b - A x|| <= tol ||b|| (else :class:`ConvergenceError`) and on until the
+    flux imbalance |Q_in - Q_out| / Q is at most ``tol``, or round-off stops the solver.
 
     Near a_c* the flux through the last constriction is many decades below ||b|| (which
     the well-connected reservoir cells dominate), so the first criterion alone can leave
     |Q_in - Q_out| / Q = 2e-4 with RS-AMG and a negative outlet flux with SA-AMG
-    (tests/test_stress_pipeline.py). Each refinement round tightens the relative tolerance
-    by the missing factor and restarts from the last iterate, down to the float64 floor
+    (tests/test_stress_pipeline.py), and RS on the paper config's largest grid met it with
+    an imbalance of 1.0 and sigma 2.5 times too large. An iterative solve goes on in one CG
+    run (:func:`linsolve.pcg`) until the fluxes balance; a direct one refines, each round
+    tightening the relative residual by the missing factor, while the residual still falls
     (the reservoir fluxes are differences 1 - p of order Q / T, so their round-off is
     eps T / Q). sigma comes from the dissipation, whose error is quadratic in the pressure
     error. Where a direct solve's imbalance stays above :data:`FLOW_IMBALANCE_MAX`, that
     error, r^T A^-1 r, costs one more solve with the factorisation and is returned too.
     """
-    # one factorisation or AMG hierarchy for every round: near a_c* its set-up cost as
-    # much as the iterations of a round (1.0-1.3 s of 2-4 s a round at 1024^2)
-    sol, prepared = solve_prepared(matrix, rhs, tol=tol, method=method,
+    # not also "within _imbalance_floor": near a_c* that stopped RS with sigma 3e-4 off where
+    # going on to round-off gave 1e-8 (1024^2, a_c 0.44, y)
+    def balanced(x: np.ndarray) -> bool:
+        return _flux_balance(faces, act, cells, x)[2] <= tol
+
+    # one factorisation for every refinement round: near a_c* it costs as much as a round
+    sol, prepared = solve_prepared(matrix, rhs, tol=tol, method=method, accept=balanced,
                                    flowing_fraction=cells.size / act.size)
-    cap = REFINE_MAX_ITER if prepared.preconditioner is not None else None
-    spent = sol.iterations  # every round's iterations, a rejected one's as well
-    for round_ in range(rounds + 1):
-        q = np.zeros(act.shape)
-        q.ravel()[cells] = sol.x
-        dissipation = _dissipation(faces, q)
-        q_in = float(np.sum(faces.t_in * (1.0 - q[0])))
-        q_out = float(np.sum(faces.t_out * q[-1]))
-        imbalance = abs(q_in - q_out) / dissipation
-        if imbalance <= tol or round_ == rounds:
+    q, dissipation, imbalance = _flux_balance(faces, act, cells, sol.x)
+    for _round in range(rounds if prepared.factor is not None else 0):
+        if imbalance <= tol:
             break
         rel = max(sol.residual * 0.25 * tol / imbalance, 1e-16)
-        better = solve_spd(matrix, rhs, tol=rel, x0=sol.x, strict=False, prepared=prepared,
-                           max_iter=cap)
-        spent += better.iterations
+        better = solve_spd(matrix, rhs, tol=rel, x0=sol.x, strict=False, prepared=prepared)
         if not better.residual < 0.5 * sol.residual:  # stalled at round-off
             break
-        sol = better
+        sol = replace(better, iterations=sol.iterations)
+        q, dissipation, imbalance = _flux_balance(faces, act, cells, sol.x)
     excess = None
     if imbalance > FLOW_IMBALANCE_MAX and prepared.factor is not None:
         r = rhs - matrix @ sol.x
         excess = abs(float(r @ prepared.factor.solve(r))) / dissipation
-    return _Balanced(replace(sol, iterations=spent), q, dissipation, imbalance, excess)
+    return _Balanced(sol, q, dissipation, imbalance, excess)
 
 
 def _unbalanced(balanced: _Balanced) -> str:
@@ -207,8 +230,10 @@ def _balanced_solution(matrix, rhs, cells, act, faces: Faces, *, tol: float,
     it with its dissipation's error r^T A^-1 r, one more solve with the factorisation, and
     raises :class:`ConvergenceError` where that exceeds :data:`FLOW_SIGMA_RTOL`. An AMG
     solve cannot; with ``method="auto"`` the direct solver solves again where its
-    factorisation fits, otherwise (and for an explicit iterative method) a warning says
-    that sigma is unchecked.
+    factorisation fits. Otherwise (and for an explicit iterative method), having run on
+    until the fluxes balanced or round-off stopped it, it raises where the imbalance
+    exceeds :data:`ROUNDOFF_MARGIN` times what round-off leaves (:func:`_imbalance_floor`),
+    and where it does not a warning says that sigma is unchecked.
     """
     first = _solve_flux_balanced(matrix, rhs, cells, act, faces, tol=tol, method=method)
     if first.balanced or first.certified:
@@ -220,9 +245,18 @@ def _balanced_solution(matrix, rhs, cells, act, faces: Faces, *, tol: float,
             why = "" if fits else (f"its factorisation would need about {describe(need)} more "
                                    f"memory than the {describe(have)} available")
         if why:
-            log.warning("%s: its sigma is not checked (no direct solve: %s)",
-                        _unbalanced(first), why)
-            return first
+            sol = first.solution
+            floor = _imbalance_floor(matrix, rhs, sol.x, first.dissipation)
+            if first.imbalance <= ROUNDOFF_MARGIN * floor:
+                log.warning("%s, within what round-off leaves (%.2g): its sigma is not checked "
+                            "(no direct solve: %s)", _unbalanced(first), floor, why)
+                return first
+            raise ConvergenceError(
+                f"{_unbalanced(first)} after {sol.iterations} CG iterations, more than "
+                f"{ROUNDOFF_MARGIN} times the {floor:.2g} that round-off leaves: the solve "
+                f"missed flux through the gap's narrowest channels and its sigma can be wrong "
+                f"(no direct solve: {why})",
+                residual=sol.residual, iterations=sol.iterations)
         log.warning("%s; checking with the direct solver (%d unknowns)", _unbalanced(first),
                     matrix.shape[0])
         again = _solve_flux_balanced(matrix, rhs, cells, act, faces, tol=tol, method="direct")
@@ -336,6 +370,7 @@ def solve(
         method=sol.method,
         sigma_flux=q_mean * scale,
         n_active=int(cells.size),
+        imbalance_floor=_imbalance_floor(matrix, rhs, sol.x, dissipation),
     )
 
 
