@@ -2,6 +2,8 @@
 
 from __future__ import annotations
 
+from types import SimpleNamespace
+
 import numpy as np
 import pytest
 
@@ -137,15 +139,20 @@ def test_rs_converges_at_last_percolating_step(heights):
     assert solve(np.maximum(d0 - heights, 0.0), 0).sigma == 0.0
 
 
-def _reynolds_matrix(heights, a_c):
+def _reynolds_system(gap) -> SimpleNamespace:
+    """The system ``solve(gap, 0)`` assembles on a unit square: its faces, flowing cells
+    (``act``, ``cells``), matrix (CSR) and right-hand side."""
     from roughflow.flow.assembly import assemble, face_transmissibilities
-    from roughflow.percolation import spanning_cells
 
-    s = sigma_of(bearing_gap(heights, a_c))
-    act = spanning_cells(s > 0, 0)
-    n = heights.shape[0]
-    matrix, _, _ = assemble(face_transmissibilities(np.where(act, s, 0.0), 1 / n, 1 / n), act)
-    return matrix.tocsr()
+    s = sigma_of(gap)
+    act = flow_core.flowing_cells(s, 0)
+    faces = face_transmissibilities(np.where(act, s, 0.0), 1 / gap.shape[0], 1 / gap.shape[1])
+    matrix, rhs, cells = assemble(faces, act)
+    return SimpleNamespace(faces=faces, act=act, cells=cells, matrix=matrix.tocsr(), rhs=rhs)
+
+
+def _reynolds_matrix(heights, a_c):
+    return _reynolds_system(bearing_gap(heights, a_c)).matrix
 
 
 def test_rs_preconditioner_is_symmetric_positive_definite(heights):
@@ -308,16 +315,13 @@ def test_pcg_stops_at_round_off(heights):
     to ``max_iter``: at the last percolating step of the bearing gap the true residual stays
     at 2e-14 from iteration 14 on (docs/flow.md); 40 leaves room for that and is far from
     the 500 allowed. The iterate it returns is converged (residual below 1e-12)."""
-    from roughflow.flow.assembly import assemble, face_transmissibilities
     from roughflow.flow.linsolve import pcg, prepare
 
     order = np.argsort(heights, axis=None, kind="stable")
     k = critical_open_count(order, heights.shape, 0)
     hs = heights.ravel()[order]
-    s = sigma_of(np.maximum(0.5 * (hs[k - 1] + hs[k]) - heights, 0.0))
-    act = flow_core.flowing_cells(s, 0)
-    n = heights.shape[0]
-    matrix, rhs, _ = assemble(face_transmissibilities(np.where(act, s, 0.0), 1 / n, 1 / n), act)
+    system = _reynolds_system(np.maximum(0.5 * (hs[k - 1] + hs[k]) - heights, 0.0))
+    matrix, rhs = system.matrix, system.rhs
     m = prepare(matrix, "rs").preconditioner
     calls = []
 
@@ -325,8 +329,7 @@ def test_pcg_stops_at_round_off(heights):
         calls.append(1)
         return False
 
-    x, iterations = pcg(matrix.tocsr(), rhs, tol=1e-8, preconditioner=m, max_iter=500,
-                        accept=never)
+    x, iterations = pcg(matrix, rhs, tol=1e-8, preconditioner=m, max_iter=500, accept=never)
     assert 0 < len(calls) <= iterations < 40
     assert np.linalg.norm(rhs - matrix @ x) < 1e-12 * np.linalg.norm(rhs)
 
@@ -401,19 +404,12 @@ def test_dissipation_error_is_the_energy_norm_of_the_pressure_error(heights):
     sides (about 1.6 Q here) agree to 3e-15 relative (measured): 1e-9 leaves room for any
     summation order and still catches a change of either formula (a face kind missing from
     one of them moves the difference by O(1))."""
-    from roughflow.flow.assembly import assemble, face_transmissibilities
-    from roughflow.percolation import spanning_cells
-
-    s = bearing_gap(heights, 0.3) ** 3 / 12.0
-    act = spanning_cells(s > 0, 0)
-    faces = face_transmissibilities(np.where(act, s, 0.0), 1 / 128, 1 / 128)
-    matrix, rhs, cells = assemble(faces, act)
-    exact = solve_spd(matrix, rhs, tol=1e-14, method="direct").x
+    system = _reynolds_system(bearing_gap(heights, 0.3))
+    matrix = system.matrix
+    exact = solve_spd(matrix, system.rhs, tol=1e-14, method="direct").x
 
     def dissipation(x):
-        q = np.zeros(act.shape)
-        q.ravel()[cells] = x
-        return flow_core._dissipation(faces, q)
+        return flow_core._flux_balance(system.faces, system.act, system.cells, x)[1]
 
     q_star = dissipation(exact)
     e = 1e-3 * np.random.default_rng(4).standard_normal(exact.size)
@@ -464,15 +460,10 @@ def test_cg_goes_on_until_the_fluxes_balance(amg_sized_heights, method):
     """Near a_c* a CG solve stopped at the residual tolerance 1e-8 leaves |Q_in - Q_out| / Q
     above it (RS about 1e-7, SA 1e-6 on this gap); the flow solve goes on in the same run
     until the imbalance is at most ``tol`` too."""
-    from roughflow.flow.assembly import assemble, face_transmissibilities
-
     gap = bearing_gap(amg_sized_heights, 0.35)
-    s = sigma_of(gap)
-    act = flow_core.flowing_cells(s, 0)
-    faces = face_transmissibilities(np.where(act, s, 0.0), 1 / 384, 1 / 384)
-    matrix, rhs, cells = assemble(faces, act)
-    plain = solve_spd(matrix, rhs, tol=1e-8, method=method)
-    assert flow_core._flux_balance(faces, act, cells, plain.x)[2] > 1e-8
+    system = _reynolds_system(gap)
+    plain = solve_spd(system.matrix, system.rhs, tol=1e-8, method=method)
+    assert flow_core._flux_balance(system.faces, system.act, system.cells, plain.x)[2] > 1e-8
     r = solve(gap, 0, method=method, tol=1e-8)
     assert r.flux_imbalance <= 1e-8 and r.iterations > plain.iterations
 
@@ -485,7 +476,6 @@ def test_imbalance_floor_separates_round_off_from_a_missed_flux(heights):
     "Flux check"). A CG iterate that has not yet carried the flux through the bottleneck (3
     iterations) is above the margin by orders of magnitude, which is what an AMG solve that
     cannot be checked raises on."""
-    from roughflow.flow.assembly import assemble, face_transmissibilities
     from roughflow.flow.linsolve import pcg, prepare
 
     order = np.argsort(heights, axis=None, kind="stable")
@@ -496,15 +486,11 @@ def test_imbalance_floor_separates_round_off_from_a_missed_flux(heights):
         for method in ("direct", "rs", "sa"):
             r = solve(gap, 0, method=method, tol=1e-12)
             assert 0 < r.flux_imbalance <= flow_core.ROUNDOFF_MARGIN * r.imbalance_floor
-        s = sigma_of(gap)
-        act = flow_core.flowing_cells(s, 0)
-        faces = face_transmissibilities(np.where(act, s, 0.0), 1 / 128, 1 / 128)
-        matrix, rhs, cells = assemble(faces, act)
-        early, _ = pcg(matrix.tocsr(), rhs, tol=1.0, max_iter=3,
-                       preconditioner=prepare(matrix, "rs").preconditioner,
-                       accept=lambda x: False)
-        _, dissipation, imbalance = flow_core._flux_balance(faces, act, cells, early)
-        floor = flow_core._imbalance_floor(matrix, rhs, early, dissipation)
+        sy = _reynolds_system(gap)
+        early, _ = pcg(sy.matrix, sy.rhs, tol=1.0, max_iter=3, accept=lambda x: False,
+                       preconditioner=prepare(sy.matrix, "rs").preconditioner)
+        _, dissipation, imbalance = flow_core._flux_balance(sy.faces, sy.act, sy.cells, early)
+        floor = flow_core._imbalance_floor(sy.matrix, sy.rhs, early, dissipation)
         assert imbalance > 100 * flow_core.ROUNDOFF_MARGIN * floor
 
 
