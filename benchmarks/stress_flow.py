@@ -15,8 +15,9 @@ method (``auto``: RS-AMG CG or the direct solver, ``roughflow.flow.linsolve.choo
 unless ``--no-reference``, with the other of the two as the reference for sigma. A row records
 the outcome (``converged``, converged after falling back to the direct solver, or the
 ConvergenceError's residual), the method, CG iterations, residual, flux imbalance and what
-round-off alone leaves of it (``FlowResult.imbalance_floor``), the time of each solve, sigma
-and its relative difference from the reference, and the decades spanned by the flowing
+round-off alone leaves of it (``FlowResult.imbalance_floor``), the time of each solve, sigma,
+its error from the linear solve (``FlowResult.sigma_error``, direct solves) and its relative
+difference from the reference, and the decades spanned by the flowing
 cells' u^3. The gap of a failed solve is kept in
 ``results/benchmarks/stress_flow_gaps/`` to reproduce it. Rows are appended as they come (an
 interrupted run keeps its rows). Writes
@@ -106,6 +107,7 @@ def run_case(size: float, eps_f: float, model: str, gamma: float, hurst: float, 
                    "residual": residual,
                    "imbalance": res.flux_imbalance if res is not None else math.nan,
                    "imbalance_floor": res.imbalance_floor if res is not None else math.nan,
+                   "sigma_error": res.sigma_error if res is not None else math.nan,
                    "seconds": t, "sigma": res.sigma if res is not None else math.nan,
                    "flowing_fraction": res.n_active / c.gap.size if res is not None else math.nan,
                    "u3_decades": _decades(c.gap, ax)}
@@ -119,6 +121,7 @@ def run_case(size: float, eps_f: float, model: str, gamma: float, hurst: float, 
                 row["imbalance_floor_reference"] = (ref.imbalance_floor if ref is not None
                                                     else math.nan)
                 row["iterations_reference"] = ref.iterations if ref is not None else -1
+                row["sigma_error_reference"] = ref.sigma_error if ref is not None else math.nan
                 row["sigma_rel_diff"] = (abs(row["sigma"] - ref.sigma) / ref.sigma
                                          if ref is not None and ref.sigma > 0 else math.nan)
                 if ref_error:
@@ -147,7 +150,7 @@ KEYS = ["n", "model", "gamma", "hurst", "seed", "target", "a_c", "axis", "outcom
         "iterations", "residual", "imbalance", "seconds", "sigma", "flowing_fraction", "u3_decades",
         "reference", "seconds_reference", "sigma_reference", "sigma_rel_diff",
         "imbalance_reference", "iterations_reference", "gap_file", "imbalance_floor",
-        "imbalance_floor_reference"]
+        "imbalance_floor_reference", "sigma_error", "sigma_error_reference"]
 
 
 def _largest(values) -> float:

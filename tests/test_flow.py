@@ -494,6 +494,40 @@ def test_imbalance_floor_separates_round_off_from_a_missed_flux(heights):
         assert imbalance > 100 * flow_core.ROUNDOFF_MARGIN * floor
 
 
+def test_sigma_error_is_the_dissipation_error_of_the_iterate(heights):
+    """``_sigma_error`` is r^T A^-1 r / Q(x): for the iterates of 1 - 5 RS-CG iterations it
+    equals (Q(x) - Q) / Q(x), measured against the direct solve. The identity is exact (the
+    dissipation is the energy, minimal at the solution, and exceeds it by the error's energy
+    norm), so the two differ only by round-off: eps Q / (Q(x) - Q), at most 3e-8 relative
+    for the errors here (0.9 down to 8e-9), against the 1e-6 allowed. A wrong sign, a
+    missing A^-1 or a missing 1 / Q is off by orders of magnitude. ``solve`` reports it for
+    direct solves (round-off: below 1e-12 here) and NaN for RS, which has no A^-1."""
+    import scipy.sparse.linalg as spla
+
+    from roughflow.flow.linsolve import pcg, prepare
+
+    for a_c in (0.1, 0.3):
+        gap = bearing_gap(heights, a_c)
+        sy = _reynolds_system(gap)
+        lu = spla.splu(sy.matrix.tocsc())
+        exact = flow_core._flux_balance(sy.faces, sy.act, sy.cells, lu.solve(sy.rhs))[1]
+        m = prepare(sy.matrix, "rs").preconditioner
+        errors = []
+        for its in (1, 2, 3, 5):
+            x, _ = pcg(sy.matrix, sy.rhs, tol=1e-30, max_iter=its, accept=lambda x: False,
+                       preconditioner=m)
+            q = flow_core._flux_balance(sy.faces, sy.act, sy.cells, x)[1]
+            estimate = flow_core._sigma_error(sy.matrix, sy.rhs, x, lu.solve, q)
+            assert estimate == pytest.approx((q - exact) / q, rel=1e-6, abs=0)
+            errors.append(estimate)
+        assert errors[0] > 0.1 and errors[-1] < 1e-6  # a real range of errors
+        direct, rs = solve(gap, 0, method="direct"), solve(gap, 0, method="rs")
+        assert 0 <= direct.sigma_error < 1e-12
+        assert np.isnan(rs.sigma_error)
+    closed = solve(np.zeros((8, 8)), 0)
+    assert closed.sigma == 0 and closed.sigma_error == 0
+
+
 def test_amg_solve_at_round_off_is_returned_with_a_warning(caplog):
     """The open row of test_gaps_below_float64_resolution_are_closed, u^3 1e-15 of the rest:
     the fluxes cannot balance in float64 (RS and the direct solver end at |Q_in - Q_out| / Q

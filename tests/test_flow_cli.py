@@ -41,6 +41,10 @@ def test_cli_both_axes(tmp_path, gap):
         assert float(ds["sigma_x"]) == pytest.approx(sx, rel=1e-12)
         assert ds.attrs["sigma_x"] == pytest.approx(sx, rel=1e-12)
         assert float(ds["sigma_y"]) == 0.0 and ds.attrs["percolating_y"] == 0
+        # the solve's error diagnostics: a direct solve (small grid) at round-off; no solve
+        # along y (blocked), so nothing to be wrong
+        assert ds.attrs["method_x"] == "direct" and 0 <= ds.attrs["sigma_error_x"] < 1e-12
+        assert ds.attrs["imbalance_floor_x"] > 0 and ds.attrs["sigma_error_y"] == 0
         assert "units" in ds["sigma_x"].attrs and "units" in ds["flux_x_x"].attrs
         assert ds["pressure_x"].shape == gap.shape
         assert ds.attrs["contact_area_fraction"] == 0.1

@@ -190,15 +190,29 @@ def test_ladder_records_the_flow_solver_and_combines_with_files_that_do_not(monk
         imbalance = ds["flow_imbalance"].values
         assert np.isfinite(imbalance).all() and (imbalance <= FLOW_TOL).all()
         assert (imbalance[ds["percolating"].values == 0] == 0).all()
+        # what round-off leaves of it: positive where a solve ran, 0 where none did
+        floor = ds["flow_imbalance_floor"].values
+        solved = ds["percolating"].values == 1
+        assert solved.any() and (floor[solved] > 0).all() and (floor[~solved] == 0).all()
+    # sigma's error r^T A^-1 r / Q: at round-off for the direct solves (a 1e-8 residual
+    # left by the factorisation alone would give about 1e-16), NaN for AMG (no A^-1)
+    solved = direct["percolating"].values == 1
+    error = direct["flow_sigma_error"].values
+    assert (error[solved] < 1e-12).all() and (error[~solved] == 0).all()
+    assert np.isnan(amg["flow_sigma_error"].values[solved]).all()
+    attrs = direct["flow_sigma_error"].attrs
+    assert attrs["units"] and "r^T A^-1 r / Q" in attrs["long_name"]
     # the same sigma either way (both solve to the flow tolerance; the dissipation's error
     # is quadratic in the 1e-8 residual)
     np.testing.assert_allclose(amg["sigma"], direct["sigma"], rtol=1e-10)
     # job files written before the variable existed still combine: NaN where it is missing
     older = run_ladder(LadderJob(surface=TINY, model="bearing", seeds=(2,),
                                  area_fractions=(0.05, 0.3), a_c_star=0.5, a_c_star_alt=0.4))
-    out = combine([direct, older.drop_vars(["flow_direct", "flow_imbalance"])])
+    out = combine([direct, older.drop_vars(["flow_direct", "flow_imbalance",
+                                            "flow_imbalance_floor", "flow_sigma_error"])])
     assert np.isnan(out["flow_direct"].sel(seed=2)).all()
     assert np.isnan(out["flow_imbalance"].sel(seed=2)).all()
+    assert np.isnan(out["flow_sigma_error"].sel(seed=2)).all()
     assert (out["flow_direct"].sel(seed=1) == 1).all()
 
 

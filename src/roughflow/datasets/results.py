@@ -169,6 +169,7 @@ def flow_dataset(results: Mapping[int, FlowResult], contact: np.ndarray, *, lx: 
         attrs.update({f"sigma_{a}": r.sigma, f"residual_{a}": r.residual,
                       f"flux_imbalance_{a}": r.flux_imbalance, f"iterations_{a}": r.iterations,
                       f"percolating_{a}": r.percolating, f"method_{a}": r.method,
-                      f"sigma_flux_{a}": r.sigma_flux})
+                      f"sigma_flux_{a}": r.sigma_flux, f"sigma_error_{a}": r.sigma_error,
+                      f"imbalance_floor_{a}": r.imbalance_floor})
     out.attrs = attrs
     return out

@@ -16,6 +16,7 @@ inlet and outlet flux is reported as ``flux_imbalance``.
 from __future__ import annotations
 
 import logging
+import math
 from dataclasses import dataclass, replace
 
 import numpy as np
@@ -51,6 +52,9 @@ class FlowResult:
         ``FLOW_IMBALANCE_MAX`` sigma was checked, or a warning says it could not be.
     imbalance_floor: the |Q_in - Q_out| / Q that float64 round-off alone leaves this
         solution (0 without a solve): an imbalance near it says nothing about sigma.
+    sigma_error: sigma's relative error from the solve's residual r, r^T A^-1 r / Q
+        (sigma is variational, so this is exact up to round-off in r), computed with the
+        direct solver's factorisation; NaN for an AMG solve (no A^-1), 0 without a solve.
     iterations: CG iterations, those spent balancing the fluxes and before a fallback to
         the direct solver included (0 for a direct solve or when no solve was needed).
     percolating: whether the open cells connect the two reservoirs.
@@ -72,6 +76,7 @@ class FlowResult:
     sigma_flux: float = 0.0
     n_active: int = 0
     imbalance_floor: float = 0.0
+    sigma_error: float = 0.0
 
 
 _AXES = {0: 0, 1: 1, "x": 0, "y": 1}
@@ -121,14 +126,14 @@ def _dissipation(faces: Faces, q: np.ndarray) -> float:
 class _Balanced:
     """A solve of the Reynolds system with its flux check: the linear solution, the pressure
     on the grid (0 in inactive cells), the dissipation Q(p), |Q_in - Q_out| / Q(p), and
-    (direct solves whose imbalance exceeds :data:`FLOW_IMBALANCE_MAX` only, else None) the
-    dissipation's relative error (Q(p) - Q) / Q(p) = r^T A^-1 r / Q(p)."""
+    (direct solves only, else None) the dissipation's relative error
+    (Q(p) - Q) / Q(p) = r^T A^-1 r / Q(p) (:func:`_sigma_error`)."""
 
     solution: LinearSolution
     pressure: np.ndarray
     dissipation: float
     imbalance: float
-    excess: float | None = None
+    sigma_error: float | None = None
 
     @property
     def balanced(self) -> bool:
@@ -137,7 +142,7 @@ class _Balanced:
     @property
     def certified(self) -> bool:
         """Whether the dissipation's error is known to be at most :data:`FLOW_SIGMA_RTOL`."""
-        return self.excess is not None and self.excess <= FLOW_SIGMA_RTOL
+        return self.sigma_error is not None and self.sigma_error <= FLOW_SIGMA_RTOL
 
 
 def _flux_balance(faces: Faces, act: np.ndarray, cells: np.ndarray, x: np.ndarray):
@@ -169,6 +174,19 @@ def _imbalance_floor(matrix, rhs, x: np.ndarray, dissipation: float) -> float:
     return float(np.finfo(np.float64).eps * np.linalg.norm(w) / dissipation)
 
 
+def _sigma_error(matrix, rhs, x: np.ndarray, solve_a, dissipation: float) -> float:
+    """The relative error (Q(x) - Q) / Q(x) of the dissipation of ``x``: r^T A^-1 r / Q(x)
+    with r = b - A x and ``solve_a`` applying A^-1 (the factorisation).
+
+    The dissipation is the energy x^T A x - 2 b^T x + c, minimal at the solution, so it
+    exceeds Q by the energy norm of the error, e^T A e = r^T A^-1 r with A e = r; sigma is
+    Q times a length ratio, so this is sigma's relative error too. The factorisation's
+    own round-off in A^-1 r is relative to that term, so the value is exact to a few
+    digits; what limits it is the round-off of r itself (:func:`_imbalance_floor`)."""
+    r = rhs - matrix @ x
+    return abs(float(r @ solve_a(r))) / dissipation
+
+
 def _solve_flux_balanced(matrix, rhs, cells, act, faces: Faces, *, tol: float, method: str,
                          rounds: int = 4) -> _Balanced:
     """Solve to ||b - A x|| <= tol ||b|| (else :class:`ConvergenceError`) and on until the
@@ -183,8 +201,8 @@ def _solve_flux_balanced(matrix, rhs, cells, act, faces: Faces, *, tol: float, m
     tightening the relative residual by the missing factor, while the residual still falls
     (the reservoir fluxes are differences 1 - p of order Q / T, so their round-off is
     eps T / Q). sigma comes from the dissipation, whose error is quadratic in the pressure
-    error. Where a direct solve's imbalance stays above :data:`FLOW_IMBALANCE_MAX`, that
-    error, r^T A^-1 r, costs one more solve with the factorisation and is returned too.
+    error. A direct solve returns that error, r^T A^-1 r / Q (:func:`_sigma_error`), too:
+    one more solve with the factorisation (1-4 % of a direct solve's time, docs/flow.md).
     """
     # not also "within _imbalance_floor": near a_c* that stopped RS with sigma 3e-4 off where
     # going on to round-off gave 1e-8 (1024^2, a_c 0.44, y)
@@ -204,11 +222,10 @@ def _solve_flux_balanced(matrix, rhs, cells, act, faces: Faces, *, tol: float, m
             break
         sol = replace(better, iterations=sol.iterations)
         q, dissipation, imbalance = _flux_balance(faces, act, cells, sol.x)
-    excess = None
-    if imbalance > FLOW_IMBALANCE_MAX and prepared.factor is not None:
-        r = rhs - matrix @ sol.x
-        excess = abs(float(r @ prepared.factor.solve(r))) / dissipation
-    return _Balanced(sol, q, dissipation, imbalance, excess)
+    error = None
+    if prepared.factor is not None:
+        error = _sigma_error(matrix, rhs, sol.x, prepared.factor.solve, dissipation)
+    return _Balanced(sol, q, dissipation, imbalance, error)
 
 
 def _unbalanced(balanced: _Balanced) -> str:
@@ -266,7 +283,7 @@ def _balanced_solution(matrix, rhs, cells, act, faces: Faces, *, tol: float,
             return first
     sol = first.solution
     raise ConvergenceError(
-        f"{_unbalanced(first)}, and its dissipation is uncertain by {first.excess:.2g} > "
+        f"{_unbalanced(first)}, and its dissipation is uncertain by {first.sigma_error:.2g} > "
         f"{FLOW_SIGMA_RTOL:g} relative (float64 cannot resolve this gap's flow)",
         residual=sol.residual, iterations=sol.iterations)
 
@@ -371,6 +388,7 @@ def solve(
         sigma_flux=q_mean * scale,
         n_active=int(cells.size),
         imbalance_floor=_imbalance_floor(matrix, rhs, sol.x, dissipation),
+        sigma_error=math.nan if balanced.sigma_error is None else balanced.sigma_error,
     )
 
 

@@ -128,6 +128,8 @@ def run_ladder(job: LadderJob, *, threads: int | None = None) -> xr.Dataset:
     r["sigma"] = np.full((ns, nk, 2), np.nan)
     r["flow_residual"] = np.full((ns, nk, 2), np.nan)
     r["flow_imbalance"] = np.full((ns, nk, 2), np.nan)
+    r["flow_imbalance_floor"] = np.full((ns, nk, 2), np.nan)
+    r["flow_sigma_error"] = np.full((ns, nk, 2), np.nan)
     r["flow_iterations"] = np.full((ns, nk, 2), -1, dtype=np.int64)
     r["flow_direct"] = np.full((ns, nk, 2), -1, dtype=np.int64)
     r["percolating"] = np.full((ns, nk, 2), -1, dtype=np.int64)
@@ -169,6 +171,8 @@ def run_ladder(job: LadderJob, *, threads: int | None = None) -> xr.Dataset:
                     r["flow_direct"][i, k, ax] = 0
                     r["flow_residual"][i, k, ax] = 0.0
                     r["flow_imbalance"][i, k, ax] = 0.0
+                    r["flow_imbalance_floor"][i, k, ax] = 0.0
+                    r["flow_sigma_error"][i, k, ax] = 0.0
                     continue
                 try:
                     fr = flow.solve(c.gap, ax, lx=lx, ly=ly)
@@ -179,6 +183,8 @@ def run_ladder(job: LadderJob, *, threads: int | None = None) -> xr.Dataset:
                 r["sigma"][i, k, ax] = fr.sigma
                 r["flow_residual"][i, k, ax] = fr.residual
                 r["flow_imbalance"][i, k, ax] = fr.flux_imbalance
+                r["flow_imbalance_floor"][i, k, ax] = fr.imbalance_floor
+                r["flow_sigma_error"][i, k, ax] = fr.sigma_error
                 r["flow_iterations"][i, k, ax] = fr.iterations
                 r["flow_direct"][i, k, ax] = int(fr.method == "direct")
             th = _theory(c.gap, ~open_mask, c.area_fraction if math.isnan(a_cont) else a_cont,
@@ -219,6 +225,14 @@ def run_ladder(job: LadderJob, *, threads: int | None = None) -> xr.Dataset:
         "flow_imbalance": var(r["flow_imbalance"], ska, DIMENSIONLESS,
                               "relative flux imbalance |Q_in - Q_out| / Q of the flow solve "
                               "(0 without a solve)"),
+        "flow_imbalance_floor": var(
+            r["flow_imbalance_floor"], ska, DIMENSIONLESS,
+            "the flux imbalance float64 round-off alone leaves the flow solve's pressure "
+            "(0 without a solve): an imbalance near it says nothing about sigma"),
+        "flow_sigma_error": var(
+            r["flow_sigma_error"], ska, DIMENSIONLESS,
+            "relative error of sigma from the flow solve's residual, r^T A^-1 r / Q (direct "
+            "solves; NaN for AMG-CG, which has no A^-1; 0 without a solve)"),
         "flow_iterations": var(r["flow_iterations"], ska, DIMENSIONLESS,
                                "iterations of the flow solve"),
         "flow_direct": var(r["flow_direct"], ska, DIMENSIONLESS,

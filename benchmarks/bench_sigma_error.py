@@ -1,0 +1,86 @@
+"""What recording sigma's error costs a direct flow solve (``FlowResult.sigma_error``).
+
+Usage:
+    ROUGHFLOW_FFT_THREADS=1 python benchmarks/bench_sigma_error.py [--sizes 512 1024]
+        [--areas 0.1 0.3 0.4] [--repeats 3] [--tag NAME]
+
+Bearing gaps (the top fraction a_c of the heights in contact) of the surface H = 0.8,
+L/lambda_r = 4, 4 points per lambda_s, seed 0. For each, the median time of a whole direct
+``flow.solve`` along x (which includes the error since it is recorded) and of
+``flow.core._sigma_error`` alone (r = b - A p, one more solve with the factorisation,
+r^T A^-1 r / Q), their ratio, and the error, the imbalance and its round-off floor the solve
+reports. Writes results/benchmarks/sigma_error[_TAG].{csv,md}; docs/flow.md quotes it.
+"""
+
+from __future__ import annotations
+
+import argparse
+import functools
+import statistics
+import sys
+import time
+from pathlib import Path
+
+import numpy as np
+
+from roughflow.flow import core, solve
+from roughflow.flow.assembly import assemble, face_transmissibilities
+from roughflow.flow.linsolve import prepare
+from roughflow.surface import SurfaceSpec, generate
+
+sys.path.insert(0, str(Path(__file__).resolve().parent))
+from bench_contact import write_table  # noqa: E402
+
+
+def _median_time(fn, repeats: int):
+    times, out = [], None
+    for _ in range(repeats):
+        t0 = time.perf_counter()
+        out = fn()
+        times.append(time.perf_counter() - t0)
+    return statistics.median(times), out
+
+
+def rows_for(n: int, areas: list[float], repeats: int) -> list[dict]:
+    s = generate(SurfaceSpec.from_sweep(l_over_lambda_r=4, eps_f=16.0 / n,
+                                        points_per_lambda_s=4, seed=0))
+    h, lx, ly = s.heights, s.lx, s.ly
+    rows = []
+    for a_c in areas:
+        gap = np.maximum(np.quantile(h, 1.0 - a_c) - h, 0.0)
+        t_solve, res = _median_time(
+            functools.partial(solve, gap, 0, lx=lx, ly=ly, method="direct"), repeats)
+        local = gap**3 / 12.0  # eta = 1, as solve's default
+        act = core.flowing_cells(local, 0)
+        faces = face_transmissibilities(np.where(act, local, 0.0), lx / gap.shape[0],
+                                        ly / gap.shape[1])
+        matrix, rhs, _ = assemble(faces, act)
+        matrix = matrix.tocsr()
+        factor = prepare(matrix, "direct").factor
+        x = factor.solve(rhs)
+        dissipation = res.sigma * ly / lx  # sigma = Q L_flow / L_across
+        t_error, error = _median_time(
+            functools.partial(core._sigma_error, matrix, rhs, x, factor.solve, dissipation),
+            repeats)
+        row = {"n": n, "a_c": a_c, "solve_s": t_solve, "sigma_error_s": t_error,
+               "ratio": t_error / t_solve, "sigma_error": res.sigma_error,
+               "sigma_error_timed": error, "imbalance": res.flux_imbalance,
+               "imbalance_floor": res.imbalance_floor}
+        print(row, flush=True)
+        rows.append(row)
+    return rows
+
+
+def main() -> None:
+    ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    ap.add_argument("--sizes", type=int, nargs="+", default=[512, 1024])
+    ap.add_argument("--areas", type=float, nargs="+", default=[0.1, 0.3, 0.4])
+    ap.add_argument("--repeats", type=int, default=3)
+    ap.add_argument("--tag", default="")
+    args = ap.parse_args()
+    rows = [r for n in args.sizes for r in rows_for(n, args.areas, args.repeats)]
+    write_table("sigma_error" + (f"_{args.tag}" if args.tag else ""), rows)
+
+
+if __name__ == "__main__":
+    main()
