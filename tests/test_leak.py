@@ -13,7 +13,7 @@ import xarray as xr
 from roughflow import flow
 from roughflow.cli import build_parser, main
 from roughflow.datasets import leak_dataset
-from roughflow.defaults import BOUNDARY
+from roughflow.defaults import BOUNDARY, FLOW_TOL
 from roughflow.errors import InputError
 from roughflow.leak import LeakCurve, leak_curve
 from roughflow.surface import ScanInfo, Surface, SurfaceSpec, generate
@@ -45,7 +45,8 @@ def test_uniform_gap_leak_rate_equals_the_hand_calculation():
     curve = LeakCurve(
         pressure=np.array([1e-3]), area_fraction=np.zeros(1), mean_gap=np.array([h / L]),
         percolating=np.ones((1, 2), bool), sigma=np.array([sigma]),
-        iterations=np.zeros(1, int), residual=np.zeros(1), thresholds={}, boundary="periodic",
+        iterations=np.zeros(1, int), residual=np.zeros(1), flow_imbalance=np.zeros((1, 2)),
+        flow_sigma_error=np.zeros((1, 2)), thresholds={}, boundary="periodic",
         rms_gradient=0.0, window_lx=1.0, window_ly=0.75, window_shape=(16, 12))
     surface = Surface.from_array(np.zeros((16, 12)), lx=1.0, ly=0.75)
     ds = leak_dataset(curve, surface, scales=Scales(length=L, modulus=1e9, viscosity=eta),
@@ -77,6 +78,13 @@ def test_closing_every_gap_is_an_answer(curve):
     assert curve.percolating[0].all() and (curve.sigma[0] > 0).all()
     assert (np.diff(curve.area_fraction) >= 0).all()
     assert (np.diff(curve.sigma, axis=0) <= 0).all()
+    # each flow solve's diagnostics: the small windows are solved directly (sigma's error at
+    # round-off, fluxes balanced to the flow tolerance); nothing where no solve ran
+    solved = curve.percolating
+    assert (curve.flow_sigma_error[solved] < 1e-12).all()
+    assert (curve.flow_imbalance[solved] <= FLOW_TOL).all()
+    assert (curve.flow_sigma_error[~solved] == 0).all()
+    assert (curve.flow_imbalance[~solved] == 0).all()
 
 
 def test_sealing_bracket_agrees_with_the_curve(curve):
@@ -123,6 +131,8 @@ def test_cli_leak_prints_and_writes_the_curve(imported, tmp_path, capsys):
         np.testing.assert_allclose(ds["pressure"], np.geomspace(1e6, 1e11, 4), rtol=1e-12)
         assert ds.attrs["ref_length_m"] == pytest.approx(500e-9)
         assert ds.sizes == {"scan": 1, "pressure": 4, "axis": 2}
+        for name in ("flow_imbalance", "flow_sigma_error"):
+            assert ds[name].dims == ("scan", "pressure", "axis") and ds[name].attrs["long_name"]
         # the table's numbers are the dataset's
         q = ds["leak_rate"].isel(scan=0, pressure=0).values
         assert f"{q[0]:10.3e}" in text and f"{q[1]:10.3e}" in text

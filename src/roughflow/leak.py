@@ -50,6 +50,9 @@ class LeakCurve:
     percolating: whether the fluid spans the window along each axis.
     sigma: effective conductance per axis, u^3/(12 eta) in L^3/eta (0 without percolation).
     iterations, residual: of each contact solve.
+    flow_imbalance, flow_sigma_error: of each flow solve (``FlowResult.flux_imbalance`` and
+        ``sigma_error``: sigma's relative error from the linear solve, NaN for AMG); 0
+        without percolation.
     thresholds: per axis, the percolation threshold search on the same window; its
         ``p_lo`` / ``p_hi`` are nominal pressures (E*): the fluid spans at ``p_lo`` and not
         at ``p_hi``, so the seal closes along that axis between them.
@@ -65,6 +68,8 @@ class LeakCurve:
     sigma: np.ndarray
     iterations: np.ndarray
     residual: np.ndarray
+    flow_imbalance: np.ndarray
+    flow_sigma_error: np.ndarray
     thresholds: dict[int, Threshold]
     boundary: str
     rms_gradient: float
@@ -154,11 +159,11 @@ def pressure_curve(emb: Embedding, pressures: np.ndarray, *, contact_tol: float 
     """Contact area, mean gap, percolation and conductances of the window of ``emb`` at
     each nominal pressure (increasing; warm-started solves): the :class:`LeakCurve` fields
     ``area_fraction``, ``mean_gap``, ``percolating``, ``sigma``, ``iterations``,
-    ``residual``."""
+    ``residual``, ``flow_imbalance``, ``flow_sigma_error``."""
     n = len(pressures)
     area, gap, its, res = (np.zeros(n) for _ in range(4))
     spans = np.zeros((n, 2), dtype=bool)
-    sigma = np.zeros((n, 2))
+    sigma, imbalance, sigma_error = (np.zeros((n, 2)) for _ in range(3))
     state: ContactResult | None = None
     for i, pn in enumerate(pressures):
         state = solve(emb.surface, emb.cell_pressure(pn), tol=contact_tol, init=state,
@@ -169,9 +174,12 @@ def pressure_curve(emb: Embedding, pressures: np.ndarray, *, contact_tol: float 
         for ax in (0, 1):
             spans[i, ax] = percolates(~seen.contact, ax, periodic=emb.periodic)
             if spans[i, ax]:
-                sigma[i, ax] = flow.solve(seen.gap, ax, lx=emb.lx, ly=emb.ly, tol=flow_tol,
-                                          periodic=emb.periodic).sigma
+                fr = flow.solve(seen.gap, ax, lx=emb.lx, ly=emb.ly, tol=flow_tol,
+                                periodic=emb.periodic)
+                sigma[i, ax], imbalance[i, ax] = fr.sigma, fr.flux_imbalance
+                sigma_error[i, ax] = fr.sigma_error
         log.info("p = %.4g E*: a_c = %.4f, percolating x %d y %d, sigma = %.3e, %.3e", pn,
                  area[i], spans[i, 0], spans[i, 1], sigma[i, 0], sigma[i, 1])
     return {"area_fraction": area, "mean_gap": gap, "percolating": spans, "sigma": sigma,
-            "iterations": its.astype(np.int64), "residual": res}
+            "iterations": its.astype(np.int64), "residual": res, "flow_imbalance": imbalance,
+            "flow_sigma_error": sigma_error}

@@ -89,6 +89,14 @@ def leak_dataset(curve: LeakCurve, surface: Surface, *, scales: Scales, fluid_pr
         "contact_residual": (sp, curve.residual[None], {
             "units": RESIDUAL_UNITS, "long_name": "residual of the contact solve (largest gap "
                                                   "error / rms height)"}),
+        "flow_imbalance": (spa, curve.flow_imbalance[None], {
+            "units": DIMENSIONLESS, "long_name": "relative flux imbalance |Q_in - Q_out| / Q of "
+                                                 "the flow solve (0 without a solve)"}),
+        "flow_sigma_error": (spa, curve.flow_sigma_error[None], {
+            "units": DIMENSIONLESS,
+            "long_name": "relative error of sigma from the flow solve's residual, r^T A^-1 r / "
+                         "Q (direct solves; NaN for AMG-CG, which has no A^-1; 0 without a "
+                         "solve)"}),
         "a_c_star": (sa, thr("a_c_star"), {
             "units": DIMENSIONLESS, "long_name": "critical contact area a_c* where the fluid "
                                                  "stops spanning along axis"}),
