@@ -4,6 +4,7 @@ from __future__ import annotations
 
 import argparse
 import logging
+import math
 from typing import TYPE_CHECKING
 
 from roughflow.defaults import FLOW_METHODS, FLOW_TOL
@@ -73,9 +74,10 @@ def run(args: argparse.Namespace) -> None:
     for ax in axes:
         results[ax] = solve(gap, ax, lx=lx, ly=ly, eta=args.eta, tol=args.tol,
                             method=args.method)
-        log.info("sigma_%s = %.6e (%s, %d iterations, residual %.1e)", "xy"[ax],
-                 results[ax].sigma, results[ax].method, results[ax].iterations,
-                 results[ax].residual)
+        r = results[ax]
+        error = ("not known (AMG)" if math.isnan(r.sigma_error) else f"{r.sigma_error:.1e}")
+        log.info("sigma_%s = %.6e (%s, %d iterations, residual %.1e, sigma's error %s)",
+                 "xy"[ax], r.sigma, r.method, r.iterations, r.residual, error)
     out = flow_dataset(results, contact, lx=lx, ly=ly, eta=args.eta, tol=args.tol)
     out.attrs["source"] = str(args.input)
     for k, v in ds_in.attrs.items():
