@@ -24,7 +24,6 @@ from pathlib import Path
 import numpy as np
 
 from roughflow.flow import core, solve
-from roughflow.flow.assembly import assemble, face_transmissibilities
 from roughflow.flow.linsolve import prepare
 from roughflow.surface import SurfaceSpec, generate
 
@@ -51,17 +50,13 @@ def rows_for(n: int, areas: list[float], repeats: int) -> list[dict]:
         t_solve, res = _median_time(
             functools.partial(solve, gap, 0, lx=lx, ly=ly, method="direct"), repeats)
         local = gap**3 / 12.0  # eta = 1, as solve's default
-        act = core.flowing_cells(local, 0)
-        faces = face_transmissibilities(np.where(act, local, 0.0), lx / gap.shape[0],
-                                        ly / gap.shape[1])
-        matrix, rhs, _ = assemble(faces, act)
-        matrix = matrix.tocsr()
-        factor = prepare(matrix, "direct").factor
-        x = factor.solve(rhs)
-        dissipation = res.sigma * ly / lx  # sigma = Q L_flow / L_across
+        system = core.reynolds_system(local, core.flowing_cells(local, 0), 0, lx=lx, ly=ly)
+        factor = prepare(system.matrix, "direct").factor
+        x = factor.solve(system.rhs)
+        dissipation = res.sigma * system.l_across / system.l_flow  # sigma = Q L_flow / L_across
         t_error, error = _median_time(
-            functools.partial(core._sigma_error, matrix, rhs, x, factor.solve, dissipation),
-            repeats)
+            functools.partial(core._sigma_error, system.matrix, system.rhs, x, factor.solve,
+                              dissipation), repeats)
         row = {"n": n, "a_c": a_c, "solve_s": t_solve, "sigma_error_s": t_error,
                "ratio": t_error / t_solve, "sigma_error": res.sigma_error,
                "sigma_error_timed": error, "imbalance": res.flux_imbalance,

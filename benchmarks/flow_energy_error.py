@@ -23,8 +23,7 @@ from pathlib import Path
 
 import numpy as np
 
-from roughflow.flow.assembly import assemble, face_transmissibilities
-from roughflow.flow.core import _dissipation, flowing_cells
+from roughflow.flow.core import _dissipation, flowing_cells, reynolds_system
 from roughflow.flow.linsolve import prepare
 
 sys.path.insert(0, str(Path(__file__).resolve().parent))
@@ -41,12 +40,10 @@ def main() -> None:
     gap = np.load(args.gap)
     axis = 1 if args.gap.stem.endswith("_y") else 0
     s = gap**3 / 12.0
-    act = flowing_cells(s, axis)  # the unknowns of flow.solve
-    if axis == 1:
-        s, act = s.T, act.T
-    faces = face_transmissibilities(np.where(act, s, 0.0), 1 / s.shape[0], 1 / s.shape[1])
-    a, b, cells = assemble(faces, act)
-    a = a.tocsr()
+    # the system flow.solve assembles (on a unit square)
+    system = reynolds_system(s, flowing_cells(s, axis), axis, lx=1.0, ly=1.0)
+    faces, act, cells, a, b = (system.faces, system.active, system.cells, system.matrix,
+                               system.rhs)
 
     def dissipation(x):
         q = np.zeros(act.shape)

@@ -2,8 +2,6 @@
 
 from __future__ import annotations
 
-from types import SimpleNamespace
-
 import numpy as np
 import pytest
 
@@ -139,16 +137,10 @@ def test_rs_converges_at_last_percolating_step(heights):
     assert solve(np.maximum(d0 - heights, 0.0), 0).sigma == 0.0
 
 
-def _reynolds_system(gap) -> SimpleNamespace:
-    """The system ``solve(gap, 0)`` assembles on a unit square: its faces, flowing cells
-    (``act``, ``cells``), matrix (CSR) and right-hand side."""
-    from roughflow.flow.assembly import assemble, face_transmissibilities
-
+def _reynolds_system(gap) -> flow_core.ReynoldsSystem:
+    """The system ``solve(gap, 0)`` assembles on a unit square."""
     s = sigma_of(gap)
-    act = flow_core.flowing_cells(s, 0)
-    faces = face_transmissibilities(np.where(act, s, 0.0), 1 / gap.shape[0], 1 / gap.shape[1])
-    matrix, rhs, cells = assemble(faces, act)
-    return SimpleNamespace(faces=faces, act=act, cells=cells, matrix=matrix.tocsr(), rhs=rhs)
+    return flow_core.reynolds_system(s, flow_core.flowing_cells(s, 0), 0, lx=1.0, ly=1.0)
 
 
 def _reynolds_matrix(heights, a_c):
@@ -409,7 +401,7 @@ def test_dissipation_error_is_the_energy_norm_of_the_pressure_error(heights):
     exact = solve_spd(matrix, system.rhs, tol=1e-14, method="direct").x
 
     def dissipation(x):
-        return flow_core._flux_balance(system.faces, system.act, system.cells, x)[1]
+        return flow_core._flux_balance(system.faces, system.active, system.cells, x)[1]
 
     q_star = dissipation(exact)
     e = 1e-3 * np.random.default_rng(4).standard_normal(exact.size)
@@ -463,7 +455,7 @@ def test_cg_goes_on_until_the_fluxes_balance(amg_sized_heights, method):
     gap = bearing_gap(amg_sized_heights, 0.35)
     system = _reynolds_system(gap)
     plain = solve_spd(system.matrix, system.rhs, tol=1e-8, method=method)
-    assert flow_core._flux_balance(system.faces, system.act, system.cells, plain.x)[2] > 1e-8
+    assert flow_core._flux_balance(system.faces, system.active, system.cells, plain.x)[2] > 1e-8
     r = solve(gap, 0, method=method, tol=1e-8)
     assert r.flux_imbalance <= 1e-8 and r.iterations > plain.iterations
 
@@ -489,7 +481,7 @@ def test_imbalance_floor_separates_round_off_from_a_missed_flux(heights):
         sy = _reynolds_system(gap)
         early, _ = pcg(sy.matrix, sy.rhs, tol=1.0, max_iter=3, accept=lambda x: False,
                        preconditioner=prepare(sy.matrix, "rs").preconditioner)
-        _, dissipation, imbalance = flow_core._flux_balance(sy.faces, sy.act, sy.cells, early)
+        _, dissipation, imbalance = flow_core._flux_balance(sy.faces, sy.active, sy.cells, early)
         floor = flow_core._imbalance_floor(sy.matrix, sy.rhs, early, dissipation)
         assert imbalance > 100 * flow_core.ROUNDOFF_MARGIN * floor
 
@@ -510,13 +502,13 @@ def test_sigma_error_is_the_dissipation_error_of_the_iterate(heights):
         gap = bearing_gap(heights, a_c)
         sy = _reynolds_system(gap)
         lu = spla.splu(sy.matrix.tocsc())
-        exact = flow_core._flux_balance(sy.faces, sy.act, sy.cells, lu.solve(sy.rhs))[1]
+        exact = flow_core._flux_balance(sy.faces, sy.active, sy.cells, lu.solve(sy.rhs))[1]
         m = prepare(sy.matrix, "rs").preconditioner
         errors = []
         for its in (1, 2, 3, 5):
             x, _ = pcg(sy.matrix, sy.rhs, tol=1e-30, max_iter=its, accept=lambda x: False,
                        preconditioner=m)
-            q = flow_core._flux_balance(sy.faces, sy.act, sy.cells, x)[1]
+            q = flow_core._flux_balance(sy.faces, sy.active, sy.cells, x)[1]
             estimate = flow_core._sigma_error(sy.matrix, sy.rhs, x, lu.solve, q)
             assert estimate == pytest.approx((q - exact) / q, rel=1e-6, abs=0)
             errors.append(estimate)

@@ -15,7 +15,13 @@ from typing import TYPE_CHECKING
 import numpy as np
 import xarray as xr
 
-from .results import AXIS_COORD, AXIS_NAMES, spec_attrs
+from .results import (
+    AXIS_COORD,
+    AXIS_NAMES,
+    FLOW_IMBALANCE_LONG_NAME,
+    FLOW_SIGMA_ERROR_LONG_NAME,
+    spec_attrs,
+)
 from .units import (
     CONDUCTANCE_SI,
     DIMENSIONLESS,
@@ -90,13 +96,9 @@ def leak_dataset(curve: LeakCurve, surface: Surface, *, scales: Scales, fluid_pr
             "units": RESIDUAL_UNITS, "long_name": "residual of the contact solve (largest gap "
                                                   "error / rms height)"}),
         "flow_imbalance": (spa, curve.flow_imbalance[None], {
-            "units": DIMENSIONLESS, "long_name": "relative flux imbalance |Q_in - Q_out| / Q of "
-                                                 "the flow solve (0 without a solve)"}),
+            "units": DIMENSIONLESS, "long_name": FLOW_IMBALANCE_LONG_NAME}),
         "flow_sigma_error": (spa, curve.flow_sigma_error[None], {
-            "units": DIMENSIONLESS,
-            "long_name": "relative error of sigma from the flow solve's residual, r^T A^-1 r / "
-                         "Q (direct solves; NaN for AMG-CG, which has no A^-1; 0 without a "
-                         "solve)"}),
+            "units": DIMENSIONLESS, "long_name": FLOW_SIGMA_ERROR_LONG_NAME}),
         "a_c_star": (sa, thr("a_c_star"), {
             "units": DIMENSIONLESS, "long_name": "critical contact area a_c* where the fluid "
                                                  "stops spanning along axis"}),

@@ -36,6 +36,17 @@ AXIS_NAMES = ("x", "y")
 AXIS_COORD = ("axis", list(AXIS_NAMES), {"long_name": "flow / percolation direction "
                                                       "(x = axis 0, y = axis 1)"})
 
+#: long names of a flow solve's diagnostics, shared by the datasets that record them per solve
+#: (ladder scenes, leak curves)
+FLOW_IMBALANCE_LONG_NAME = ("relative flux imbalance |Q_in - Q_out| / Q of the flow solve "
+                            "(0 without a solve)")
+FLOW_IMBALANCE_FLOOR_LONG_NAME = (
+    "the flux imbalance float64 round-off alone leaves the flow solve's pressure (0 without a "
+    "solve): an imbalance near it says nothing about sigma")
+FLOW_SIGMA_ERROR_LONG_NAME = (
+    "relative error of sigma from the flow solve's residual, r^T A^-1 r / Q (direct solves; "
+    "NaN for AMG-CG, which has no A^-1; 0 without a solve)")
+
 
 def spec_attrs(surface: Surface) -> dict:
     """The surface's generation parameters as ``spec_*`` attributes, or for an imported

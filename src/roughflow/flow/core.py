@@ -20,6 +20,7 @@ import math
 from dataclasses import dataclass, replace
 
 import numpy as np
+import scipy.sparse as sp
 
 from roughflow.defaults import (
     FLOW_CLOSED_BELOW,
@@ -77,6 +78,45 @@ class FlowResult:
     n_active: int = 0
     imbalance_floor: float = 0.0
     sigma_error: float = 0.0
+
+
+@dataclass(frozen=True)
+class ReynoldsSystem:
+    """The assembled Reynolds system of one gap and axis, in the frame where the flow runs
+    along axis 0 (the gap's arrays transposed for flow along y).
+
+    faces: face transmissibilities; active: the cells that carry flow (on the transposed
+    grid for axis 1); cells: their flat indices, the unknowns in order; matrix (CSR, SPD)
+    and rhs of A p = b (inlet pressure 1, outlet 0); h_flow, h_across: cell sides along and
+    across the flow; l_flow, l_across: the domain's lengths.
+    """
+
+    faces: Faces
+    active: np.ndarray
+    cells: np.ndarray
+    matrix: sp.csr_matrix
+    rhs: np.ndarray
+    h_flow: float
+    h_across: float
+    l_flow: float
+    l_across: float
+
+
+def reynolds_system(sigma_local: np.ndarray, active: np.ndarray, axis: int, *, lx: float,
+                    ly: float, periodic: bool = True) -> ReynoldsSystem:
+    """Assemble A p = b for flow along ``axis`` (0 or 1) from the local conductivities
+    ``sigma_local`` = u^3 / (12 eta) (Eq. 4) and the flowing cells ``active``
+    (:func:`flowing_cells`), both on the gap's grid of cell lengths ``lx`` x ``ly``."""
+    nx, ny = sigma_local.shape
+    hx, hy = lx / nx, ly / ny
+    if axis == 0:
+        s, act, h_flow, h_across, l_flow, l_across = sigma_local, active, hx, hy, lx, ly
+    else:
+        s, act, h_flow, h_across, l_flow, l_across = sigma_local.T, active.T, hy, hx, ly, lx
+    faces = face_transmissibilities(np.where(act, s, 0.0), h_flow, h_across, periodic=periodic)
+    matrix, rhs, cells = assemble(faces, act)
+    return ReynoldsSystem(faces, act, cells, matrix, rhs, h_flow, h_across, l_flow,
+                          l_across)
 
 
 _AXES = {0: 0, 1: 1, "x": 0, "y": 1}
@@ -343,8 +383,6 @@ def solve(
     method = check_method(method)
     check_memory("flow", g.shape, what="a Reynolds flow solve")
 
-    nx, ny = g.shape
-    hx, hy = lx / nx, ly / ny
     sigma_local = g**3 / (12.0 * eta)
     active = flowing_cells(sigma_local, ax, periodic=periodic)
 
@@ -354,21 +392,18 @@ def solve(
         return FlowResult(0.0, nan, zeros, zeros.copy(), 0.0, 0.0, 0, False, ax)
 
     # work with flow along axis 0
-    if ax == 0:
-        s, act, h_flow, h_across, l_flow, l_across = sigma_local, active, hx, hy, lx, ly
-    else:
-        s, act, h_flow, h_across, l_flow, l_across = sigma_local.T, active.T, hy, hx, ly, lx
-    s = np.where(act, s, 0.0)
-    faces = face_transmissibilities(s, h_flow, h_across, periodic=periodic)
-    matrix, rhs, cells = assemble(faces, act)
+    system = reynolds_system(sigma_local, active, ax, lx=lx, ly=ly, periodic=periodic)
+    faces, act, cells, matrix, rhs = (system.faces, system.active, system.cells, system.matrix,
+                                      system.rhs)
+    h_flow, h_across = system.h_flow, system.h_across
     balanced = _balanced_solution(matrix, rhs, cells, act, faces, tol=tol, method=method)
     sol, q, dissipation = balanced.solution, balanced.pressure, balanced.dissipation
-    p = np.full(s.shape, np.nan)
+    p = np.full(act.shape, np.nan)
     p.ravel()[cells] = sol.x
     q_in = float(np.sum(faces.t_in * (1.0 - q[0])))
     q_out = float(np.sum(faces.t_out * q[-1]))
     q_mean = 0.5 * (q_in + q_out)
-    scale = l_flow / l_across
+    scale = system.l_flow / system.l_across
     j_along, j_across = _cell_fluxes(faces, p, h_flow, h_across)
     if ax == 0:
         pressure, fx, fy = p, j_along, j_across

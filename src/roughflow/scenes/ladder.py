@@ -21,7 +21,12 @@ import xarray as xr
 
 from roughflow import contact, flow, percolation, theory
 from roughflow.accuracy import PERIMETER_C, perimeter_corrected_area
-from roughflow.datasets.results import AXIS_COORD
+from roughflow.datasets.results import (
+    AXIS_COORD,
+    FLOW_IMBALANCE_FLOOR_LONG_NAME,
+    FLOW_IMBALANCE_LONG_NAME,
+    FLOW_SIGMA_ERROR_LONG_NAME,
+)
 from roughflow.datasets.sweep import no_fill_on_coords, param_coords, surface_vars, var
 from roughflow.datasets.units import (
     DIMENSIONLESS,
@@ -222,17 +227,11 @@ def run_ladder(job: LadderJob, *, threads: int | None = None) -> xr.Dataset:
                            "fluid percolates along axis (1/0)"),
         "flow_residual": var(r["flow_residual"], ska, DIMENSIONLESS,
                              "relative residual of the flow solve"),
-        "flow_imbalance": var(r["flow_imbalance"], ska, DIMENSIONLESS,
-                              "relative flux imbalance |Q_in - Q_out| / Q of the flow solve "
-                              "(0 without a solve)"),
-        "flow_imbalance_floor": var(
-            r["flow_imbalance_floor"], ska, DIMENSIONLESS,
-            "the flux imbalance float64 round-off alone leaves the flow solve's pressure "
-            "(0 without a solve): an imbalance near it says nothing about sigma"),
-        "flow_sigma_error": var(
-            r["flow_sigma_error"], ska, DIMENSIONLESS,
-            "relative error of sigma from the flow solve's residual, r^T A^-1 r / Q (direct "
-            "solves; NaN for AMG-CG, which has no A^-1; 0 without a solve)"),
+        "flow_imbalance": var(r["flow_imbalance"], ska, DIMENSIONLESS, FLOW_IMBALANCE_LONG_NAME),
+        "flow_imbalance_floor": var(r["flow_imbalance_floor"], ska, DIMENSIONLESS,
+                                    FLOW_IMBALANCE_FLOOR_LONG_NAME),
+        "flow_sigma_error": var(r["flow_sigma_error"], ska, DIMENSIONLESS,
+                                FLOW_SIGMA_ERROR_LONG_NAME),
         "flow_iterations": var(r["flow_iterations"], ska, DIMENSIONLESS,
                                "iterations of the flow solve"),
         "flow_direct": var(r["flow_direct"], ska, DIMENSIONLESS,
