@@ -1,4 +1,4 @@
-"""What recording sigma's error costs a direct flow solve (``FlowResult.sigma_error``).
+"""What recording sigma's error costs a flow solve (``FlowResult.sigma_error``): direct, AMG.
 
 Usage:
     ROUGHFLOW_FFT_THREADS=1 python benchmarks/bench_sigma_error.py [--sizes 512 1024]
@@ -9,7 +9,10 @@ L/lambda_r = 4, 4 points per lambda_s, seed 0. For each, the median time of a wh
 ``flow.solve`` along x (which includes the error since it is recorded) and of
 ``flow.core._sigma_error`` alone (r = b - A p, one more solve with the factorisation,
 r^T A^-1 r / Q), their ratio, and the error, the imbalance and its round-off floor the solve
-reports. Writes results/benchmarks/sigma_error[_TAG].{csv,md}; docs/flow.md quotes it.
+reports. Then the same for an RS-AMG solve and its upper bound
+(``flow.core._sigma_error_bound``: the divergence of the solve's fluxes routed along the
+widest spanning tree, ``flow.bound``), with the bound RS reports. Writes
+results/benchmarks/sigma_error[_TAG].{csv,md}; docs/flow.md quotes it.
 """
 
 from __future__ import annotations
@@ -57,10 +60,20 @@ def rows_for(n: int, areas: list[float], repeats: int) -> list[dict]:
         t_error, error = _median_time(
             functools.partial(core._sigma_error, system.matrix, system.rhs, x, factor.solve,
                               dissipation), repeats)
+        t_rs, rs = _median_time(
+            functools.partial(solve, gap, 0, lx=lx, ly=ly, method="rs"), repeats)
+        x_rs = rs.pressure.ravel()[system.cells]
+        t_bound, bound = _median_time(
+            functools.partial(core._sigma_error_bound, system.faces, system.active,
+                              system.cells, x_rs), repeats)
         row = {"n": n, "a_c": a_c, "solve_s": t_solve, "sigma_error_s": t_error,
                "ratio": t_error / t_solve, "sigma_error": res.sigma_error,
                "sigma_error_timed": error, "imbalance": res.flux_imbalance,
-               "imbalance_floor": res.imbalance_floor}
+               "imbalance_floor": res.imbalance_floor, "rs_solve_s": t_rs,
+               "rs_iterations": rs.iterations, "bound_s": t_bound,
+               "bound_ratio": t_bound / t_rs, "rs_bound": rs.sigma_error,
+               "rs_bound_timed": bound, "rs_imbalance_floor": rs.imbalance_floor,
+               "rs_minus_direct": (rs.sigma - res.sigma) / res.sigma}
         print(row, flush=True)
         rows.append(row)
     return rows

@@ -16,7 +16,8 @@ unless ``--no-reference``, with the other of the two as the reference for sigma.
 the outcome (``converged``, converged after falling back to the direct solver, or the
 ConvergenceError's residual), the method, CG iterations, residual, flux imbalance and what
 round-off alone leaves of it (``FlowResult.imbalance_floor``), the time of each solve, sigma,
-its error from the linear solve (``FlowResult.sigma_error``, direct solves) and its relative
+its error from the linear solve (``FlowResult.sigma_error``: exact for direct solves, an
+upper bound for AMG ones) and its relative
 difference from the reference, and the decades spanned by the flowing
 cells' u^3. The gap of a failed solve is kept in
 ``results/benchmarks/stress_flow_gaps/`` to reproduce it. Rows are appended as they come (an

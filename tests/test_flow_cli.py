@@ -57,6 +57,14 @@ def test_cli_single_axis_and_errors(tmp_path, gap, capsys):
     assert main(["flow", str(src), "--axis", "x", "-o", str(out)]) == 0
     with xr.open_dataset(out) as ds:
         assert "sigma_x" in ds and "sigma_y" not in ds
+    # an AMG solve reports its error bound (docs/flow.md "Error bound"), logged with -v
+    capsys.readouterr()
+    assert main(["flow", str(src), "--axis", "x", "--method", "rs", "-v", "-o", str(out)]) == 0
+    logged = capsys.readouterr().err
+    assert "(rs," in logged and "sigma's error at most" in logged
+    with xr.open_dataset(out) as ds:
+        assert ds.attrs["method_x"] == "rs"
+        assert 0 < ds.attrs["sigma_error_x"] <= 1e-9  # 1e-14 - 1e-12 measured
     bad = tmp_path / "bad.nc"
     write_contact(bad, -gap - 0.1)
     with pytest.raises(SystemExit) as exc:

@@ -4,7 +4,6 @@ from __future__ import annotations
 
 import argparse
 import logging
-import math
 from typing import TYPE_CHECKING
 
 from roughflow.defaults import FLOW_METHODS, FLOW_TOL
@@ -75,7 +74,8 @@ def run(args: argparse.Namespace) -> None:
         results[ax] = solve(gap, ax, lx=lx, ly=ly, eta=args.eta, tol=args.tol,
                             method=args.method)
         r = results[ax]
-        error = ("not known (AMG)" if math.isnan(r.sigma_error) else f"{r.sigma_error:.1e}")
+        error = (f"{r.sigma_error:.1e}" if r.method in ("direct", "none") else
+                 f"at most {r.sigma_error:.1e}")
         log.info("sigma_%s = %.6e (%s, %d iterations, residual %.1e, sigma's error %s)",
                  "xy"[ax], r.sigma, r.method, r.iterations, r.residual, error)
     out = flow_dataset(results, contact, lx=lx, ly=ly, eta=args.eta, tol=args.tol)

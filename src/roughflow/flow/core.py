@@ -16,7 +16,6 @@ inlet and outlet flux is reported as ``flux_imbalance``.
 from __future__ import annotations
 
 import logging
-import math
 from dataclasses import dataclass, replace
 
 import numpy as np
@@ -34,6 +33,7 @@ from roughflow.percolation import spanning_cells
 from roughflow.resources import check_memory, describe
 
 from .assembly import Faces, assemble, face_transmissibilities
+from .bound import dissipation_bounds
 from .linsolve import LinearSolution, check_method, direct_fits, solve_prepared, solve_spd
 
 log = logging.getLogger(__name__)
@@ -53,9 +53,11 @@ class FlowResult:
         ``FLOW_IMBALANCE_MAX`` sigma was checked, or a warning says it could not be.
     imbalance_floor: the |Q_in - Q_out| / Q that float64 round-off alone leaves this
         solution (0 without a solve): an imbalance near it says nothing about sigma.
-    sigma_error: sigma's relative error from the solve's residual r, r^T A^-1 r / Q
-        (sigma is variational, so this is exact up to round-off in r), computed with the
-        direct solver's factorisation; NaN for an AMG solve (no A^-1), 0 without a solve.
+    sigma_error: sigma's relative error (sigma is an upper bound: Dirichlet's principle).
+        A direct solve gives it exactly, r^T A^-1 r / Q with the solve's residual r and its
+        factorisation; an AMG solve, which has no A^-1, an upper bound from Thomson's
+        principle (:mod:`roughflow.flow.bound`), round-off allowed for
+        (:data:`BOUND_ROUNDOFF`). 0 without a solve.
     iterations: CG iterations, those spent balancing the fluxes and before a fallback to
         the direct solver included (0 for a direct solve or when no solve was needed).
     percolating: whether the open cells connect the two reservoirs.
@@ -165,15 +167,17 @@ def _dissipation(faces: Faces, q: np.ndarray) -> float:
 @dataclass(frozen=True)
 class _Balanced:
     """A solve of the Reynolds system with its flux check: the linear solution, the pressure
-    on the grid (0 in inactive cells), the dissipation Q(p), |Q_in - Q_out| / Q(p), and
-    (direct solves only, else None) the dissipation's relative error
-    (Q(p) - Q) / Q(p) = r^T A^-1 r / Q(p) (:func:`_sigma_error`)."""
+    on the grid (0 in inactive cells), the dissipation Q(p), |Q_in - Q_out| / Q(p), what
+    round-off leaves of that (:func:`_imbalance_floor`), and the dissipation's relative error
+    (Q(p) - Q) / Q(p): exact for a direct solve (:func:`_sigma_error`), an upper bound for
+    an AMG one (:func:`_sigma_error_bound`)."""
 
     solution: LinearSolution
     pressure: np.ndarray
     dissipation: float
     imbalance: float
-    sigma_error: float | None = None
+    floor: float
+    sigma_error: float
 
     @property
     def balanced(self) -> bool:
@@ -182,7 +186,13 @@ class _Balanced:
     @property
     def certified(self) -> bool:
         """Whether the dissipation's error is known to be at most :data:`FLOW_SIGMA_RTOL`."""
-        return self.sigma_error is not None and self.sigma_error <= FLOW_SIGMA_RTOL
+        return self.sigma_error <= FLOW_SIGMA_RTOL
+
+    @property
+    def accepted(self) -> bool:
+        """Whether sigma needs no further check: certified, or a direct solve whose fluxes
+        balance (its exact error is then of order the imbalance squared)."""
+        return self.certified or (self.balanced and self.solution.method == "direct")
 
 
 def _flux_balance(faces: Faces, act: np.ndarray, cells: np.ndarray, x: np.ndarray):
@@ -227,6 +237,23 @@ def _sigma_error(matrix, rhs, x: np.ndarray, solve_a, dissipation: float) -> flo
     return abs(float(r @ solve_a(r))) / dissipation
 
 
+#: the bound's allowance for round-off, relative: ten times the largest |bound| measured on
+#: direct solves at round-off (1.1e-15 over 112 solves, 128^2 - 1024^2, a_c 0.1 up to the
+#: last percolating step; their errors r^T A^-1 r / Q 1e-25 - 1e-17). The bound sums its
+#: terms with compensation and takes the divergence from pressure differences, so no
+#: cancellation of order T |x| enters it (docs/flow.md "Error bound").
+BOUND_ROUNDOFF = 1e-14
+
+
+def _sigma_error_bound(faces: Faces, act, cells, x: np.ndarray) -> float:
+    """An upper bound on (Q(x) - Q) / Q(x) that needs no A^-1 (Thomson's principle,
+    :func:`roughflow.flow.bound.dissipation_bounds`), plus :data:`BOUND_ROUNDOFF`. It was
+    1.04 - 8.4 times the exact error on RS iterates with errors from 0.96 down to 1e-8, and
+    10 - 115 times on converged RS solves (errors 3e-16 - 2.5e-13; docs/flow.md "Error
+    bound")."""
+    return dissipation_bounds(faces, act, cells, x).relative_error + BOUND_ROUNDOFF
+
+
 def _solve_flux_balanced(matrix, rhs, cells, act, faces: Faces, *, tol: float, method: str,
                          rounds: int = 4) -> _Balanced:
     """Solve to ||b - A x|| <= tol ||b|| (else :class:`ConvergenceError`) and on until the
@@ -242,7 +269,8 @@ def _solve_flux_balanced(matrix, rhs, cells, act, faces: Faces, *, tol: float, m
     (the reservoir fluxes are differences 1 - p of order Q / T, so their round-off is
     eps T / Q). sigma comes from the dissipation, whose error is quadratic in the pressure
     error. A direct solve returns that error, r^T A^-1 r / Q (:func:`_sigma_error`), too:
-    one more solve with the factorisation (1-4 % of a direct solve's time, docs/flow.md).
+    one more solve with the factorisation (1-4 % of a direct solve's time, docs/flow.md);
+    an AMG solve an upper bound on it (:func:`_sigma_error_bound`; 7-11 % of an RS solve).
     """
     # not also "within _imbalance_floor": near a_c* that stopped RS with sigma 3e-4 off where
     # going on to round-off gave 1e-8 (1024^2, a_c 0.44, y)
@@ -262,10 +290,12 @@ def _solve_flux_balanced(matrix, rhs, cells, act, faces: Faces, *, tol: float, m
             break
         sol = replace(better, iterations=sol.iterations)
         q, dissipation, imbalance = _flux_balance(faces, act, cells, sol.x)
-    error = None
+    floor = _imbalance_floor(matrix, rhs, sol.x, dissipation)
     if prepared.factor is not None:
         error = _sigma_error(matrix, rhs, sol.x, prepared.factor.solve, dissipation)
-    return _Balanced(sol, q, dissipation, imbalance, error)
+    else:
+        error = _sigma_error_bound(faces, act, cells, sol.x)
+    return _Balanced(sol, q, dissipation, imbalance, floor, error)
 
 
 def _unbalanced(balanced: _Balanced) -> str:
@@ -273,27 +303,35 @@ def _unbalanced(balanced: _Balanced) -> str:
             f"{balanced.imbalance:.2g} > {FLOW_IMBALANCE_MAX:g}")
 
 
+def _uncertified(balanced: _Balanced) -> str:
+    return (f"Reynolds solve ({balanced.solution.method}) ended with |Q_in - Q_out| / Q = "
+            f"{balanced.imbalance:.2g} and sigma's error bound {balanced.sigma_error:.2g} > "
+            f"{FLOW_SIGMA_RTOL:g}")
+
+
 def _balanced_solution(matrix, rhs, cells, act, faces: Faces, *, tol: float,
                        method: str) -> _Balanced:
-    """:func:`_solve_flux_balanced`, checked where its fluxes do not balance to
-    :data:`FLOW_IMBALANCE_MAX`.
+    """:func:`_solve_flux_balanced`, checked where sigma's error is not certified to
+    :data:`FLOW_SIGMA_RTOL`.
 
     Near a_c* the flux is many decades below ||b||, so the residual norm cannot tell a solve
     that missed the flux through the last constriction: an RS solve on the paper config's
     largest grid (a_c 0.414, y) met its residual with |Q_in - Q_out| / Q = 1.0 and a sigma
-    2.5 times the direct solve's. But solves at round-off end there too (every solver at
-    the last percolating step of a bearing gap: 3e-2, with sigma equal to 8e-12), so the
-    imbalance only raises the question (docs/flow.md "Flux check"). A direct solve answers
-    it with its dissipation's error r^T A^-1 r, one more solve with the factorisation, and
-    raises :class:`ConvergenceError` where that exceeds :data:`FLOW_SIGMA_RTOL`. An AMG
-    solve cannot; with ``method="auto"`` the direct solver solves again where its
-    factorisation fits. Otherwise (and for an explicit iterative method), having run on
-    until the fluxes balanced or round-off stopped it, it raises where the imbalance
-    exceeds :data:`ROUNDOFF_MARGIN` times what round-off leaves (:func:`_imbalance_floor`),
-    and where it does not a warning says that sigma is unchecked.
+    2.5 times the direct solve's. The flux imbalance cannot tell it either, since solves at
+    round-off end there too (every solver at the last percolating step of a bearing gap:
+    3e-2, with sigma equal to 8e-12; docs/flow.md "Flux check"). The error of sigma can: a
+    direct solve knows it exactly, an AMG solve has an upper bound (:func:`_solve_flux_balanced`).
+    A solve so certified is returned, and so is a direct one whose fluxes balance to
+    :data:`FLOW_IMBALANCE_MAX`. Otherwise, with ``method="auto"``, the direct solver solves
+    again where its factorisation fits, and raises :class:`ConvergenceError` where its error
+    exceeds :data:`FLOW_SIGMA_RTOL` and its fluxes do not balance. An AMG solve that cannot
+    be checked so (an explicit iterative method, or no memory for the factorisation), having
+    run on until the fluxes balanced or round-off stopped it, raises where its imbalance
+    exceeds :data:`ROUNDOFF_MARGIN` times what round-off leaves (:func:`_imbalance_floor`);
+    where it does not, or where its fluxes balance, a warning says that sigma is unchecked.
     """
     first = _solve_flux_balanced(matrix, rhs, cells, act, faces, tol=tol, method=method)
-    if first.balanced or first.certified:
+    if first.accepted:
         return first
     if first.solution.method != "direct":
         why = f"method={method!r}"
@@ -302,24 +340,25 @@ def _balanced_solution(matrix, rhs, cells, act, faces: Faces, *, tol: float,
             why = "" if fits else (f"its factorisation would need about {describe(need)} more "
                                    f"memory than the {describe(have)} available")
         if why:
-            sol = first.solution
-            floor = _imbalance_floor(matrix, rhs, sol.x, first.dissipation)
-            if first.imbalance <= ROUNDOFF_MARGIN * floor:
-                log.warning("%s, within what round-off leaves (%.2g): its sigma is not checked "
-                            "(no direct solve: %s)", _unbalanced(first), floor, why)
+            sol, floor = first.solution, first.floor
+            if first.balanced or first.imbalance <= ROUNDOFF_MARGIN * floor:
+                how = ("its fluxes balance" if first.balanced else
+                       f"within what round-off leaves ({floor:.2g})")
+                log.warning("%s, %s: its sigma is not checked (no direct solve: %s)",
+                            _uncertified(first), how, why)
                 return first
             raise ConvergenceError(
-                f"{_unbalanced(first)} after {sol.iterations} CG iterations, more than "
-                f"{ROUNDOFF_MARGIN} times the {floor:.2g} that round-off leaves: the solve "
-                f"missed flux through the gap's narrowest channels and its sigma can be wrong "
-                f"(no direct solve: {why})",
+                f"{_uncertified(first)} after {sol.iterations} CG iterations, the imbalance more "
+                f"than {ROUNDOFF_MARGIN} times the {floor:.2g} that round-off leaves: the "
+                f"solve missed flux through the gap's narrowest channels and its sigma can be "
+                f"wrong (no direct solve: {why})",
                 residual=sol.residual, iterations=sol.iterations)
-        log.warning("%s; checking with the direct solver (%d unknowns)", _unbalanced(first),
+        log.warning("%s; checking with the direct solver (%d unknowns)", _uncertified(first),
                     matrix.shape[0])
         again = _solve_flux_balanced(matrix, rhs, cells, act, faces, tol=tol, method="direct")
         first = replace(again, solution=replace(
             again.solution, iterations=again.solution.iterations + first.solution.iterations))
-        if first.balanced or first.certified:
+        if first.accepted:
             return first
     sol = first.solution
     raise ConvergenceError(
@@ -367,9 +406,10 @@ def solve(
     ``periodic``: the cell is periodic across the flow (default), or closed by walls there
     (False: a non-periodic scan).
     Raises ``InputError`` for bad input and ``ConvergenceError`` if the solver misses
-    ``tol``, or where its fluxes do not balance to ``FLOW_IMBALANCE_MAX`` and a direct
-    solve finds sigma uncertain by more than ``FLOW_SIGMA_RTOL`` (an AMG solve that
-    cannot be checked so logs a warning).
+    ``tol``, or where sigma's error is not certified to ``FLOW_SIGMA_RTOL`` and a direct
+    solve whose fluxes do not balance to ``FLOW_IMBALANCE_MAX`` finds sigma uncertain by
+    more (an AMG solve that cannot be checked so raises where its imbalance is beyond
+    round-off, and logs a warning where it is not).
     """
     g = check_gap(gap)
     ax = _check_axis(axis)
@@ -422,8 +462,8 @@ def solve(
         method=sol.method,
         sigma_flux=q_mean * scale,
         n_active=int(cells.size),
-        imbalance_floor=_imbalance_floor(matrix, rhs, sol.x, dissipation),
-        sigma_error=math.nan if balanced.sigma_error is None else balanced.sigma_error,
+        imbalance_floor=balanced.floor,
+        sigma_error=balanced.sigma_error,
     )
 
 
