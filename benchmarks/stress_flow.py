@@ -17,11 +17,11 @@ the outcome (``converged``, converged after falling back to the direct solver, o
 ConvergenceError's residual), the method, CG iterations, residual, flux imbalance and what
 round-off alone leaves of it (``FlowResult.imbalance_floor``), the time of each solve, sigma,
 its error from the linear solve (``FlowResult.sigma_error``: exact for direct solves, an
-upper bound for AMG ones) and its relative
-difference from the reference, and the decades spanned by the flowing
-cells' u^3. The gap of a failed solve is kept in
-``results/benchmarks/stress_flow_gaps/`` to reproduce it. Rows are appended as they come (an
-interrupted run keeps its rows). Writes
+upper bound for AMG ones), its relative difference from the reference, whether the two
+intervals [sigma (1 - error), sigma] overlap to round-off (each sigma is an upper bound on
+the exact one, so they must), and the decades spanned by the flowing cells' u^3. The gap
+of a failed solve is kept in ``results/benchmarks/stress_flow_gaps/`` to reproduce it.
+Rows are appended as they come (an interrupted run keeps its rows). Writes
 results/benchmarks/stress_flow[_TAG].{csv,md}; docs/flow.md quotes it.
 """
 
@@ -38,6 +38,7 @@ import numpy as np
 
 from roughflow import flow, percolation
 from roughflow.errors import ConvergenceError
+from roughflow.flow.core import BOUND_ROUNDOFF
 from roughflow.scenes.jobs import LadderJob, SurfaceParams
 from roughflow.scenes.ladder import contact_ladder
 from roughflow.surface import generate
@@ -125,6 +126,15 @@ def run_case(size: float, eps_f: float, model: str, gamma: float, hurst: float, 
                 row["sigma_error_reference"] = ref.sigma_error if ref is not None else math.nan
                 row["sigma_rel_diff"] = (abs(row["sigma"] - ref.sigma) / ref.sigma
                                          if ref is not None and ref.sigma > 0 else math.nan)
+                # each sigma is at least the exact one and at most (1 + its error) times it,
+                # so the two [sigma (1 - error), sigma] must overlap, up to the round-off of
+                # the sums that form sigma, which a direct solve's error leaves out (the AMG
+                # bound allows BOUND_ROUNDOFF for its own)
+                slack = BOUND_ROUNDOFF
+                row["errors_agree"] = (float(
+                    ref.sigma >= row["sigma"] * (1 - row["sigma_error"] - slack)
+                    and row["sigma"] >= ref.sigma * (1 - ref.sigma_error - slack))
+                    if ref is not None and res is not None else math.nan)
                 if ref_error:
                     row["outcome"] += f" ({other} failed)"
             imbalances = [row["imbalance"], row.get("imbalance_reference", math.nan)]
@@ -151,7 +161,7 @@ KEYS = ["n", "model", "gamma", "hurst", "seed", "target", "a_c", "axis", "outcom
         "iterations", "residual", "imbalance", "seconds", "sigma", "flowing_fraction", "u3_decades",
         "reference", "seconds_reference", "sigma_reference", "sigma_rel_diff",
         "imbalance_reference", "iterations_reference", "gap_file", "imbalance_floor",
-        "imbalance_floor_reference", "sigma_error", "sigma_error_reference"]
+        "imbalance_floor_reference", "sigma_error", "sigma_error_reference", "errors_agree"]
 
 
 def _largest(values) -> float:
@@ -174,8 +184,10 @@ def summary(rows: list[dict]) -> str:
              "| fell back to direct | CG iterations median / max (AMG solves) "
              "| largest sigma difference between RS and direct "
              "| largest flux imbalance, direct / RS "
-             "| largest imbalance / round-off floor, direct / RS | largest u^3 span (decades) |",
-             "|---|---|---|---|---|---|---|---|---|---|---|---|---|---|"]
+             "| largest imbalance / round-off floor, direct / RS | largest u^3 span (decades) "
+             "| largest sigma error, direct / RS's bound "
+             "| pairs whose sigma intervals [sigma (1 - error), sigma] do not overlap |",
+             "|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|"]
     groups = {}
     for r in rows:
         groups.setdefault((r["n"], r["model"], r["gamma"], r["hurst"]), []).append(r)
@@ -193,6 +205,10 @@ def summary(rows: list[dict]) -> str:
         over_floor = {m: _largest([_ratio(r, "") for r in rs if r["method"] == m]
                                   + [_ratio(r, "_reference") for r in rs
                                      if r.get("reference") == m]) for m in ("direct", "rs")}
+        error = {m: _largest([r.get("sigma_error") for r in rs if r["method"] == m]
+                             + [r.get("sigma_error_reference") for r in rs
+                                if r.get("reference") == m]) for m in ("direct", "rs")}
+        disagree = sum(r.get("errors_agree") == 0.0 for r in rs)
         lines.append(
             f"| {n} | {model} | {gamma:g} | {hurst:g} | {len({r['seed'] for r in rs})} | "
             f"{len(rs)} | {failed} | {chosen} | {fell_back} | "
@@ -200,7 +216,8 @@ def summary(rows: list[dict]) -> str:
             f"{max(its) if its else -1} | {max(diffs) if diffs else math.nan:.2g} | "
             f"{worst['direct']:.2g} / {worst['rs']:.2g} | "
             f"{over_floor['direct']:.2g} / {over_floor['rs']:.2g} | "
-            f"{max(r['u3_decades'] for r in rs):.1f} |")
+            f"{max(r['u3_decades'] for r in rs):.1f} | "
+            f"{error['direct']:.2g} / {error['rs']:.2g} | {disagree} |")
     return "\n".join(lines) + "\n"
 
 

@@ -115,3 +115,32 @@ def test_unknowns_the_faces_do_not_connect_give_no_bound():
     cells = np.arange(3)
     bounds = dissipation_bounds(faces, active, cells, np.array([0.5, 0.5, 0.5]))
     assert bounds.upper == 0.5 and bounds.lower == 0.0 and bounds.relative_error == 1.0
+
+
+def test_direct_solve_at_round_off_reports_the_sharper_error(heights):
+    """At the last bearing step before flow along x stops on this surface (a_c 0.5468, where
+    the bottleneck's u^3 is near the 1e-16 closing limit) the imbalance floor is about 80:
+    the float64 residual r is mostly round-off, and so is the direct solve's r^T A^-1 r / Q
+    (2.8e-8). The bound does not use r and gives 7.6e-9 (both are upper bounds on the
+    error), so the solve reports the bound. RS's sigma cannot lie below the lower end."""
+    from roughflow.flow.linsolve import prepare as prepare_solver
+
+    lo, hi = 0.3, 0.8
+    for _ in range(30):  # the largest a_c at which the gap still carries flow along x
+        mid = 0.5 * (lo + hi)
+        gap = np.maximum(np.quantile(heights, 1.0 - mid) - heights, 0.0)
+        lo, hi = (mid, hi) if flow_core.flowing_cells(gap**3 / 12.0, 0).any() else (lo, mid)
+    gap = np.maximum(np.quantile(heights, 1.0 - lo) - heights, 0.0)
+    d = solve(gap, 0, method="direct")
+    assert d.imbalance_floor > 10 * flow_core.DIRECT_BOUND_ABOVE_FLOOR
+    sy = _system(gap)
+    x = d.pressure.ravel()[sy.cells]
+    dissipation = flow_core._flux_balance(sy.faces, sy.active, sy.cells, x)[1]
+    from_residual = flow_core._sigma_error(sy.matrix, sy.rhs, x,
+                                           prepare_solver(sy.matrix, "direct").factor.solve,
+                                           dissipation)
+    bound = flow_core._sigma_error_bound(sy.faces, sy.active, sy.cells, x)
+    assert bound < 0.5 * from_residual
+    assert d.sigma_error == pytest.approx(bound, rel=1e-9)
+    rs = solve(gap, 0, method="rs")
+    assert (d.sigma - rs.sigma) / d.sigma <= d.sigma_error
