@@ -280,7 +280,7 @@ def _solve_flux_balanced(matrix, rhs, cells, act, faces: Faces, *, tol: float, m
     eps T / Q). sigma comes from the dissipation, whose error is quadratic in the pressure
     error. A direct solve returns that error, r^T A^-1 r / Q (:func:`_sigma_error`), too:
     one more solve with the factorisation (1-4 % of a direct solve's time, docs/flow.md);
-    an AMG solve an upper bound on it (:func:`_sigma_error_bound`; 7-11 % of an RS solve).
+    an AMG solve an upper bound on it (:func:`_sigma_error_bound`; 6-9 % of an RS solve).
     """
     # not also "within _imbalance_floor": near a_c* that stopped RS with sigma 3e-4 off where
     # going on to round-off gave 1e-8 (1024^2, a_c 0.44, y)
