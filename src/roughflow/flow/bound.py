@@ -38,14 +38,11 @@ _MANTISSA_DROPPED = 44
 
 
 @numba.njit(cache=True)
-def _divergence_free(t_along, t_across, t_in, t_out, index, x):  # pragma: no cover
-    """The fluxes of the pressures ``x`` of the unknowns, their divergence routed to the
-    reservoirs along the maximum spanning tree; returns (Q(x), the energy E of the corrected
-    fluxes, their inlet flux, their outlet flux, whether the tree reached every unknown)."""
+def _face_edges(t_along, t_across, t_in, t_out, index, m):  # pragma: no cover
+    """The faces as edges (head, tail, T) of a graph on the unknowns 0 .. m-1, the inlet m
+    and the outlet m + 1. Edge 0 joins the two reservoirs: no face, it carries nothing and
+    enters no sum, but lets one tree reach both."""
     n0, n1 = index.shape
-    m = x.size
-    inlet, outlet = m, m + 1
-    # the faces as edges of a graph on the unknowns and the two reservoirs
     n_edges = 1
     for i in range(n0):
         for j in range(n1):
@@ -61,9 +58,7 @@ def _divergence_free(t_along, t_across, t_in, t_out, index, x):  # pragma: no co
     head = np.empty(n_edges, np.int32)
     tail = np.empty(n_edges, np.int32)
     trans = np.empty(n_edges, np.float64)
-    # edge 0 joins the reservoirs (no face: it carries nothing and enters no sum), so
-    # that one tree reaches both
-    head[0], tail[0], trans[0] = inlet, outlet, np.inf
+    head[0], tail[0], trans[0] = m, m + 1, np.inf
     k = 1
     for i in range(n0):
         for j in range(n1):
@@ -76,38 +71,49 @@ def _divergence_free(t_along, t_across, t_in, t_out, index, x):  # pragma: no co
                 k += 1
     for j in range(n1):
         if t_in[j] > 0:
-            head[k], tail[k], trans[k] = inlet, index[0, j], t_in[j]
+            head[k], tail[k], trans[k] = m, index[0, j], t_in[j]
             k += 1
         if t_out[j] > 0:
-            head[k], tail[k], trans[k] = index[n0 - 1, j], outlet, t_out[j]
+            head[k], tail[k], trans[k] = index[n0 - 1, j], m + 1, t_out[j]
             k += 1
-    # Kruskal from the largest transmissibility down, by a counting sort on the leading
-    # bits of T (a positive float64's bits order it: 8 bits of mantissa resolve 1.003)
+    return head, tail, trans
+
+
+@numba.njit(cache=True)
+def _largest_first(trans):  # pragma: no cover
+    """The edges in order of decreasing T, edge 0 first: a counting sort on the leading bits
+    of T (a positive float64's bits order it)."""
+    n_edges = trans.size
     bits = trans.view(np.int64) >> _MANTISSA_DROPPED
     lo, hi = bits[1], bits[1]
     for e in range(2, n_edges):
         lo = min(lo, bits[e])
         hi = max(hi, bits[e])
-    levels = hi - lo + 1
     key = np.empty(n_edges, np.int32)
     key[0] = 0
     for e in range(1, n_edges):
-        key[e] = hi - bits[e] + 1  # 1 .. levels, largest T first
-    count = np.zeros(levels + 2, np.int32)
+        key[e] = hi - bits[e] + 1  # 1 .. hi - lo + 1
+    count = np.zeros(hi - lo + 3, np.int32)
     for e in range(n_edges):
         count[key[e] + 1] += 1
-    for b in range(1, levels + 2):
+    for b in range(1, count.size):
         count[b] += count[b - 1]
     order = np.empty(n_edges, np.int32)
     for e in range(n_edges):
         order[count[key[e]]] = e
         count[key[e]] += 1
-    parent = np.arange(m + 2).astype(np.int32)
-    size = np.ones(m + 2, np.int32)
-    in_tree = np.zeros(n_edges, np.bool_)
-    degree = np.zeros(m + 2, np.int32)
+    return order
+
+
+@numba.njit(cache=True)
+def _maximum_spanning_tree(head, tail, trans, n_nodes):  # pragma: no cover
+    """Kruskal: which edges form the tree, each node's degree in it, whether it spans."""
+    parent = np.arange(n_nodes).astype(np.int32)
+    size = np.ones(n_nodes, np.int32)
+    in_tree = np.zeros(head.size, np.bool_)
+    degree = np.zeros(n_nodes, np.int32)
     kept = 0
-    for e in order:
+    for e in _largest_first(trans):
         a, b = _find(parent, head[e]), _find(parent, tail[e])
         if a != b:
             if size[a] > size[b]:  # union by size: shallow trees, fewer random reads
@@ -118,44 +124,65 @@ def _divergence_free(t_along, t_across, t_in, t_out, index, x):  # pragma: no co
             degree[head[e]] += 1
             degree[tail[e]] += 1
             kept += 1
-            if kept == m + 1:
+            if kept == n_nodes - 1:
                 break
-    pressure = np.empty(m + 2)
-    pressure[:m] = x
-    pressure[inlet], pressure[outlet] = 1.0, 0.0
-    if kept < m + 1:
-        upper = 0.0
-        for e in range(1, n_edges):
-            upper += trans[e] * (pressure[head[e]] - pressure[tail[e]]) ** 2
-        return upper, 0.0, 0.0, 0.0, False
-    # the tree rooted at the inlet: breadth-first order, each node's parent and edge
-    start = np.zeros(m + 3, np.int32)
-    for v in range(m + 2):
+    return in_tree, degree, kept == n_nodes - 1
+
+
+@numba.njit(cache=True)
+def _rooted(head, tail, in_tree, degree, root):  # pragma: no cover
+    """The tree's nodes in breadth-first order from ``root`` and each node's edge to its
+    parent (-1 at the root)."""
+    n_nodes = degree.size
+    start = np.zeros(n_nodes + 1, np.int32)
+    for v in range(n_nodes):
         start[v + 1] = start[v] + degree[v]
     fill = start[:-1].copy()
-    adjacent = np.empty(2 * (m + 1), np.int32)
-    for e in range(n_edges):
+    adjacent = np.empty(start[-1], np.int32)
+    for e in range(head.size):
         if in_tree[e]:
             adjacent[fill[head[e]]] = e
             fill[head[e]] += 1
             adjacent[fill[tail[e]]] = e
             fill[tail[e]] += 1
-    bfs = np.empty(m + 2, np.int32)
-    up = np.full(m + 2, -1, np.int32)  # the edge to the parent
-    bfs[0] = inlet
-    seen = np.zeros(m + 2, np.bool_)
-    seen[inlet] = True
+    order = np.empty(n_nodes, np.int32)
+    up = np.full(n_nodes, -1, np.int32)
+    seen = np.zeros(n_nodes, np.bool_)
+    order[0] = root
+    seen[root] = True
     n_seen = 1
-    for s in range(m + 2):
-        v = bfs[s]
+    for s in range(n_nodes):
+        v = order[s]
         for a in range(start[v], start[v + 1]):
             e = adjacent[a]
             w = tail[e] if head[e] == v else head[e]
             if not seen[w]:
                 seen[w] = True
                 up[w] = e
-                bfs[n_seen] = w
+                order[n_seen] = w
                 n_seen += 1
+    return order, up
+
+
+@numba.njit(cache=True)
+def _divergence_free(t_along, t_across, t_in, t_out, index, x):  # pragma: no cover
+    """The fluxes of the pressures ``x`` of the unknowns, their divergence routed to the
+    reservoirs along the maximum spanning tree; returns (Q(x), the energy E of the corrected
+    fluxes, their inlet flux, their outlet flux, whether the tree reached every unknown)."""
+    m = x.size
+    inlet, outlet = m, m + 1
+    head, tail, trans = _face_edges(t_along, t_across, t_in, t_out, index, m)
+    n_edges = head.size
+    in_tree, degree, spans = _maximum_spanning_tree(head, tail, trans, m + 2)
+    pressure = np.empty(m + 2)
+    pressure[:m] = x
+    pressure[inlet], pressure[outlet] = 1.0, 0.0
+    if not spans:
+        upper = 0.0
+        for e in range(1, n_edges):
+            upper += trans[e] * (pressure[head[e]] - pressure[tail[e]]) ** 2
+        return upper, 0.0, 0.0, 0.0, False
+    order, up = _rooted(head, tail, in_tree, degree, inlet)
     # the fluxes T (p_head - p_tail) of x, from pressure differences: the divergence they
     # leave is then exact to about eps times the flux through the gap, whereas the residual
     # b - A x carries eps T |x|, up to 1e3 times the flux near a_c* (its round-off floor)
@@ -171,7 +198,7 @@ def _divergence_free(t_along, t_across, t_in, t_out, index, x):  # pragma: no co
     # each unknown sends what it takes in and its subtree's to its parent: afterwards every
     # cell's outflow equals its inflow
     for s in range(m + 1, 0, -1):
-        v = bfs[s]
+        v = order[s]
         e = up[v]
         if e == 0:
             continue
