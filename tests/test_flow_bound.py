@@ -121,8 +121,8 @@ def test_direct_solve_at_round_off_reports_the_sharper_error(heights):
     """At the last bearing step before flow along x stops on this surface (a_c 0.5468, where
     the bottleneck's u^3 is near the 1e-16 closing limit) the imbalance floor is about 80:
     the float64 residual r is mostly round-off, and so is the direct solve's r^T A^-1 r / Q
-    (2.8e-8). The bound does not use r and gives 7.6e-9 (both are upper bounds on the
-    error), so the solve reports the bound. RS's sigma cannot lie below the lower end."""
+    (2.8e-8). The bound does not use r, is rigorous and gives 7.6e-9, so the solve reports
+    the bound. RS's sigma cannot lie below the lower end."""
     from roughflow.flow.linsolve import prepare as prepare_solver
 
     lo, hi = 0.3, 0.8
