@@ -16,7 +16,7 @@ unless ``--no-reference``, with the other of the two as the reference for sigma.
 the outcome (``converged``, converged after falling back to the direct solver, or the
 ConvergenceError's residual), the method, CG iterations, residual, flux imbalance and what
 round-off alone leaves of it (``FlowResult.imbalance_floor``), the time of each solve, sigma,
-its error from the linear solve (``FlowResult.sigma_error``: exact for direct solves, an
+its error from the linear solve (``FlowResult.sigma_error``: estimated for direct solves, an
 upper bound for AMG ones), its relative difference from the reference, whether the two
 intervals [sigma (1 - error), sigma] overlap to round-off (each sigma is an upper bound on
 the exact one, so they must), and the decades spanned by the flowing cells' u^3. The gap

@@ -165,6 +165,17 @@ def _rooted(head, tail, in_tree, degree, root):  # pragma: no cover
 
 
 @numba.njit(cache=True)
+def _add(sums, errors, k, term):  # pragma: no cover
+    """Add ``term`` to the compensated (Neumaier) sum ``k``: ``sums[k] + errors[k]``."""
+    t = sums[k] + term
+    if abs(sums[k]) >= abs(term):
+        errors[k] += (sums[k] - t) + term
+    else:
+        errors[k] += (term - t) + sums[k]
+    sums[k] = t
+
+
+@numba.njit(cache=True)
 def _divergence_free(t_along, t_across, t_in, t_out, index, x):  # pragma: no cover
     """The fluxes of the pressures ``x`` of the unknowns, their divergence routed to the
     reservoirs along the maximum spanning tree; returns (Q(x), the energy E of the corrected
@@ -186,6 +197,9 @@ def _divergence_free(t_along, t_across, t_in, t_out, index, x):  # pragma: no co
     # the fluxes T (p_head - p_tail) of x, from pressure differences: the divergence they
     # leave is then exact to about eps times the flux through the gap, whereas the residual
     # b - A x carries eps T |x|, up to 1e3 times the flux near a_c* (its round-off floor)
+    # Q(x), E and the reservoir fluxes are compensated sums (Neumaier), in that order
+    sums = np.zeros(4)
+    errors = np.zeros(4)
     flux = np.zeros(n_edges)
     carried = np.zeros(m + 2)  # what each node takes in: the divergence to cancel
     for e in range(1, n_edges):
@@ -193,6 +207,7 @@ def _divergence_free(t_along, t_across, t_in, t_out, index, x):  # pragma: no co
         flux[e] = f
         carried[head[e]] -= f
         carried[tail[e]] += f
+        _add(sums, errors, 0, f * f / trans[e])
     carried[inlet] = 0.0  # the reservoirs take in or give out anything
     carried[outlet] = 0.0
     # each unknown sends what it takes in and its subtree's to its parent: afterwards every
@@ -206,21 +221,12 @@ def _divergence_free(t_along, t_across, t_in, t_out, index, x):  # pragma: no co
         c = carried[v]
         carried[p] += c
         flux[e] += c if head[e] == v else -c
-    # Q(x), E and the reservoir fluxes by compensated sums (Neumaier)
-    sums = np.zeros(4)
-    errors = np.zeros(4)
     for e in range(1, n_edges):
-        f0 = trans[e] * (pressure[head[e]] - pressure[tail[e]])
-        terms = (f0 * f0 / trans[e], flux[e] * flux[e] / trans[e],
-                 flux[e] if head[e] == inlet else 0.0,
-                 flux[e] if tail[e] == outlet else 0.0)
-        for k in range(4):
-            t = sums[k] + terms[k]
-            if abs(sums[k]) >= abs(terms[k]):
-                errors[k] += (sums[k] - t) + terms[k]
-            else:
-                errors[k] += (terms[k] - t) + sums[k]
-            sums[k] = t
+        _add(sums, errors, 1, flux[e] * flux[e] / trans[e])
+        if head[e] == inlet:
+            _add(sums, errors, 2, flux[e])
+        elif tail[e] == outlet:
+            _add(sums, errors, 3, flux[e])
     return (sums[0] + errors[0], sums[1] + errors[1], sums[2] + errors[2], sums[3] + errors[3],
             True)
 

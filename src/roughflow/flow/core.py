@@ -54,8 +54,9 @@ class FlowResult:
     imbalance_floor: the |Q_in - Q_out| / Q that float64 round-off alone leaves this
         solution (0 without a solve): an imbalance near it says nothing about sigma.
     sigma_error: sigma's relative error (sigma is an upper bound: Dirichlet's principle).
-        A direct solve gives it exactly, r^T A^-1 r / Q with the solve's residual r and its
-        factorisation; an AMG solve, which has no A^-1, an upper bound from Thomson's
+        A direct solve estimates it as r^T A^-1 r / Q with the solve's residual r and its
+        factorisation (exact up to the round-off of r); an AMG solve, which has no A^-1, an
+        upper bound from Thomson's
         principle (:mod:`roughflow.flow.bound`), round-off allowed for
         (:data:`BOUND_ROUNDOFF`). Where r is mostly round-off (``imbalance_floor`` above
         :data:`DIRECT_BOUND_ABOVE_FLOOR`) a direct solve reports the smaller of the two.
@@ -171,8 +172,8 @@ class _Balanced:
     """A solve of the Reynolds system with its flux check: the linear solution, the pressure
     on the grid (0 in inactive cells), the dissipation Q(p), |Q_in - Q_out| / Q(p), what
     round-off leaves of that (:func:`_imbalance_floor`), and the dissipation's relative error
-    (Q(p) - Q) / Q(p): exact for a direct solve (:func:`_sigma_error`), an upper bound for
-    an AMG one (:func:`_sigma_error_bound`)."""
+    (Q(p) - Q) / Q(p): estimated for a direct solve (:func:`_sigma_error`), an upper bound
+    for an AMG one (:func:`_sigma_error_bound`)."""
 
     solution: LinearSolution
     pressure: np.ndarray
@@ -337,7 +338,8 @@ def _balanced_solution(matrix, rhs, cells, act, faces: Faces, *, tol: float,
     2.5 times the direct solve's. The flux imbalance cannot tell it either, since solves at
     round-off end there too (every solver at the last percolating step of a bearing gap:
     3e-2, with sigma equal to 8e-12; docs/flow.md "Flux check"). The error of sigma can: a
-    direct solve knows it exactly, an AMG solve has an upper bound (:func:`_solve_flux_balanced`).
+    direct solve estimates it from its residual, an AMG solve has an upper bound
+    (:func:`_solve_flux_balanced`).
     A solve so certified is returned, and so is a direct one whose fluxes balance to
     :data:`FLOW_IMBALANCE_MAX`. Otherwise, with ``method="auto"``, the direct solver solves
     again where its factorisation fits, and raises :class:`ConvergenceError` where its error
