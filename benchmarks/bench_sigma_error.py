@@ -7,9 +7,10 @@ Usage:
 Bearing gaps (the top fraction a_c of the heights in contact) of the surface H = 0.8,
 L/lambda_r = 4, 4 points per lambda_s, seed 0. For each, the median time of a whole direct
 ``flow.solve`` along x (which includes the error since it is recorded) and of
-``flow.core._sigma_error`` alone (r = b - A p, one more solve with the factorisation,
-r^T A^-1 r / Q), their ratio, and the error, the imbalance and its round-off floor the solve
-reports. Then the same for an RS-AMG solve and its upper bound
+``flow.core._sigma_error`` alone (the residual r = b - A p, its scale w = |A| |p| + |b|,
+one more solve with the factorisation: the bound (max |r| / w + 8 eps)^2 w^T A^-1 w / Q),
+their ratio, and the error, the imbalance and its round-off floor the solve reports.
+Then the same for an RS-AMG solve and its upper bound
 (``flow.core._sigma_error_bound``: the divergence of the solve's fluxes routed along the
 widest spanning tree, ``flow.bound``), with the bound RS reports. Writes
 results/benchmarks/sigma_error[_TAG].{csv,md}; docs/flow.md quotes it.

@@ -194,10 +194,11 @@ def test_ladder_records_the_flow_solver_and_combines_with_files_that_do_not(monk
         floor = ds["flow_imbalance_floor"].values
         solved = ds["percolating"].values == 1
         assert solved.any() and (floor[solved] > 0).all() and (floor[~solved] == 0).all()
-    # sigma's error r^T A^-1 r / Q: direct solves end at round-off, where it measured 1e-24 -
-    # 2e-15 (benchmarks/bench_sigma_error.py, the default workflow's ladders), so 1e-12 leaves
-    # three decades; AMG solves report their upper bound, 1e-14 - 1e-12 on such states
-    # (tests/test_flow_bound.py), so 1e-9 leaves three decades too
+    # sigma's error bound: direct solves end at round-off, where r^T A^-1 r / Q measured
+    # 1e-24 - 2e-15 (benchmarks/bench_sigma_error.py, the default workflow's ladders) and
+    # the allowances for round-off add 1e-14 and far less, so 1e-12 leaves two decades; AMG
+    # solves report their bound, 1e-14 - 1e-12 on such states (tests/test_flow_bound.py),
+    # so 1e-9 leaves three decades
     solved = direct["percolating"].values == 1
     error = direct["flow_sigma_error"].values
     assert (error[solved] < 1e-12).all() and (error[~solved] == 0).all()

@@ -90,12 +90,13 @@ FLOW_TOL_MAX = 1e-2
 #: (3e-2 at the last percolating step of a bearing gap, sigma equal to 8e-12), hence a check
 #: rather than a failure (docs/flow.md "Flux check").
 FLOW_IMBALANCE_MAX = 1e-2
-#: Largest relative error of sigma that the check accepts: the dissipation's error
-#: r^T A^-1 r / Q, computed with the direct solver's factorisation. On near-threshold states
-#: kept by the stress walks (1024^2 - 2048 x 4096) a direct solve's is 2e-13 - 2.3e-5, at
-#: round-off (a refinement step moves it by its own size); 1e-3 in sigma is 1e-3 in ln sigma,
-#: at least 300 times below its seed-to-seed spread (0.33 - 1.34 at a_c 0.2 - 0.35,
-#: docs/accuracy.md). So the check raises only for a sigma that is wrong (docs/flow.md).
+#: Largest relative error of sigma that the check accepts: the upper bound on the
+#: dissipation's error that every solve reports (docs/flow.md "Error bound"). On
+#: near-threshold states kept by the stress walks (1024^2 - 2048 x 4096) a direct solve's
+#: r^T A^-1 r / Q was 2e-13 - 2.3e-5, at round-off (a refinement step moves it by its own
+#: size); 1e-3 in sigma is 1e-3 in ln sigma, at least 300 times below its seed-to-seed
+#: spread (0.33 - 1.34 at a_c 0.2 - 0.35, docs/accuracy.md). So the check raises only for a
+#: sigma that is wrong (docs/flow.md).
 FLOW_SIGMA_RTOL = 1e-3
 #: A cell whose local conductivity u^3 / (12 eta) is at most this fraction of the largest
 #: carries no flow: float64 cannot resolve it beside the largest (a gap below 4.6e-6 of the

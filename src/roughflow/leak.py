@@ -51,7 +51,7 @@ class LeakCurve:
     sigma: effective conductance per axis, u^3/(12 eta) in L^3/eta (0 without percolation).
     iterations, residual: of each contact solve.
     flow_imbalance, flow_sigma_error: of each flow solve (``FlowResult.flux_imbalance`` and
-        ``sigma_error``: sigma's relative error from the linear solve, a bound for AMG); 0
+        ``sigma_error``: an upper bound on sigma's relative error from the linear solve); 0
         without percolation.
     thresholds: per axis, the percolation threshold search on the same window; its
         ``p_lo`` / ``p_hi`` are nominal pressures (E*): the fluid spans at ``p_lo`` and not

@@ -44,8 +44,9 @@ FLOW_IMBALANCE_FLOOR_LONG_NAME = (
     "the flux imbalance float64 round-off alone leaves the flow solve's pressure (0 without a "
     "solve): an imbalance near it says nothing about sigma")
 FLOW_SIGMA_ERROR_LONG_NAME = (
-    "relative error of sigma from the flow solve's residual: r^T A^-1 r / Q for direct solves, "
-    "an upper bound from the complementary energy for AMG-CG ones (no A^-1); 0 without a solve")
+    "upper bound on the relative error of sigma from the flow solve: for direct solves from "
+    "the residual (r^T A^-1 r / Q plus its round-off), or the complementary-energy bound where "
+    "smaller; that bound for AMG-CG ones (no A^-1); 0 without a solve")
 
 
 def spec_attrs(surface: Surface) -> dict:

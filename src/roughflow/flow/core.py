@@ -54,13 +54,13 @@ class FlowResult:
     imbalance_floor: the |Q_in - Q_out| / Q that float64 round-off alone leaves this
         solution (0 without a solve): an imbalance near it says nothing about sigma.
     sigma_error: sigma's relative error (sigma is an upper bound: Dirichlet's principle).
-        A direct solve estimates it as r^T A^-1 r / Q with the solve's residual r and its
-        factorisation (exact up to the round-off of r); an AMG solve, which has no A^-1, an
-        upper bound from Thomson's
-        principle (:mod:`roughflow.flow.bound`), round-off allowed for
-        (:data:`BOUND_ROUNDOFF`). Where r is mostly round-off (``imbalance_floor`` above
-        :data:`DIRECT_BOUND_ABOVE_FLOOR`) a direct solve reports the smaller of the two.
-        0 without a solve.
+        An upper bound in both cases: a direct solve takes r^T A^-1 r / Q with its
+        residual r and its factorisation, plus an allowance for the round-off of r; an AMG
+        solve, which has no A^-1, the bound from Thomson's principle
+        (:mod:`roughflow.flow.bound`). Both allow for the round-off of Q's sums
+        (:data:`BOUND_ROUNDOFF`), so no solve reports less than 1e-14. Where the first
+        exceeds :data:`DIRECT_BOUND_ABOVE` (r mostly round-off) a direct solve reports the
+        smaller of the two. 0 without a solve.
     iterations: CG iterations, those spent balancing the fluxes and before a fallback to
         the direct solver included (0 for a direct solve or when no solve was needed).
     percolating: whether the open cells connect the two reservoirs.
@@ -172,8 +172,9 @@ class _Balanced:
     """A solve of the Reynolds system with its flux check: the linear solution, the pressure
     on the grid (0 in inactive cells), the dissipation Q(p), |Q_in - Q_out| / Q(p), what
     round-off leaves of that (:func:`_imbalance_floor`), and the dissipation's relative error
-    (Q(p) - Q) / Q(p): estimated for a direct solve (:func:`_sigma_error`), an upper bound
-    for an AMG one (:func:`_sigma_error_bound`)."""
+    (Q(p) - Q) / Q(p), bounded from above: from the residual for a direct solve
+    (:func:`_sigma_error`), by Thomson's principle for an AMG one
+    (:func:`_sigma_error_bound`)."""
 
     solution: LinearSolution
     pressure: np.ndarray
@@ -213,6 +214,13 @@ def _flux_balance(faces: Faces, act: np.ndarray, cells: np.ndarray, x: np.ndarra
 ROUNDOFF_MARGIN = 10
 
 
+def _residual_scale(matrix, rhs, x: np.ndarray) -> np.ndarray:
+    """(|A| |x| + |b|)_i: what the round-off of the float64 residual b - A x is relative to."""
+    size = np.abs(x)
+    # |A| = 2 diag(A) - A: the Reynolds matrix has no positive off-diagonal entry
+    return 2.0 * matrix.diagonal() * size - matrix @ size + np.abs(rhs)
+
+
 def _imbalance_floor(matrix, rhs, x: np.ndarray, dissipation: float) -> float:
     """The |Q_in - Q_out| / Q that round-off alone leaves a solution ``x``.
 
@@ -221,42 +229,60 @@ def _imbalance_floor(matrix, rhs, x: np.ndarray, dissipation: float) -> float:
     Q. Solves driven to round-off ended at 0.1 - 1.5 of it (128^2 - 2048 x 4096), while the
     RS iterate that met its residual with sigma 2.5 times too large (2048 x 4096, a_c 0.414,
     y) was about 2000 times above it (docs/flow.md "Flux check")."""
-    size = np.abs(x)
-    # |A| = 2 diag(A) - A: the Reynolds matrix has no positive off-diagonal entry
-    w = 2.0 * matrix.diagonal() * size - matrix @ size + np.abs(rhs)
+    w = _residual_scale(matrix, rhs, x)
     return float(np.finfo(np.float64).eps * np.linalg.norm(w) / dissipation)
 
 
+#: the round-off of the float64 residual b - A x, relative to (|A| |x| + |b|)_i: a row has at
+#: most 5 entries, so forming it rounds by at most gamma_6 = 6u / (1 - 6u) of that (u = eps / 2,
+#: the standard bound for a sum of products), and the diagonal, a sum of at most 4 face
+#: conductances, differs from theirs by at most gamma_3 (the off-diagonal entries and b are the
+#: faces' values exactly): 4.5 eps in all, taken as 8 eps for the factorisation's own error in
+#: A^-1 (|A| |x| + |b|)
+RESIDUAL_ROUNDOFF = 8.0 * np.finfo(np.float64).eps
+
+
 def _sigma_error(matrix, rhs, x: np.ndarray, solve_a, dissipation: float) -> float:
-    """The relative error (Q(x) - Q) / Q(x) of the dissipation of ``x``: r^T A^-1 r / Q(x)
-    with r = b - A x and ``solve_a`` applying A^-1 (the factorisation).
+    """An upper bound on the relative error (Q(x) - Q) / Q(x) of the dissipation of ``x``
+    from its residual, with ``solve_a`` applying A^-1 (the factorisation).
 
     The dissipation is the energy x^T A x - 2 b^T x + c, minimal at the solution, so it
-    exceeds Q by the energy norm of the error, e^T A e = r^T A^-1 r with A e = r; sigma is
-    Q times a length ratio, so this is sigma's relative error too. The factorisation's
-    own round-off in A^-1 r is relative to that term (eps z^T |A| z / Q for z = A^-1 r:
-    2e-17 - 2e-12 near a_c*); what limits the value is the round-off of r itself
-    (:func:`_imbalance_floor`), which it squares, so it is an estimate, not a bound. On a
+    exceeds Q by the energy norm of the error, e^T A e = r*^T A^-1 r* with r* = b - A x
+    (exact arithmetic); sigma is Q times a length ratio, so this is sigma's relative error
+    too. The float64 residual r differs from r* by at most :data:`RESIDUAL_ROUNDOFF` w
+    entrywise, w = |A| |x| + |b|, so |r*| <= (c + 8 eps) w with c = max_i |r_i| / w_i; and
+    A^-1 has no negative entry (A is an M-matrix), so r*^T A^-1 r* <= |r*|^T A^-1 |r*| <=
+    (c + 8 eps)^2 w^T A^-1 w: one solve with the factorisation. A direct solve ends at
+    round-off, where c was 2.4 - 4.7 eps (128^2 bearing gaps up to the last flowing step),
+    so this is 1.5 - 2.5 times the same bound with r*^T A^-1 r* split into r^T A^-1 r and
+    the round-off's part, which needs a second solve. r^T A^-1 r / Q alone, which direct
+    solves reported before, is an estimate that can be low where r is round-off: on a
     1024^2 elastic state near a_c* (floor 1.5e-6) it gave 6.2e-14 where the error is at
-    least 1.2e-13, the distance to RS's sigma (docs/flow.md "Error bound")."""
+    least 1.2e-13, the distance to RS's sigma (docs/flow.md "Conductance estimate").
+    :data:`BOUND_ROUNDOFF` covers the round-off of the sum that forms Q(x)."""
+    w = _residual_scale(matrix, rhs, x)
     r = rhs - matrix @ x
-    return abs(float(r @ solve_a(r))) / dissipation
+    open_rows = w > 0  # where w is 0, so are A x and b, and r
+    c = float(np.max(np.abs(r[open_rows]) / w[open_rows], initial=0.0))
+    energy = (c + RESIDUAL_ROUNDOFF) ** 2 * abs(float(w @ solve_a(w)))
+    return energy / dissipation + BOUND_ROUNDOFF
 
 
-#: the bound's allowance for round-off, relative: ten times the largest |bound| measured on
-#: direct solves at round-off (1.1e-15 over 112 solves, 128^2 - 1024^2, a_c 0.1 up to the
-#: last percolating step; their errors r^T A^-1 r / Q 1e-25 - 1e-17). The bound sums its
-#: terms with compensation and takes the divergence from pressure differences, so no
-#: cancellation of order T |x| enters it (docs/flow.md "Error bound").
+#: the allowance for the round-off of the sums that form Q(x) and the bound, relative: ten
+#: times the largest |bound| measured on direct solves at round-off (1.1e-15 over 112 solves,
+#: 128^2 - 1024^2, a_c 0.1 up to the last percolating step). The bound sums its terms with
+#: compensation and takes the divergence from pressure differences, so no cancellation of
+#: order T |x| enters it (docs/flow.md "Error bound"). Both errors a solve reports include it.
 BOUND_ROUNDOFF = 1e-14
 
 
-#: a direct solve whose imbalance floor exceeds this also computes the bound and reports the
-#: smaller error. At the last percolating steps of bearing gaps (floors 6 - 900, 25 direct
-#: solves, 128^2 - 1024^2) r^T A^-1 r / Q was 1.3e-14 - 3e-7 and the bound 5.5e-14 - 1.7e-7,
-#: the bound the smaller in 6 of them (by up to 300 times); at floors below 1e-3 r^T A^-1 r / Q
-#: was at most 1e-15, where the bound (1e-14 at least) cannot help
-DIRECT_BOUND_ABOVE_FLOOR = 1e-3
+#: a direct solve whose error from its residual (:func:`_sigma_error`) exceeds this also
+#: computes the bound and reports the smaller. The residual's round-off allowance grows with
+#: the imbalance floor, about as its square: near the last percolating step of a bearing gap
+#: (128^2, floor 82) it is 9e-4 where the bound is 7.6e-9; up to 1e-10 the bound could not
+#: sharpen a number a user reads, and most solves stay below it (docs/flow.md "Conductance
+#: estimate")
+DIRECT_BOUND_ABOVE = 1e-10
 
 
 def _sigma_error_bound(faces: Faces, act, cells, x: np.ndarray) -> float:
@@ -282,9 +308,9 @@ def _solve_flux_balanced(matrix, rhs, cells, act, faces: Faces, *, tol: float, m
     tightening the relative residual by the missing factor, while the residual still falls
     (the reservoir fluxes are differences 1 - p of order Q / T, so their round-off is
     eps T / Q). sigma comes from the dissipation, whose error is quadratic in the pressure
-    error. A direct solve returns that error, r^T A^-1 r / Q (:func:`_sigma_error`), too:
-    one more solve with the factorisation (1-4 % of a direct solve's time, docs/flow.md);
-    an AMG solve an upper bound on it (:func:`_sigma_error_bound`; 6-9 % of an RS solve).
+    error. Each solve returns an upper bound on that error: a direct one from r^T A^-1 r
+    (:func:`_sigma_error`; two more solves with the factorisation), an AMG one from
+    Thomson's principle (:func:`_sigma_error_bound`; 6-9 % of an RS solve).
     """
     # not also "within _imbalance_floor": near a_c* that stopped RS with sigma 3e-4 off where
     # going on to round-off gave 1e-8 (1024^2, a_c 0.44, y)
@@ -307,9 +333,8 @@ def _solve_flux_balanced(matrix, rhs, cells, act, faces: Faces, *, tol: float, m
     floor = _imbalance_floor(matrix, rhs, sol.x, dissipation)
     if prepared.factor is not None:
         error = _sigma_error(matrix, rhs, sol.x, prepared.factor.solve, dissipation)
-        if floor > DIRECT_BOUND_ABOVE_FLOOR:
-            # r is mostly round-off, and so is the estimate r^T A^-1 r: where the bound,
-            # which is proven and does not use r, is smaller, it is reported instead
+        if error > DIRECT_BOUND_ABOVE:
+            # where r is mostly round-off its allowance dominates; the bound does not use r
             error = min(error, _sigma_error_bound(faces, act, cells, sol.x))
     else:
         error = _sigma_error_bound(faces, act, cells, sol.x)
@@ -337,9 +362,8 @@ def _balanced_solution(matrix, rhs, cells, act, faces: Faces, *, tol: float,
     largest grid (a_c 0.414, y) met its residual with |Q_in - Q_out| / Q = 1.0 and a sigma
     2.5 times the direct solve's. The flux imbalance cannot tell it either, since solves at
     round-off end there too (every solver at the last percolating step of a bearing gap:
-    3e-2, with sigma equal to 8e-12; docs/flow.md "Flux check"). The error of sigma can: a
-    direct solve estimates it from its residual, an AMG solve has an upper bound
-    (:func:`_solve_flux_balanced`).
+    3e-2, with sigma equal to 8e-12; docs/flow.md "Flux check"). The error of sigma can: each
+    solve has an upper bound on it (:func:`_solve_flux_balanced`).
     A solve so certified is returned, and so is a direct one whose fluxes balance to
     :data:`FLOW_IMBALANCE_MAX`. Otherwise, with ``method="auto"``, the direct solver solves
     again where its factorisation fits, and raises :class:`ConvergenceError` where its error
