@@ -419,8 +419,8 @@ def test_uncertified_solves_are_checked_by_the_direct_solver(amg_sized_gap, monk
     it (RS on the paper's largest grid at a_c 0.414, y: imbalance 1.0, sigma 2.5 times too
     large) takes a 2048 x 4096 grid. Limits below this gap's solves stand in for it: RS's
     error bound is 1.5e-14 (its round-off allowance 1e-14 and 5e-15) and its imbalance
-    5e-10; the direct solve's error is 1e-14 (the same allowance, and 1e-24 from its
-    residual) and its imbalance 7e-12: a limit between the two errors certifies only the
+    5e-10; the direct solve's error is 1e-14 (the same allowance, and 6e-17 from its
+    residual) and its imbalance 8e-12: a limit between the two errors certifies only the
     direct solve."""
     import roughflow.flow.linsolve as linsolve
 

@@ -54,9 +54,9 @@ class FlowResult:
     imbalance_floor: the |Q_in - Q_out| / Q that float64 round-off alone leaves this
         solution (0 without a solve): an imbalance near it says nothing about sigma.
     sigma_error: sigma's relative error (sigma is an upper bound: Dirichlet's principle).
-        An upper bound in both cases: a direct solve takes r^T A^-1 r / Q with its
-        residual r and its factorisation, plus an allowance for the round-off of r; an AMG
-        solve, which has no A^-1, the bound from Thomson's principle
+        An upper bound in both cases: a direct solve bounds it from its residual r with its
+        factorisation, the round-off of r allowed for (:func:`_sigma_error`); an AMG
+        solve, which has no A^-1, takes the bound from Thomson's principle
         (:mod:`roughflow.flow.bound`). Both allow for the round-off of Q's sums
         (:data:`BOUND_ROUNDOFF`), so no solve reports less than 1e-14. Where the first
         exceeds :data:`DIRECT_BOUND_ABOVE` (r mostly round-off) a direct solve reports the
@@ -276,12 +276,13 @@ def _sigma_error(matrix, rhs, x: np.ndarray, solve_a, dissipation: float) -> flo
 BOUND_ROUNDOFF = 1e-14
 
 
-#: a direct solve whose error from its residual (:func:`_sigma_error`) exceeds this also
-#: computes the bound and reports the smaller. The residual's round-off allowance grows with
-#: the imbalance floor, about as its square: near the last percolating step of a bearing gap
-#: (128^2, floor 82) it is 9e-4 where the bound is 7.6e-9; up to 1e-10 the bound could not
-#: sharpen a number a user reads, and most solves stay below it (docs/flow.md "Conductance
-#: estimate")
+#: a direct solve whose error bound from its residual (:func:`_sigma_error`) exceeds this
+#: also computes Thomson's bound and reports the smaller. Near a_c* A^-1 couples the large
+#: w = |A| |x| + |b| of the well-connected cells to the whole cluster, so the residual's
+#: bound is loose there: 1.7e-3 at the last flowing step of a 128^2 bearing gap (floor 82),
+#: where Thomson's is 7.6e-9, and 5e-3 on a 1024^2 elastic state (floor 6e-4). Up to 1e-10
+#: Thomson's could not sharpen a number a user reads; near a_c* it costs 5-6 % of a direct
+#: solve (docs/flow.md "Conductance estimate")
 DIRECT_BOUND_ABOVE = 1e-10
 
 
@@ -308,9 +309,9 @@ def _solve_flux_balanced(matrix, rhs, cells, act, faces: Faces, *, tol: float, m
     tightening the relative residual by the missing factor, while the residual still falls
     (the reservoir fluxes are differences 1 - p of order Q / T, so their round-off is
     eps T / Q). sigma comes from the dissipation, whose error is quadratic in the pressure
-    error. Each solve returns an upper bound on that error: a direct one from r^T A^-1 r
-    (:func:`_sigma_error`; two more solves with the factorisation), an AMG one from
-    Thomson's principle (:func:`_sigma_error_bound`; 6-9 % of an RS solve).
+    error. Each solve returns an upper bound on that error: a direct one from its residual
+    (:func:`_sigma_error`; one more solve with the factorisation, 1-4 % of a direct solve),
+    an AMG one from Thomson's principle (:func:`_sigma_error_bound`; 6-9 % of an RS solve).
     """
     # not also "within _imbalance_floor": near a_c* that stopped RS with sigma 3e-4 off where
     # going on to round-off gave 1e-8 (1024^2, a_c 0.44, y)
