@@ -280,9 +280,9 @@ BOUND_ROUNDOFF = 1e-14
 #: also computes Thomson's bound and reports the smaller. Near a_c* A^-1 couples the large
 #: w = |A| |x| + |b| of the well-connected cells to the whole cluster, so the residual's
 #: bound is loose there: 1.7e-3 at the last flowing step of a 128^2 bearing gap (floor 82),
-#: where Thomson's is 7.6e-9, and 5e-3 on a 1024^2 elastic state (floor 6e-4). Up to 1e-10
-#: Thomson's could not sharpen a number a user reads; near a_c* it costs 5-6 % of a direct
-#: solve (docs/flow.md "Conductance estimate")
+#: where Thomson's is 7.6e-9, and over 4e-3 on a 1024^2 elastic state (floor 6e-4). Up to
+#: 1e-10 Thomson's could not sharpen a number a user reads; near a_c* it costs 5-6 % of a
+#: direct solve (docs/flow.md "Conductance estimate")
 DIRECT_BOUND_ABOVE = 1e-10
 
 
