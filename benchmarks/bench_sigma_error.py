@@ -7,8 +7,9 @@ Usage:
 Bearing gaps (the top fraction a_c of the heights in contact) of the surface H = 0.8,
 L/lambda_r = 4, 4 points per lambda_s, seed 0. For each, the median time of a whole direct
 ``flow.solve`` along x (which includes the error since it is recorded) and of
-``flow.core._sigma_error`` alone (the residual r = b - A p, its scale w = |A| |p| + |b|,
-one more solve with the factorisation: the bound (max |r| / w + 8 eps)^2 w^T A^-1 w / Q),
+``flow.core._sigma_error`` alone (the residual r = b - A p and one more solve with the
+factorisation: the bound (max |r| / w + 8 eps)^2 w^T A^-1 w / Q; the scale
+w = |A| |p| + |b| is the imbalance floor's, computed by every solve and not timed here),
 their ratio, and the error, the imbalance and its round-off floor the solve reports.
 Then the same for an RS-AMG solve and its upper bound
 (``flow.core._sigma_error_bound``: the divergence of the solve's fluxes routed along the
@@ -58,9 +59,11 @@ def rows_for(n: int, areas: list[float], repeats: int) -> list[dict]:
         factor = prepare(system.matrix, "direct").factor
         x = factor.solve(system.rhs)
         dissipation = res.sigma * system.l_across / system.l_flow  # sigma = Q L_flow / L_across
+        # the residual scale is the imbalance floor's, which every solve computes anyway
+        scale = core._residual_scale(system.matrix, system.rhs, x)
         t_error, error = _median_time(
-            functools.partial(core._sigma_error, system.matrix, system.rhs, x, factor.solve,
-                              dissipation), repeats)
+            functools.partial(core._sigma_error, system.matrix, system.rhs, x, scale,
+                              factor.solve, dissipation), repeats)
         t_rs, rs = _median_time(
             functools.partial(solve, gap, 0, lx=lx, ly=ly, method="rs"), repeats)
         x_rs = rs.pressure.ravel()[system.cells]

@@ -494,7 +494,8 @@ def test_imbalance_floor_separates_round_off_from_a_missed_flux(heights):
         early, _ = pcg(sy.matrix, sy.rhs, tol=1.0, max_iter=3, accept=lambda x: False,
                        preconditioner=prepare(sy.matrix, "rs").preconditioner)
         _, dissipation, imbalance = flow_core._flux_balance(sy.faces, sy.active, sy.cells, early)
-        floor = flow_core._imbalance_floor(sy.matrix, sy.rhs, early, dissipation)
+        floor = flow_core._imbalance_floor(
+            flow_core._residual_scale(sy.matrix, sy.rhs, early), dissipation)
         assert imbalance > 100 * flow_core.ROUNDOFF_MARGIN * floor
 
 
@@ -523,7 +524,8 @@ def test_sigma_error_bounds_the_dissipation_error_of_the_iterate(heights):
             q = flow_core._flux_balance(sy.faces, sy.active, sy.cells, x)[1]
             r = sy.rhs - sy.matrix @ x
             assert float(r @ lu.solve(r)) / q == pytest.approx((q - exact) / q, rel=1e-6)
-            bound = flow_core._sigma_error(sy.matrix, sy.rhs, x, lu.solve, q)
+            bound = flow_core._sigma_error(
+                sy.matrix, sy.rhs, x, flow_core._residual_scale(sy.matrix, sy.rhs, x), lu.solve, q)
             assert bound >= (q - exact) / q
             errors.append((q - exact) / q)
         assert errors[0] > 0.1 and errors[-1] < 1e-6  # a real range of errors

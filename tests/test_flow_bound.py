@@ -140,7 +140,9 @@ def _residual_terms(gap):
     factor = prepare_solver(sy.matrix, "direct").factor.solve
     r = sy.rhs - sy.matrix @ x
     return (float(r @ factor(r)) / dissipation,
-            flow_core._sigma_error(sy.matrix, sy.rhs, x, factor, dissipation), sy, x, d)
+            flow_core._sigma_error(sy.matrix, sy.rhs, x,
+                                   flow_core._residual_scale(sy.matrix, sy.rhs, x), factor,
+                                   dissipation), sy, x, d)
 
 
 def test_direct_solve_at_round_off_reports_the_sharper_error(heights):

@@ -221,16 +221,16 @@ def _residual_scale(matrix, rhs, x: np.ndarray) -> np.ndarray:
     return 2.0 * matrix.diagonal() * size - matrix @ size + np.abs(rhs)
 
 
-def _imbalance_floor(matrix, rhs, x: np.ndarray, dissipation: float) -> float:
-    """The |Q_in - Q_out| / Q that round-off alone leaves a solution ``x``.
+def _imbalance_floor(scale: np.ndarray, dissipation: float) -> float:
+    """The |Q_in - Q_out| / Q that round-off alone leaves a solution x whose residual scale
+    (:func:`_residual_scale`) is ``scale``.
 
     Q_in - Q_out is the sum of the residual b - A x, and each entry of a residual computed in
     float64 carries round-off of about eps (|A| |x| + |b|)_i; their root sum of squares over
     Q. Solves driven to round-off ended at 0.1 - 1.5 of it (128^2 - 2048 x 4096), while the
     RS iterate that met its residual with sigma 2.5 times too large (2048 x 4096, a_c 0.414,
     y) was about 2000 times above it (docs/flow.md "Flux check")."""
-    w = _residual_scale(matrix, rhs, x)
-    return float(np.finfo(np.float64).eps * np.linalg.norm(w) / dissipation)
+    return float(np.finfo(np.float64).eps * np.linalg.norm(scale) / dissipation)
 
 
 #: the round-off of the float64 residual b - A x, relative to (|A| |x| + |b|)_i: a row has at
@@ -242,9 +242,11 @@ def _imbalance_floor(matrix, rhs, x: np.ndarray, dissipation: float) -> float:
 RESIDUAL_ROUNDOFF = 8.0 * np.finfo(np.float64).eps
 
 
-def _sigma_error(matrix, rhs, x: np.ndarray, solve_a, dissipation: float) -> float:
+def _sigma_error(matrix, rhs, x: np.ndarray, scale: np.ndarray, solve_a,
+                 dissipation: float) -> float:
     """An upper bound on the relative error (Q(x) - Q) / Q(x) of the dissipation of ``x``
-    from its residual, with ``solve_a`` applying A^-1 (the factorisation).
+    from its residual, with ``scale`` its :func:`_residual_scale` and ``solve_a`` applying
+    A^-1 (the factorisation).
 
     The dissipation is the energy x^T A x - 2 b^T x + c, minimal at the solution, so it
     exceeds Q by the energy norm of the error, e^T A e = r*^T A^-1 r* with r* = b - A x
@@ -260,11 +262,10 @@ def _sigma_error(matrix, rhs, x: np.ndarray, solve_a, dissipation: float) -> flo
     1024^2 elastic state near a_c* (floor 1.5e-6) it gave 6.2e-14 where the error is at
     least 1.2e-13, the distance to RS's sigma (docs/flow.md "Conductance estimate").
     :data:`BOUND_ROUNDOFF` covers the round-off of the sum that forms Q(x)."""
-    w = _residual_scale(matrix, rhs, x)
     r = rhs - matrix @ x
-    open_rows = w > 0  # where w is 0, so are A x and b, and r
-    c = float(np.max(np.abs(r[open_rows]) / w[open_rows], initial=0.0))
-    energy = (c + RESIDUAL_ROUNDOFF) ** 2 * abs(float(w @ solve_a(w)))
+    open_rows = scale > 0  # where the scale is 0, so are A x and b, and r
+    c = float(np.max(np.abs(r[open_rows]) / scale[open_rows], initial=0.0))
+    energy = (c + RESIDUAL_ROUNDOFF) ** 2 * abs(float(scale @ solve_a(scale)))
     return energy / dissipation + BOUND_ROUNDOFF
 
 
@@ -331,9 +332,10 @@ def _solve_flux_balanced(matrix, rhs, cells, act, faces: Faces, *, tol: float, m
             break
         sol = replace(better, iterations=sol.iterations)
         q, dissipation, imbalance = _flux_balance(faces, act, cells, sol.x)
-    floor = _imbalance_floor(matrix, rhs, sol.x, dissipation)
+    scale = _residual_scale(matrix, rhs, sol.x)
+    floor = _imbalance_floor(scale, dissipation)
     if prepared.factor is not None:
-        error = _sigma_error(matrix, rhs, sol.x, prepared.factor.solve, dissipation)
+        error = _sigma_error(matrix, rhs, sol.x, scale, prepared.factor.solve, dissipation)
         if error > DIRECT_BOUND_ABOVE:
             # where r is mostly round-off its allowance dominates; the bound does not use r
             error = min(error, _sigma_error_bound(faces, act, cells, sol.x))
