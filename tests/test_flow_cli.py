@@ -82,3 +82,15 @@ def test_plot_flux_returns_axes(tmp_path, gap):
     ax = plot_flux(r, gap == 0)
     assert "sigma" in ax.get_title()
     ax.figure.savefig(tmp_path / "p.png")
+
+
+def test_plot_flux_draws_the_domain_in_lengths_not_cells():
+    # a gamma > 1 grid: 4 times fewer, 4 times longer cells along x on a square domain;
+    # drawn in cells it would show as a 1:4 strip
+    rng = np.random.default_rng(3)
+    gap = rng.uniform(0.5, 1.0, (8, 32))
+    r = solve(gap, 0, lx=1.0, ly=1.0)
+    assert (r.lx, r.ly) == (1.0, 1.0)
+    ax = plot_flux(r)
+    assert np.allclose(ax.get_images()[0].get_extent(), (0, 1, 0, 1))
+    assert ax.get_xlabel() == "x / L"

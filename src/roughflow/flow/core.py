@@ -66,7 +66,8 @@ class FlowResult:
     percolating: whether the open cells connect the two reservoirs.
     axis: flow axis (0 = x, 1 = y); method: linear solver used ("none" if none);
     sigma_flux: the boundary-flux estimate of sigma (less accurate, for comparison);
-    n_active: number of unknowns (cells connected to both reservoirs).
+    n_active: number of unknowns (cells connected to both reservoirs);
+    lx, ly: the lengths of the periodic cell (the domain) along x and y, units of L.
     """
 
     sigma: float
@@ -83,6 +84,8 @@ class FlowResult:
     n_active: int = 0
     imbalance_floor: float = 0.0
     sigma_error: float = 0.0
+    lx: float = 1.0
+    ly: float = 1.0
 
 
 @dataclass(frozen=True)
@@ -475,7 +478,8 @@ def solve(
     nan = np.full(g.shape, np.nan)
     zeros = np.zeros(g.shape)
     if not active.any():
-        return FlowResult(0.0, nan, zeros, zeros.copy(), 0.0, 0.0, 0, False, ax)
+        return FlowResult(0.0, nan, zeros, zeros.copy(), 0.0, 0.0, 0, False, ax,
+                          lx=lx, ly=ly)
 
     # work with flow along axis 0
     system = reynolds_system(sigma_local, active, ax, lx=lx, ly=ly, periodic=periodic)
@@ -510,6 +514,8 @@ def solve(
         n_active=int(cells.size),
         imbalance_floor=balanced.floor,
         sigma_error=balanced.sigma_error,
+        lx=lx,
+        ly=ly,
     )
 
 

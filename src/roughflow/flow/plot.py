@@ -11,7 +11,10 @@ def plot_flux(result: FlowResult, contact_mask=None, ax=None, *, log: bool = Tru
     """Draw |j| of ``result`` (log scale, 6 decades, by default) with contact cells in black.
 
     ``contact_mask``: boolean (nx, ny) array of contact cells drawn black; cells
-    without flow (isolated pools) are left white. Axis 0 (x) is drawn horizontally.
+    without flow (isolated pools) are left white. Axis 0 (x) is drawn horizontally, over
+    the domain's lengths ``result.lx`` x ``result.ly`` (units of L) rather than grid cells:
+    an anisotropic surface's grid has cells longer along x than along y (gamma > 1), and
+    drawn in cells its square domain would show as a strip.
     Returns the matplotlib ``Axes``. Uses whatever backend is active (Agg in scripts).
     """
     import matplotlib.pyplot as plt
@@ -20,8 +23,7 @@ def plot_flux(result: FlowResult, contact_mask=None, ax=None, *, log: bool = Tru
     if ax is None:
         _, ax = plt.subplots(figsize=(5, 4.2))
     mag = np.hypot(result.flux_x, result.flux_y)
-    nx, ny = mag.shape
-    extent = (0, nx, 0, ny)
+    extent = (0.0, result.lx, 0.0, result.ly)
     shown = np.ma.masked_where(mag <= 0, mag)
     norm = None
     if log and shown.count() > 0:
@@ -34,7 +36,7 @@ def plot_flux(result: FlowResult, contact_mask=None, ax=None, *, log: bool = Tru
         ax.imshow(c.T, origin="lower", extent=extent, cmap=ListedColormap(["black"]),
                   interpolation="nearest")
     ax.figure.colorbar(im, ax=ax, label="|flux| (u^3 dp / (eta L))")
-    ax.set_xlabel("x (cells)")
-    ax.set_ylabel("y (cells)")
+    ax.set_xlabel("x / L")
+    ax.set_ylabel("y / L")
     ax.set_title(f"flow along {'xy'[result.axis]}: sigma = {result.sigma:.4g}")
     return ax
