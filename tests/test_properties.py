@@ -105,6 +105,7 @@ def test_contact_transposition_swaps_axes(seed, n, gamma, p):
 
 @SETTINGS
 @example(seed=258350335, n=16, gamma=1.0, ps=[0.9921875, 1.0])
+@example(seed=0, n=16, gamma=0.5, ps=[0.9999999999999999, 1.0])
 @given(seed=seeds, n=sizes, gamma=gammas,
        ps=st.lists(st.floats(min_value=0.01, max_value=1.0), min_size=2, max_size=4,
                    unique=True))
@@ -124,8 +125,13 @@ def test_contact_area_monotone_in_load(seed, n, gamma, ps):
     assert all(a1 >= a0 - 1.0 / n**2 for a0, a1 in zip(areas, areas[1:], strict=False))
     # the mean gap falls strictly with the load (p = -d(elastic energy)/d(gap) > 0) until
     # full contact, where it stays 0 (a 16^2 surface is fully in contact from p = 0.99 on:
-    # found by hypothesis, seed 258350335, loads 0.9921875 and 1)
-    assert all(g1 < g0 or g0 == g1 == 0.0 for g0, g1 in zip(gaps, gaps[1:], strict=False))
+    # found by hypothesis, seed 258350335, loads 0.9921875 and 1). Loads closer than 1e-9
+    # move it by less than the solver resolves (CTOL rms heights): at one ulp apart (seed 0,
+    # gamma 0.5, loads 1 - 1.1e-16 and 1) it came out 1.8e-19 higher, 2e-15 relative; it
+    # must then not rise by more than that resolution
+    resolution = CTOL * float(np.std(s.heights))
+    assert all(g1 < g0 or g0 == g1 == 0.0 or (p1 - p0 < 1e-9 and g1 <= g0 + resolution)
+               for p0, p1, g0, g1 in zip(ps, ps[1:], gaps, gaps[1:], strict=False))
 
 
 # ---------------------------------------------------------------------------------------
