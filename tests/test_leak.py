@@ -109,6 +109,14 @@ def test_bad_pressures_are_refused(pressures, match):
         leak_curve(scan_surface(), pressures)
 
 
+def test_a_bad_flow_sigma_tol_is_refused_before_any_solve(monkeypatch):
+    import roughflow.leak as leak
+
+    monkeypatch.setattr(leak, "solve", lambda *a, **k: pytest.fail("a contact solve ran"))
+    with pytest.raises(InputError, match="sigma_tol"):
+        leak_curve(scan_surface(), [0.1], flow_sigma_tol=0.5)
+
+
 LEAK = ["--modulus", "200GPa", "--pressures", "1MPa:100GPa:4", "--fluid-pressure", "1MPa",
         "--viscosity", "1mPa.s", "--seal-width", "2mm", "--seal-length", "60mm"]
 

@@ -8,7 +8,7 @@ import xarray as xr
 
 from roughflow.aggregate import aggregate, combine, load
 from roughflow.cli import build_parser, main
-from roughflow.defaults import FLOW_TOL
+from roughflow.defaults import FLOW_IMBALANCE_MAX, FLOW_SIGMA_TOL, FLOW_TOL
 from roughflow.errors import InputError
 from roughflow.io import write_dataset
 from roughflow.scenes import (
@@ -185,11 +185,15 @@ def test_ladder_records_the_flow_solver_and_combines_with_files_that_do_not(monk
     amg = run_ladder(job)
     assert (direct["flow_direct"] == 1).all() and (amg["flow_direct"] == 0).all()
     # the flux imbalance of each solve (a check the sigma from the dissipation does not make):
-    # the solves are balanced to the flow tolerance; 0 where no solve ran
-    for ds in (direct, amg):
+    # direct solves are balanced to the flow tolerance; AMG solves stop once sigma is
+    # proven accurate to FLOW_SIGMA_TOL, their fluxes then balanced to 1e-7 - 2e-5 on such
+    # states (benchmarks/bench_sigma_tol.py), well inside FLOW_IMBALANCE_MAX; 0 where no
+    # solve ran
+    for ds, most in ((direct, FLOW_TOL), (amg, FLOW_IMBALANCE_MAX)):
         imbalance = ds["flow_imbalance"].values
-        assert np.isfinite(imbalance).all() and (imbalance <= FLOW_TOL).all()
+        assert np.isfinite(imbalance).all() and (imbalance <= most).all()
         assert (imbalance[ds["percolating"].values == 0] == 0).all()
+        assert ds.attrs["error_budget_flow_sigma_tol"] == FLOW_SIGMA_TOL
         # what round-off leaves of it: positive where a solve ran, 0 where none did
         floor = ds["flow_imbalance_floor"].values
         solved = ds["percolating"].values == 1
@@ -197,20 +201,22 @@ def test_ladder_records_the_flow_solver_and_combines_with_files_that_do_not(monk
     # sigma's error bound: direct solves end at round-off, where r^T A^-1 r / Q measured
     # 1e-24 - 2e-15 (benchmarks/bench_sigma_error.py, the default workflow's ladders) and
     # the allowances for round-off add 1e-14 and far less, so 1e-12 leaves two decades; AMG
-    # solves report their bound, 1e-14 - 1e-12 on such states (tests/test_flow_bound.py),
-    # so 1e-9 leaves three decades
+    # solves end at the first iterate whose bound is within FLOW_SIGMA_TOL
     solved = direct["percolating"].values == 1
     error = direct["flow_sigma_error"].values
     assert (error[solved] < 1e-12).all() and (error[~solved] == 0).all()
     bound = amg["flow_sigma_error"].values
-    assert (bound[solved] > 0).all() and (bound[solved] <= 1e-9).all()
+    assert (bound[solved] > 0).all() and (bound[solved] <= FLOW_SIGMA_TOL).all()
     assert (bound[~solved] == 0).all()
     attrs = direct["flow_sigma_error"].attrs
     assert attrs["units"] and "r^T A^-1 r / Q" in attrs["long_name"]
     assert "upper bound" in attrs["long_name"]
-    # the same sigma either way (both solve to the flow tolerance; the dissipation's error
-    # is quadratic in the 1e-8 residual)
-    np.testing.assert_allclose(amg["sigma"], direct["sigma"], rtol=1e-10)
+    # the same sigma either way, to the AMG solves' bounds: each sigma is at least the exact
+    # one, so the AMG sigma lies at most its bound above the direct one (and at most the
+    # direct one's error below it)
+    amg_sigma, direct_sigma = amg["sigma"].values[solved], direct["sigma"].values[solved]
+    distance = (amg_sigma - direct_sigma) / amg_sigma
+    assert (distance <= bound[solved]).all() and (distance >= -error[solved]).all()
     # job files written before the variable existed still combine: NaN where it is missing
     older = run_ladder(LadderJob(surface=TINY, model="bearing", seeds=(2,),
                                  area_fractions=(0.05, 0.3), a_c_star=0.5, a_c_star_alt=0.4))

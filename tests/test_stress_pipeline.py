@@ -224,9 +224,9 @@ def test_flux_balance_is_one_cg_run_on_one_hierarchy(monkeypatch):
         return build(*args, **kwargs)
 
     def recorded_pcg(*args, **kwargs):
-        x, iterations = pcg(*args, **kwargs)
-        runs.append(iterations)
-        return x, iterations
+        run = pcg(*args, **kwargs)
+        runs.append(run.iterations)
+        return run
 
     monkeypatch.setattr(linsolve, "_amg_preconditioner", counted_build)
     monkeypatch.setattr(linsolve, "pcg", recorded_pcg)

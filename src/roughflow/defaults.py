@@ -98,6 +98,12 @@ FLOW_IMBALANCE_MAX = 1e-2
 #: spread (0.33 - 1.34 at a_c 0.2 - 0.35, docs/accuracy.md). So the check raises only for a
 #: sigma that is wrong (docs/flow.md).
 FLOW_SIGMA_RTOL = 1e-3
+#: Proven relative error of sigma at which the ladder's and ``leak``'s iterative flow solves
+#: stop (``flow.solve(sigma_tol=)``), whatever their residual and flux balance: the ladder's
+#: contact tolerance (1e-6) alone moves sigma by up to 6e-7 (docs/accuracy.md), and the
+#: seed-to-seed sd of ln sigma is 0.33 - 1.34. RS-CG certifies it after 6-9 iterations where
+#: the residual and flux criteria take 9-16 (docs/flow.md "Stopping at sigma's accuracy").
+FLOW_SIGMA_TOL = 1e-6
 #: A cell whose local conductivity u^3 / (12 eta) is at most this fraction of the largest
 #: carries no flow: float64 cannot resolve it beside the largest (a gap below 4.6e-6 of the
 #: largest gap). Contact solves leave such cells at contact edges (gaps of 2e-8 - 5e-6 of

@@ -26,12 +26,14 @@ from roughflow.contact import ContactResult, solve
 from roughflow.defaults import (
     BOUNDARY,
     CONTACT_TOL,
+    FLOW_SIGMA_TOL,
     FLOW_TOL,
     THRESHOLD_CONTACT_TOL,
     THRESHOLD_PRESSURE_RANGE,
     THRESHOLD_TOL,
 )
 from roughflow.errors import InputError, require_positive
+from roughflow.flow import check_sigma_tol
 from roughflow.percolation import percolates
 from roughflow.resources import check_memory
 from roughflow.search import SearchOptions, Threshold, first_pressure, threshold
@@ -116,6 +118,7 @@ def sealing_search(emb: Embedding, *, gbar: float, tol: float = THRESHOLD_TOL,
 
 def leak_curve(surface: Surface, pressures, *, boundary: str | None = None,
                contact_tol: float = CONTACT_TOL, flow_tol: float = FLOW_TOL,
+               flow_sigma_tol: float | None = FLOW_SIGMA_TOL,
                threshold_tol: float = THRESHOLD_TOL,
                threshold_contact_tol: float = THRESHOLD_CONTACT_TOL,
                sealing: bool = True, threads: int | None = None) -> LeakCurve:
@@ -124,7 +127,8 @@ def leak_curve(surface: Surface, pressures, *, boundary: str | None = None,
     the sealing thresholds (:func:`sealing_search`, skipped with ``sealing=False``).
 
     ``boundary``: :data:`~roughflow.defaults.BOUNDARY_METHODS` (default
-    :func:`default_boundary`). Bad input raises :class:`InputError` before any solve; a
+    :func:`default_boundary`). ``flow_tol``, ``flow_sigma_tol``: ``tol`` and ``sigma_tol`` of
+    :func:`roughflow.flow.solve`. Bad input raises :class:`InputError` before any solve; a
     contact or flow solve that misses its tolerance raises ``ConvergenceError``.
     """
     p = check_pressures(pressures)
@@ -134,6 +138,7 @@ def leak_curve(surface: Surface, pressures, *, boundary: str | None = None,
                     ("threshold_tol", threshold_tol),
                     ("threshold_contact_tol", threshold_contact_tol)):
         require_positive(name, v)
+    check_sigma_tol(flow_sigma_tol)
     method = default_boundary(surface) if boundary is None else boundary
     emb = embed(surface, method)
     # a leak curve holds what a pressure ladder holds, on the embedded grid
@@ -141,7 +146,7 @@ def leak_curve(surface: Surface, pressures, *, boundary: str | None = None,
     gbar = (surface.scan.rms_gradient if surface.scan is not None else
             rms_gradient(surface.heights, surface.lx, surface.ly, periodic=surface.periodic))
     curve = pressure_curve(emb, p, contact_tol=contact_tol, flow_tol=flow_tol,
-                           threads=threads)
+                           flow_sigma_tol=flow_sigma_tol, threads=threads)
     thresholds = (sealing_search(emb, gbar=gbar, tol=threshold_tol,
                                  contact_tol=threshold_contact_tol, threads=threads)
                   if sealing else {})
@@ -150,12 +155,14 @@ def leak_curve(surface: Surface, pressures, *, boundary: str | None = None,
         rms_gradient=float(gbar), window_lx=emb.lx, window_ly=emb.ly,
         window_shape=emb.shape,
         settings={"contact_tol": contact_tol, "flow_tol": flow_tol,
+                  **({} if flow_sigma_tol is None else {"flow_sigma_tol": flow_sigma_tol}),
                   "threshold_tol": threshold_tol,
                   "threshold_contact_tol": threshold_contact_tol})
 
 
 def pressure_curve(emb: Embedding, pressures: np.ndarray, *, contact_tol: float = CONTACT_TOL,
-                   flow_tol: float = FLOW_TOL, threads: int | None = None) -> dict:
+                   flow_tol: float = FLOW_TOL, flow_sigma_tol: float | None = FLOW_SIGMA_TOL,
+                   threads: int | None = None) -> dict:
     """Contact area, mean gap, percolation and conductances of the window of ``emb`` at
     each nominal pressure (increasing; warm-started solves): the :class:`LeakCurve` fields
     ``area_fraction``, ``mean_gap``, ``percolating``, ``sigma``, ``iterations``,
@@ -175,7 +182,7 @@ def pressure_curve(emb: Embedding, pressures: np.ndarray, *, contact_tol: float 
             spans[i, ax] = percolates(~seen.contact, ax, periodic=emb.periodic)
             if spans[i, ax]:
                 fr = flow.solve(seen.gap, ax, lx=emb.lx, ly=emb.ly, tol=flow_tol,
-                                periodic=emb.periodic)
+                                sigma_tol=flow_sigma_tol, periodic=emb.periodic)
                 sigma[i, ax], imbalance[i, ax] = fr.sigma, fr.flux_imbalance
                 sigma_error[i, ax] = fr.sigma_error
         log.info("p = %.4g E*: a_c = %.4f, percolating x %d y %d, sigma = %.3e, %.3e", pn,

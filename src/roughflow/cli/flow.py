@@ -6,7 +6,7 @@ import argparse
 import logging
 from typing import TYPE_CHECKING
 
-from roughflow.defaults import FLOW_METHODS, FLOW_TOL
+from roughflow.defaults import FLOW_METHODS, FLOW_SIGMA_RTOL, FLOW_SIGMA_TOL, FLOW_TOL
 
 from ._common import add_input, add_output, axis_arg, warn_if_nonperiodic_scan
 
@@ -35,6 +35,11 @@ def register(sub: argparse._SubParsersAction) -> None:
     p.add_argument("--eta", type=float, default=1.0, help="viscosity eta (1)")
     p.add_argument("--tol", type=float, default=FLOW_TOL,
                    help=f"relative residual of the linear solve ({FLOW_TOL:g})")
+    p.add_argument("--sigma-tol", type=float, default=None, metavar="RTOL",
+                   help="also stop an iterative solve once sigma is proven accurate to this "
+                        f"relative error (at most {FLOW_SIGMA_RTOL:g}), whatever its residual: "
+                        "fewer iterations, a less converged pressure field (off; the sweeps "
+                        f"use {FLOW_SIGMA_TOL:g})")
     p.add_argument("--method", choices=FLOW_METHODS, default="auto",
                    help="linear solver: auto (direct for small systems and thin flowing "
                         "clusters, else rs; an AMG result whose fluxes do not balance "
@@ -61,10 +66,11 @@ def _read_gap(ds):
 
 def run(args: argparse.Namespace) -> None:
     from roughflow.datasets import flow_dataset
-    from roughflow.flow import solve
+    from roughflow.flow import check_sigma_tol, solve
     from roughflow.io import write_dataset
     from roughflow.provenance import PROVENANCE_ATTRS
 
+    sigma_tol = check_sigma_tol(args.sigma_tol)
     ds_in = args.data["input"]
     gap, contact, lx, ly = _read_gap(ds_in)
     warn_if_nonperiodic_scan(ds_in, args.input, "flow")
@@ -72,11 +78,12 @@ def run(args: argparse.Namespace) -> None:
     results = {}
     for ax in axes:
         results[ax] = solve(gap, ax, lx=lx, ly=ly, eta=args.eta, tol=args.tol,
-                            method=args.method)
+                            method=args.method, sigma_tol=sigma_tol)
         r = results[ax]
         log.info("sigma_%s = %.6e (%s, %d iterations, residual %.1e, sigma's error at most "
                  "%.1e)", "xy"[ax], r.sigma, r.method, r.iterations, r.residual, r.sigma_error)
-    out = flow_dataset(results, contact, lx=lx, ly=ly, eta=args.eta, tol=args.tol)
+    out = flow_dataset(results, contact, lx=lx, ly=ly, eta=args.eta, tol=args.tol,
+                       sigma_tol=sigma_tol)
     out.attrs["source"] = str(args.input)
     for k, v in ds_in.attrs.items():
         # the contact's provenance continues in this file's history and references

@@ -158,13 +158,16 @@ def threshold_dataset(results: Mapping[int, Threshold], surface: Surface | None 
 
 
 def flow_dataset(results: Mapping[int, FlowResult], contact: np.ndarray, *, lx: float,
-                 ly: float, eta: float, tol: float) -> xr.Dataset:
-    """sigma per axis, the pressure and flux fields, and the solver diagnostics."""
+                 ly: float, eta: float, tol: float,
+                 sigma_tol: float | None = None) -> xr.Dataset:
+    """sigma per axis, the pressure and flux fields, and the solver diagnostics (the
+    attribute ``sigma_tol`` only where the solves had one)."""
     nx, ny = contact.shape
     out = xr.Dataset(coords=grid_coords(nx, ny, lx, ly))
     out["contact"] = (("x", "y"), np.asarray(contact).astype(np.int8),
                       {"units": DIMENSIONLESS, "long_name": "contact mask (1 = contact)"})
-    attrs = {"title": "roughflow flow", "lx": lx, "ly": ly, "eta": eta, "tol": tol}
+    attrs = {"title": "roughflow flow", "lx": lx, "ly": ly, "eta": eta, "tol": tol,
+             **({} if sigma_tol is None else {"sigma_tol": sigma_tol})}
     for ax, r in results.items():
         a = AXIS_NAMES[ax]
         out[f"sigma_{a}"] = ((), r.sigma, {

@@ -48,7 +48,8 @@ class FlowResult:
         carry no flow (contact and cells not connected to both reservoirs).
     flux_x, flux_y: (nx, ny) cell-centred flux density -sigma grad p (volume flow
         per unit width per unit dp), the mean of the two face values in each direction.
-    residual: relative residual ||b - A p|| / ||b|| of the linear system (<= ``tol``).
+    residual: relative residual ||b - A p|| / ||b|| of the linear system (<= ``tol``, unless
+        ``sigma_tol`` ended the solve first).
     flux_imbalance: |Q_in - Q_out| / Q, a check of the solve (0 without a solve); above
         ``FLOW_IMBALANCE_MAX`` sigma was checked, or a warning says it could not be.
     imbalance_floor: the |Q_in - Q_out| / Q that float64 round-off alone leaves this
@@ -299,8 +300,43 @@ def _sigma_error_bound(faces: Faces, act, cells, x: np.ndarray) -> float:
     return dissipation_bounds(faces, act, cells, x).relative_error + BOUND_ROUNDOFF
 
 
+class _SigmaCertificate:
+    """:func:`linsolve.pcg`'s ``certify`` for a target relative error ``target`` of sigma:
+    true once Thomson's bound (:func:`_sigma_error_bound`) on the iterate is at most
+    ``target``; ``bound`` then holds it.
+
+    The bound costs about a V-cycle and a half (a pass over the faces and a spanning tree),
+    so it is taken only where CG's own estimate says it can pass: Q(x) - Q is the energy
+    error (x - x*)^T A (x - x*), and a step's energy decrease ``drop`` is the previous
+    iterate's error less the new one's, about the previous error where AMG-CG gains a
+    decade an iteration. The first check waits for drop <= target Q; a check that fails
+    (the bound is 1 - 400 times the exact error on RS iterates) lowers the next one's
+    threshold by the factor it missed by."""
+
+    def __init__(self, faces: Faces, act: np.ndarray, cells: np.ndarray, target: float):
+        self.faces, self.act, self.cells, self.target = faces, act, cells, target
+        self.threshold = target
+        self.dissipation: float | None = None  # Q of an earlier iterate: at least today's
+        self.bound: float | None = None
+        self.checks = 0
+
+    def __call__(self, x: np.ndarray, drop: float) -> bool:
+        if self.dissipation is not None and drop > self.threshold * self.dissipation:
+            return False
+        self.dissipation = _flux_balance(self.faces, self.act, self.cells, x)[1]
+        if drop > self.threshold * self.dissipation:
+            return False
+        bound = _sigma_error_bound(self.faces, self.act, self.cells, x)
+        self.checks += 1
+        if bound <= self.target:
+            self.bound = bound
+            return True
+        self.threshold = drop / self.dissipation * self.target / bound
+        return False
+
+
 def _solve_flux_balanced(matrix, rhs, cells, act, faces: Faces, *, tol: float, method: str,
-                         rounds: int = 4) -> _Balanced:
+                         sigma_tol: float | None = None, rounds: int = 4) -> _Balanced:
     """Solve to ||b - A x|| <= tol ||b|| (else :class:`ConvergenceError`) and on until the
     flux imbalance |Q_in - Q_out| / Q is at most ``tol``, or round-off stops the solver.
 
@@ -316,6 +352,8 @@ def _solve_flux_balanced(matrix, rhs, cells, act, faces: Faces, *, tol: float, m
     error. Each solve returns an upper bound on that error: a direct one from its residual
     (:func:`_sigma_error`; one more solve with the factorisation, 1-4 % of a direct solve),
     an AMG one from Thomson's principle (:func:`_sigma_error_bound`; 6-9 % of an RS solve).
+    With ``sigma_tol``, an iterative solve also stops at the first iterate whose bound is at
+    most ``sigma_tol`` (:class:`_SigmaCertificate`), whatever its residual and imbalance.
     """
     # not also "within _imbalance_floor": near a_c* that stopped RS with sigma 3e-4 off where
     # going on to round-off gave 1e-8 (1024^2, a_c 0.44, y)
@@ -323,8 +361,9 @@ def _solve_flux_balanced(matrix, rhs, cells, act, faces: Faces, *, tol: float, m
         return _flux_balance(faces, act, cells, x)[2] <= tol
 
     # one factorisation for every refinement round: near a_c* it costs as much as a round
+    certificate = None if sigma_tol is None else _SigmaCertificate(faces, act, cells, sigma_tol)
     sol, prepared = solve_prepared(matrix, rhs, tol=tol, method=method, accept=balanced,
-                                   flowing_fraction=cells.size / act.size)
+                                   certify=certificate, flowing_fraction=cells.size / act.size)
     q, dissipation, imbalance = _flux_balance(faces, act, cells, sol.x)
     for _round in range(rounds if prepared.factor is not None else 0):
         if imbalance <= tol:
@@ -342,6 +381,8 @@ def _solve_flux_balanced(matrix, rhs, cells, act, faces: Faces, *, tol: float, m
         if error > DIRECT_BOUND_ABOVE:
             # where r is mostly round-off its allowance dominates; the bound does not use r
             error = min(error, _sigma_error_bound(faces, act, cells, sol.x))
+    elif sol.certified:
+        error = certificate.bound  # of this very iterate: the run ended on it
     else:
         error = _sigma_error_bound(faces, act, cells, sol.x)
     return _Balanced(sol, q, dissipation, imbalance, floor, error)
@@ -359,7 +400,7 @@ def _uncertified(balanced: _Balanced) -> str:
 
 
 def _balanced_solution(matrix, rhs, cells, act, faces: Faces, *, tol: float,
-                       method: str) -> _Balanced:
+                       method: str, sigma_tol: float | None = None) -> _Balanced:
     """:func:`_solve_flux_balanced`, checked where sigma's error is not certified to
     :data:`FLOW_SIGMA_RTOL`.
 
@@ -379,7 +420,8 @@ def _balanced_solution(matrix, rhs, cells, act, faces: Faces, *, tol: float,
     exceeds :data:`ROUNDOFF_MARGIN` times what round-off leaves (:func:`_imbalance_floor`);
     where it does not, or where its fluxes balance, a warning says that sigma is unchecked.
     """
-    first = _solve_flux_balanced(matrix, rhs, cells, act, faces, tol=tol, method=method)
+    first = _solve_flux_balanced(matrix, rhs, cells, act, faces, tol=tol, method=method,
+                                 sigma_tol=sigma_tol)
     if first.accepted:
         return first
     if first.solution.method != "direct":
@@ -431,6 +473,17 @@ def flowing_cells(sigma_local: np.ndarray, axis: int, *, periodic: bool = True) 
     return active
 
 
+def check_sigma_tol(sigma_tol: float | None) -> float | None:
+    """``sigma_tol`` of :func:`solve`, checked: None, or in (0, ``FLOW_SIGMA_RTOL``] (a looser
+    sigma would not pass as certified, and the direct solver would check it again)."""
+    if sigma_tol is None:
+        return None
+    if not (isinstance(sigma_tol, int | float) and 0.0 < sigma_tol <= FLOW_SIGMA_RTOL):
+        raise InputError(f"sigma_tol must be None or in (0, {FLOW_SIGMA_RTOL:g}], got "
+                         f"{sigma_tol!r}")
+    return float(sigma_tol)
+
+
 def solve(
     gap,
     axis,
@@ -441,6 +494,7 @@ def solve(
     tol: float = FLOW_TOL,
     method: str | None = None,
     periodic: bool = True,
+    sigma_tol: float | None = None,
 ) -> FlowResult:
     """Reynolds flow along ``axis`` (0/"x" or 1/"y") through the gap field ``gap[ix, iy]``.
 
@@ -454,6 +508,11 @@ def solve(
     connect the two reservoirs gives sigma = 0 without a solve.
     ``periodic``: the cell is periodic across the flow (default), or closed by walls there
     (False: a non-periodic scan).
+    ``sigma_tol``: where given (at most ``FLOW_SIGMA_RTOL``), an iterative solve also ends at
+    the first iterate whose sigma is proven accurate to ``sigma_tol`` relative (Thomson's
+    bound), whatever its residual and flux balance: sigma needs far fewer iterations than
+    the pressure field (its error is quadratic in the pressure's). The sweeps and ``leak``
+    use ``FLOW_SIGMA_TOL``; None (default): solve to ``tol`` as above.
     Raises ``InputError`` for bad input and ``ConvergenceError`` if the solver misses
     ``tol``, or where sigma's error is not certified to ``FLOW_SIGMA_RTOL`` and a direct
     solve whose fluxes do not balance to ``FLOW_IMBALANCE_MAX`` finds sigma uncertain by
@@ -470,6 +529,7 @@ def solve(
         raise InputError(f"tol must be at most {FLOW_TOL_MAX:g} (a looser solve does not balance "
                          f"the inlet and outlet fluxes), got {tol!r}")
     method = check_method(method)
+    sigma_tol = check_sigma_tol(sigma_tol)
     check_memory("flow", g.shape, what="a Reynolds flow solve")
 
     sigma_local = g**3 / (12.0 * eta)
@@ -486,7 +546,8 @@ def solve(
     faces, act, cells, matrix, rhs = (system.faces, system.active, system.cells, system.matrix,
                                       system.rhs)
     h_flow, h_across = system.h_flow, system.h_across
-    balanced = _balanced_solution(matrix, rhs, cells, act, faces, tol=tol, method=method)
+    balanced = _balanced_solution(matrix, rhs, cells, act, faces, tol=tol, method=method,
+                                  sigma_tol=sigma_tol)
     sol, q, dissipation = balanced.solution, balanced.pressure, balanced.dissipation
     p = np.full(act.shape, np.nan)
     p.ravel()[cells] = sol.x
@@ -529,9 +590,11 @@ def conductance(
     tol: float = FLOW_TOL,
     method: str | None = None,
     periodic: bool = True,
+    sigma_tol: float | None = None,
 ) -> float | tuple[float, float]:
     """Effective conductance along ``axis``, or ``(sigma_x, sigma_y)`` when ``axis`` is None."""
-    kw = dict(lx=lx, ly=ly, eta=eta, tol=tol, method=method, periodic=periodic)
+    kw = dict(lx=lx, ly=ly, eta=eta, tol=tol, method=method, periodic=periodic,
+              sigma_tol=sigma_tol)
     if axis is None:
         return solve(gap, 0, **kw).sigma, solve(gap, 1, **kw).sigma
     return solve(gap, axis, **kw).sigma

@@ -36,7 +36,7 @@ from roughflow.datasets.units import (
     SECONDS,
     SIGMA_UNITS,
 )
-from roughflow.defaults import CONTACT_TOL
+from roughflow.defaults import CONTACT_TOL, FLOW_SIGMA_TOL
 from roughflow.errors import ConvergenceError
 from roughflow.search import LoadSearch, warm_start_compliance
 from roughflow.surface import Surface, generate
@@ -150,7 +150,8 @@ def run_ladder(job: LadderJob, *, threads: int | None = None) -> xr.Dataset:
         log.info("seed %d: %s model, %d x %d grid, gamma=%g H=%g L/lambda_r=%g eps_f=%g",
                  seed, job.model, spec.nx, spec.ny, p.gamma, p.hurst, p.size, p.eps_f)
         gap0 = surface.heights.max() - surface.heights
-        r["sigma_ref"][i] = flow.conductance(gap0, None, lx=lx, ly=ly)
+        r["sigma_ref"][i] = flow.conductance(gap0, None, lx=lx, ly=ly,
+                                             sigma_tol=FLOW_SIGMA_TOL)
         log.info("seed %d: sigma_ref = (%.4g, %.4g)", seed, *r["sigma_ref"][i])
         adhesion = _adhesion(surface, job, spec.lambda_s) if job.model == "adhesive" else None
         if adhesion is not None:
@@ -180,7 +181,7 @@ def run_ladder(job: LadderJob, *, threads: int | None = None) -> xr.Dataset:
                     r["flow_sigma_error"][i, k, ax] = 0.0
                     continue
                 try:
-                    fr = flow.solve(c.gap, ax, lx=lx, ly=ly)
+                    fr = flow.solve(c.gap, ax, lx=lx, ly=ly, sigma_tol=FLOW_SIGMA_TOL)
                 except ConvergenceError as exc:  # keep what reproduces it (the CLI saves it)
                     exc.inputs = {"gap": c.gap, "axis": ax, "lx": lx, "ly": ly, "seed": seed,
                                   "target": target}
@@ -261,6 +262,7 @@ def run_ladder(job: LadderJob, *, threads: int | None = None) -> xr.Dataset:
         "title": "roughflow ladder scene", "scene": "ladder", "job_id": job.job_id,
         "error_budget_points_per_lambda_s": p.points_per_lambda_s,
         "error_budget_contact_tol": CONTACT_TOL, "error_budget_perimeter_c": PERIMETER_C,
+        "error_budget_flow_sigma_tol": FLOW_SIGMA_TOL,
         "error_budget_area_tol": job.area_tol,
         "a_c_star_theory": job.a_c_star, "a_c_star_alt": a_alt,
         "emt_forms": "isotropic: Eq. 5-6 with a_c_star_theory; isotropic_alt: the same with "
