@@ -10,7 +10,9 @@ pyamg's own set-up spends about a third of its time on Python-level copies and c
 (absolute values and row scaling of a strength matrix whose pattern alone is used, the
 diagonal dropped through a COO round trip, A's values put on the interpolation pattern by
 an element-wise product), its cycle a third on residual norms and argument checks. The
-C/F splittings are pyamg's on every level and the cycle is pyamg's arithmetic
+interpolation weights are our own kernel (:func:`_classical_weights`, pyamg's formula with
+a marker instead of pyamg's nested scans). The C/F splittings are pyamg's on every level,
+the weights pyamg's up to summation order, and the cycle is pyamg's arithmetic
 (tests/test_flow.py); see docs/flow.md, "Linear solver".
 """
 
@@ -112,6 +114,81 @@ def _kept_entries(cp, cj, keep, values):  # pragma: no cover (compiled)
     return op, oj[:k], ox[:k]
 
 
+@numba.njit(cache=True)
+def _classical_weights(ap, aj, ax, cp, cj, cx, splitting, pp):  # pragma: no cover (compiled)
+    """Classical (Ruge-Stueben) interpolation on the pattern ``pp`` of the kept strong
+    connections (cp, cj, cx): P's column indices (coarse numbering) and weights.
+
+    An F point i interpolates from its strong C neighbours C_i with
+    w_ij = -(a_ij + sum_{k in F_i} a_ik abar_kj / sum_{m in C_i} abar_km) / (a_ii + sum of
+    its weak connections), F_i its strong F neighbours and abar_km the entries of row k of
+    A whose sign is opposite to a_kk; a strong F neighbour with no such entry in C_i (only
+    on coarse levels, whose Galerkin matrices have positive off-diagonal entries) is left
+    out. These are the weights of pyamg's
+    ``rs_classical_interpolation_pass2`` (``modified=True``) up to summation order, but
+    each a_kj is found through a marker over the columns of C_i instead of a scan of row
+    i for every entry of row k."""
+    n = splitting.size
+    pj = np.empty(pp[n], pp.dtype)
+    px = np.zeros(pp[n], ax.dtype)
+    coarse = np.empty(n, pp.dtype)  # the coarse index of each C point
+    nc = 0
+    for i in range(n):
+        coarse[i] = nc
+        nc += splitting[i]
+    slot = np.full(n, -1, pp.dtype)  # -1: not a kept strong neighbour of the row at hand
+    diag = np.zeros(n, ax.dtype)
+    for i in range(n):
+        for jj in range(ap[i], ap[i + 1]):
+            if aj[jj] == i:
+                diag[i] += ax[jj]
+    for i in range(n):
+        k0 = pp[i]
+        if splitting[i] == 1:
+            pj[k0] = coarse[i]
+            px[k0] = 1.0
+            continue
+        t = k0
+        for jj in range(cp[i], cp[i + 1]):
+            j = cj[jj]
+            if j == i:
+                continue
+            if splitting[j] == 1:
+                slot[j] = t
+                pj[t] = coarse[j]
+                px[t] = cx[jj]
+                t += 1
+            else:
+                slot[j] = -2  # a strong F neighbour
+        diagonal = 0.0
+        for jj in range(ap[i], ap[i + 1]):
+            j = aj[jj]
+            if j == i or slot[j] == -1:
+                diagonal += ax[jj]
+        for jj in range(cp[i], cp[i + 1]):
+            k = cj[jj]
+            if k == i or splitting[k] == 1:
+                continue
+            akk = diag[k]
+            denominator = 0.0
+            for mm in range(ap[k], ap[k + 1]):
+                m = aj[mm]
+                if slot[m] >= 0 and ax[mm] * akk < 0.0:
+                    denominator += ax[mm]
+            if denominator == 0.0:  # as pyamg: left out, not lumped into the diagonal
+                continue
+            share = cx[jj] / denominator
+            for mm in range(ap[k], ap[k + 1]):
+                m = aj[mm]
+                if slot[m] >= 0 and ax[mm] * akk < 0.0:
+                    px[slot[m]] += share * ax[mm]
+        for tt in range(k0, t):
+            px[tt] = -px[tt] / diagonal
+        for jj in range(cp[i], cp[i + 1]):
+            slot[cj[jj]] = -1
+    return pj, px
+
+
 def _coarsen(a: sp.csr_matrix):
     """(P, R, splitting) of one RS coarsening of ``a``, or None where it would keep every
     point or none."""
@@ -143,9 +220,7 @@ def _coarsen(a: sp.csr_matrix):
     cp, cj, cx = _kept_entries(sp_, sj, keep, sx)
     pp = np.empty_like(ap)
     amg_core.rs_classical_interpolation_pass1(n, cp, cj, splitting, pp)
-    pj, px = np.empty(pp[-1], dtype=pp.dtype), np.empty(pp[-1], dtype=ax.dtype)
-    amg_core.rs_classical_interpolation_pass2(n, ap, aj, ax, cp, cj, cx, splitting, pp, pj, px,
-                                              True)
+    pj, px = _classical_weights(ap, aj, ax, cp, cj, cx, splitting, pp)
     p = sp.csr_matrix((px, pj, pp), shape=(n, n_coarse))
     return p, p.T.tocsr(), splitting
 
