@@ -283,7 +283,7 @@ def test_a_failed_check_waits_for_the_estimate_to_fall_by_what_it_missed(heights
     assert not check(x, 0.9 * check.threshold * q) and check.checks == 2
 
 
-@pytest.mark.parametrize("bad", [0.0, -1e-6, 2e-3, "1e-6"])
+@pytest.mark.parametrize("bad", [0.0, -1e-6, 2e-3, float("nan"), "tight"])
 def test_sigma_tol_is_checked_before_any_work(bad):
     with pytest.raises(InputError, match="sigma_tol"):
         solve(np.ones((8, 8)), 0, sigma_tol=bad)
