@@ -366,9 +366,25 @@ def test_auto_picks_the_direct_solver_for_thin_clusters(amg_sized_heights, monke
     for gap, r in ((thin, r_thin), (open_, r_open)):
         other = solve(gap, 0, method="rs" if r.method == "direct" else "direct")
         assert r.sigma == pytest.approx(other.sigma, rel=1e-10)
+    # a caller that knows its gaps moves the limit: 0 leaves every state beyond
+    # DIRECT_MAX_UNKNOWNS to RS (faster on isotropic bearing gaps at any flowing fraction
+    # measured), 1 factorises the open state too
+    bearing = solve(thin, 0, direct_max_flowing_fraction=0.0)
+    assert bearing.method == "rs" and bearing.sigma == pytest.approx(r_thin.sigma, rel=1e-10)
+    assert solve(open_, 0, direct_max_flowing_fraction=1.0).method == "direct"
     # a factorisation that would not fit leaves the thin state to RS
     monkeypatch.setattr(linsolve, "headroom_bytes", lambda: 1)
     assert solve(thin, 0).method == "rs"
+
+
+@pytest.mark.parametrize("bad", [-0.1, 1.5, float("nan"), "most", [0.5]])
+def test_direct_max_flowing_fraction_is_checked_before_any_work(bad, monkeypatch):
+    def no_solve(*args, **kwargs):
+        raise AssertionError("a solve started")
+
+    monkeypatch.setattr(flow_core, "_balanced_solution", no_solve)
+    with pytest.raises(InputError, match="direct_max_flowing_fraction"):
+        solve(np.ones((8, 8)), 0, direct_max_flowing_fraction=bad)
 
 
 def test_auto_falls_back_to_direct_when_amg_does_not_converge(amg_sized_gap, monkeypatch):

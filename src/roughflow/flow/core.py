@@ -34,7 +34,14 @@ from roughflow.resources import check_memory, describe
 
 from .assembly import Faces, assemble, face_transmissibilities
 from .bound import dissipation_bounds
-from .linsolve import LinearSolution, check_method, direct_fits, solve_prepared, solve_spd
+from .linsolve import (
+    LinearSolution,
+    check_direct_max_flowing_fraction,
+    check_method,
+    direct_fits,
+    solve_prepared,
+    solve_spd,
+)
 
 log = logging.getLogger(__name__)
 
@@ -338,7 +345,9 @@ class _SigmaCertificate:
 
 
 def _solve_flux_balanced(matrix, rhs, cells, act, faces: Faces, *, tol: float, method: str,
-                         sigma_tol: float | None = None, rounds: int = 4) -> _Balanced:
+                         sigma_tol: float | None = None,
+                         direct_max_flowing_fraction: float | None = None,
+                         rounds: int = 4) -> _Balanced:
     """Solve to ||b - A x|| <= tol ||b|| (else :class:`ConvergenceError`) and on until the
     flux imbalance |Q_in - Q_out| / Q is at most ``tol``, or round-off stops the solver.
 
@@ -356,6 +365,7 @@ def _solve_flux_balanced(matrix, rhs, cells, act, faces: Faces, *, tol: float, m
     an AMG one from Thomson's principle (:func:`_sigma_error_bound`; 6-9 % of an RS solve).
     With ``sigma_tol``, an iterative solve also stops at the first iterate whose bound is at
     most ``sigma_tol`` (:class:`_SigmaCertificate`), whatever its residual and imbalance.
+    ``direct_max_flowing_fraction``: see :func:`linsolve.choose`.
     """
     # not also "within _imbalance_floor": near a_c* that stopped RS with sigma 3e-4 off where
     # going on to round-off gave 1e-8 (1024^2, a_c 0.44, y)
@@ -365,7 +375,8 @@ def _solve_flux_balanced(matrix, rhs, cells, act, faces: Faces, *, tol: float, m
     # one factorisation for every refinement round: near a_c* it costs as much as a round
     certificate = None if sigma_tol is None else _SigmaCertificate(faces, act, cells, sigma_tol)
     sol, prepared = solve_prepared(matrix, rhs, tol=tol, method=method, accept=balanced,
-                                   certify=certificate, flowing_fraction=cells.size / act.size)
+                                   certify=certificate, flowing_fraction=cells.size / act.size,
+                                   direct_max_flowing_fraction=direct_max_flowing_fraction)
     q, dissipation, imbalance = _flux_balance(faces, act, cells, sol.x)
     for _round in range(rounds if prepared.factor is not None else 0):
         if imbalance <= tol:
@@ -402,7 +413,8 @@ def _uncertified(balanced: _Balanced) -> str:
 
 
 def _balanced_solution(matrix, rhs, cells, act, faces: Faces, *, tol: float,
-                       method: str, sigma_tol: float | None = None) -> _Balanced:
+                       method: str, sigma_tol: float | None = None,
+                       direct_max_flowing_fraction: float | None = None) -> _Balanced:
     """:func:`_solve_flux_balanced`, checked where sigma's error is not certified to
     :data:`FLOW_SIGMA_RTOL`.
 
@@ -423,7 +435,8 @@ def _balanced_solution(matrix, rhs, cells, act, faces: Faces, *, tol: float,
     where it does not, or where its fluxes balance, a warning says that sigma is unchecked.
     """
     first = _solve_flux_balanced(matrix, rhs, cells, act, faces, tol=tol, method=method,
-                                 sigma_tol=sigma_tol)
+                                 sigma_tol=sigma_tol,
+                                 direct_max_flowing_fraction=direct_max_flowing_fraction)
     if first.accepted:
         return first
     if first.solution.method != "direct":
@@ -497,6 +510,7 @@ def solve(
     method: str | None = None,
     periodic: bool = True,
     sigma_tol: float | None = None,
+    direct_max_flowing_fraction: float | None = None,
 ) -> FlowResult:
     """Reynolds flow along ``axis`` (0/"x" or 1/"y") through the gap field ``gap[ix, iy]``.
 
@@ -515,6 +529,11 @@ def solve(
     bound), whatever its residual and flux balance: sigma needs far fewer iterations than
     the pressure field (its error is quadratic in the pressure's). The sweeps and ``leak``
     use ``FLOW_SIGMA_TOL``; None (default): solve to ``tol`` as above.
+    ``direct_max_flowing_fraction``: the largest share of the cells carrying flow at which
+    ``auto`` takes the direct solver beyond 70k unknowns (None: 0.75). On isotropic
+    bearing-model gaps RS was faster at every share measured, so 0 suits them; on elastic
+    gaps and anisotropic (gamma 2) bearing gaps of the paper's sizes the default is as fast
+    or faster (docs/flow.md "Since sigma_tol").
     Raises ``InputError`` for bad input and ``ConvergenceError`` if the solver misses
     ``tol``, or where sigma's error is not certified to ``FLOW_SIGMA_RTOL`` and a direct
     solve whose fluxes do not balance to ``FLOW_IMBALANCE_MAX`` finds sigma uncertain by
@@ -532,6 +551,7 @@ def solve(
                          f"the inlet and outlet fluxes), got {tol!r}")
     method = check_method(method)
     sigma_tol = check_sigma_tol(sigma_tol)
+    direct_max_flowing_fraction = check_direct_max_flowing_fraction(direct_max_flowing_fraction)
     check_memory("flow", g.shape, what="a Reynolds flow solve")
 
     sigma_local = g**3 / (12.0 * eta)
@@ -549,7 +569,8 @@ def solve(
                                       system.rhs)
     h_flow, h_across = system.h_flow, system.h_across
     balanced = _balanced_solution(matrix, rhs, cells, act, faces, tol=tol, method=method,
-                                  sigma_tol=sigma_tol)
+                                  sigma_tol=sigma_tol,
+                                  direct_max_flowing_fraction=direct_max_flowing_fraction)
     sol, q, dissipation = balanced.solution, balanced.pressure, balanced.dissipation
     p = np.full(act.shape, np.nan)
     p.ravel()[cells] = sol.x

@@ -20,10 +20,11 @@ Methods (chosen by measurement, see ``benchmarks/bench_flow.py`` and docs/flow.m
 
 ``"auto"`` (:func:`choose`) takes the direct solver up to :data:`DIRECT_MAX_UNKNOWNS`
 unknowns, and beyond where the flowing cells are at most
-:data:`DIRECT_MAX_FLOWING_FRACTION` of the grid and the factorisation fits in memory;
-otherwise RS. An RS solve that does not converge is retried by the direct solver where it
-fits (:func:`solve_prepared`): near a_c*, on the paper config's largest grids, RS-CG can
-stall on conductivities that span 16 decades (docs/flow.md "Direct solver").
+:data:`DIRECT_MAX_FLOWING_FRACTION` of the grid (or the caller's
+``direct_max_flowing_fraction``) and the factorisation fits in memory; otherwise RS. An RS
+solve that does not converge is retried by the direct solver where it fits
+(:func:`solve_prepared`): near a_c*, on the paper config's largest grids, RS-CG can stall
+on conductivities that span 16 decades (docs/flow.md "Direct solver").
 
 The iterative methods run :func:`pcg`, which a caller can keep going past ``tol`` until its
 own test accepts the iterate (:mod:`roughflow.flow.core` balances the reservoir fluxes so),
@@ -42,7 +43,7 @@ import scipy.sparse as sp
 import scipy.sparse.linalg as spla
 
 from roughflow.defaults import FLOW_METHODS as METHODS
-from roughflow.errors import ConvergenceError, InputError
+from roughflow.errors import ConvergenceError, InputError, require_finite
 from roughflow.flow import amg
 from roughflow.resources import FLOW_LDL_BYTES_PER_UNKNOWN, describe, headroom_bytes
 
@@ -53,10 +54,13 @@ log = logging.getLogger(__name__)
 #: (docs/flow.md "Direct solver")
 DIRECT_MAX_UNKNOWNS = 70_000
 #: beyond it, ``"auto"`` uses the direct solver where the unknowns (the cells that carry
-#: flow) are at most this fraction of the grid's cells, if the factorisation fits in memory:
-#: there it took 0.09-1.33x RS's time on elastic and bearing gaps from 128^2 to 2048 x 4096
-#: (above 1 only near the limit on grids up to 1024^2), and up to 10x where more cells flow
-#: (docs/flow.md "Direct solver")
+#: flow) are at most this fraction of the grid's cells, if the factorisation fits in memory.
+#: On elastic gaps it took 0.74-1.03x the time of RS stopped at ``FLOW_SIGMA_TOL`` there at
+#: 2048^2 (0.86-1.23x at 512^2-1024^2, a few tenths of a second either way) and 0.09-1.33x
+#: RS to ``tol`` at 2048 x 4096, where RS stalls near a_c*; 1.3-1.9x at fractions 0.8-0.85
+#: and up to 10x with every cell open. On isotropic bearing gaps RS was the faster at every
+#: fraction measured, on anisotropic ones (gamma 2, 2048 x 4096) mostly not: the ladders keep
+#: this limit for every model (docs/flow.md "Direct solver", ``benchmarks/bench_direct.py``)
 DIRECT_MAX_FLOWING_FRACTION = 0.75
 MAX_ITER_AMG = 500
 #: AMG-CG iterations after which ``"auto"`` retries with the direct solver (where its
@@ -132,24 +136,43 @@ def direct_fits(n: int) -> tuple[bool, int, int | None]:
     return have is None or need <= have, need, have
 
 
-def choose(method: str | None, n: int, flowing_fraction: float | None = None) -> str:
+def check_direct_max_flowing_fraction(value: float | None) -> float | None:
+    """``value`` as a float in [0, 1] (None stays None: :data:`DIRECT_MAX_FLOWING_FRACTION`);
+    :class:`InputError` otherwise."""
+    if value is None:
+        return None
+    v = require_finite("direct_max_flowing_fraction", value)
+    if not 0.0 <= v <= 1.0:
+        raise InputError(f"direct_max_flowing_fraction must lie in [0, 1] (a share of the "
+                         f"grid's cells), got {value!r}")
+    return v
+
+
+def choose(method: str | None, n: int, flowing_fraction: float | None = None,
+           direct_max_flowing_fraction: float | None = None) -> str:
     """The method ``"auto"`` stands for with ``n`` unknowns that are ``flowing_fraction`` of
-    the grid's cells (None: unknown; then by size only), else ``method`` itself."""
+    the grid's cells (None: unknown; then by size only), else ``method`` itself.
+    ``direct_max_flowing_fraction``: the largest flowing fraction at which ``"auto"`` takes
+    the direct solver beyond :data:`DIRECT_MAX_UNKNOWNS` (None:
+    :data:`DIRECT_MAX_FLOWING_FRACTION`)."""
     method = check_method(method)
     if method != "auto":
         return method
     if n <= DIRECT_MAX_UNKNOWNS:
         return "direct"
-    if flowing_fraction is not None and flowing_fraction <= DIRECT_MAX_FLOWING_FRACTION:
+    limit = (DIRECT_MAX_FLOWING_FRACTION if direct_max_flowing_fraction is None
+             else direct_max_flowing_fraction)
+    if flowing_fraction is not None and flowing_fraction <= limit:
         return "direct" if direct_fits(n)[0] else "rs"
     return "rs"
 
 
 def prepare(a: sp.spmatrix, method: str = "auto",
-            flowing_fraction: float | None = None) -> Prepared:
+            flowing_fraction: float | None = None,
+            direct_max_flowing_fraction: float | None = None) -> Prepared:
     """Factorise (``"direct"``) or build the AMG preconditioner of ``a`` for
     :func:`solve_spd` (``"auto"``: :func:`choose`)."""
-    method = choose(method, a.shape[0], flowing_fraction)
+    method = choose(method, a.shape[0], flowing_fraction, direct_max_flowing_fraction)
     if method == "direct":
         # QDLDL reads the upper triangle of a CSC matrix (A is symmetric)
         return Prepared(method, factor=qdldl.Solver(sp.triu(a, format="csc"), upper=True))
@@ -272,13 +295,14 @@ def solve_spd(
 
 def solve_prepared(a: sp.csr_matrix, b: np.ndarray, *, tol: float, method: str = "auto",
                    flowing_fraction: float | None = None,
+                   direct_max_flowing_fraction: float | None = None,
                    accept: Callable[[np.ndarray], bool] | None = None,
                    certify: Callable[[np.ndarray, float], bool] | None = None,
                    ) -> tuple[LinearSolution, Prepared]:
     """:func:`prepare` and :func:`solve_spd` of ``a x = b``, returning the solution and what
     was prepared (for further solves of the same matrix). ``flowing_fraction``: the
-    unknowns' share of the grid's cells, for :func:`choose`; ``accept``, ``certify``: see
-    :func:`pcg`.
+    unknowns' share of the grid's cells, and ``direct_max_flowing_fraction``, for
+    :func:`choose`; ``accept``, ``certify``: see :func:`pcg`.
 
     With ``method="auto"``, an AMG solve is retried by the direct solver when it has not
     converged after :data:`AMG_ITER_BEFORE_FALLBACK` iterations, if the factorisation fits
@@ -288,7 +312,7 @@ def solve_prepared(a: sp.csr_matrix, b: np.ndarray, *, tol: float, method: str =
     (naming the memory the fallback would have needed).
     """
     method = check_method(method)
-    chosen = choose(method, a.shape[0], flowing_fraction)
+    chosen = choose(method, a.shape[0], flowing_fraction, direct_max_flowing_fraction)
     fallback = method == "auto" and chosen != "direct"
     # measured before the AMG hierarchy, which is freed before the factorisation; only
     # where it matters

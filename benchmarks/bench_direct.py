@@ -1,0 +1,147 @@
+"""Where the direct flow solver's time goes, and how it compares with RS-AMG now that the
+sweeps' AMG solves stop at a proven sigma accuracy (``sigma_tol``).
+
+For each size, an isotropic surface (H = ``--hurst``, eps_f = 1/16, 8 points per lambda_s,
+n = 128 L/lambda_r) is brought by warm-started elastic contact solves (tol 1e-6, the
+ladder's) to pressures that give a_c of about 0.15 - 0.4; the bearing model is cut at each
+elastic state's area, so both models are compared at the same areas. Every state and axis is
+solved by ``method="direct"`` and ``method="rs"``, both with ``sigma_tol`` =
+``FLOW_SIGMA_TOL`` as the ladders and ``leak`` run them, ``--repeats`` times, alternated; a
+row gives the flowing fraction (the unknowns' share of the cells, which ``auto`` decides
+by), the method ``auto`` takes with its default limit (the elastic model's), the median
+times and their ratio, and RS's CG iterations. For axis x it also splits QDLDL's
+factorisation into its ordering and symbolic part (the approximate minimum degree ordering
+inside ``qdldl.Solver``) and its numeric part (timed by ``Solver.update``, which
+refactorises the same pattern), with the factor's nonzeros.
+
+    ROUGHFLOW_FFT_THREADS=1 python benchmarks/bench_direct.py --sizes 512 1024
+
+Writes results/benchmarks/bench_direct{tag}.{csv,md}; docs/flow.md "Direct solver" quotes it.
+"""
+
+from __future__ import annotations
+
+import argparse
+import logging
+import os
+import statistics
+import sys
+import time
+from pathlib import Path
+
+os.environ.setdefault("OPENBLAS_NUM_THREADS", "1")
+os.environ.setdefault("OMP_NUM_THREADS", "1")
+os.environ.setdefault("ROUGHFLOW_FFT_THREADS", "1")
+
+import qdldl  # noqa: E402
+import scipy.sparse as sp  # noqa: E402
+
+from roughflow import contact, flow  # noqa: E402
+from roughflow.defaults import FLOW_SIGMA_TOL  # noqa: E402
+from roughflow.flow.core import flowing_cells, reynolds_system  # noqa: E402
+from roughflow.flow.linsolve import choose  # noqa: E402
+from roughflow.surface import SurfaceSpec, generate  # noqa: E402
+
+sys.path.insert(0, str(Path(__file__).resolve().parent))
+from bench_contact import OUT, write_csv  # noqa: E402
+
+#: pressures (E* gbar) that give a_c of about 0.15, 0.19, 0.24, 0.28, 0.33, 0.36 on these
+#: surfaces (H = 0.8; flowing fractions about 0.85 - 0.6)
+PRESSURES = (0.068, 0.09, 0.113, 0.136, 0.163, 0.181)
+METHODS = ("direct", "rs")
+
+
+def factorisation_split(gap, lx: float, ly: float) -> dict:
+    """QDLDL on the x-axis system of ``gap``: the whole factorisation, its numeric part, the
+    factor's nonzeros."""
+    sigma_local = gap**3 / 12.0
+    system = reynolds_system(sigma_local, flowing_cells(sigma_local, 0), 0, lx=lx, ly=ly)
+    upper = sp.triu(system.matrix, format="csc")
+    t0 = time.perf_counter()
+    solver = qdldl.Solver(upper, upper=True)
+    t1 = time.perf_counter()
+    solver.update(upper, upper=True)
+    t2 = time.perf_counter()
+    return dict(factor_s=t1 - t0, numeric_s=t2 - t1, ordering_s=(t1 - t0) - (t2 - t1),
+                nnz_l=int(solver.factors()[0].nnz))
+
+
+def compare(gap, axis: int, lx: float, ly: float, repeats: int) -> dict | None:
+    times = {m: [] for m in METHODS}
+    out = {}
+    for _ in range(repeats):
+        for m in METHODS:
+            t0 = time.perf_counter()
+            out[m] = flow.solve(gap, axis, lx=lx, ly=ly, method=m, sigma_tol=FLOW_SIGMA_TOL)
+            times[m].append(time.perf_counter() - t0)
+    rs, direct = out["rs"], out["direct"]
+    if not rs.percolating:
+        return None
+    fraction = rs.n_active / gap.size
+    td, tr = statistics.median(times["direct"]), statistics.median(times["rs"])
+    return dict(unknowns=rs.n_active, flowing_fraction=fraction,
+                auto=choose("auto", rs.n_active, fraction), direct_s=td, rs_s=tr,
+                direct_over_rs=td / tr, rs_iterations=rs.iterations,
+                sigma_distance=abs(rs.sigma - direct.sigma) / direct.sigma)
+
+
+def main() -> None:
+    ap = argparse.ArgumentParser(description=__doc__.split("\n")[0])
+    ap.add_argument("--sizes", type=int, nargs="+", default=[512, 1024])
+    ap.add_argument("--pressures", type=float, nargs="+", default=list(PRESSURES))
+    ap.add_argument("--models", nargs="+", default=["elastic", "bearing"],
+                    choices=("elastic", "bearing"))
+    ap.add_argument("--hurst", type=float, default=0.8)
+    ap.add_argument("--seed", type=int, default=9)
+    ap.add_argument("--repeats", type=int, default=3)
+    ap.add_argument("--tag", default="")
+    args = ap.parse_args()
+    logging.disable(logging.WARNING)
+    OUT.mkdir(parents=True, exist_ok=True)
+    rows = []
+    for n in args.sizes:
+        spec = SurfaceSpec.from_sweep(hurst=args.hurst, eps_f=1 / 16, points_per_lambda_s=8,
+                                      seed=args.seed, l_over_lambda_r=n / 128)
+        s = generate(spec)
+        assert s.shape == (n, n), s.shape
+        state = None
+        for p in args.pressures:
+            state = contact.solve(s, p, tol=1e-6, init=state)
+            gaps = {"elastic": state.gap}
+            if "bearing" in args.models:
+                gaps["bearing"] = contact.solve(s, model="bearing",
+                                                area_fraction=state.area_fraction).gap
+            for model in args.models:
+                split = factorisation_split(gaps[model], s.lx, s.ly)
+                for axis in (0, 1):
+                    res = compare(gaps[model], axis, s.lx, s.ly, args.repeats)
+                    if res is None:
+                        continue
+                    row = dict(n=n, model=model, a_c=round(state.area_fraction, 4),
+                               axis="xy"[axis], **res, repeats=args.repeats)
+                    row.update(split if axis == 0 else {k: "" for k in split})
+                    rows.append(row)
+                    print(row, flush=True)
+                    write_csv(f"bench_direct{args.tag}", rows)  # kept if interrupted
+    write_markdown(rows, OUT / f"bench_direct{args.tag}.md", args)
+
+
+def write_markdown(rows: list[dict], path: Path, args) -> None:
+    lines = [f"# Direct (QDLDL) against RS-AMG, both to sigma_tol = {FLOW_SIGMA_TOL:g} (H = "
+             f"{args.hurst}, seed {args.seed}, median of {args.repeats}, alternated)", "",
+             "| n | model | a_c | axis | flowing fraction | auto | direct [s] | RS [s] | "
+             "direct / RS | RS iterations | QDLDL ordering + symbolic [s] | numeric [s] | "
+             "nnz(L) |",
+             "|---|---|---|---|---|---|---|---|---|---|---|---|---|"]
+    for r in rows:
+        split = (f"{r['ordering_s']:.2f} | {r['numeric_s']:.2f} | {r['nnz_l']:.2e}"
+                 if r["ordering_s"] != "" else " | | ")
+        lines.append(
+            f"| {r['n']} | {r['model']} | {r['a_c']:.3f} | {r['axis']} | "
+            f"{r['flowing_fraction']:.3f} | {r['auto']} | {r['direct_s']:.2f} | "
+            f"{r['rs_s']:.2f} | {r['direct_over_rs']:.2f} | {r['rs_iterations']} | {split} |")
+    path.write_text("\n".join(lines) + "\n")
+
+
+if __name__ == "__main__":
+    main()
