@@ -1,20 +1,23 @@
 """Where the direct flow solver's time goes, and how it compares with RS-AMG now that the
 sweeps' AMG solves stop at a proven sigma accuracy (``sigma_tol``).
 
-For each size, an isotropic surface (H = ``--hurst``, eps_f = 1/16, 8 points per lambda_s,
-n = 128 L/lambda_r) is brought by warm-started elastic contact solves (tol 1e-6, the
-ladder's) to pressures that give a_c of about 0.15 - 0.4; the bearing model is cut at each
-elastic state's area, so both models are compared at the same areas. Every state and axis is
-solved by ``method="direct"`` and ``method="rs"``, both with ``sigma_tol`` =
-``FLOW_SIGMA_TOL`` as the ladders and ``leak`` run them, ``--repeats`` times, alternated; a
-row gives the flowing fraction (the unknowns' share of the cells, which ``auto`` decides
-by), the method ``auto`` takes with its default limit (the elastic model's), the median
-times and their ratio, and RS's CG iterations. For axis x it also splits QDLDL's
-factorisation into its ordering and symbolic part (the approximate minimum degree ordering
-inside ``qdldl.Solver``) and its numeric part (timed by ``Solver.update``, which
+For each size n, a surface (H = ``--hurst``, Peklenik number ``--gamma``, eps_f = 1/16,
+8 points per lambda_s, L/lambda_r = n/128 times max(sqrt(gamma), 1/sqrt(gamma)) as in the
+paper's cells: n x n at gamma 1, 2048 x 4096 for n = 2048 at gamma 2) is brought by
+warm-started elastic contact solves (tol 1e-6, the ladder's) to pressures that give a_c of
+about 0.15 - 0.4; the bearing model is cut at each elastic state's area, so both models are
+compared at the same areas. Every state and axis is solved by ``method="direct"`` and
+``method="rs"``, both with ``sigma_tol`` = ``FLOW_SIGMA_TOL`` as the ladders and ``leak``
+run them, ``--repeats`` times, alternated; a row gives the flowing fraction (the unknowns'
+share of the cells, which ``auto`` decides by), the method ``auto`` takes with its default
+limit, the median times and their ratio, and RS's CG iterations. For axis x it also splits
+QDLDL's factorisation into its ordering and symbolic part (the approximate minimum degree
+ordering inside ``qdldl.Solver``) and its numeric part (timed by ``Solver.update``, which
 refactorises the same pattern), with the factor's nonzeros.
 
     ROUGHFLOW_FFT_THREADS=1 python benchmarks/bench_direct.py --sizes 512 1024
+    ROUGHFLOW_FFT_THREADS=1 python benchmarks/bench_direct.py --sizes 2048 --gamma 2 \
+        --models bearing --pressures 0.113 0.163 0.181 --repeats 1 --tag _g2
 
 Writes results/benchmarks/bench_direct{tag}.{csv,md}; docs/flow.md "Direct solver" quotes it.
 """
@@ -23,6 +26,7 @@ from __future__ import annotations
 
 import argparse
 import logging
+import math
 import os
 import statistics
 import sys
@@ -92,6 +96,7 @@ def main() -> None:
     ap.add_argument("--models", nargs="+", default=["elastic", "bearing"],
                     choices=("elastic", "bearing"))
     ap.add_argument("--hurst", type=float, default=0.8)
+    ap.add_argument("--gamma", type=float, default=1.0)
     ap.add_argument("--seed", type=int, default=9)
     ap.add_argument("--repeats", type=int, default=3)
     ap.add_argument("--tag", default="")
@@ -99,11 +104,13 @@ def main() -> None:
     logging.disable(logging.WARNING)
     OUT.mkdir(parents=True, exist_ok=True)
     rows = []
+    stretch = max(math.sqrt(args.gamma), 1 / math.sqrt(args.gamma))
     for n in args.sizes:
-        spec = SurfaceSpec.from_sweep(hurst=args.hurst, eps_f=1 / 16, points_per_lambda_s=8,
-                                      seed=args.seed, l_over_lambda_r=n / 128)
+        spec = SurfaceSpec.from_sweep(hurst=args.hurst, gamma=args.gamma, eps_f=1 / 16,
+                                      points_per_lambda_s=8, seed=args.seed,
+                                      l_over_lambda_r=n / 128 * stretch)
         s = generate(spec)
-        assert s.shape == (n, n), s.shape
+        grid = "x".join(map(str, s.shape))
         state = None
         for p in args.pressures:
             state = contact.solve(s, p, tol=1e-6, init=state)
@@ -117,8 +124,9 @@ def main() -> None:
                     res = compare(gaps[model], axis, s.lx, s.ly, args.repeats)
                     if res is None:
                         continue
-                    row = dict(n=n, model=model, a_c=round(state.area_fraction, 4),
-                               axis="xy"[axis], **res, repeats=args.repeats)
+                    row = dict(grid=grid, gamma=args.gamma, model=model,
+                               a_c=round(state.area_fraction, 4), axis="xy"[axis], **res,
+                               repeats=args.repeats)
                     row.update(split if axis == 0 else {k: "" for k in split})
                     rows.append(row)
                     print(row, flush=True)
@@ -129,15 +137,15 @@ def main() -> None:
 def write_markdown(rows: list[dict], path: Path, args) -> None:
     lines = [f"# Direct (QDLDL) against RS-AMG, both to sigma_tol = {FLOW_SIGMA_TOL:g} (H = "
              f"{args.hurst}, seed {args.seed}, median of {args.repeats}, alternated)", "",
-             "| n | model | a_c | axis | flowing fraction | auto | direct [s] | RS [s] | "
-             "direct / RS | RS iterations | QDLDL ordering + symbolic [s] | numeric [s] | "
+             "| grid | gamma | model | a_c | axis | flowing fraction | auto | direct [s] | "
+             "RS [s] | direct / RS | RS iterations | QDLDL ordering + symbolic [s] | numeric [s] | "
              "nnz(L) |",
-             "|---|---|---|---|---|---|---|---|---|---|---|---|---|"]
+             "|---|---|---|---|---|---|---|---|---|---|---|---|---|---|"]
     for r in rows:
         split = (f"{r['ordering_s']:.2f} | {r['numeric_s']:.2f} | {r['nnz_l']:.2e}"
                  if r["ordering_s"] != "" else " | | ")
         lines.append(
-            f"| {r['n']} | {r['model']} | {r['a_c']:.3f} | {r['axis']} | "
+            f"| {r['grid']} | {r['gamma']:g} | {r['model']} | {r['a_c']:.3f} | {r['axis']} | "
             f"{r['flowing_fraction']:.3f} | {r['auto']} | {r['direct_s']:.2f} | "
             f"{r['rs_s']:.2f} | {r['direct_over_rs']:.2f} | {r['rs_iterations']} | {split} |")
     path.write_text("\n".join(lines) + "\n")
