@@ -53,6 +53,7 @@ from bench_contact import OUT, write_csv  # noqa: E402
 #: surfaces (H = 0.8; flowing fractions about 0.85 - 0.6)
 PRESSURES = (0.068, 0.09, 0.113, 0.136, 0.163, 0.181)
 METHODS = ("direct", "rs")
+SPLIT_KEYS = ("factor_s", "numeric_s", "ordering_s", "nnz_l")
 
 
 def factorisation_split(gap, lx: float, ly: float) -> dict:
@@ -66,8 +67,8 @@ def factorisation_split(gap, lx: float, ly: float) -> dict:
     t1 = time.perf_counter()
     solver.update(upper, upper=True)
     t2 = time.perf_counter()
-    return dict(factor_s=t1 - t0, numeric_s=t2 - t1, ordering_s=(t1 - t0) - (t2 - t1),
-                nnz_l=int(solver.factors()[0].nnz))
+    return dict(zip(SPLIT_KEYS, (t1 - t0, t2 - t1, (t1 - t0) - (t2 - t1),
+                                 int(solver.factors()[0].nnz)), strict=True))
 
 
 def compare(gap, axis: int, lx: float, ly: float, repeats: int) -> dict | None:
@@ -119,15 +120,16 @@ def main() -> None:
                 gaps["bearing"] = contact.solve(s, model="bearing",
                                                 area_fraction=state.area_fraction).gap
             for model in args.models:
-                split = factorisation_split(gaps[model], s.lx, s.ly)
                 for axis in (0, 1):
                     res = compare(gaps[model], axis, s.lx, s.ly, args.repeats)
-                    if res is None:
+                    if res is None:  # not percolating: no system to solve or factorise
                         continue
                     row = dict(grid=grid, gamma=args.gamma, model=model,
                                a_c=round(state.area_fraction, 4), axis="xy"[axis], **res,
                                repeats=args.repeats)
-                    row.update(split if axis == 0 else {k: "" for k in split})
+                    split = (factorisation_split(gaps[model], s.lx, s.ly) if axis == 0
+                             else dict.fromkeys(SPLIT_KEYS, ""))
+                    row.update(split)
                     rows.append(row)
                     print(row, flush=True)
                     write_csv(f"bench_direct{args.tag}", rows)  # kept if interrupted

@@ -168,11 +168,10 @@ def choose(method: str | None, n: int, flowing_fraction: float | None = None,
 
 
 def prepare(a: sp.spmatrix, method: str = "auto",
-            flowing_fraction: float | None = None,
-            direct_max_flowing_fraction: float | None = None) -> Prepared:
+            flowing_fraction: float | None = None) -> Prepared:
     """Factorise (``"direct"``) or build the AMG preconditioner of ``a`` for
     :func:`solve_spd` (``"auto"``: :func:`choose`)."""
-    method = choose(method, a.shape[0], flowing_fraction, direct_max_flowing_fraction)
+    method = choose(method, a.shape[0], flowing_fraction)
     if method == "direct":
         # QDLDL reads the upper triangle of a CSC matrix (A is symmetric)
         return Prepared(method, factor=qdldl.Solver(sp.triu(a, format="csc"), upper=True))
