@@ -10,10 +10,13 @@ compared at the same areas. Every state and axis is solved by ``method="direct"`
 ``method="rs"``, both with ``sigma_tol`` = ``FLOW_SIGMA_TOL`` as the ladders and ``leak``
 run them, ``--repeats`` times, alternated; a row gives the flowing fraction (the unknowns'
 share of the cells, which ``auto`` decides by), the method ``auto`` takes with its default
-limit, the median times and their ratio, and RS's CG iterations. For axis x it also splits
-QDLDL's factorisation into its ordering and symbolic part (the approximate minimum degree
-ordering inside ``qdldl.Solver``) and its numeric part (timed by ``Solver.update``, which
-refactorises the same pattern), with the factor's nonzeros.
+limit, the median times and their ratio, and RS's CG iterations. The states of one model
+and axis form a ladder (increasing load), and the direct solve is also timed with the
+previous state's elimination order (``flow.solve(ordering=)``, chained as the ladders chain
+it: each state reuses the order the one before it used), with its flops over those of a
+fresh order. For axis x it also splits the fresh factorisation into the approximate minimum
+degree ordering (``ldl.amd_order``) and the rest (permutation, symbolic and numeric
+factorisation: ``ldl.factor`` in that order), with the factor's nonzeros.
 
     ROUGHFLOW_FFT_THREADS=1 python benchmarks/bench_direct.py --sizes 512 1024
     ROUGHFLOW_FFT_THREADS=1 python benchmarks/bench_direct.py --sizes 2048 --gamma 2 \
@@ -37,11 +40,9 @@ os.environ.setdefault("OPENBLAS_NUM_THREADS", "1")
 os.environ.setdefault("OMP_NUM_THREADS", "1")
 os.environ.setdefault("ROUGHFLOW_FFT_THREADS", "1")
 
-import qdldl  # noqa: E402
-import scipy.sparse as sp  # noqa: E402
-
 from roughflow import contact, flow  # noqa: E402
 from roughflow.defaults import FLOW_SIGMA_TOL  # noqa: E402
+from roughflow.flow import ldl  # noqa: E402
 from roughflow.flow.core import flowing_cells, reynolds_system  # noqa: E402
 from roughflow.flow.linsolve import choose  # noqa: E402
 from roughflow.surface import SurfaceSpec, generate  # noqa: E402
@@ -52,42 +53,56 @@ from bench_contact import OUT, write_csv  # noqa: E402
 #: pressures (E* gbar) that give a_c of about 0.15, 0.19, 0.24, 0.28, 0.33, 0.36 on these
 #: surfaces (H = 0.8; flowing fractions about 0.85 - 0.6)
 PRESSURES = (0.068, 0.09, 0.113, 0.136, 0.163, 0.181)
-METHODS = ("direct", "rs")
+#: the direct solve ordered afresh, with the previous state's order, and RS
+VARIANTS = ("direct", "reused", "rs")
 SPLIT_KEYS = ("factor_s", "numeric_s", "ordering_s", "nnz_l")
 
 
 def factorisation_split(gap, lx: float, ly: float) -> dict:
-    """QDLDL on the x-axis system of ``gap``: the whole factorisation, its numeric part, the
-    factor's nonzeros."""
+    """The fresh LDL^T of the x-axis system of ``gap``: the whole factorisation, the part
+    after the ordering, the ordering, the factor's nonzeros."""
     sigma_local = gap**3 / 12.0
-    system = reynolds_system(sigma_local, flowing_cells(sigma_local, 0), 0, lx=lx, ly=ly)
-    upper = sp.triu(system.matrix, format="csc")
+    matrix = reynolds_system(sigma_local, flowing_cells(sigma_local, 0), 0, lx=lx,
+                             ly=ly).matrix
     t0 = time.perf_counter()
-    solver = qdldl.Solver(upper, upper=True)
+    order = ldl.amd_order(matrix)
     t1 = time.perf_counter()
-    solver.update(upper, upper=True)
+    factor = ldl.factor(matrix, order)
     t2 = time.perf_counter()
-    return dict(zip(SPLIT_KEYS, (t1 - t0, t2 - t1, (t1 - t0) - (t2 - t1),
-                                 int(solver.factors()[0].nnz)), strict=True))
+    return dict(zip(SPLIT_KEYS, (t2 - t0, t2 - t1, t1 - t0, factor.nnz), strict=True))
 
 
-def compare(gap, axis: int, lx: float, ly: float, repeats: int) -> dict | None:
-    times = {m: [] for m in METHODS}
+def compare(gap, axis: int, lx: float, ly: float, repeats: int,
+            previous: flow.CellOrdering | None) -> dict | None:
+    """Both solvers on ``gap``, the direct one also with ``previous`` (the last state's order
+    along ``axis``; None: none yet, so no reused time)."""
+    times = {v: [] for v in VARIANTS}
     out = {}
     for _ in range(repeats):
-        for m in METHODS:
+        for v in VARIANTS:
+            if v == "reused" and previous is None:
+                continue
             t0 = time.perf_counter()
-            out[m] = flow.solve(gap, axis, lx=lx, ly=ly, method=m, sigma_tol=FLOW_SIGMA_TOL)
-            times[m].append(time.perf_counter() - t0)
+            out[v] = flow.solve(gap, axis, lx=lx, ly=ly, sigma_tol=FLOW_SIGMA_TOL,
+                                method="rs" if v == "rs" else "direct",
+                                ordering=previous if v == "reused" else None)
+            times[v].append(time.perf_counter() - t0)
     rs, direct = out["rs"], out["direct"]
     if not rs.percolating:
         return None
     fraction = rs.n_active / gap.size
     td, tr = statistics.median(times["direct"]), statistics.median(times["rs"])
+    reused = out.get("reused", direct)
+    tu = statistics.median(times["reused"]) if times["reused"] else float("nan")
     return dict(unknowns=rs.n_active, flowing_fraction=fraction,
                 auto=choose("auto", rs.n_active, fraction), direct_s=td, rs_s=tr,
-                direct_over_rs=td / tr, rs_iterations=rs.iterations,
-                sigma_distance=abs(rs.sigma - direct.sigma) / direct.sigma)
+                direct_over_rs=td / tr, reused_s=tu, reused_over_rs=tu / tr,
+                reused_over_direct=tu / td,
+                flops_ratio=reused.ordering.flops / direct.ordering.flops,
+                rs_iterations=rs.iterations,
+                sigma_distance=abs(rs.sigma - direct.sigma) / direct.sigma,
+                reused_sigma_distance=abs(reused.sigma - direct.sigma) / direct.sigma,
+                ordering=reused.ordering)
 
 
 def main() -> None:
@@ -113,6 +128,7 @@ def main() -> None:
         s = generate(spec)
         grid = "x".join(map(str, s.shape))
         state = None
+        previous: dict[tuple[str, int], flow.CellOrdering | None] = {}
         for p in args.pressures:
             state = contact.solve(s, p, tol=1e-6, init=state)
             gaps = {"elastic": state.gap}
@@ -121,9 +137,11 @@ def main() -> None:
                                                 area_fraction=state.area_fraction).gap
             for model in args.models:
                 for axis in (0, 1):
-                    res = compare(gaps[model], axis, s.lx, s.ly, args.repeats)
+                    res = compare(gaps[model], axis, s.lx, s.ly, args.repeats,
+                                  previous.get((model, axis)))
                     if res is None:  # not percolating: no system to solve or factorise
                         continue
+                    previous[(model, axis)] = res.pop("ordering")
                     row = dict(grid=grid, gamma=args.gamma, model=model,
                                a_c=round(state.area_fraction, 4), axis="xy"[axis], **res,
                                repeats=args.repeats)
@@ -139,17 +157,21 @@ def main() -> None:
 def write_markdown(rows: list[dict], path: Path, args) -> None:
     lines = [f"# Direct (QDLDL) against RS-AMG, both to sigma_tol = {FLOW_SIGMA_TOL:g} (H = "
              f"{args.hurst}, seed {args.seed}, median of {args.repeats}, alternated)", "",
+             "reused: the direct solve with the previous state's elimination order (chained); "
+             "flops: its factorisation's over a fresh order's.", "",
              "| grid | gamma | model | a_c | axis | flowing fraction | auto | direct [s] | "
-             "RS [s] | direct / RS | RS iterations | QDLDL ordering + symbolic [s] | numeric [s] | "
-             "nnz(L) |",
-             "|---|---|---|---|---|---|---|---|---|---|---|---|---|---|"]
+             "reused [s] | RS [s] | direct / RS | reused / RS | reused / direct | flops | "
+             "RS iterations | AMD ordering [s] | the rest [s] | nnz(L) |",
+             "|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|"]
     for r in rows:
         split = (f"{r['ordering_s']:.2f} | {r['numeric_s']:.2f} | {r['nnz_l']:.2e}"
                  if r["ordering_s"] != "" else " | | ")
         lines.append(
             f"| {r['grid']} | {r['gamma']:g} | {r['model']} | {r['a_c']:.3f} | {r['axis']} | "
             f"{r['flowing_fraction']:.3f} | {r['auto']} | {r['direct_s']:.2f} | "
-            f"{r['rs_s']:.2f} | {r['direct_over_rs']:.2f} | {r['rs_iterations']} | {split} |")
+            f"{r['reused_s']:.2f} | {r['rs_s']:.2f} | {r['direct_over_rs']:.2f} | "
+            f"{r['reused_over_rs']:.2f} | {r['reused_over_direct']:.2f} | "
+            f"{r['flops_ratio']:.2f} | {r['rs_iterations']} | {split} |")
     path.write_text("\n".join(lines) + "\n")
 
 

@@ -172,6 +172,8 @@ def pressure_curve(emb: Embedding, pressures: np.ndarray, *, contact_tol: float 
     spans = np.zeros((n, 2), dtype=bool)
     sigma, imbalance, sigma_error = (np.zeros((n, 2)) for _ in range(3))
     state: ContactResult | None = None
+    # each axis's last direct solve orders the next one's cells (flow.CellOrdering)
+    orderings: list[flow.CellOrdering | None] = [None, None]
     for i, pn in enumerate(pressures):
         state = solve(emb.surface, emb.cell_pressure(pn), tol=contact_tol, init=state,
                       threads=threads)
@@ -182,7 +184,9 @@ def pressure_curve(emb: Embedding, pressures: np.ndarray, *, contact_tol: float 
             spans[i, ax] = percolates(~seen.contact, ax, periodic=emb.periodic)
             if spans[i, ax]:
                 fr = flow.solve(seen.gap, ax, lx=emb.lx, ly=emb.ly, tol=flow_tol,
-                                sigma_tol=flow_sigma_tol, periodic=emb.periodic)
+                                sigma_tol=flow_sigma_tol, periodic=emb.periodic,
+                                ordering=orderings[ax])
+                orderings[ax] = fr.ordering
                 sigma[i, ax], imbalance[i, ax] = fr.sigma, fr.flux_imbalance
                 sigma_error[i, ax] = fr.sigma_error
         log.info("p = %.4g E*: a_c = %.4f, percolating x %d y %d, sigma = %.3e, %.3e", pn,

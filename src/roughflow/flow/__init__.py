@@ -5,7 +5,7 @@ compute the effective conductances sigma_x, sigma_y by cell-centred finite
 volumes with AMG-preconditioned CG; ``plot_flux`` draws the flux over the contact map.
 """
 
-from .core import FlowResult, check_sigma_tol, conductance, solve
+from .core import CellOrdering, FlowResult, check_sigma_tol, conductance, solve
 from .plot import plot_flux
 
-__all__ = ["FlowResult", "check_sigma_tol", "conductance", "plot_flux", "solve"]
+__all__ = ["CellOrdering", "FlowResult", "check_sigma_tol", "conductance", "plot_flux", "solve"]

@@ -14,8 +14,9 @@ Methods (chosen by measurement, see ``benchmarks/bench_flow.py`` and docs/flow.m
   correction (:mod:`roughflow.flow.amg`); the default where most cells carry flow.
 - ``"sa"``: CG preconditioned by smoothed-aggregation AMG.
 - ``"direct"``: sparse Cholesky-type LDL^T factorisation (QDLDL, approximate minimum
-  degree ordering; no pivoting is needed for this SPD M-matrix); the default for small
-  systems and for thin flowing clusters, near a_c*, where its fill is small.
+  degree ordering, or an order the caller passes: :mod:`roughflow.flow.ldl`; no pivoting
+  is needed for this SPD M-matrix); the default for small systems and for thin flowing
+  clusters, near a_c*, where its fill is small.
 - ``"cg"``: CG without preconditioner (benchmark reference; slow).
 
 ``"auto"`` (:func:`choose`) takes the direct solver up to :data:`DIRECT_MAX_UNKNOWNS`
@@ -44,7 +45,7 @@ import scipy.sparse.linalg as spla
 
 from roughflow.defaults import FLOW_METHODS as METHODS
 from roughflow.errors import ConvergenceError, InputError, require_finite
-from roughflow.flow import amg
+from roughflow.flow import amg, ldl
 from roughflow.resources import FLOW_LDL_BYTES_PER_UNKNOWN, describe, headroom_bytes
 
 log = logging.getLogger(__name__)
@@ -100,14 +101,26 @@ class CGRun:
 
 
 @dataclass(frozen=True)
+class OrderHint:
+    """An elimination order for a direct solve (a permutation of the unknowns), and the
+    floating point operations above which the solve orders afresh instead (those of the
+    factorisation the order came from: on a subset of its unknowns an order cannot need
+    more, so exceeding them means unknowns it never saw got in its way)."""
+
+    order: np.ndarray
+    max_flops: float
+
+
+@dataclass(frozen=True)
 class Prepared:
     """What a solve of one matrix builds before it iterates, kept for further solves of the
     same matrix (the flux-balance refinement of :mod:`roughflow.flow.core` solves it up to
-    five times): the LDL^T factorisation of ``"direct"`` or the AMG preconditioner of ``"rs"`` and
-    ``"sa"`` (None for ``"cg"``). Built by :func:`prepare`."""
+    five times): the LDL^T factorisation of ``"direct"`` (:class:`ldl.LDLFactor`; a
+    ``qdldl.Solver`` where :func:`ldl.available` is False) or the AMG preconditioner of
+    ``"rs"`` and ``"sa"`` (None for ``"cg"``). Built by :func:`prepare`."""
 
     method: str
-    factor: qdldl.Solver | None = None
+    factor: ldl.LDLFactor | qdldl.Solver | None = None
     preconditioner: spla.LinearOperator | None = None
 
 
@@ -168,13 +181,18 @@ def choose(method: str | None, n: int, flowing_fraction: float | None = None,
 
 
 def prepare(a: sp.spmatrix, method: str = "auto",
-            flowing_fraction: float | None = None) -> Prepared:
+            flowing_fraction: float | None = None, hint: OrderHint | None = None) -> Prepared:
     """Factorise (``"direct"``) or build the AMG preconditioner of ``a`` for
-    :func:`solve_spd` (``"auto"``: :func:`choose`)."""
+    :func:`solve_spd` (``"auto"``: :func:`choose`). ``hint``: the direct solver's
+    elimination order (else approximate minimum degree's; ignored by the other methods)."""
     method = choose(method, a.shape[0], flowing_fraction)
     if method == "direct":
-        # QDLDL reads the upper triangle of a CSC matrix (A is symmetric)
-        return Prepared(method, factor=qdldl.Solver(sp.triu(a, format="csc"), upper=True))
+        if not ldl.available():
+            # QDLDL reads the upper triangle of a CSC matrix (A is symmetric)
+            return Prepared(method, factor=qdldl.Solver(sp.triu(a, format="csc"), upper=True))
+        if hint is None:
+            return Prepared(method, factor=ldl.factor(a))
+        return Prepared(method, factor=ldl.factor(a, hint.order, max_flops=hint.max_flops))
     if method == "cg":
         return Prepared(method)
     return Prepared(method, preconditioner=_amg_preconditioner(sp.csr_matrix(a), method))
@@ -297,11 +315,12 @@ def solve_prepared(a: sp.csr_matrix, b: np.ndarray, *, tol: float, method: str =
                    direct_max_flowing_fraction: float | None = None,
                    accept: Callable[[np.ndarray], bool] | None = None,
                    certify: Callable[[np.ndarray, float], bool] | None = None,
+                   hint: OrderHint | None = None,
                    ) -> tuple[LinearSolution, Prepared]:
     """:func:`prepare` and :func:`solve_spd` of ``a x = b``, returning the solution and what
     was prepared (for further solves of the same matrix). ``flowing_fraction``: the
     unknowns' share of the grid's cells, and ``direct_max_flowing_fraction``, for
-    :func:`choose`; ``accept``, ``certify``: see :func:`pcg`.
+    :func:`choose`; ``accept``, ``certify``: see :func:`pcg`; ``hint``: see :func:`prepare`.
 
     With ``method="auto"``, an AMG solve is retried by the direct solver when it has not
     converged after :data:`AMG_ITER_BEFORE_FALLBACK` iterations, if the factorisation fits
@@ -316,7 +335,7 @@ def solve_prepared(a: sp.csr_matrix, b: np.ndarray, *, tol: float, method: str =
     # measured before the AMG hierarchy, which is freed before the factorisation; only
     # where it matters
     fits, need, have = direct_fits(a.shape[0]) if fallback else (True, 0, None)
-    prepared = prepare(a, chosen)
+    prepared = prepare(a, chosen, hint=hint)
     try:
         sol = solve_spd(a, b, tol=tol, prepared=prepared, accept=accept, certify=certify,
                         max_iter=AMG_ITER_BEFORE_FALLBACK if fallback and fits else None)
@@ -333,6 +352,6 @@ def solve_prepared(a: sp.csr_matrix, b: np.ndarray, *, tol: float, method: str =
         failed = exc.with_traceback(None)  # its frames would keep the AMG hierarchy alive
     del prepared
     log.warning("%s; retrying with the direct solver (%d unknowns)", failed, a.shape[0])
-    prepared = prepare(a, "direct")
+    prepared = prepare(a, "direct", hint=hint)
     sol = solve_spd(a, b, tol=tol, prepared=prepared)
     return replace(sol, iterations=sol.iterations + failed.iterations), prepared

@@ -159,6 +159,8 @@ def run_ladder(job: LadderJob, *, threads: int | None = None) -> xr.Dataset:
                      adhesion.range)
             if i == 0:
                 adhesion_attrs = _adhesion_attrs(surface, adhesion, spec.lambda_s, job)
+        # each axis's last direct solve orders the next one's cells (flow.CellOrdering)
+        orderings: list[flow.CellOrdering | None] = [None, None]
         for k, (target, c, a_cont) in enumerate(
                 contact_ladder(surface, job, threads, adhesion)):
             r["area_fraction"][i, k] = c.area_fraction
@@ -181,11 +183,13 @@ def run_ladder(job: LadderJob, *, threads: int | None = None) -> xr.Dataset:
                     r["flow_sigma_error"][i, k, ax] = 0.0
                     continue
                 try:
-                    fr = flow.solve(c.gap, ax, lx=lx, ly=ly, sigma_tol=FLOW_SIGMA_TOL)
+                    fr = flow.solve(c.gap, ax, lx=lx, ly=ly, sigma_tol=FLOW_SIGMA_TOL,
+                                    ordering=orderings[ax])
                 except ConvergenceError as exc:  # keep what reproduces it (the CLI saves it)
                     exc.inputs = {"gap": c.gap, "axis": ax, "lx": lx, "ly": ly, "seed": seed,
                                   "target": target}
                     raise
+                orderings[ax] = fr.ordering
                 r["sigma"][i, k, ax] = fr.sigma
                 r["flow_residual"][i, k, ax] = fr.residual
                 r["flow_imbalance"][i, k, ax] = fr.flux_imbalance
