@@ -190,9 +190,8 @@ def prepare(a: sp.spmatrix, method: str = "auto",
         if not ldl.available():
             # QDLDL reads the upper triangle of a CSC matrix (A is symmetric)
             return Prepared(method, factor=qdldl.Solver(sp.triu(a, format="csc"), upper=True))
-        if hint is None:
-            return Prepared(method, factor=ldl.factor(a))
-        return Prepared(method, factor=ldl.factor(a, hint.order, max_flops=hint.max_flops))
+        order, max_flops = (None, None) if hint is None else (hint.order, hint.max_flops)
+        return Prepared(method, factor=ldl.factor(a, order, max_flops=max_flops))
     if method == "cg":
         return Prepared(method)
     return Prepared(method, preconditioner=_amg_preconditioner(sp.csr_matrix(a), method))
