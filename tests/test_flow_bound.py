@@ -188,6 +188,39 @@ def test_direct_error_allows_for_the_residuals_round_off(heights):
     assert short >= 1  # the estimate alone falls short of the distance at least once
 
 
+def test_direct_solve_sharpens_its_error_only_beyond_sigma_tol(heights, monkeypatch):
+    """With ``sigma_tol`` a direct solve takes Thomson's bound (a spanning tree of every
+    face) only where the error from its residual exceeds ``sigma_tol``: 1e-4 below the last
+    step that flows along x that error is 3.0e-7 (floor 0.019; measured), within 1e-6, and
+    is reported as it is, where without ``sigma_tol`` the bound sharpens it to 1.6e-11;
+    3e-5 below the step it is 2.1e-6, so the bound is taken either way. sigma itself is the
+    same solve's, and the error reported still covers the distance to RS's sigma."""
+    calls = []
+    bound = flow_core._sigma_error_bound
+
+    def counted(*args):
+        calls.append(1)
+        return bound(*args)
+
+    monkeypatch.setattr(flow_core, "_sigma_error_bound", counted)
+    sigma_tol = 1e-6
+    for below, sharpened in ((1e-4, False), (3e-5, True)):
+        gap = _last_flowing_gap(heights, 0, below)
+        _, from_residual, *_ = _residual_terms(gap)
+        assert (from_residual > sigma_tol) == sharpened
+        calls.clear()
+        plain = solve(gap, 0, method="direct")
+        assert len(calls) == 1 and plain.sigma_error < from_residual
+        calls.clear()
+        asked = solve(gap, 0, method="direct", sigma_tol=sigma_tol)
+        assert len(calls) == int(sharpened) and asked.sigma == plain.sigma
+        expected = plain.sigma_error if sharpened else from_residual
+        assert asked.sigma_error == pytest.approx(expected, rel=1e-9)
+        assert asked.sigma_error <= sigma_tol
+        rs = solve(gap, 0, method="rs")
+        assert (asked.sigma - rs.sigma) / asked.sigma <= asked.sigma_error
+
+
 @pytest.mark.parametrize(("shape", "periodic", "lx", "ly"), [
     ((40, 2), True, 1.0, 1.0),    # two parallel faces join each pair of cells across
     ((40, 2), False, 1.0, 1.0),

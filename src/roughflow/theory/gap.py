@@ -30,6 +30,7 @@ from .effective_medium import (
     bruggeman,
     bruggeman_anisotropic,
     local_conductivity,
+    medium,
     noncontact_decomposition,
 )
 
@@ -93,15 +94,18 @@ def gap_theory(gap, *, a_c_star: float, contact=None, gamma: float = 1.0,
     def on_grid(a_star: float) -> float:
         return min(a_star + shift, _MAX_GRID_THRESHOLD)
 
-    iso = bruggeman(sig, a_c_star=on_grid(a_c_star))
+    # one distribution for every form, which shares the roots of equations they have in
+    # common (all of them at gamma = 1)
+    m = medium(sig)
+    iso = bruggeman(m, a_c_star=on_grid(a_c_star))
     a_c = iso.a_c if area_fraction is None else area_fraction
-    alt = (bruggeman(sig, a_c_star=on_grid(a_c_star_alt)).sigma if a_c_star_alt is not None
+    alt = (bruggeman(m, a_c_star=on_grid(a_c_star_alt)).sigma if a_c_star_alt is not None
            else math.nan)
-    cor = bruggeman_anisotropic(sig, a_c_star=on_grid(a_c_star), gamma=gamma, form="corrected")
-    per = bruggeman_anisotropic(sig, a_c_star=on_grid(a_c_star), gamma=gamma, form="persson")
+    cor = bruggeman_anisotropic(m, a_c_star=on_grid(a_c_star), gamma=gamma, form="corrected")
+    per = bruggeman_anisotropic(m, a_c_star=on_grid(a_c_star), gamma=gamma, form="persson")
     nc = math.nan
     if noncontact and 0 < (sig > 0).mean() and iso.a_c <= on_grid(a_c_star):
-        nc = noncontact_decomposition(sig, a_c_star=on_grid(a_c_star)).sigma_nc
+        nc = noncontact_decomposition(m, a_c_star=on_grid(a_c_star)).sigma_nc
     ubar = float(gap.mean())
     return GapTheory(
         grid_area_fraction=grid_a, area_fraction=a_c, mean_gap=ubar, peklenik=float(gamma),
