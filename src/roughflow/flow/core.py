@@ -69,8 +69,9 @@ class FlowResult:
         solve, which has no A^-1, takes the bound from Thomson's principle
         (:mod:`roughflow.flow.bound`). Both allow for the round-off of Q's sums
         (:data:`BOUND_ROUNDOFF`), so no solve reports less than 1e-14. Where the first
-        exceeds :data:`DIRECT_BOUND_ABOVE` (r mostly round-off) a direct solve reports the
-        smaller of the two. 0 without a solve.
+        exceeds :data:`DIRECT_BOUND_ABOVE` (r mostly round-off), or ``sigma_tol`` where that
+        is larger (:func:`direct_bound_above`), a direct solve reports the smaller of the
+        two. 0 without a solve.
     iterations: CG iterations, those spent balancing the fluxes and before a fallback to
         the direct solver included (0 for a direct solve or when no solve was needed).
     percolating: whether the open cells connect the two reservoirs.
@@ -363,9 +364,9 @@ def direct_bound_above(sigma_tol: float | None) -> float:
     """The error from a direct solve's residual above which it also computes Thomson's
     bound: :data:`DIRECT_BOUND_ABOVE`, or the caller's ``sigma_tol`` where that is larger.
     A caller that asked for sigma to ``sigma_tol`` gets an error bound within it either
-    way; sharpening it further cost 1.2-1.75 s a solve at 2048^2 (a spanning tree of 6.5
-    million faces), 7 of the 8 Thomson bounds a 1024^2 elastic ladder took on its direct
-    solves (docs/flow.md "Conductance estimate")."""
+    way; sharpening it further costs 1.65-1.8 s a solve at 2048^2 (a spanning tree of 6.6
+    million faces), and 7 of the 8 direct solves of a 1024^2 elastic ladder that took it
+    were within 1e-6 without it (docs/flow.md "Conductance estimate")."""
     return DIRECT_BOUND_ABOVE if sigma_tol is None else max(DIRECT_BOUND_ABOVE, sigma_tol)
 
 
@@ -435,7 +436,8 @@ def _solve_flux_balanced(matrix, rhs, cells, act, faces: Faces, *, tol: float, m
     (:func:`_sigma_error`; one more solve with the factorisation, 1-4 % of a direct solve),
     an AMG one from Thomson's principle (:func:`_sigma_error_bound`; 6-9 % of an RS solve).
     With ``sigma_tol``, an iterative solve also stops at the first iterate whose bound is at
-    most ``sigma_tol`` (:class:`_SigmaCertificate`), whatever its residual and imbalance.
+    most ``sigma_tol`` (:class:`_SigmaCertificate`), whatever its residual and imbalance,
+    and a direct one takes Thomson's bound only beyond it (:func:`direct_bound_above`).
     ``direct_max_flowing_fraction``: see :func:`linsolve.choose`; ``hint``: the direct
     solver's elimination order (:func:`linsolve.prepare`).
     """
@@ -606,7 +608,9 @@ def solve(
     the first iterate whose sigma is proven accurate to ``sigma_tol`` relative (Thomson's
     bound), whatever its residual and flux balance: sigma needs far fewer iterations than
     the pressure field (its error is quadratic in the pressure's). The sweeps and ``leak``
-    use ``FLOW_SIGMA_TOL``; None (default): solve to ``tol`` as above.
+    use ``FLOW_SIGMA_TOL``; None (default): solve to ``tol`` as above. A direct solve whose
+    error from its residual is within ``sigma_tol`` reports that error instead of
+    sharpening it with Thomson's bound (:func:`direct_bound_above`).
     ``direct_max_flowing_fraction``: the largest share of the cells carrying flow at which
     ``auto`` takes the direct solver beyond 70k unknowns (None: 0.75). On isotropic
     bearing-model gaps RS was faster at every share measured, so 0 suits them; on elastic

@@ -481,7 +481,10 @@ def _solve_emt(m: Medium, a: float, b: float,
     hi = max(2.0 * (1.0 - z) * a / (b * (a - b)), 2.0 * lo)
     ylo, yhi = math.log(lo), math.log(hi)
     if guess is None and (sample := m.sample()) is not None:
-        guess = sample.root(a, b)[0]
+        try:
+            guess = sample.root(a, b)[0]
+        except ConvergenceError:  # only a start: the whole medium decides
+            guess = None
     y = 0.5 * (ylo + yhi)
     if guess is not None and 0.0 < guess < math.inf and ylo < math.log(guess / smax) < yhi:
         y = math.log(guess / smax)
