@@ -320,3 +320,29 @@ def test_a_failed_check_waits_for_the_estimate_to_fall_by_what_it_missed(heights
 def test_sigma_tol_is_checked_before_any_work(bad):
     with pytest.raises(InputError, match="sigma_tol"):
         solve(np.ones((8, 8)), 0, sigma_tol=bad)
+
+
+def test_a_certificate_builds_its_tree_once(heights, monkeypatch):
+    """The spanning tree depends on the faces alone: a certificate that checks several
+    iterates of one system builds it once, and a bound on the kept tree is the bound on a
+    tree built afresh, bit for bit."""
+    gap = np.maximum(np.quantile(heights, 0.7) - heights, 0.0)  # bearing gap, a_c 0.3
+    sy = _system(gap)
+    x_star = spla.spsolve(sy.matrix.tocsc(), sy.rhs)
+    noise = np.random.default_rng(1).standard_normal(x_star.size)
+    builds = []
+    build = flow_core.widest_tree
+
+    def counted(*args):
+        builds.append(1)
+        return build(*args)
+
+    monkeypatch.setattr(flow_core, "widest_tree", counted)
+    certificate = flow_core._SigmaCertificate(sy.faces, sy.active, sy.cells, 1e-30)
+    iterates = [x_star + 1e-3 * noise, x_star + 1e-5 * noise]
+    for x in iterates:  # a drop of 0 always checks; no bound meets 1e-30
+        assert not certificate(x, 0.0)
+    assert certificate.checks == 2 and len(builds) == 1
+    for x in iterates:
+        kept = dissipation_bounds(sy.faces, sy.active, sy.cells, x, certificate.tree)
+        assert kept == dissipation_bounds(sy.faces, sy.active, sy.cells, x)
