@@ -21,6 +21,19 @@ def _system(gap, axis=0):
     return flow_core.reynolds_system(s, flow_core.flowing_cells(s, axis), axis, lx=1.0, ly=1.0)
 
 
+def _counted(monkeypatch, name: str) -> list:
+    """A list that grows by one at each call of ``flow_core.<name>`` (still called)."""
+    calls = []
+    function = getattr(flow_core, name)
+
+    def counted(*args):
+        calls.append(1)
+        return function(*args)
+
+    monkeypatch.setattr(flow_core, name, counted)
+    return calls
+
+
 def _bound(sy, x):
     """(the bound on the error of ``x`` without its round-off allowance, its dissipation)."""
     bounds = dissipation_bounds(sy.faces, sy.active, sy.cells, x)
@@ -195,14 +208,7 @@ def test_direct_solve_sharpens_its_error_only_beyond_sigma_tol(heights, monkeypa
     is reported as it is, where without ``sigma_tol`` the bound sharpens it to 1.6e-11;
     3e-5 below the step it is 2.1e-6, so the bound is taken either way. sigma itself is the
     same solve's, and the error reported still covers the distance to RS's sigma."""
-    calls = []
-    bound = flow_core._sigma_error_bound
-
-    def counted(*args):
-        calls.append(1)
-        return bound(*args)
-
-    monkeypatch.setattr(flow_core, "_sigma_error_bound", counted)
+    calls = _counted(monkeypatch, "_sigma_error_bound")
     sigma_tol = 1e-6
     for below, sharpened in ((1e-4, False), (3e-5, True)):
         gap = _last_flowing_gap(heights, 0, below)
@@ -330,14 +336,7 @@ def test_a_certificate_builds_its_tree_once(heights, monkeypatch):
     sy = _system(gap)
     x_star = spla.spsolve(sy.matrix.tocsc(), sy.rhs)
     noise = np.random.default_rng(1).standard_normal(x_star.size)
-    builds = []
-    build = flow_core.widest_tree
-
-    def counted(*args):
-        builds.append(1)
-        return build(*args)
-
-    monkeypatch.setattr(flow_core, "widest_tree", counted)
+    builds = _counted(monkeypatch, "widest_tree")
     certificate = flow_core._SigmaCertificate(sy.faces, sy.active, sy.cells, 1e-30)
     iterates = [x_star + 1e-3 * noise, x_star + 1e-5 * noise]
     for x in iterates:  # a drop of 0 always checks; no bound meets 1e-30
