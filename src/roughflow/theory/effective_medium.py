@@ -45,6 +45,10 @@ _MAXITER = 500
 #: of about this many cells: off by a few per cent, so that Newton on all cells needs 3-4
 #: evaluations instead of 8-12 from the bracket's middle (each a pass over every cell)
 _SAMPLE = 16384
+#: |H| at which a root whose bracket round-off has closed still counts as found: H sums
+#: terms of order 1 (compensated), so its round-off is about 1e-16 (the Brent solver before
+#: accepted bracket ends within the same 1e-14)
+_ROUNDOFF_H = 1e-14
 # |log(sigma_x/sigma_y) - log r| substitute for a direction that is closed (0) or
 # unbounded (inf) at a trial ratio: only its sign matters to the bracketing solver.
 _BIG = 1e3
@@ -502,7 +506,7 @@ def _solve_emt(m: Medium, a: float, b: float,
         if abs(step) <= tol:
             return math.exp(y) * smax, abs(h)
         if yhi - ylo <= tol:  # only round-off can close the bracket before Newton converges
-            if abs(h) < 1e-12:
+            if abs(h) < _ROUNDOFF_H:
                 return math.exp(y) * smax, abs(h)
             raise ConvergenceError("Bruggeman bracket lost to round-off", residual=abs(h),
                                    iterations=_MAXITER)
