@@ -345,3 +345,58 @@ def test_a_certificate_builds_its_tree_once(heights, monkeypatch):
     for x in iterates:
         kept = dissipation_bounds(sy.faces, sy.active, sy.cells, x, certificate.tree)
         assert kept == dissipation_bounds(sy.faces, sy.active, sy.cells, x)
+
+
+def _kruskal(head, tail, key, n_nodes):
+    """Reference: Kruskal over every edge in the order (key, index), plain Python."""
+    parent = list(range(n_nodes))
+
+    def find(v):
+        while parent[v] != v:
+            v = parent[v]
+        return v
+
+    in_tree = np.zeros(head.size, bool)
+    for e in sorted(range(head.size), key=lambda e: (key[e], e)):
+        a, b = find(int(head[e])), find(int(tail[e]))
+        if a != b:
+            parent[a] = b
+            in_tree[e] = True
+    return in_tree
+
+
+@pytest.mark.parametrize("seed", [0, 1, 2])
+def test_spanning_tree_is_kruskals_whatever_the_ties(seed):
+    """The two-step tree (each node's best edge, then Kruskal between the clusters) must be
+    the tree of Kruskal over all edges in the order (key, index): ties are broken by the
+    edge's index. Transmissibilities drawn from four values tie everywhere, so taking a
+    tied edge other than the first (or any edge out of order) gives another tree; a
+    periodic seam of width 2 adds parallel edges, width 1 self-loops."""
+    from roughflow.flow.bound import _keys, _maximum_spanning_tree
+
+    rng = np.random.default_rng(seed)
+    for n1 in (1, 2, 9):
+        n0 = 11
+        m = n0 * n1
+        index = np.arange(m, dtype=np.int32).reshape(n0, n1)
+        values = np.array([0.5, 1.0, 1.0 + 1e-9, 3.0])  # 1 and 1 + 1e-9 share a key
+        heads, tails, trans = [m], [m + 1], [np.inf]  # edge 0 joins the reservoirs
+        for i in range(n0):
+            for j in range(n1):
+                if i < n0 - 1:
+                    heads.append(index[i, j]), tails.append(index[i + 1, j])
+                    trans.append(rng.choice(values))
+                heads.append(index[i, j]), tails.append(index[i, (j + 1) % n1])
+                trans.append(rng.choice(values))
+        for j in range(n1):
+            heads += [m, index[n0 - 1, j]]
+            tails += [index[0, j], m + 1]
+            trans += [rng.choice(values), rng.choice(values)]
+        head, tail = np.array(heads, np.int32), np.array(tails, np.int32)
+        trans = np.array(trans)
+        key, _ = _keys(trans)
+        in_tree, degree, spans = _maximum_spanning_tree(head, tail, trans, m + 2)
+        np.testing.assert_array_equal(in_tree, _kruskal(head, tail, key, m + 2))
+        assert spans and in_tree.sum() == m + 1
+        np.testing.assert_array_equal(
+            degree, np.bincount(np.r_[head[in_tree], tail[in_tree]], minlength=m + 2))

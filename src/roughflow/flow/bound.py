@@ -80,9 +80,10 @@ def _face_edges(t_along, t_across, t_in, t_out, index, m):  # pragma: no cover
 
 
 @numba.njit(cache=True)
-def _largest_first(trans):  # pragma: no cover
-    """The edges in order of decreasing T, edge 0 first: a counting sort on the leading bits
-    of T (a positive float64's bits order it)."""
+def _keys(trans):  # pragma: no cover
+    """Each edge's sort key, smaller for larger T (a positive float64's bits order it; the
+    last :data:`_MANTISSA_DROPPED` are dropped), edge 0's 0 before all; and how many keys
+    there can be."""
     n_edges = trans.size
     bits = trans.view(np.int64) >> _MANTISSA_DROPPED
     lo, hi = bits[1], bits[1]
@@ -93,39 +94,93 @@ def _largest_first(trans):  # pragma: no cover
     key[0] = 0
     for e in range(1, n_edges):
         key[e] = hi - bits[e] + 1  # 1 .. hi - lo + 1
-    count = np.zeros(hi - lo + 3, np.int32)
-    for e in range(n_edges):
-        count[key[e] + 1] += 1
-    for b in range(1, count.size):
-        count[b] += count[b - 1]
-    order = np.empty(n_edges, np.int32)
-    for e in range(n_edges):
-        order[count[key[e]]] = e
-        count[key[e]] += 1
-    return order
+    return key, hi - lo + 2
 
 
 @numba.njit(cache=True)
 def _maximum_spanning_tree(head, tail, trans, n_nodes):  # pragma: no cover
-    """Kruskal: which edges form the tree, each node's degree in it, whether it spans."""
+    """The maximum spanning tree of the edges ranked by (key, index), the one Kruskal's
+    algorithm builds from a stable sort of the keys: which edges form it, each node's
+    degree in it, whether it spans.
+
+    Kruskal over all edges in key order reads the union-find at random (three quarters of
+    a tree's time at 1024 x 2048), so the tree is built in two steps. Boruvka's first round:
+    under a strict order each node's best edge belongs to the tree (cut property), and
+    joining those is one pass over the grid's neighbours. Then Kruskal in the same order
+    over the edges between the clusters this leaves (about a third of the nodes), on the
+    contracted graph, whose smaller union-find and sorted endpoint arrays stay in cache.
+    The same edges as Kruskal over all of them (tested), 2-4x faster."""
+    n_edges = head.size
+    key, n_keys = _keys(trans)
+    best = np.full(n_nodes, -1, np.int32)
+    for e in range(n_edges):  # increasing index: only a smaller key is better
+        k = key[e]
+        b = best[head[e]]
+        if b < 0 or k < key[b]:
+            best[head[e]] = e
+        b = best[tail[e]]
+        if b < 0 or k < key[b]:
+            best[tail[e]] = e
     parent = np.arange(n_nodes).astype(np.int32)
     size = np.ones(n_nodes, np.int32)
-    in_tree = np.zeros(head.size, np.bool_)
-    degree = np.zeros(n_nodes, np.int32)
+    in_tree = np.zeros(n_edges, np.bool_)
     kept = 0
-    for e in _largest_first(trans):
+    for v in range(n_nodes):
+        e = best[v]
+        if e < 0:
+            continue
         a, b = _find(parent, head[e]), _find(parent, tail[e])
-        if a != b:
+        if a != b:  # a face picked by both its cells, or a self-loop, joins nothing
             if size[a] > size[b]:  # union by size: shallow trees, fewer random reads
                 a, b = b, a
             parent[a] = b
             size[b] += size[a]
             in_tree[e] = True
+            kept += 1
+    # the clusters, numbered in order of their first node (raster order, so neighbours in
+    # the grid stay near in the union-find), and the edges between them by (key, index)
+    cluster = np.full(n_nodes, -1, np.int32)
+    of = np.empty(n_nodes, np.int32)
+    n_clusters = 0
+    for v in range(n_nodes):
+        r = _find(parent, v)
+        if cluster[r] < 0:
+            cluster[r] = n_clusters
+            n_clusters += 1
+        of[v] = cluster[r]
+    start = np.zeros(n_keys + 2, np.int32)
+    for e in range(n_edges):
+        if of[head[e]] != of[tail[e]]:
+            start[key[e] + 1] += 1
+    for k in range(1, start.size):
+        start[k] += start[k - 1]
+    n_between = start[-1]
+    ends = np.empty((n_between, 2), np.int32)
+    edge = np.empty(n_between, np.int32)
+    for e in range(n_edges):
+        a, b = of[head[e]], of[tail[e]]
+        if a != b:
+            s = start[key[e]]
+            ends[s, 0], ends[s, 1], edge[s] = a, b, e
+            start[key[e]] += 1
+    parent = np.arange(n_clusters).astype(np.int32)
+    size = np.ones(n_clusters, np.int32)
+    for s in range(n_between):
+        if kept == n_nodes - 1:
+            break
+        a, b = _find(parent, ends[s, 0]), _find(parent, ends[s, 1])
+        if a != b:
+            if size[a] > size[b]:
+                a, b = b, a
+            parent[a] = b
+            size[b] += size[a]
+            in_tree[edge[s]] = True
+            kept += 1
+    degree = np.zeros(n_nodes, np.int32)
+    for e in range(n_edges):
+        if in_tree[e]:
             degree[head[e]] += 1
             degree[tail[e]] += 1
-            kept += 1
-            if kept == n_nodes - 1:
-                break
     return in_tree, degree, kept == n_nodes - 1
 
 
