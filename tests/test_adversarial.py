@@ -311,3 +311,145 @@ def test_every_file_argument_goes_through_the_shared_layer():
                 files += 1
                 assert a.dest in declared, f"roughflow {name}: {a.dest} bypasses the checks"
     assert files >= 15
+
+
+@pytest.fixture(scope="module")
+def two_eps_f(files):
+    """A threshold study that mixes two eps_f (bearing jobs, 32^2 and 64^2)."""
+    d = files["dir"]
+    for eps_f in ("0.25", "0.125"):
+        argv = ["scene", "threshold", "--model", "bearing", "--l-over-lambda-r", "4",
+                "--eps-f", eps_f, "--points-per-lambda-s", "2", "--seeds", "0", "1",
+                "-o", d / f"mix_{eps_f}.nc"]
+        assert main([str(a) for a in argv]) in (0, None)
+    study = d / "mixed_study.nc"
+    assert main(["aggregate", str(d / "mix_0.25.nc"), str(d / "mix_0.125.nc"),
+                 "-o", str(study)]) in (0, None)
+    return study
+
+
+def test_fit_of_a_study_mixing_eps_f_is_refused(files, two_eps_f, capsys):
+    # it wrote an all-NaN fit (underdetermined = 0) with exit 0 and only a warning
+    out = files["dir"] / "mixed_fit.nc"
+    code, err = run(["fit", two_eps_f, "--bootstrap", "0", "-o", out], capsys)
+    assert code == 2 and "one eps_f, the dataset has 2: 0.125, 0.25" in err, err
+    assert not out.exists()
+
+
+@pytest.mark.parametrize("study", ["threshold_vs_size", "threshold_vs_hurst"])
+def test_figure_of_a_study_mixing_eps_f_is_refused(files, two_eps_f, capsys, study):
+    # both drew with eps_f left as a dimension and stopped on an IndexError (exit 1)
+    out = files["dir"] / f"mixed_{study}.png"
+    code, err = run(["figure", study, two_eps_f, "-o", out], capsys)
+    assert code == 2 and "one eps_f" in err and "Traceback" not in err, err
+    assert not out.exists()
+
+
+def test_figure_checks_its_pdf_path_before_drawing(files, capsys):
+    # a directory in the PDF's place failed after the PNG was written, leaving a stray
+    # "fig.part.pdf" behind
+    d = files["dir"] / "pdf_taken"
+    (d / "fig.pdf").mkdir(parents=True)
+    code, err = run(["figure", "threshold_vs_gamma", files["study"], "-o", d / "fig.png"],
+                    capsys)
+    assert code == 2 and "fig.pdf" in err and "is a directory" in err, err
+    assert sorted(p.name for p in d.iterdir()) == ["fig.pdf"]
+
+
+def test_flow_plot_into_a_new_folder(files, capsys):
+    # the flux plot did not create its folder (exit 1 after the flow file was written)
+    d = files["dir"] / "plots"
+    code, err = run(["flow", files["contact"], "--plot", d / "new" / "flux.png",
+                     "-o", d / "flow.nc"], capsys)
+    assert code == 0, err
+    assert (d / "new" / "flux.png").read_bytes()[:4] == b"\x89PNG"
+    assert sorted(p.name for p in (d / "new").iterdir()) == ["flux.png"]
+
+
+def test_save_figure_leaves_nothing_when_rendering_fails(tmp_path):
+    from matplotlib.figure import Figure
+
+    from roughflow.io import save_figure
+
+    class Broken(Figure):
+        def savefig(self, fname, **kw):
+            with open(fname, "wb") as fh:
+                fh.write(b"half a figure")
+            raise RuntimeError("renderer died")
+
+    with pytest.raises(RuntimeError, match="renderer died"):
+        save_figure(Broken(), tmp_path / "fig.png")
+    assert list(tmp_path.iterdir()) == []
+
+
+def test_messages_name_the_file_and_do_not_misdirect(files, capsys, monkeypatch):
+    d = files["dir"]
+    with xr.open_dataset(files["contact"]) as ds:
+        ds = ds.load()
+    gap = ds["gap"].values.copy()
+    gap[3, 4] = np.nan
+    ds.assign(gap=(ds["gap"].dims, gap)).to_netcdf(d / "nan_gap.nc")
+    code, err = run(["flow", d / "nan_gap.nc", "-o", d / "x.nc"], capsys)
+    # a contact file with a bad value is not "a surface file" (the old hint)
+    assert code == 2 and "non-finite" in err and "looks like" not in err, err
+    with xr.open_dataset(files["surface"]) as ds:
+        ds = ds.load()
+    ds.attrs["lx"] = -1.0
+    ds.to_netcdf(d / "neg_lx.nc")
+    code, err = run(["contact", d / "neg_lx.nc", "--pressure", "0.1", "-o", d / "x.nc"], capsys)
+    assert code == 2 and "neg_lx.nc" in err and "-1.0" in err, err
+    ds.attrs["lx"] = 2.0  # the spec_* attributes say 1 x 1
+    ds.to_netcdf(d / "other_lx.nc")
+    code, err = run(["contact", d / "other_lx.nc", "--pressure", "0.1", "-o", d / "x.nc"],
+                    capsys)
+    assert code == 2 and "other_lx.nc" in err and "spec_* attributes say" in err, err
+    big = ds.assign(heights=ds["heights"] * 1e300)
+    big.attrs["lx"] = 1.0
+    big.to_netcdf(d / "huge.nc")
+    code, err = run(["contact", d / "huge.nc", "--pressure", "0.1", "-o", d / "x.nc"], capsys)
+    assert code == 2 and "out of range" in err, err  # was a ValueError on a NaN level
+    code, err = run(["surface", *TINY, "-o", ""], capsys)
+    assert code == 2 and "empty" in err, err
+    monkeypatch.setenv("ROUGHFLOW_FFT_THREADS", "99999")
+    code, err = run(["surface", *TINY, "-o", d / "x.nc"], capsys)
+    assert code == 2 and "from 1 to 4096" in err, err
+    assert not (d / "x.nc").exists()
+
+
+def test_gap_whose_conductivity_overflows_is_refused():
+    # a gap of 1e200 gave sigma = 0 with exit 0 (u^3 overflowed to inf, then inf / inf)
+    from roughflow.errors import InputError
+    from roughflow.flow import conductance
+
+    with pytest.raises(InputError, match="gap out of range"):
+        conductance(np.full((8, 8), 1e200), lx=1.0, ly=1.0)
+
+
+def test_api_arguments_of_the_wrong_type_are_named():
+    # each of these passed silently or failed later with a TypeError / AttributeError
+    from roughflow.errors import InputError
+    from roughflow.flow import solve
+    from roughflow.surface import SurfaceSpec, generate
+
+    gap = np.full((16, 16), 0.01)
+    with pytest.raises(InputError, match="periodic must be True or False, got 'no'"):
+        solve(gap, 0, lx=1.0, ly=1.0, periodic="no")
+    with pytest.raises(InputError, match="gap must be real"):
+        solve(gap + 1e-3j, 0, lx=1.0, ly=1.0)
+    with pytest.raises(InputError, match="needs a SurfaceSpec, got NoneType"):
+        generate(None)
+    spec = dict(nx=32, ny=32, lx=1.0, ly=1.0, hurst=0.8, gamma=1.0, lambda_r=0.25,
+                lambda_s=0.0625, seed=0)
+    with pytest.raises(InputError, match="hurst must be a number, got 'abc'"):
+        SurfaceSpec(**{**spec, "hurst": "abc"})
+    # a number given as a string is the number (as require_finite reads it everywhere)
+    assert np.array_equal(generate(SurfaceSpec(**{**spec, "hurst": "0.8", "lx": "1"})).heights,
+                          generate(SurfaceSpec(**spec)).heights)
+
+
+def test_aggregate_study_config_must_be_an_object(files, capsys):
+    out = files["dir"] / "agg_cfg.nc"
+    code, err = run(["aggregate", files["job"], files["job2"], "--study-config", "[1, 2]",
+                     "-o", out], capsys)
+    assert code == 2 and "must be a JSON object" in err, err
+    assert not out.exists()

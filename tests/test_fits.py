@@ -149,3 +149,21 @@ def test_fit_dataset_recovers_a_star():
     iso = res.sel(group="isotropic", fit="joint", nu_mode="fixed")
     assert abs(float(iso["a_star"]) - 0.415) < 0.01
     assert res["a_star"].attrs["units"] == "1"
+
+
+def test_fit_dataset_refuses_mixed_settings_and_empty_data(tmp_path):
+    # two eps_f in one study used to give an all-NaN fit file with exit 0 (only a warning)
+    one = _threshold_dataset()
+    two = xr.concat([one, one.assign_coords(eps_f=[0.03125])], dim="eps_f")
+    with pytest.raises(InputError, match="needs one eps_f, the dataset has 2"):
+        fit_dataset(two, n_boot=0)
+    empty = one.copy(data={"a_c_star": np.full(one["a_c_star"].shape, np.nan)})
+    with pytest.raises(InputError, match="no finite threshold"):
+        fit_dataset(empty, n_boot=0)
+    # one group without data leaves that group NaN and fits the other
+    iso_gone = one.copy(deep=True)
+    iso_gone["a_c_star"].loc[{"gamma": 1.0}] = np.nan
+    res = fit_dataset(iso_gone, n_boot=0)
+    assert np.isnan(res["a_star"].sel(group="isotropic")).all()
+    assert np.isfinite(float(res["a_star"].sel(group="anisotropic", fit="joint",
+                                               nu_mode="fixed")))

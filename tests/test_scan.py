@@ -64,6 +64,25 @@ def test_npy_needs_size_and_unit(tmp_path):
     check_scaled(s, h * UM, 2 * UM, 1.5 * UM)
 
 
+def test_truncated_npy_refused_before_reading(tmp_path):
+    # a cut .npy was read past its end (a different map on each run, once exit 0 with a
+    # complete-looking file); the CLI now exits 2 naming it and writes nothing
+    np.save(tmp_path / "scan.npy", np.arange(64.0 * 64).reshape(64, 64))
+    data = (tmp_path / "scan.npy").read_bytes()
+    (tmp_path / "cut.npy").write_bytes(data[:300])
+    with pytest.raises(InputError, match="truncated"):
+        from_scan(tmp_path / "cut.npy", size="1um", unit="um")
+    (tmp_path / "junk.npy").write_bytes(b"garbage")
+    with pytest.raises(InputError, match="not a valid .npy"):
+        from_scan(tmp_path / "junk.npy", size="1um", unit="um")
+    out = tmp_path / "cut.nc"
+    with pytest.raises(SystemExit) as exc:
+        main(["import", str(tmp_path / "cut.npy"), "--size", "1um", "--unit", "um",
+              "-o", str(out)])
+    assert exc.value.code == 2
+    assert not out.exists()
+
+
 def test_plain_text_written_by_numpy(tmp_path):
     h = heights()
     # SurfaceTopography's plain-text reader takes a row as a line along x (rows are y):

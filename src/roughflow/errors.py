@@ -90,11 +90,23 @@ def require_field(name: str, array, *, ndim: int = 2):
     non-finite values."""
     import numpy as np
 
-    a = np.asarray(array, dtype=np.float64)
+    raw = np.asarray(array)
+    if raw.dtype.kind == "c":  # a cast to float64 would drop the imaginary part silently
+        raise InputError(f"{name} must be real, got complex values")
+    try:
+        a = raw.astype(np.float64, copy=False)
+    except (TypeError, ValueError):
+        raise InputError(f"{name} must hold numbers, got {raw.dtype} values") from None
     if a.ndim != ndim:
         raise InputError(f"{name} must be a {ndim}D array, got shape {a.shape}")
     if a.size == 0:
         raise InputError(f"{name} is empty (shape {a.shape})")
+    # one summing pass, without the boolean array: any nan or inf makes the sum non-finite
+    # (an overflow of finite values does too, and the exact scan below then finds nothing)
+    with np.errstate(over="ignore", invalid="ignore"):
+        total = float(a.sum())
+    if math.isfinite(total):
+        return a
     bad = ~np.isfinite(a)
     if bad.any():
         idx = tuple(int(i) for i in np.argwhere(bad)[0])

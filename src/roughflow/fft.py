@@ -38,7 +38,8 @@ def default_threads() -> int:
     except ValueError:
         raise InputError(f"ROUGHFLOW_FFT_THREADS must be a positive integer, got {raw!r}") from None
     if not 1 <= n <= MAX_THREADS:
-        raise InputError(f"ROUGHFLOW_FFT_THREADS must be a positive integer, got {raw!r}")
+        raise InputError(f"ROUGHFLOW_FFT_THREADS must be an integer from 1 to {MAX_THREADS}, "
+                         f"got {raw!r}")
     return n
 
 

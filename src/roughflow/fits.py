@@ -19,7 +19,7 @@ import numpy as np
 import xarray as xr
 from scipy.optimize import least_squares
 
-from roughflow.datasets.sweep import threshold_values
+from roughflow.datasets.sweep import single_setting, threshold_values
 from roughflow.datasets.units import DIMENSIONLESS
 from roughflow.defaults import FIT_BOOTSTRAP, NU_PERCOLATION
 from roughflow.errors import InputError, require_finite, require_int
@@ -198,12 +198,7 @@ def threshold_points(ds: xr.Dataset, group: str) -> tuple[dict, dict]:
     thresholds are one direction, "both"). Points are the (gamma, eps_t) pairs with data.
     """
 
-    a = threshold_values(ds)
-    for dim in ("model", "hurst", "eps_f"):
-        if dim in a.dims:
-            if a.sizes[dim] != 1:
-                raise InputError(f"fit needs one {dim}, the dataset has {a.sizes[dim]}")
-            a = a.isel({dim: 0})
+    a = single_setting(threshold_values(ds))
     eps, aseed = {}, {}
     for g in a["gamma"].values:
         iso = bool(np.isclose(g, 1.0))
@@ -247,12 +242,19 @@ def fit_dataset(ds: xr.Dataset, *, n_boot: int = FIT_BOOTSTRAP, nu: float = NU_P
     out["n_points"] = np.zeros(shape, dtype=np.int32)
     out["nu_at_bound"] = np.zeros(shape, dtype=np.int32)
     out["underdetermined"] = np.zeros(shape, dtype=np.int32)
-    for gi, group in enumerate(groups):
+    single_setting(threshold_values(ds))  # a dataset of several settings is refused whole
+    points = {}
+    for group in groups:
         try:
-            eps, aseed = threshold_points(ds, group)
-        except InputError as exc:
+            points[group] = threshold_points(ds, group)
+        except InputError as exc:  # a group without any finite threshold stays NaN
             log.warning("%s", exc)
+    if not points:
+        raise InputError("the dataset has no finite threshold to fit")
+    for gi, group in enumerate(groups):
+        if group not in points:
             continue
+        eps, aseed = points[group]
         for fi, which in enumerate(fits):
             dirs = list(eps) if which == "joint" else [which]
             if any(d not in eps for d in dirs):

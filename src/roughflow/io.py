@@ -8,6 +8,7 @@ file gets its provenance attributes (:mod:`roughflow.provenance`).
 
 from __future__ import annotations
 
+import math
 import os
 import tempfile
 from dataclasses import fields
@@ -54,29 +55,71 @@ def publish(tmp: str | os.PathLike, path: str | os.PathLike) -> None:
     os.replace(tmp, path)
 
 
-def write_dataset(ds: xr.Dataset, path: str | os.PathLike, *,
-                  provenance: Provenance | None = None) -> Path:
-    """Write ``ds`` to ``path`` atomically (temporary file + rename), with the permissions
-    of a newly created file and the attributes of ``provenance`` (default: the Python
-    API's, :class:`~roughflow.provenance.Provenance`) in place of any it carried."""
+def check_output(path: str | os.PathLike, *, option: str = "--output",
+                 suffixes: tuple[str, ...] = (".nc",)) -> None:
+    """Refuse an output path that cannot be written, before any work: a wrong suffix, an
+    existing directory, a parent that is a file, or a folder where no file can be created
+    (probed by creating and removing a temporary file, which also works for root)."""
+    path = str(path)
+    if not path.strip():
+        raise InputError(f"{option} is empty; give a file name")
+    p = Path(path)
+    if p.is_dir():
+        raise InputError(f"{option} {path!r} is a directory; give a file name")
+    if suffixes and p.suffix.lower() not in suffixes:
+        raise InputError(f"{option} {path!r}: the file name must end in "
+                         f"{' or '.join(suffixes)}")
+    parent = p.absolute().parent
+    while not parent.exists():
+        parent = parent.parent
+    if not parent.is_dir():
+        raise InputError(f"{option} {path!r}: {str(parent)!r} is a file, not a directory")
+    try:
+        fd, tmp = tempfile.mkstemp(prefix=".roughflow-probe-", dir=parent)
+    except OSError as exc:
+        raise InputError(f"{option} {path!r}: cannot create files in {str(parent)!r} "
+                         f"({exc.strerror})") from None
+    os.close(fd)
+    os.unlink(tmp)
+
+
+def save_figure(fig, path: str | os.PathLike, **savefig_kw) -> Path:
+    """Render the matplotlib ``fig`` to ``path`` atomically (temporary file + rename, the
+    format from the suffix), creating missing folders; a failed render leaves nothing."""
     path = Path(path)
+    return _write_atomically(path, lambda tmp: fig.savefig(
+        tmp, format=path.suffix.lstrip(".").lower(), **savefig_kw))
+
+
+def _write_atomically(path: Path, write) -> Path:
+    """Call ``write(tmp)`` on a temporary file next to ``path`` (missing folders created),
+    then :func:`publish` it as ``path``; a failed write leaves nothing behind."""
     path.parent.mkdir(parents=True, exist_ok=True)
-    ds = ds.copy()
-    attrs = {k: v for k, v in ds.attrs.items() if k not in PROVENANCE_ATTRS}
-    attrs.update((provenance or Provenance()).attrs())
-    ds.attrs = clean_attrs(attrs)
-    for name in ds.variables:
-        ds[name].attrs = clean_attrs(ds[name].attrs)
-    fd, tmp = tempfile.mkstemp(suffix=".nc.part", dir=path.parent)
+    fd, tmp = tempfile.mkstemp(suffix=path.suffix + ".part", dir=path.parent)
     os.close(fd)
     try:
-        ds.to_netcdf(tmp)
+        write(tmp)
         publish(tmp, path)
     except BaseException:
         if os.path.exists(tmp):
             os.unlink(tmp)
         raise
     return path
+
+
+def write_dataset(ds: xr.Dataset, path: str | os.PathLike, *,
+                  provenance: Provenance | None = None) -> Path:
+    """Write ``ds`` to ``path`` atomically (temporary file + rename), with the permissions
+    of a newly created file and the attributes of ``provenance`` (default: the Python
+    API's, :class:`~roughflow.provenance.Provenance`) in place of any it carried."""
+    path = Path(path)
+    ds = ds.copy()
+    attrs = {k: v for k, v in ds.attrs.items() if k not in PROVENANCE_ATTRS}
+    attrs.update((provenance or Provenance()).attrs())
+    ds.attrs = clean_attrs(attrs)
+    for name in ds.variables:
+        ds[name].attrs = clean_attrs(ds[name].attrs)
+    return _write_atomically(path, ds.to_netcdf)
 
 
 def read_dataset(path: str | os.PathLike, kinds: str | tuple[str, ...] | None = None, *,
@@ -138,8 +181,15 @@ def surface_from_dataset(ds: xr.Dataset) -> Surface:
     from roughflow.datasets.kinds import check_kind
 
     check_kind(ds, "surface", "the dataset")
-    heights = require_field("heights", ds["heights"].transpose("x", "y").values)
-    lx, ly = require_positive("lx", ds.attrs["lx"]), require_positive("ly", ds.attrs["ly"])
+    # name the file in messages where the dataset was read from one
+    where = f"{ds.encoding['source']!r}: " if "source" in ds.encoding else ""
+    heights = require_field(f"{where}heights", ds["heights"].transpose("x", "y").values)
+    try:
+        lx, ly = (float(ds.attrs[k]) for k in ("lx", "ly"))
+    except (TypeError, ValueError):
+        raise InputError(f"{where}the attributes lx, ly must be numbers, got "
+                         f"{ds.attrs['lx']!r}, {ds.attrs['ly']!r}") from None
+    lx, ly = require_positive(f"{where}lx", lx), require_positive(f"{where}ly", ly)
     spec = None
     if "spec_nx" in ds.attrs:
         kw = {k[5:]: ds.attrs[k] for k in ds.attrs if k.startswith("spec_")}
@@ -153,8 +203,12 @@ def surface_from_dataset(ds: xr.Dataset) -> Surface:
             raise InputError(f"the spec_* attributes of the surface are incomplete or invalid "
                              f"({type(exc).__name__}: {exc})") from None
         if (spec.nx, spec.ny) != heights.shape:
-            raise InputError(f"heights have shape {heights.shape} but the spec_* attributes "
-                             f"say {spec.nx} x {spec.ny}")
+            raise InputError(f"{where}heights have shape {heights.shape} but the spec_* "
+                             f"attributes say {spec.nx} x {spec.ny}")
+        if not (math.isclose(spec.lx, lx, rel_tol=1e-12)
+                and math.isclose(spec.ly, ly, rel_tol=1e-12)):
+            raise InputError(f"{where}the cell is {lx!r} x {ly!r} but the spec_* attributes "
+                             f"say {spec.lx!r} x {spec.ly!r}")
     scan = None
     if "scan_source" in ds.attrs:
         try:

@@ -264,7 +264,28 @@ def _sizes(size, unit: str | None) -> tuple[float, float]:
     return out[0], out[1]
 
 
+def _check_npy_complete(path: Path) -> None:
+    """Refuse a .npy file shorter than its header says: SurfaceTopography maps such a file
+    and reads whatever memory lies past its end (measured: a different map on every run)."""
+    from numpy.lib import format as npy
+
+    with path.open("rb") as fh:
+        try:
+            major, _ = npy.read_magic(fh)
+            header = npy.read_array_header_1_0 if major == 1 else npy.read_array_header_2_0
+            shape, _, dtype = header(fh)
+        except ValueError as exc:
+            raise InputError(f"{str(path)!r} is not a valid .npy file ({exc})") from None
+        need = fh.tell() + math.prod(shape) * dtype.itemsize
+    have = path.stat().st_size
+    if have < need:
+        raise InputError(f"{str(path)!r} is truncated: its header announces a {shape} "
+                         f"{dtype} array ({need} bytes with the header), the file has {have}")
+
+
 def _open(path: Path):
+    if path.suffix.lower() == ".npy":
+        _check_npy_complete(path)
     try:
         from SurfaceTopography import open_topography
     except ImportError:

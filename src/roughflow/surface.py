@@ -64,11 +64,14 @@ class SurfaceSpec:
             v = getattr(self, name)
             if isinstance(v, bool) or not isinstance(v, (int, np.integer)) or v < 4:
                 raise InputError(f"{name} must be an integer >= 4, got {v!r}")
+        # stored as the floats they were checked as: a number given as a string ("0.8")
+        # otherwise failed later, with a TypeError deep in the spectrum
         for name in ("lx", "ly", "gamma", "lambda_r", "lambda_s", "rms_slope"):
-            require_positive(name, getattr(self, name))
+            object.__setattr__(self, name, require_positive(name, getattr(self, name)))
         h = require_finite("hurst", self.hurst)
         if not 0 < h <= 1:
             raise InputError(f"hurst must lie in (0, 1], got {self.hurst!r}")
+        object.__setattr__(self, "hurst", h)
         require_int("seed", self.seed, minimum=0, maximum=MAX_SEED)
         if self.rolloff not in ROLLOFF_FORMS:
             raise InputError(f"rolloff must be one of {ROLLOFF_FORMS}, got {self.rolloff!r}")
@@ -314,6 +317,8 @@ def generate(spec: SurfaceSpec) -> Surface:
     """
     from roughflow.resources import check_memory
 
+    if not isinstance(spec, SurfaceSpec):
+        raise InputError(f"generate needs a SurfaceSpec, got {type(spec).__name__}")
     nx, ny = spec.nx, spec.ny
     check_memory("surface", (nx, ny), what="generating a surface")
     box, kx_max, ky_max = _phase_box(spec)

@@ -2,9 +2,9 @@
 
 A subcommand declares its files with :func:`add_input` (a dataset of given kinds,
 :mod:`roughflow.datasets.kinds`) and :func:`add_output`; before its ``func`` runs,
-:func:`roughflow.cli.main` checks every output path (:func:`check_output`: writable, not a
-directory, the right suffix) and reads every input (:func:`read_inputs`: readable netCDF of
-the expected kind, loaded into ``args.data[dest]``). Any failure is an
+:func:`roughflow.cli.main` checks every output path (:func:`roughflow.io.check_output`:
+writable, not a directory, the right suffix) and reads every input (:func:`read_inputs`:
+readable netCDF of the expected kind, loaded into ``args.data[dest]``). Any failure is an
 :class:`~roughflow.errors.InputError`: exit status 2 with a message naming the file, before
 any work starts. A new subcommand gets all of this by using the two helpers.
 """
@@ -13,9 +13,6 @@ from __future__ import annotations
 
 import argparse
 import logging
-import os
-import tempfile
-from pathlib import Path
 
 from roughflow import defaults
 from roughflow.errors import InputError
@@ -48,7 +45,7 @@ def _record(parser: argparse.ArgumentParser, attr: str, entry: tuple) -> None:
 def add_output(parser: argparse.ArgumentParser, *flags: str, dest: str = "output",
                suffixes: tuple[str, ...] = (".nc",), required: bool = True,
                metavar: str = "FILE.nc", help: str = "netCDF file to write") -> None:
-    """An output file option (default ``-o/--output``), checked by :func:`check_output`
+    """An output file option (default ``-o/--output``), checked by :func:`roughflow.io.check_output`
     before the subcommand runs."""
     flags = flags or ("-o", "--output")
     parser.add_argument(*flags, dest=dest, required=required, default=None, metavar=metavar,
@@ -66,33 +63,49 @@ def add_input(parser: argparse.ArgumentParser, *names: str, kinds: str | tuple[s
     _record(parser, _INPUTS, (action.dest, kinds, what))
 
 
-def check_output(path: str, *, option: str = "--output",
-                 suffixes: tuple[str, ...] = (".nc",)) -> None:
-    """Refuse an output path that cannot be written, before any work: a wrong suffix, an
-    existing directory, a parent that is a file, or a folder where no file can be created
-    (probed by creating and removing a temporary file, which also works for root)."""
-    p = Path(path)
-    if p.is_dir():
-        raise InputError(f"{option} {path!r} is a directory; give a file name")
-    if suffixes and p.suffix.lower() not in suffixes:
-        raise InputError(f"{option} {path!r}: the file name must end in "
-                         f"{' or '.join(suffixes)}")
-    parent = p.absolute().parent
-    while not parent.exists():
-        parent = parent.parent
-    if not parent.is_dir():
-        raise InputError(f"{option} {path!r}: {str(parent)!r} is a file, not a directory")
-    try:
-        fd, tmp = tempfile.mkstemp(prefix=".roughflow-probe-", dir=parent)
-    except OSError as exc:
-        raise InputError(f"{option} {path!r}: cannot create files in {str(parent)!r} "
-                         f"({exc.strerror})") from None
-    os.close(fd)
-    os.unlink(tmp)
+def dest_of(flag: str) -> str:
+    """The namespace attribute of a long option (``--eps-f`` -> ``eps_f``)."""
+    return flag[2:].replace("-", "_")
+
+
+# Refusing a given option that does not apply: argparse cannot tell a given option from its
+# default by the value alone.
+class _RecordGiven(argparse.Action):
+    """argparse's plain store action that also records that its option was given, in
+    ``args._given`` (the defaults stay the documented values, so a value equal to the
+    default still counts as given)."""
+
+    def __call__(self, parser, namespace, values, option_string=None) -> None:
+        setattr(namespace, self.dest, values)
+        if option_string is not None:
+            namespace._given = {*getattr(namespace, "_given", ()), self.dest}
+
+
+def track_given(parser: argparse.ArgumentParser) -> None:
+    """Make every plain option added to ``parser`` from now on record whether it was given
+    (:func:`given`), so that a command can refuse a given option that does not apply."""
+    parser.register("action", None, _RecordGiven)
+
+
+def given(args: argparse.Namespace) -> set[str]:
+    """Destinations of the options given on the command line (:func:`track_given`)."""
+    return set(getattr(args, "_given", ()))
+
+
+def refuse_given(args: argparse.Namespace, flags: tuple[str, ...], why: str) -> None:
+    """InputError naming those of ``flags`` that were given, with their values, and ``why``
+    they do not apply."""
+    named = [f"{f} {getattr(args, dest_of(f))}" for f in flags if dest_of(f) in given(args)]
+    if named:
+        raise InputError(f"{', '.join(named)}: {'does' if len(named) == 1 else 'do'} not "
+                         f"apply {why}")
 
 
 def check_outputs(args: argparse.Namespace) -> None:
-    """:func:`check_output` for every output the subcommand declared (given ones only)."""
+    """:func:`roughflow.io.check_output` for every output the subcommand declared (given
+    ones only)."""
+    from roughflow.io import check_output
+
     for dest, option, suffixes in getattr(args, _OUTPUTS, None) or []:
         if getattr(args, dest, None) is not None:
             check_output(getattr(args, dest), option=option, suffixes=suffixes)

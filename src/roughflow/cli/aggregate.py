@@ -37,6 +37,8 @@ def run(args: argparse.Namespace) -> None:
             config = json.loads(args.study_config)
         except json.JSONDecodeError as exc:
             raise InputError(f"--study-config is not JSON: {exc}") from None
+        if not isinstance(config, dict):  # a study's block is a mapping of its keys
+            raise InputError(f"--study-config must be a JSON object, got {args.study_config!r}")
         provenance = replace(provenance, study_config=json.dumps(config, sort_keys=True))
     aggregate(args.data["inputs"], args.output, study=args.study,
               sources=[repr(p) for p in args.inputs], provenance=provenance)

@@ -20,11 +20,12 @@ def register(sub: argparse._SubParsersAction) -> None:
     add_input(p, "files", kinds=None, what="result file", nargs="*", metavar="RESULT.nc",
               help="netCDF files written by roughflow (optional)")
     p.add_argument("--method", action="append", default=None, metavar="NAME",
-                   help="only the references of this method (repeatable): " +
+                   help="only the references of this method (repeatable; not with result "
+                        "files): " +
                         ", ".join(_methods()))
     p.add_argument("--format", choices=FORMATS, default="text",
                    help="text (default), bibtex, markdown (as in docs/physics.md) or cff "
-                        "(CITATION.cff of this version)")
+                        "(CITATION.cff of this version; without files or --method)")
     p.set_defaults(func=run)
 
 
@@ -40,6 +41,7 @@ def run(args: argparse.Namespace) -> None:
     from roughflow.errors import InputError
     from roughflow.provenance import input_references
 
+    _check_selection(args)
     if args.format == "cff":
         print(cff(__version__), end="")
         return
@@ -59,3 +61,19 @@ def run(args: argparse.Namespace) -> None:
         print("\n\n".join(r.bibtex() for r in refs))
     else:
         print("\n".join(f"[{r.key}] {r.text()}" for r in refs))
+
+
+def _check_selection(args: argparse.Namespace) -> None:
+    """Refuse selections that would be ignored, or select nothing: result files and
+    --method are alternatives (a file that used other methods would print nothing), and
+    the CFF file is roughflow's own citation, of neither."""
+    from roughflow.errors import InputError
+
+    method = " ".join(f"--method {m}" for m in args.method or ())
+    if args.format == "cff" and (args.files or method):
+        got = ", ".join([*args.files, *([method] if method else [])])
+        raise InputError("--format cff prints roughflow's own CITATION.cff, which takes "
+                         f"neither result files nor --method (got {got})")
+    if args.files and method:
+        raise InputError(f"{method} and result files are alternatives: give the files (their "
+                         "references) or --method (a method's), not both")

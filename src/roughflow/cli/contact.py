@@ -19,7 +19,9 @@ from ._common import (
     add_output,
     adhesion_help,
     on_backend,
+    refuse_given,
     resolve_adhesion,
+    track_given,
     warn_if_nonperiodic_scan,
 )
 
@@ -38,6 +40,7 @@ def register(sub: argparse._SubParsersAction) -> None:
             "with every scalar of the result and every surface parameter as attributes."
         ),
     )
+    track_given(p)  # the bearing model refuses the solver's options (_check_model_options)
     add_input(p, "surface", kinds="surface", what="surface file", metavar="SURFACE.nc",
               help="surface file ('roughflow surface')")
     p.add_argument("--pressure", type=float, default=None,
@@ -70,8 +73,7 @@ def run(args: argparse.Namespace) -> None:
     from roughflow.io import surface_from_dataset, write_dataset
 
     on_backend(args)  # CuPy and a GPU, before any work
-    if args.model == "bearing" and args.pressure is not None:
-        raise InputError("--model bearing takes --area-fraction, not --pressure")
+    _check_model_options(args)
     surface = surface_from_dataset(args.data["surface"])
     if args.model != "bearing":  # the bearing model is local: no edges to join
         warn_if_nonperiodic_scan(args.data["surface"], args.surface, "contact")
@@ -91,3 +93,13 @@ def run(args: argparse.Namespace) -> None:
     methods += ["adhesion"] if result.model == "adhesive" else []
     write_dataset(contact_dataset(surface, result, adhesion), args.output,
                   provenance=args.provenance.using(*methods))
+
+
+def _check_model_options(args: argparse.Namespace) -> None:
+    """Refuse options that the chosen model does not use (they would be ignored)."""
+    if args.model != "bearing":
+        return
+    if args.pressure is not None:
+        raise InputError("--model bearing takes --area-fraction, not --pressure")
+    refuse_given(args, ("--method", "--tol", "--max-iter"), "to --model bearing: it has no "
+                 "solver (it cuts the heights at the level of --area-fraction)")

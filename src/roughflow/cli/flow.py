@@ -99,10 +99,11 @@ def _plot(results: dict, contact: np.ndarray, path: str) -> None:
     from matplotlib.figure import Figure
 
     from roughflow.flow import plot_flux
+    from roughflow.io import save_figure
 
     fig = Figure(figsize=(5 * len(results), 4.2))
     axes = fig.subplots(1, len(results), squeeze=False)
     for ax, r in zip(axes[0], results.values(), strict=True):
         plot_flux(r, contact, ax=ax)
     fig.tight_layout()
-    fig.savefig(path, dpi=120)
+    save_figure(fig, path, dpi=120)

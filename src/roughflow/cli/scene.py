@@ -13,16 +13,22 @@ import time
 
 from roughflow import defaults
 from roughflow.defaults import ADHESION_RANGE_OVER_LAMBDA_S, ADHESION_SURFACE_ENERGY_RATIO
+from roughflow.errors import InputError
 
-from ._common import add_output, add_surface_options
+from ._common import add_output, add_surface_options, refuse_given, track_given
 
 log = logging.getLogger(__name__)
 
+_SURFACE_FLAGS = ("--gamma", "--hurst", "--l-over-lambda-r", "--eps-f",
+                  "--points-per-lambda-s", "--aspect")
+#: Options of the adhesive model only (ladder scene).
+_ADHESION_FLAGS = ("--surface-energy-ratio", "--range-over-lambda-s", "--tabor")
 
-def _surface_options(p: argparse.ArgumentParser, **overrides) -> None:
+
+def _surface_options(p: argparse.ArgumentParser, flags: tuple[str, ...] = _SURFACE_FLAGS,
+                     **overrides) -> None:
     g = p.add_argument_group("surface (unit-area cell; lengths in units of L)")
-    add_surface_options(g, ("--gamma", "--hurst", "--l-over-lambda-r", "--eps-f",
-                            "--points-per-lambda-s", "--aspect"), **overrides)
+    add_surface_options(g, flags, **overrides)
     seeds = overrides.get("seeds", [0])
     p.add_argument("--seeds", type=int, nargs="+", default=seeds, metavar="SEED",
                    help=f"surface seeds handled by this job ({' '.join(map(str, seeds))})")
@@ -60,6 +66,7 @@ def register(sub: argparse._SubParsersAction) -> None:
                                       "(warm-started load search), full Reynolds conductance "
                                       "along x and y where the fluid percolates, Bruggeman and "
                                       "closed forms.")
+    track_given(ld)  # adhesion options with another model are refused (_check_ladder)
     _surface_options(ld)
     ld.add_argument("--model", choices=defaults.MODELS, default="elastic",
                     help="contact model (elastic)")
@@ -89,9 +96,11 @@ def register(sub: argparse._SubParsersAction) -> None:
                          description="Isotropic rectangular cell (lx/ly = 1/gamma) and the "
                                      "gamma-stretched square cell from the same phases, pressed "
                                      "to the target contact area; heights, gap, phase maps.")
-    _surface_options(c, gamma=ch["gamma"], hurst=ch["hurst"], eps_f=ch["eps_f"],
-                     l_over_lambda_r=ch["l_over_lambda_r"], seeds=[ch["seed"]],
-                     points_per_lambda_s=ch["points_per_lambda_s"])
+    # the two cells' aspects follow from gamma: no --aspect (refused if given)
+    _surface_options(c, _SURFACE_FLAGS[:-1], gamma=ch["gamma"], hurst=ch["hurst"],
+                     eps_f=ch["eps_f"], l_over_lambda_r=ch["l_over_lambda_r"],
+                     seeds=[ch["seed"]], points_per_lambda_s=ch["points_per_lambda_s"])
+    c.add_argument("--aspect", type=float, default=None, help=argparse.SUPPRESS)
     c.add_argument("--area-fraction", type=float, default=ch["area_fraction"],
                    help=f"target a_c ({ch['area_fraction']:g})")
     c.add_argument("--model", choices=("elastic", "bearing"), default=ch["model"],
@@ -104,6 +113,7 @@ def job_from_args(args: argparse.Namespace):
     from roughflow.scenes import ChannelsJob, LadderJob, SurfaceParams, ThresholdJob
 
     if args.kind == "channels":
+        _check_channels(args)
         return ChannelsJob(gamma=args.gamma, hurst=args.hurst,
                            l_over_lambda_r=args.l_over_lambda_r, eps_f=args.eps_f,
                            area_fraction=args.area_fraction, model=args.model,
@@ -114,6 +124,7 @@ def job_from_args(args: argparse.Namespace):
     if args.kind == "threshold":
         return ThresholdJob(surface=surface, model=args.model, seeds=tuple(args.seeds),
                             tol=args.tol, contact_tol=args.contact_tol)
+    _check_ladder(args)
     rho = args.range_over_lambda_s
     if rho is None and args.tabor is None:
         rho = ADHESION_RANGE_OVER_LAMBDA_S
@@ -121,6 +132,25 @@ def job_from_args(args: argparse.Namespace):
                      area_fractions=tuple(args.area_fractions), a_c_star=args.a_c_star,
                      a_c_star_alt=args.a_c_star_alt, area_tol=args.area_tol, tabor=args.tabor,
                      surface_energy_ratio=args.surface_energy_ratio, range_over_lambda_s=rho)
+
+
+def _check_channels(args: argparse.Namespace) -> None:
+    """Refuse the surface options that the channels job has no field for."""
+    if args.aspect is not None:
+        raise InputError(f"--aspect {args.aspect:g} does not apply to the channels scene: its "
+                         "cells' aspects follow from --gamma (the isotropic cell has lx/ly = "
+                         "1/gamma, the stretched one is square)")
+    if len(args.seeds) > 1:
+        raise InputError(f"the channels scene takes one seed, got --seeds "
+                         f"{' '.join(map(str, args.seeds))} (run it once per seed)")
+
+
+def _check_ladder(args: argparse.Namespace) -> None:
+    """Refuse adhesion options with a model that has no adhesion (the workflow's jobs pass
+    them for --model adhesive only, LadderJob.cli_args)."""
+    if args.model != "adhesive":
+        refuse_given(args, _ADHESION_FLAGS, f"to --model {args.model}, only to --model "
+                     "adhesive")
 
 
 def run(args: argparse.Namespace) -> None:

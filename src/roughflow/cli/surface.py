@@ -7,9 +7,13 @@ import logging
 
 from roughflow.errors import InputError
 
-from ._common import add_output, add_surface_options
+from ._common import add_output, add_surface_options, dest_of, refuse_given, track_given
 
 log = logging.getLogger(__name__)
+
+#: Options of the explicit grid (--lx, --ly: its cell) and of the sweep numbers.
+GRID_FLAGS = ("--lx", "--ly")
+SWEEP_FLAGS = ("--l-over-lambda-r", "--eps-f", "--points-per-lambda-s", "--aspect")
 
 
 def register(sub: argparse._SubParsersAction) -> None:
@@ -24,6 +28,7 @@ def register(sub: argparse._SubParsersAction) -> None:
             "the cell side L; heights are normalised to the rms gradient."
         ),
     )
+    track_given(p)  # each form refuses the other's options (spec_from_args)
     add_surface_options(p, ("--hurst", "--gamma", "--rolloff"))
     p.add_argument("--seed", type=int, default=0, help="random seed of the phases (0)")
     p.add_argument("--rms-slope", type=float, default=1.0, help="rms gradient (1)")
@@ -35,25 +40,19 @@ def register(sub: argparse._SubParsersAction) -> None:
     g.add_argument("--lambda-r", type=float, help="roll-off wavelength")
     g.add_argument("--lambda-s", type=float, help="short-wavelength cutoff")
     s = p.add_argument_group("sweep numbers (used when --nx is not given)")
-    add_surface_options(s, ("--l-over-lambda-r", "--eps-f", "--points-per-lambda-s", "--aspect"))
+    add_surface_options(s, SWEEP_FLAGS)
     add_output(p)
     p.set_defaults(func=run)
 
 
 def spec_from_args(args: argparse.Namespace):
-    from roughflow.surface import SurfaceSpec
-
     explicit = (args.nx, args.ny, args.lambda_r, args.lambda_s)
     if any(v is not None for v in explicit):
-        names = ("--nx", "--ny", "--lambda-r", "--lambda-s")
-        missing = [n for n, v in zip(names, explicit, strict=True) if v is None]
-        if missing:
-            raise InputError(f"an explicit grid needs {', '.join(missing)} as well")
-        return SurfaceSpec(
-            nx=args.nx, ny=args.ny, lx=args.lx, ly=args.ly, hurst=args.hurst,
-            gamma=args.gamma, lambda_r=args.lambda_r, lambda_s=args.lambda_s,
-            seed=args.seed, rms_slope=args.rms_slope, rolloff=args.rolloff,
-        )
+        return _explicit_spec(args)
+    refuse_given(args, GRID_FLAGS, "without an explicit grid (--nx --ny --lambda-r "
+                 "--lambda-s): the sweep numbers make a unit-area cell, shaped by --aspect")
+    from roughflow.surface import SurfaceSpec
+
     spec = SurfaceSpec.from_sweep(
         gamma=args.gamma, hurst=args.hurst, l_over_lambda_r=args.l_over_lambda_r,
         eps_f=args.eps_f, points_per_lambda_s=args.points_per_lambda_s,
@@ -64,6 +63,22 @@ def spec_from_args(args: argparse.Namespace):
 
         spec = replace(spec, rms_slope=args.rms_slope)
     return spec
+
+
+def _explicit_spec(args: argparse.Namespace):
+    from roughflow.surface import SurfaceSpec
+
+    names = ("--nx", "--ny", "--lambda-r", "--lambda-s")
+    missing = [n for n in names if getattr(args, dest_of(n)) is None]
+    if missing:
+        raise InputError(f"an explicit grid needs {', '.join(missing)} as well")
+    refuse_given(args, SWEEP_FLAGS, "to an explicit grid (--nx --ny --lambda-r "
+                 "--lambda-s --lx --ly set the cell)")
+    return SurfaceSpec(
+        nx=args.nx, ny=args.ny, lx=args.lx, ly=args.ly, hurst=args.hurst,
+        gamma=args.gamma, lambda_r=args.lambda_r, lambda_s=args.lambda_s,
+        seed=args.seed, rms_slope=args.rms_slope, rolloff=args.rolloff,
+    )
 
 
 def run(args: argparse.Namespace) -> None:

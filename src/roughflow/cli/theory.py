@@ -23,12 +23,16 @@ from roughflow import defaults
 from roughflow.defaults import A_C_STAR_PAPER, MODELS
 from roughflow.errors import InputError
 
-from ._common import add_input, add_output, add_surface_options
+from ._common import add_input, add_output, add_surface_options, refuse_given, track_given
 
 if TYPE_CHECKING:  # numpy is imported when a command runs, not for --help
     import numpy as np
 
 DEFAULT_PRESSURES = "0.002,0.005,0.01,0.02,0.05,0.1,0.15,0.2,0.25"
+#: The options of the spec without a file (besides --gamma), and of Persson theory.
+SPEC_FLAGS = ("--hurst", "--l-over-lambda-r", "--eps-f", "--points-per-lambda-s", "--aspect",
+              "--rolloff")
+PERSSON_FLAGS = ("--pressures", "--energy-factor")
 
 
 def register(sub: argparse._SubParsersAction) -> None:
@@ -43,6 +47,7 @@ def register(sub: argparse._SubParsersAction) -> None:
             "and sigma(p) = Eq. 16 over --pressures. Units: E* = 1, lengths in L, eta = 1."
         ),
     )
+    track_given(p)  # each form refuses the options of the others (_check_form)
     add_input(p, "file", kinds=("gap", "surface"), what="input file", nargs="?", default=None,
               metavar="FILE.nc",
               help="netCDF file with 'gap' (result) or 'heights' (surface); optional")
@@ -70,8 +75,7 @@ def register(sub: argparse._SubParsersAction) -> None:
     s.add_argument("--energy-factor", type=float, default=None,
                    help="correction factor of the elastic energy (default: "
                         "roughflow.theory.DEFAULT_ENERGY_FACTOR, docs/theory.md)")
-    add_surface_options(s, ("--hurst", "--l-over-lambda-r", "--eps-f", "--points-per-lambda-s",
-                            "--aspect", "--rolloff"))
+    add_surface_options(s, SPEC_FLAGS)
     add_output(p, required=False, help="also write the results to this netCDF file")
     p.set_defaults(func=run)
 
@@ -91,21 +95,38 @@ def _parse_pressures(text: str) -> np.ndarray:
 def run(args: argparse.Namespace) -> None:
     from roughflow.io import surface_from_dataset
 
+    ds = args.data["file"]
+    _check_form(args, "spec" if ds is None else "gap" if "gap" in ds else "surface")
     if args.file is None:
-        if args.flow is not None:
-            raise InputError("--flow needs a gap file (roughflow contact) to compare with")
         _run_persson(args, _spec_from_args(args), source="spec from options")
         return
     path = Path(args.file)
-    ds = args.data["file"]
     if "gap" in ds:
         _run_gap(args, ds)
     else:
-        if args.flow is not None:
-            raise InputError(f"--flow compares with a gap file, but {str(path)!r} is a surface")
         surface = surface_from_dataset(ds)
         src = surface.spec if surface.spec is not None else surface
         _run_persson(args, src, source=f"{path.name} ({'spec' if surface.spec else 'measured'})")
+
+
+def _check_form(args: argparse.Namespace, form: str) -> None:
+    """Refuse the options that the form (a "gap" file, a "surface" file or the "spec" of
+    the options) does not use: they would be ignored."""
+    if form == "gap":
+        refuse_given(args, (*PERSSON_FLAGS, *SPEC_FLAGS), f"to a gap file "
+                     f"({args.file}), only to Persson theory (a surface file or none)")
+        if args.peklenik == "conductivity":
+            refuse_given(args, ("--gamma",), "with --peklenik conductivity (the "
+                         "Peklenik number is estimated from each gap field)")
+        return
+    if args.flow is not None:
+        raise InputError("--flow needs a gap file (roughflow contact) to compare with" if
+                         form == "spec" else
+                         f"--flow compares with a gap file, but {args.file!r} is a surface")
+    refuse_given(args, ("--peklenik",), "without a gap file")
+    if form == "surface":
+        refuse_given(args, ("--gamma", *SPEC_FLAGS), f"to a surface file "
+                     f"({args.file}): its own spectrum is used")
 
 
 def _spec_from_args(args: argparse.Namespace):

@@ -22,7 +22,9 @@ from ._common import (
     adhesion_help,
     axis_arg,
     on_backend,
+    refuse_given,
     resolve_adhesion,
+    track_given,
     warn_if_nonperiodic_scan,
 )
 
@@ -42,6 +44,7 @@ def register(sub: argparse._SubParsersAction) -> None:
             "gbar) per axis and the list of contact solves."
         ),
     )
+    track_given(p)  # the bearing model refuses the search's options (_search_options)
     p_min, p_max = THRESHOLD_PRESSURE_RANGE
     add_input(p, "surface", kinds="surface", what="surface file", metavar="SURFACE.nc",
               help="surface file written by 'roughflow surface'")
@@ -60,8 +63,8 @@ def register(sub: argparse._SubParsersAction) -> None:
     p.add_argument("--p-max", type=float, default=p_max,
                    help=f"highest allowed pressure in E* gbar ({p_max:g})")
     p.add_argument("--p-guess", type=float, default=None,
-                   help="first pressure (default: the contact law's load for a_c = "
-                        f"{A_C_STAR_PAPER})")
+                   help="first pressure, in [--p-min, --p-max] (default: the contact law's "
+                        f"load for a_c = {A_C_STAR_PAPER})")
     p.add_argument("--contact-tol", type=float, default=THRESHOLD_CONTACT_TOL,
                    help="tolerance of each contact solve, gap error / rms height "
                         f"({THRESHOLD_CONTACT_TOL:g})")
@@ -80,18 +83,15 @@ def register(sub: argparse._SubParsersAction) -> None:
 def run(args: argparse.Namespace) -> None:
     from roughflow.datasets import threshold_dataset
     from roughflow.io import surface_from_dataset, write_dataset
-    from roughflow.search import SearchOptions, threshold
+    from roughflow.search import threshold
 
     on_backend(args)  # CuPy and a GPU, before any work
+    options = _search_options(args)
     surface = surface_from_dataset(args.data["surface"])
     warn_if_nonperiodic_scan(args.data["surface"], args.surface, "threshold")
     adhesion = resolve_adhesion(args.model, args.surface_energy, args.adhesion_range, surface,
                                 flags=("--surface-energy", "--adhesion-range"),
                                 source=args.surface)
-    options = SearchOptions(
-        strategy=args.strategy, pressure_range=(args.p_min, args.p_max),
-        first_pressure=args.p_guess, contact_tol=args.contact_tol, method=args.method,
-        on_unbracketed="nan" if args.allow_unbracketed else "raise")
     res = threshold(surface, args.axis, model=args.model, tol=args.tol, adhesion=adhesion,
                     options=options, backend=args.backend)
     if args.axis is not None:
@@ -104,3 +104,22 @@ def run(args: argparse.Namespace) -> None:
     methods = ["percolation", "bearing" if args.model == "bearing" else args.method or "gfmd"]
     methods += {"elastic": ["perimeter"], "adhesive": ["adhesion"]}.get(args.model, [])
     write_dataset(ds, args.output, provenance=args.provenance.using(*methods))
+
+
+#: Options of the contact solves of a search: the bearing model's exact sweep solves none.
+_SOLVE_FLAGS = ("--strategy", "--p-min", "--p-max", "--p-guess", "--method", "--contact-tol")
+
+
+def _search_options(args: argparse.Namespace):
+    """The :class:`~roughflow.search.SearchOptions` of the arguments, after refusing those
+    that the model does not use (they would be ignored)."""
+    from roughflow.search import SearchOptions
+
+    if args.model == "bearing":
+        refuse_given(args, _SOLVE_FLAGS, "to --model bearing: its threshold is an exact sweep "
+                     "of the heights, without contact solves")
+    # a --p-guess outside [--p-min, --p-max] is refused by SearchOptions (first_pressure)
+    return SearchOptions(
+        strategy=args.strategy, pressure_range=(args.p_min, args.p_max),
+        first_pressure=args.p_guess, contact_tol=args.contact_tol, method=args.method,
+        on_unbracketed="nan" if args.allow_unbracketed else "raise")

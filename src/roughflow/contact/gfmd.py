@@ -96,7 +96,7 @@ import numpy as np
 
 from roughflow import fft, gpu
 from roughflow.defaults import SOLVER_LOG_EVERY
-from roughflow.errors import require_field
+from roughflow.errors import InputError, require_field
 from roughflow.surface import spectral_rms_gradient
 
 from . import _kernels as _k
@@ -251,6 +251,9 @@ def hard_wall_setup(heights: np.ndarray, lx: float, ly: float,
         plan = fft.plan(shape, threads)
         h = np.ascontiguousarray(heights - h0).ravel()
         hscale = math.sqrt(dot(h, h) / size) or 1.0
+    if not math.isfinite(hscale):  # the squares of the heights overflow
+        raise InputError(f"surface heights out of range: rms height {hscale:.3g} (heights in "
+                         "units of L)")
     plan.real_in.reshape(-1)[:] = h
     ht = plan.execute_forward()
     wts = xp.asarray(fft.rfft_weights(shape[1]))
@@ -260,6 +263,9 @@ def hard_wall_setup(heights: np.ndarray, lx: float, ly: float,
     xp.reciprocal(pre, out=pre)
     pre *= 1.0 / size
     gbar = spectral_rms_gradient(ht, shape, lx, ly)
+    if not math.isfinite(gbar):
+        raise InputError(f"surface slopes out of range: rms slope {gbar:.3g} (heights in "
+                         "units of L)")
     # the same sample on either backend: h = heights - h0 is exact arithmetic on the host too
     flat = heights.ravel()
     levels = np.sort(np.append(flat[::_level_stride(size, shape[1])] - h0, flat.max() - h0))

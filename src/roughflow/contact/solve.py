@@ -3,7 +3,6 @@
 from __future__ import annotations
 
 import dataclasses
-import math
 from typing import TYPE_CHECKING
 
 import numpy as np
@@ -61,7 +60,8 @@ def solve(
       ``"elastic"`` (hard-wall repulsion), ``"adhesive"`` (``adhesion=Adhesion(...)``,
       docs/physics.md Sect. 3.3; ``pressure`` may be 0 or negative) or ``"bearing"`` (overlap model,
       ``area_fraction=a``: contact at the top fraction a of heights, gap = max(d - h, 0),
-      no elasticity; ``pressure`` is ignored).
+      no elasticity; ``pressure`` is ignored; ``method`` and ``tol``, unused, are still
+      checked).
     method:
       ``"cg"``: constrained conjugate gradients on the pressure (Polonsky-Keer), 2 FFT
       pairs per iteration. ``"gfmd"``: Green's function molecular dynamics with mass
@@ -108,26 +108,17 @@ def solve(
         gpu_check_memory(heights.shape, "an elastic contact solve on the GPU")
     check_memory("bearing" if model == "bearing" else "contact", heights.shape,
                  what=f"a {model} contact solve")
+    # checked for every model, the bearing one included (which uses neither): a bad value
+    # is a caller's mistake whatever the model
+    tol = _check_tol(tol)
+    method = _check_method(method)
     if model == "bearing":
-        if area_fraction is None:
-            raise InputError("the bearing model needs area_fraction=")
-        a = float(area_fraction)
-        if not math.isfinite(a) or not 0.0 <= a <= 1.0:
-            raise InputError(f"area_fraction must lie in [0, 1], got {area_fraction!r}")
-        return solve_bearing(heights, a)
+        return solve_bearing(heights, _check_bearing_area(area_fraction))
     if area_fraction is not None:
         raise InputError(
             f"area_fraction={area_fraction!r} is only for model='bearing'; the {model} model "
             "is load controlled (pressure=)"
         )
-    tol = require_positive("tol", tol)
-    if tol > CONTACT_TOL_MAX:
-        raise InputError(f"tol must be at most {CONTACT_TOL_MAX:g} (a gap error of 1 % of the rms "
-                         f"height; a looser one returns the starting state), got {tol!r}")
-    if method is None:
-        method = "gfmd"
-    if method not in METHODS:
-        raise InputError(f"method must be one of {METHODS}, got {method!r}")
     if pressure is None:
         raise InputError(f"the {model} model needs pressure= (mean pressure in E* gbar)")
     if model == "elastic":
@@ -219,6 +210,36 @@ def solve(
         method=method,
         separation=float(out.separation),
     )
+
+
+def _check_tol(tol: float) -> float:
+    tol = require_positive("tol", tol)
+    if tol > CONTACT_TOL_MAX:
+        raise InputError(f"tol must be at most {CONTACT_TOL_MAX:g} (a gap error of 1 % of the rms "
+                         f"height; a looser one returns the starting state), got {tol!r}")
+    return tol
+
+
+def _check_method(method: str | None) -> str:
+    """``method``, None meaning "gfmd" (the default)."""
+    if method is None:
+        return "gfmd"
+    if method not in METHODS:
+        raise InputError(f"method must be one of {METHODS}, got {method!r}")
+    return method
+
+
+def _check_bearing_area(area_fraction) -> float:
+    """The bearing model's target area: a number in [0, 1] (bools refused: True is no
+    area)."""
+    if area_fraction is None:
+        raise InputError("the bearing model needs area_fraction=")
+    if isinstance(area_fraction, (bool, np.bool_)):
+        raise InputError(f"area_fraction must be a number in [0, 1], got {area_fraction!r}")
+    a = require_finite("area_fraction", area_fraction)
+    if not 0.0 <= a <= 1.0:
+        raise InputError(f"area_fraction must lie in [0, 1], got {area_fraction!r}")
+    return a
 
 
 def _require_hard_wall(what: str, value, kind: type, maker: str, model: str,

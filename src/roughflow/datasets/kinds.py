@@ -28,8 +28,9 @@ class Kind:
     any_of: tuple[str, ...] = ()
     finite: tuple[str, ...] = ()
 
-    def problems(self, ds) -> list[str]:
-        """Why ``ds`` is not of this kind (empty when it is)."""
+    def problems(self, ds, *, values: bool = True) -> list[str]:
+        """Why ``ds`` is not of this kind (empty when it is); ``values=False``: its layout
+        only (variables, dimensions, attributes), not the finite values."""
         out = []
         for name, dims in self.variables.items():
             if name not in ds.variables:
@@ -39,7 +40,7 @@ class Kind:
         if self.any_of and not any(n in ds.variables for n in self.any_of):
             out.append(f"none of the variables {', '.join(map(repr, self.any_of))}")
         out += [f"no {a!r} attribute" for a in self.attrs if a not in ds.attrs]
-        for name in self.finite:
+        for name in self.finite if values else ():
             if name in ds.variables and not out:
                 bad = int((~np.isfinite(np.asarray(ds[name].values, dtype=float))).sum())
                 if bad:
@@ -99,6 +100,8 @@ def check_kind(ds, kinds: str | tuple[str, ...], source: str) -> str:
             return k
     first = KINDS[kinds[0]]
     wanted = " or ".join(KINDS[k].what for k in kinds)
-    looks = [KINDS[k].what for k in kinds_of(ds) if k != "gap"]
+    # a file of the wanted layout whose values are bad is not another kind of file
+    laid_out = any(not KINDS[k].problems(ds, values=False) for k in kinds)
+    looks = [] if laid_out else [KINDS[k].what for k in kinds_of(ds) if k != "gap"]
     hint = f"; it looks like {looks[0]}" if looks else ""
     raise InputError(f"{source} is not {wanted}: {'; '.join(first.problems(ds))}{hint}")

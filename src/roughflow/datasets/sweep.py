@@ -13,6 +13,8 @@ from typing import TYPE_CHECKING
 import numpy as np
 import xarray as xr
 
+from roughflow.errors import InputError
+
 from .results import AXIS_COORD
 from .units import DIMENSIONLESS
 
@@ -106,6 +108,20 @@ def threshold_values(ds: xr.Dataset) -> xr.DataArray:
     fine = ds["points_per_lambda_s"] >= CORRECTION_MIN_POINTS
     corrected = ds["a_c_star_corrected"]
     return xr.where(fine & corrected.notnull(), corrected, raw).transpose(*raw.dims)
+
+
+def single_setting(a: xr.DataArray, dims: tuple[str, ...] = ("model", "hurst", "eps_f"),
+                   ) -> xr.DataArray:
+    """``a`` at its single value of each of ``dims`` (those it has); InputError naming the
+    values where it has several: a finite-size fit or a figure of one series mixes no
+    settings."""
+    for dim in dims:
+        if dim in a.dims:
+            if a.sizes[dim] != 1:
+                raise InputError(f"this analysis needs one {dim}, the dataset has "
+                                 f"{a.sizes[dim]}: {', '.join(map(str, a[dim].values))}")
+            a = a.isel({dim: 0})
+    return a
 
 
 def area_values(ds: xr.Dataset) -> xr.DataArray:

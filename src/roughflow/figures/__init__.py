@@ -34,11 +34,15 @@ def make_figure(study: str, dataset, output: str | os.PathLike, fit=None, *,
     (:data:`roughflow.datasets.kinds.STUDY_KINDS`); ``source`` names it in messages."""
     from roughflow.aggregate import load
     from roughflow.datasets.kinds import STUDY_KINDS, check_kind
+    from roughflow.io import check_output, save_figure
 
     out = Path(output)
     if out.suffix.lower() != ".png":
         raise InputError(f"the figure is written as PNG (and a PDF next to it): {str(out)!r} "
                          "must end in .png")
+    pdf = out.with_suffix(".pdf")
+    check_output(out, option="figure", suffixes=(".png",))
+    check_output(pdf, option="the figure's PDF", suffixes=(".pdf",))
     mod = module(study)
     if isinstance(dataset, (str, os.PathLike)):
         source = f"study dataset {str(dataset)!r}"
@@ -46,9 +50,6 @@ def make_figure(study: str, dataset, output: str | os.PathLike, fit=None, *,
     check_kind(dataset, STUDY_KINDS[study], source)
     fit_ds = load(fit, "fit") if isinstance(fit, (str, os.PathLike)) else fit
     fig = mod.draw(dataset, fit=fit_ds)
-    out.parent.mkdir(parents=True, exist_ok=True)
-    for path in (out.with_suffix(".png"), out.with_suffix(".pdf")):
-        tmp = path.with_name(path.stem + ".part" + path.suffix)
-        fig.savefig(tmp, dpi=150)
-        os.replace(tmp, path)
+    for path in (out, pdf):
+        save_figure(fig, path, dpi=150)
     return mod.CAPTION

@@ -6,7 +6,7 @@ import numpy as np
 import xarray as xr
 from matplotlib.figure import Figure
 
-from roughflow.datasets.sweep import threshold_values
+from roughflow.datasets.sweep import single_setting, threshold_values
 
 from ._threshold import format_gamma_axis, plot_vs_gamma
 
@@ -24,10 +24,7 @@ CAPTION = (
 def draw(ds: xr.Dataset, fit=None) -> Figure:
     fig = Figure(figsize=(5.5, 4.2), layout="constrained")
     ax = fig.subplots()
-    a = threshold_values(ds)
-    for dim in ("model", "eps_f"):
-        if dim in a.dims and a.sizes[dim] == 1:
-            a = a.isel({dim: 0})
+    a = single_setting(threshold_values(ds), ("model", "eps_f"))  # one curve per hurst
     if "eps_t" in a.dims:
         a = a.max("eps_t", skipna=True) if a.sizes["eps_t"] > 1 else a.isel(eps_t=0)
     hursts = sorted(a["hurst"].values)

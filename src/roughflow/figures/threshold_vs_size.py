@@ -6,7 +6,7 @@ import numpy as np
 import xarray as xr
 from matplotlib.figure import Figure
 
-from roughflow.datasets.sweep import threshold_values
+from roughflow.datasets.sweep import single_setting, threshold_values
 from roughflow.fits import scaling
 
 from ._style import EASY, HARD, seed_stats
@@ -48,10 +48,7 @@ def _fit_row(fit: xr.Dataset, group: str, which: str, mode: str) -> dict | None:
 def draw(ds: xr.Dataset, fit: xr.Dataset | None = None) -> Figure:
     fig = Figure(figsize=(6.4, 4.8), layout="constrained")
     ax = fig.subplots()
-    a = threshold_values(ds)
-    for dim in ("model", "hurst", "eps_f"):
-        if dim in a.dims and a.sizes[dim] == 1:
-            a = a.isel({dim: 0})
+    a = single_setting(threshold_values(ds))  # the fits' check: one model, hurst, eps_f
     mean, sem, _ = seed_stats(a)
     gammas = [float(g) for g in a["gamma"].values]
     aniso = [g for g in gammas if not np.isclose(g, 1.0)]

@@ -205,12 +205,19 @@ def _check_axis(axis) -> int:
         raise InputError(f"axis must be 0, 1, 'x' or 'y', got {axis!r}") from None
 
 
+#: The largest gap whose conductivity u^3 / 12 is a finite float64.
+_GAP_MAX = float(np.cbrt(np.finfo(np.float64).max / 12))
+
+
 def check_gap(gap) -> np.ndarray:
     """Return ``gap`` as a float64 2D array, or raise :class:`InputError`."""
     g = require_field("gap", gap)
     if (g < 0).any():
         idx = tuple(int(i) for i in np.argwhere(g < 0)[0])
         raise InputError(f"gap must be >= 0, got {g[idx]!r} at {idx}")
+    if g.max() > _GAP_MAX:
+        raise InputError(f"gap out of range: its largest value {float(g.max())!r} (in units "
+                         f"of L) is above {_GAP_MAX:.3g}, where u^3 / 12 overflows")
     return g
 
 
@@ -637,6 +644,8 @@ def solve(
     """
     g = check_gap(gap)
     ax = _check_axis(axis)
+    if not isinstance(periodic, (bool, np.bool_)):  # a string such as "no" is truthy
+        raise InputError(f"periodic must be True or False, got {periodic!r}")
     lx = require_positive("lx", lx)
     ly = lx if ly is None else require_positive("ly", ly)
     eta = require_positive("eta", eta)

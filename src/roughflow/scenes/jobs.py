@@ -274,12 +274,19 @@ class ChannelsJob:
 
     def surfaces(self) -> tuple[SurfaceParams, SurfaceParams]:
         """(isotropic rectangular cell with lx/ly = 1/gamma, stretched square cell)."""
-        iso = SurfaceParams(gamma=1.0, hurst=self.hurst, l_over_lambda_r=self.l_over_lambda_r,
-                            eps_f=self.eps_f, points_per_lambda_s=self.points_per_lambda_s,
-                            aspect=1.0 / self.gamma)
+        # the stretched cell first: it checks gamma (finite, > 0) before 1/gamma is taken
         aniso = SurfaceParams(gamma=self.gamma, hurst=self.hurst,
                               l_over_lambda_r=self.l_over_lambda_r, eps_f=self.eps_f,
                               points_per_lambda_s=self.points_per_lambda_s)
+        try:
+            iso = SurfaceParams(gamma=1.0, hurst=self.hurst,
+                                l_over_lambda_r=self.l_over_lambda_r, eps_f=self.eps_f,
+                                points_per_lambda_s=self.points_per_lambda_s,
+                                aspect=1.0 / self.gamma)
+        except InputError as exc:
+            # its own message names the derived gamma=1 and aspect: name the given gamma
+            raise InputError(f"gamma={self.gamma!r} gives an isotropic cell with lx/ly = "
+                             f"1/gamma that does not fit: {exc}") from None
         return iso, aniso
 
     def cli_args(self) -> list[str]:

@@ -52,7 +52,7 @@ from roughflow.defaults import (
     THRESHOLD_TOL,
     THRESHOLD_TOL_MAX,
 )
-from roughflow.errors import ConvergenceError, InputError, require_positive
+from roughflow.errors import ConvergenceError, InputError, require_finite, require_positive
 from roughflow.gpu import check_backend
 from roughflow.gpu import check_memory as gpu_check_memory
 from roughflow.percolation import (
@@ -149,8 +149,8 @@ class SearchOptions:
         baseline).
     pressure_range: pressures (E* gbar) the search may try; a surface whose fluid spans at
         the top or never spans at the bottom is unbracketed.
-    first_pressure: the first pressure tried; default the contact law's load for
-        :data:`~roughflow.defaults.A_C_STAR_PAPER`.
+    first_pressure: the first pressure tried, within ``pressure_range``; default the contact
+        law's load for :data:`~roughflow.defaults.A_C_STAR_PAPER` (clamped into the range).
     contact_tol: tolerance of each contact solve (largest gap error / rms height).
     method: contact method passed to :func:`roughflow.contact.solve` (None: its default).
     max_solves: cap on the contact solves; exceeding it raises :class:`ConvergenceError`.
@@ -196,8 +196,13 @@ class SearchOptions:
             raise InputError("pressure_range must be finite with p_min < p_max, got "
                              f"{self.pressure_range!r}")
         require_positive("contact_tol", self.contact_tol)
-        if self.first_pressure is not None and not math.isfinite(float(self.first_pressure)):
-            raise InputError(f"first_pressure must be finite, got {self.first_pressure!r}")
+        if self.first_pressure is not None:
+            # a first pressure outside the range would be clamped into it without a word
+            # (the default one may be: it is the contact law's, whatever the range)
+            first = require_finite("first_pressure", self.first_pressure)
+            if not p_min <= first <= p_max:
+                raise InputError(f"first_pressure must lie in pressure_range [{p_min:g}, "
+                                 f"{p_max:g}], got {self.first_pressure!r}")
 
 
 @dataclass(frozen=True)
