@@ -47,6 +47,45 @@ def test_expand_study_names_unresolvable_sizes():
         expand_study("threshold_vs_gamma", block)
 
 
+# Each of these planned cleanly and failed (or was ignored) only after the jobs ran.
+_SMALL = {"seeds": [0], "points_per_lambda_s": 2, "eps_f": [0.25], "l_over_lambda_r": [4]}
+_LADDER = {**_SMALL, "area_fraction": [0.2, 0.4]}
+
+
+@pytest.mark.parametrize("name, block, match", [
+    # the figure (and fit) refused the dataset after every job: one series only
+    ("threshold_vs_size", {**_SMALL, "model": ["elastic", "bearing"]}, "one model"),
+    ("threshold_vs_size", {**_SMALL, "hurst": [0.5, 0.8]}, "one hurst"),
+    ("threshold_vs_hurst", {**_SMALL, "eps_f": [0.25, 0.125]}, "one eps_f"),
+    ("flow_isotropic", {**_LADDER, "hurst": [0.3, 0.8]}, "one hurst for model elastic"),
+    ("flow_anisotropic", {**_LADDER, "gamma": [2, 4]}, "one gamma for model elastic"),
+    # keys nothing reads
+    ("threshold_vs_gamma", {**_SMALL, "series": [{"area_fraction": [0.2]}]}, "area_fraction"),
+    ("threshold_vs_gamma", {**_SMALL, "fit": {"bootstrap": 5}}, "threshold_vs_size only"),
+    ("flow_anisotropic", {**_LADDER, "gamma": [2],
+                          "adhesion": {"surface_energy_ratio": 0.5}}, "adhesive model"),
+    ("flow_isotropic", {**_LADDER, "a_c_star": {"adhesive": 0.3}}, "a_c_star of adhesive"),
+    ("flow_isotropic", {**_LADDER, "gamma": [2]}, "takes gamma = 1"),
+    # the fit job's own range of nu (the schema asks only nu > 0)
+    ("threshold_vs_size", {**_SMALL, "fit": {"nu": 10}}, "nu must lie in"),
+    # ids agree to 6 digits: the second job was dropped without a word
+    ("threshold_vs_gamma", {**_SMALL, "gamma": [1, 1.0000001]}, "get the id"),
+])
+def test_expand_study_refuses_what_its_jobs_or_figure_cannot_use(name, block, match):
+    with pytest.raises(InputError, match=match):
+        expand_study(name, block)
+
+
+def test_expand_study_keeps_what_applies():
+    # the same keys where they apply: several models of a flow study, each at one setting
+    jobs = expand_study("flow_anisotropic", {
+        **_LADDER, "gamma": [2], "model": ["elastic", "adhesive"],
+        "adhesion": {"surface_energy_ratio": 0.5}, "a_c_star": {"adhesive": 0.3}})
+    assert {j.model for j in jobs.values()} == {"elastic", "adhesive"}
+    assert len(expand_study("threshold_vs_size", {**_SMALL, "l_over_lambda_r": [2, 4],
+                                                  "fit": {"nu": 1.5}})) == 2
+
+
 @pytest.mark.parametrize("job", [
     LadderJob(surface=SurfaceParams(gamma=2.0, l_over_lambda_r=8.0, eps_f=1 / 32),
               model="adhesive", seeds=(3, 4), area_fractions=(0.1, 0.2), a_c_star=0.41,
@@ -347,3 +386,15 @@ def test_adhesive_ladder_needs_less_load_and_records_its_adhesion():
     assert adh.attrs["surface_energy_ratio"] == pytest.approx(0.1)
     assert adh.attrs["range_over_lambda_s"] == pytest.approx(0.42)
     assert adh.attrs["tabor"] > 0 and adh.attrs["adhesion_repulsion"] == "harmonic"
+
+
+@pytest.mark.parametrize("key", ["unit", "height_unit"])
+def test_measured_scan_units_are_checked_at_planning(tmp_path, monkeypatch, key):
+    # a unit roughflow import cannot read passed planning and failed in the import job
+    np.save(tmp_path / "scan.npy", np.zeros((8, 8)))
+    monkeypatch.chdir(tmp_path)
+    block = {"modulus": "1GPa", "pressures": "1MPa:10MPa:3", "fluid_pressure": "1MPa",
+             "viscosity": "1mPa.s", "seal_width": "2mm", "seal_length": "60mm",
+             "scans": [{"file": "scan.npy", "size": "500nm", "unit": "nm", key: "banana"}]}
+    with pytest.raises(InputError, match=f"scan 'scan'.*{key}.*banana"):
+        expand_study("measured", block)

@@ -1,13 +1,18 @@
 # Accuracy budget (issue 8): convergence of a_c* and sigma against grid resolution, contact
 # solver tolerance and bisection tolerance, with wall times; tables and error-vs-time plots
-# under results/benchmarks/. Not part of the default target: `snakemake --cores 1 accuracy`
-# (about 30 min on one core). Seeds and resolutions via config["accuracy"] (optional):
+# under <results>/benchmarks/ (the config's results folder). Not part of the default target:
+# `snakemake --cores 1 accuracy` (about 30 min on one core). Seeds and resolutions via
+# config["accuracy"] (optional):
 #   accuracy: {seeds: [0, 1, 2, 3, 4, 5], points_per_lambda_s: [2, 4, 8, 16]}
 
 _ACC = config.get("accuracy", {}) or {}
 _ACC_SEEDS = " ".join(str(s) for s in _ACC.get("seeds", [0, 1, 2, 3, 4, 5]))
 _ACC_PPL = " ".join(str(p) for p in _ACC.get("points_per_lambda_s", [2, 4, 8, 16]))
-_ACC_OUT = "results/benchmarks"
+_ACC_OUT = f"{RESULTS}/benchmarks"
+# the script of the checkout that holds this Snakefile, run by the Python that runs snakemake
+# (as RF in common.smk), not the first `python` on PATH
+_ACC_SCRIPT = f"{PYTHON} " + shlex.quote(
+    str(Path(workflow.basedir) / "benchmarks" / "convergence.py"))
 
 
 rule accuracy_resolution:
@@ -18,7 +23,7 @@ rule accuracy_resolution:
         f"{_ACC_OUT}/logs/convergence_resolution.log",
     threads: 1
     shell:
-        "rm -f {output} && ROUGHFLOW_FFT_THREADS={threads} python benchmarks/convergence.py "
+        "rm -f {output} && ROUGHFLOW_FFT_THREADS={threads} {_ACC_SCRIPT} "
         "resolution --out {_ACC_OUT} --seeds {_ACC_SEEDS} --ppl {_ACC_PPL} > {log} 2>&1"
 
 
@@ -30,7 +35,7 @@ rule accuracy_tolerances:
         f"{_ACC_OUT}/logs/convergence_tol.log",
     threads: 1
     shell:
-        "rm -f {output} && ROUGHFLOW_FFT_THREADS={threads} python benchmarks/convergence.py "
+        "rm -f {output} && ROUGHFLOW_FFT_THREADS={threads} {_ACC_SCRIPT} "
         "tol --out {_ACC_OUT} --seeds {_ACC_SEEDS} > {log} 2>&1"
 
 
@@ -47,4 +52,4 @@ rule accuracy:
     log:
         f"{_ACC_OUT}/logs/convergence_report.log",
     shell:
-        "python benchmarks/convergence.py report --out {_ACC_OUT} > {log} 2>&1"
+        "{_ACC_SCRIPT} report --out {_ACC_OUT} > {log} 2>&1"

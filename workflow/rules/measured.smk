@@ -43,7 +43,9 @@ rule import_scan:
         mem_mb=2000,
         runtime=10,
     shell:
-        "{RF} -v import {input} {params.args} -o {output} > {log} 2>&1"
+        # the scan is a user-given path (spaces, shell characters): quoted, as are the
+        # import options (MeasuredJob.import_args)
+        "{RF} -v import {input:q} {params.args} -o {output} > {log} 2>&1"
 
 
 rule leak:

@@ -5,6 +5,8 @@ from __future__ import annotations
 import numpy as np
 import xarray as xr
 
+from roughflow.errors import InputError
+
 
 def ladder(ds: xr.Dataset, model: str) -> xr.Dataset:
     """The model's ladder with length-1 parameter dimensions dropped."""
@@ -15,7 +17,7 @@ def ladder(ds: xr.Dataset, model: str) -> xr.Dataset:
             other = [d for d in sub["area_fraction"].dims if d != dim]
             ran = sub["area_fraction"].notnull().any(other).values
             if ran.sum() != 1 and sub.sizes[dim] != 1:
-                raise ValueError(f"the flow figures expect one {dim} per model, got "
+                raise InputError(f"the flow figures expect one {dim} per model, got "
                                  f"{sub[dim].values[ran]}")
             sub = sub.isel({dim: int(np.argmax(ran)) if ran.any() else 0})
     return sub

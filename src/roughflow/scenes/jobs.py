@@ -344,6 +344,9 @@ class LeakJob:
         for key, kind in LEAK_QUANTITIES.items():
             parse_quantity(getattr(self, key), kind, key)
         parse_range(self.pressures, "pressure", "pressures")
+        for key in ("unit", "height_unit"):  # as roughflow import reads them
+            if getattr(self, key) is not None:
+                parse_quantity(f"1 {getattr(self, key)}", "length", key)
         if self.size is not None:
             for part in str(self.size).split(","):
                 try:
@@ -445,6 +448,7 @@ def expand_study(name: str, block: dict) -> dict[str, Job]:
     other's cells raises :class:`InputError` naming the study, series and values before any
     job runs.
     """
+    _check_keys_apply(name, block)
     block = {**study_defaults(name), **block}
     if name == defaults.MEASURED_STUDY:
         return _expand_measured(block)
@@ -471,11 +475,93 @@ def expand_study(name: str, block: dict) -> dict[str, Job]:
             try:
                 for g in groups:
                     job = _make_job(name, s, model, gamma, hurst, size, eps_f, ppl, g)
-                    jobs.setdefault(job.job_id, job)
+                    _add_job(jobs, job)
             except InputError as exc:
                 raise InputError(f"{where}: {values}: {exc}") from None
     check_collisions(name, jobs.values())
+    _check_one_series(name, jobs.values())
     return jobs
+
+
+def _add_job(jobs: dict[str, Job], job: Job) -> None:
+    """Add ``job`` under its id; the same job twice is one job, but two different jobs with
+    one id (values equal to the 6 digits of the id) would silently drop the second."""
+    other = jobs.setdefault(job.job_id, job)
+    if other != job:
+        raise InputError(f"two different jobs get the id {job.job_id!r} (their values agree "
+                         "to the 6 significant digits of job ids): make them differ more")
+
+
+#: Parameters a study's figure (and fit) shows one value of, per model for the flow
+#: studies (datasets.sweep.single_setting, figures._flow.ladder).
+_ONE_VALUE = {"threshold_vs_size": ("model", "hurst", "eps_f"),
+              "threshold_vs_hurst": ("model", "eps_f"),
+              **{s: ("gamma", "hurst", "eps_t", "eps_f") for s in FLOW_STUDIES}}
+
+
+def _check_one_series(name: str, jobs) -> None:
+    """Refuse at planning a study whose figure or fit would refuse its dataset after every
+    job ran: several values of a parameter it draws one series of."""
+    from roughflow.datasets.sweep import PARAM_DIMS
+
+    dims = _ONE_VALUE.get(name)
+    if dims is None:
+        return
+    per_model = name in FLOW_STUDIES
+    seen: dict[str, dict[str, set]] = {}
+    for job in jobs:
+        key = dict(zip(PARAM_DIMS, job.key, strict=True))
+        values = seen.setdefault(key["model"] if per_model else "", {})
+        for dim in dims:
+            values.setdefault(dim, set()).add(key[dim])
+    for model, values in seen.items():
+        for dim, found in values.items():
+            if len(found) > 1:
+                where = f" for model {model}" if per_model else ""
+                shown = ", ".join(f"{v:g}" if isinstance(v, float) else str(v)
+                                  for v in sorted(found, key=str))
+                raise InputError(f"config studies.{name}: its figure shows one {dim}"
+                                 f"{where}, the study has {len(found)}: {shown}")
+
+
+def _check_keys_apply(name: str, block: dict) -> None:
+    """Refuse keys of a study block that nothing would use (they were silently ignored)."""
+    from roughflow.fits import check_nu
+
+    where = f"config studies.{name}"
+    if name in THRESHOLD_STUDIES:
+        for n, s in enumerate(block.get("series") or []):
+            if "area_fraction" in s:
+                raise InputError(f"{where}.series[{n}]: area_fraction is a key of the flow "
+                                 "studies (their contact-area ladder); a threshold study "
+                                 "searches a_c*")
+        if "fit" in block:
+            if name != "threshold_vs_size":
+                raise InputError(f"{where}: fit applies to threshold_vs_size only (its "
+                                 "finite-size-scaling fit); this study runs no fit")
+            if "nu" in block["fit"]:
+                try:
+                    check_nu(block["fit"]["nu"])
+                except InputError as exc:
+                    raise InputError(f"{where}.fit: {exc}") from None
+    if name in FLOW_STUDIES:
+        models = set(_as_list(block.get("model", study_defaults(name)["model"])))
+        for s in block.get("series") or []:
+            models |= set(_as_list(s.get("model", [])))
+        if "adhesion" in block and "adhesive" not in models:
+            raise InputError(f"{where}: adhesion applies to the adhesive model, which this "
+                             f"study does not run (models: {', '.join(sorted(models))})")
+        unused = sorted(set(block.get("a_c_star") or {}) - models)
+        if unused:
+            raise InputError(f"{where}: a_c_star of {', '.join(unused)}, a model this study "
+                             f"does not run (models: {', '.join(sorted(models))})")
+    if name == "flow_isotropic":
+        gammas = set(_as_list(block.get("gamma", [1.0])))
+        for s in block.get("series") or []:
+            gammas |= set(_as_list(s.get("gamma", [])))
+        if gammas - {1.0}:
+            raise InputError(f"{where}: the isotropic study takes gamma = 1, got "
+                             f"{sorted(gammas)} (anisotropic surfaces: flow_anisotropic)")
 
 
 def expand_studies(studies: dict) -> dict[str, Job]:

@@ -1,0 +1,121 @@
+"""Config handling of the Snakemake workflow at planning time (dry runs only, no job runs).
+
+Each test runs ``snakemake -n`` in a subprocess in a temporary copy of the workflow
+(tests/workflow_copy.py), on a small config built from config/test.yaml.
+"""
+
+from __future__ import annotations
+
+import os
+import shlex
+import shutil
+import subprocess
+import sys
+from pathlib import Path
+
+import pytest
+import yaml
+from workflow_copy import copy_workflow
+
+SNAKEMAKE = Path(sys.executable).with_name("snakemake")
+
+pytestmark = pytest.mark.skipif(not SNAKEMAKE.exists(), reason="snakemake not installed")
+
+
+def dry_run(wd: Path, *args: str) -> subprocess.CompletedProcess:
+    """``snakemake -n -p`` (shell commands printed) on config/case.yaml; targets in args."""
+    env = {**os.environ, "ROUGHFLOW_FFT_THREADS": "1", "MPLBACKEND": "Agg"}
+    return subprocess.run([str(SNAKEMAKE), *args, "-n", "-p", "--cores", "1",
+                           "--configfile", "config/case.yaml"],
+                          cwd=wd, env=env, capture_output=True, text=True, timeout=300)
+
+
+def write_case(wd: Path, studies=("channels",), **top) -> None:
+    """config/case.yaml: the given studies of config/test.yaml plus top-level keys."""
+    cfg = yaml.safe_load((wd / "config" / "test.yaml").read_text())
+    cfg["studies"] = {name: cfg["studies"][name] for name in studies}
+    cfg.update(top)
+    (wd / "config" / "case.yaml").write_text(yaml.safe_dump(cfg))
+
+
+def shell_commands(output: str, word: str) -> list[list[str]]:
+    """The printed shell commands that contain ``word``, split as the shell splits them."""
+    return [shlex.split(line.split("Shell command:", 1)[1])
+            for line in output.splitlines() if "Shell command:" in line and word in line]
+
+
+# (a) a scan path with a space and shell characters reaches `roughflow import` as one word
+def test_scan_path_with_spaces_and_shell_characters_is_quoted(tmp_path):
+    wd = copy_workflow(tmp_path)
+    scan = "tests/data/afm 64 & co;$(x).npy"
+    shutil.copy(wd / "tests" / "data" / "afm-64.npy", wd / scan)
+    write_case(wd, studies=("measured",))
+    cfg = yaml.safe_load((wd / "config" / "case.yaml").read_text())
+    cfg["studies"]["measured"]["scans"][0]["file"] = scan
+    (wd / "config" / "case.yaml").write_text(yaml.safe_dump(cfg))
+    res = dry_run(wd)
+    assert res.returncode == 0, res.stderr[-2000:]
+    [cmd] = shell_commands(res.stdout, " import ")
+    assert cmd[cmd.index("import") + 1] == scan
+
+
+# (b) a key given twice in one mapping of a config file is refused, naming key and file
+DUPLICATES = {
+    "study block": ("studies:\n"
+                    "  threshold_vs_gamma:\n    gamma: [1, 2]\n    seeds: [0, 1]\n"
+                    "  threshold_vs_gamma:\n    gamma: [4]\n    seeds: [5]\n",
+                    "studies.threshold_vs_gamma", "lines 2 and 5"),
+    "key inside a series": ("studies:\n  threshold_vs_gamma:\n    seeds: [0, 1]\n    series:\n"
+                            "      - {model: [elastic], eps_f: [0.125], eps_f: [0.5]}\n",
+                            "studies.threshold_vs_gamma.series[0].eps_f", "lines 5 and 5"),
+}
+
+
+@pytest.mark.parametrize("case", sorted(DUPLICATES))
+def test_duplicate_config_key_is_refused(tmp_path, case):
+    wd = copy_workflow(tmp_path)
+    text, key, lines = DUPLICATES[case]
+    (wd / "config" / "case.yaml").write_text(text)
+    res = dry_run(wd)
+    out = res.stdout + res.stderr
+    assert res.returncode != 0
+    for needle in ("invalid config", "case.yaml", repr(key), "given twice", lines):
+        assert needle in out, (needle, out[-2000:])
+    assert not (wd / "results").exists()
+
+
+# (c) the accuracy rules: the Python that runs snakemake, under the config's results folder
+def test_accuracy_rules_use_this_python_and_the_results_folder(tmp_path):
+    wd = copy_workflow(tmp_path)
+    write_case(wd, results="acc_out")
+    res = dry_run(wd, "accuracy")
+    assert res.returncode == 0, res.stderr[-2000:]
+    cmds = shell_commands(res.stdout, "convergence.py")
+    assert len(cmds) == 3
+    for cmd in cmds:
+        python = cmd[cmd.index(next(w for w in cmd if w.endswith("convergence.py"))) - 1]
+        assert Path(python).parent == Path(sys.executable).parent, cmd  # this venv
+        assert cmd[cmd.index("--out") + 1] == "acc_out/benchmarks", cmd
+    assert "results/benchmarks" not in res.stdout + res.stderr
+
+
+# (d) a results folder with a trailing or doubled slash is normalised ('out/' -> 'out')
+@pytest.mark.parametrize("results", ["out/", "out//sub/"])
+def test_results_folder_slashes_are_normalised(tmp_path, results):
+    wd = copy_workflow(tmp_path)
+    write_case(wd, results=results)
+    res = dry_run(wd)
+    out = res.stdout + res.stderr
+    assert res.returncode == 0, res.stderr[-2000:]
+    assert "double '/'" not in out and "out//" not in out
+    norm = results.rstrip("/").replace("//", "/")
+    assert f"output: {norm}/channels/dataset.nc" in out
+
+
+def test_results_folder_root_is_refused(tmp_path):
+    wd = copy_workflow(tmp_path)
+    write_case(wd, results="/")
+    res = dry_run(wd)
+    out = res.stdout + res.stderr
+    assert res.returncode != 0
+    assert "invalid config" in out and "'results'" in out and "'/'" in out, out[-2000:]
