@@ -279,13 +279,13 @@ def test_elastic_single_axis_and_bisection_agree_with_joint_call(elastic_pair):
 
 def test_elastic_unbracketed_pressure_range():
     s = _surface(seed=0, l_over_lambda_r=2)  # 64 x 64
-    with pytest.raises(ThresholdNotBracketed, match="still spans"):
+    with pytest.raises(ThresholdNotBracketed, match="still spans along x "):
         threshold(s, 0, options=SearchOptions(pressure_range=(1e-4, 1e-2)))
     t = threshold(s, 0, options=SearchOptions(pressure_range=(1e-4, 1e-2),
                                               on_unbracketed="nan"))
     assert not t.bracketed and np.isnan(t.a_c_star) and np.isnan(t.a_hi)
     assert t.a_lo < 0.05  # the highest pressure tried gave a small, spanning contact
-    with pytest.raises(ThresholdNotBracketed, match="does not span"):
+    with pytest.raises(ThresholdNotBracketed, match="does not span along y "):
         threshold(s, 1, options=SearchOptions(pressure_range=(3.0, 4.0)))
 
 

@@ -8,6 +8,8 @@ stack. Units: E* = 1, rms gradient 1, cell side L = 1, viscosity eta = 1.
 
 from __future__ import annotations
 
+#: Names of the two directions, axis 0 and axis 1 of every array (gamma > 1 stretches x).
+AXIS_NAMES = ("x", "y")
 #: Contact models: hard-wall elastic, elastic with short-range adhesion, bearing area.
 MODELS = ("elastic", "adhesive", "bearing")
 

@@ -32,7 +32,8 @@ from ._common import check_outputs, read_inputs
 
 #: Exit statuses of every subcommand (also in ``roughflow --help``).
 EXIT_STATUS = {0: "success", 1: "unexpected error (a bug: please report the traceback)",
-               2: "bad input: options, input files or output path (nothing was computed)",
+               2: "bad input: options, input files or output path (nothing was computed), "
+                  "or a surface whose threshold lies outside the search's pressure range",
                3: "a solver did not converge (its residual is printed)",
                4: "out of memory although the estimate fitted (roughflow.resources)",
                130: "interrupted"}

@@ -13,6 +13,8 @@ from typing import TYPE_CHECKING
 import numpy as np
 import xarray as xr
 
+from roughflow.defaults import AXIS_NAMES
+
 from .units import (
     DIMENSIONLESS,
     FLUID_PRESSURE_UNITS,
@@ -31,7 +33,6 @@ if TYPE_CHECKING:
     from roughflow.search import Threshold
     from roughflow.surface import Surface
 
-AXIS_NAMES = ("x", "y")
 #: The ``axis`` coordinate of every per-direction variable.
 AXIS_COORD = ("axis", list(AXIS_NAMES), {"long_name": "flow / percolation direction "
                                                       "(x = axis 0, y = axis 1)"})

@@ -43,6 +43,7 @@ from roughflow.contact import ContactResult, prepare, solve, workspace
 from roughflow.contact.law import ContactLaw
 from roughflow.defaults import (
     A_C_STAR_PAPER,
+    AXIS_NAMES,
     CONTACT_TOL_MAX,
     MODELS,
     THRESHOLD_CONTACT_TOL,
@@ -307,11 +308,11 @@ def _pending(samples: list[_Sample], axes, tol: float, load_range, strategy: str
             if hi.area - lo.area > tol:
                 todo.append(_Work(hi.area - lo.area, ax, lo, hi))
         elif lo is None and hi is not None and hi.load <= load_range[0]:
-            unbracketed[ax] = (lo, hi, f"the fluid does not span along axis {ax} even at "
+            unbracketed[ax] = (lo, hi, f"the fluid does not span along {AXIS_NAMES[ax]} even at "
                                f"the lowest allowed pressure {load_range[0]:g} "
                                f"(a_c = {hi.area:.4g})")
         elif hi is None and lo is not None and lo.load >= load_range[1]:
-            unbracketed[ax] = (lo, hi, f"the fluid still spans along axis {ax} at the "
+            unbracketed[ax] = (lo, hi, f"the fluid still spans along {AXIS_NAMES[ax]} at the "
                                f"highest allowed pressure {load_range[1]:g} "
                                f"(a_c = {lo.area:.4g})")
         else:
@@ -486,7 +487,7 @@ def _refine(evaluate: Callable[[float, ContactResult | None, bool], _Sample], ax
             widest = max(todo, key=lambda t: (t.width, t.axis))
             tried = ", ".join(f"({q.load:.4g}, {q.area:.4g})" for q in samples[-4:])
             raise ConvergenceError(
-                f"threshold along axis {widest.axis} not resolved to tol={tol:g} within "
+                f"threshold along {AXIS_NAMES[widest.axis]} not resolved to tol={tol:g} within "
                 f"max_solves={options.max_solves} contact solves; last (load, a_c): {tried}"
                 f"{_unresolved_hint(widest.lo, widest.hi, law)}; residual = bracket width",
                 residual=float(widest.width), iterations=len(samples))
@@ -495,8 +496,9 @@ def _refine(evaluate: Callable[[float, ContactResult | None, bool], _Sample], ax
         if lo is not None and hi is not None and hi.load - lo.load <= 1e-12 * hi.load:
             raise ConvergenceError(
                 f"{AREA_JUMP} from {lo.area:.6g} to {hi.area:.6g} between pressures "
-                f"{lo.load:.12g} and {hi.load:.12g}: threshold along axis {work.axis} cannot "
-                f"be resolved to tol={tol:g}{_unresolved_hint(lo, hi, law)}",
+                f"{lo.load:.12g} and {hi.load:.12g}: threshold along "
+                f"{AXIS_NAMES[work.axis]} cannot be resolved to tol={tol:g}"
+                f"{_unresolved_hint(lo, hi, law)}",
                 residual=float(work.width),
                 iterations=len(samples))
         target, want = _propose(work, tol=tol, misses=misses[work.axis],
@@ -527,7 +529,7 @@ def _bearing_exact(heights: np.ndarray, axes, tol: float, on_unbracketed: str):
         msg = ""
         if not ok:
             msg = (f"{b.tied} cells share the critical height {b.height!r}: the threshold "
-                   f"along axis {ax} is only known to lie in [{b.a_lo:.6g}, {b.a_hi:.6g}], "
+                   f"along {AXIS_NAMES[ax]} is only known to lie in [{b.a_lo:.6g}, {b.a_hi:.6g}], "
                    f"wider than tol={tol:g}")
             if on_unbracketed == "raise":
                 raise ThresholdNotBracketed(msg)
