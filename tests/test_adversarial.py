@@ -417,12 +417,15 @@ def test_messages_name_the_file_and_do_not_misdirect(files, capsys, monkeypatch)
 
 
 def test_gap_whose_conductivity_overflows_is_refused():
-    # a gap of 1e200 gave sigma = 0 with exit 0 (u^3 overflowed to inf, then inf / inf)
+    # a gap of 1e200 gave sigma = 0 with exit 0 (u^3 overflowed to inf)
     from roughflow.errors import InputError
     from roughflow.flow import conductance
 
-    with pytest.raises(InputError, match="gap out of range"):
+    with pytest.raises(InputError, match="u\\^3 / \\(12 eta\\) overflows"):
         conductance(np.full((8, 8), 1e200), lx=1.0, ly=1.0)
+    # so did a legal gap with a tiny viscosity (every cell inf, then closed as unresolved)
+    with pytest.raises(InputError, match="eta 1e-310"):
+        conductance(np.ones((8, 8)), lx=1.0, ly=1.0, eta=1e-310)
 
 
 def test_api_arguments_of_the_wrong_type_are_named():

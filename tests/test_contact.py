@@ -170,6 +170,27 @@ def test_bearing_model(rough):
     assert solve(rough, model="bearing", area_fraction=0.0).area_fraction == 0.0
 
 
+def test_bearing_mask_and_gap_agree_at_the_threshold():
+    # with the plane on the highest non-contact height, that point had gap 0 without
+    # contact; at the search's last spanning state it is the critical point, and the flow
+    # saw no path (sigma 0) where the fluid percolated
+    from roughflow import flow, percolation, search
+
+    s = generate(SurfaceSpec.from_sweep(gamma=1.0, hurst=0.8, l_over_lambda_r=2,
+                                        eps_f=1 / 8, points_per_lambda_s=4, seed=0))
+    for axis in (0, 1):
+        th = search.threshold(s, axis=axis, model="bearing")
+        r = solve(s, model="bearing", area_fraction=th.a_lo)
+        assert np.array_equal(r.gap == 0, r.contact)
+        assert percolation.percolates(~r.contact, axis=axis)
+        assert flow.solve(r.gap, axis).sigma > 0
+    # full contact: the plane at the lowest point, below every partial-contact plane
+    h = s.heights
+    almost = solve(s, model="bearing", area_fraction=1 - 1 / h.size).separation
+    full = solve(s, model="bearing", area_fraction=1.0).separation
+    assert full == pytest.approx(h.min() - h.mean()) and full <= almost
+
+
 def test_result_is_frozen(rough):
     r = solve(rough, model="bearing", area_fraction=0.5)
     assert isinstance(r, ContactResult)

@@ -245,7 +245,7 @@ def test_non_percolating_gives_zero_without_solve(monkeypatch):
 
 
 @pytest.mark.parametrize("method", ["direct", "rs"])
-def test_gaps_below_float64_resolution_are_closed(monkeypatch, method):
+def test_gaps_below_float64_resolution_are_closed(monkeypatch, caplog, method):
     """A cell with u^3 at most FLOW_CLOSED_BELOW (1e-16) of the largest carries no flow (left
     open, such cells from warm-started contact solves stalled RS-CG on a 1024^2 ladder
     state). A row of them across x blocks flow along x, without a solve; along y that row
@@ -257,12 +257,17 @@ def test_gaps_below_float64_resolution_are_closed(monkeypatch, method):
     tiny = u0 * (0.5 * FLOW_CLOSED_BELOW) ** (1 / 3)  # u^3 half the floor
     g = np.full((20, 16), u0)
     g[9, :] = tiny
-    along_y = solve(g, 1, method=method)
+    with caplog.at_level("WARNING", logger="roughflow.flow.core"):
+        along_y = solve(g, 1, method=method)
+    assert not caplog.records  # the row blocks nothing along y: no word
     assert along_y.sigma == pytest.approx(sigma_of(u0) * 19 / 20, rel=1e-12)
     assert np.isnan(along_y.pressure[9]).all()
     monkeypatch.setattr(flow_core, "solve_prepared", lambda *a, **k: pytest.fail("solver called"))
-    blocked = solve(g, 0, method=method)
+    with caplog.at_level("WARNING", logger="roughflow.flow.core"):
+        blocked = solve(g, 0, method=method)
     assert blocked.sigma == 0.0 and not blocked.percolating
+    # the open cells do span: the zero is the floor's, and a warning says so
+    assert "flow along x" in caplog.text and "Unresolved gaps" in caplog.text
     # a row 10x above the floor stays open and sets sigma_x: the series (harmonic) mean of
     # the 20 rows, exact for this discretisation (test_stripes_...); 1e-6 allows the
     # round-off of a system whose conductivities span 15 decades

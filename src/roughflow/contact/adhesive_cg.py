@@ -44,7 +44,7 @@ from roughflow.defaults import SOLVER_LOG_EVERY
 
 from . import _kernels as _k
 from ._gfmd_common import Z_MASS, load_scale, residual, spectral_factors
-from ._linalg import dot
+from ._linalg import dot, height_scale
 from ._result import SolverOutput
 from .adhesion import Adhesion
 
@@ -101,7 +101,7 @@ def adhesive_cg(
     inv_mass_n = np.empty_like(base_mass)
     h0 = float(heights.mean())
     h = np.ascontiguousarray(heights - h0, dtype=np.float64).ravel()
-    hscale = math.sqrt(dot(h, h) / size) or 1.0
+    hscale = height_scale(h)
     scale = load_scale(kmin, hscale, load, True)
     amp, rho = adhesion.max_tension, adhesion.range
     w = math.pi / rho

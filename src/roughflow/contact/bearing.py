@@ -11,8 +11,13 @@ def solve_bearing(heights: np.ndarray, area_fraction: float) -> ContactResult:
     """Flat plane at height d such that the top ``area_fraction`` of the grid points are in
     contact (h >= d); gap = max(d - h, 0). a_c = round(a N)/N exactly.
 
-    d is placed on the highest non-contact height (ties broken by order), so the
-    contact points are exactly the k highest and their gap is 0.
+    d lies halfway between the lowest contact height and the highest non-contact one, so
+    the contact points are exactly the k highest (ties broken by order), their gap is 0 and
+    every other point's gap is positive (unless it ties with a contact height): the mask
+    and the gap agree on what is open, for percolation and flow alike. On d at the highest
+    non-contact height, that point had gap 0 without contact, and at a threshold state it
+    is the critical point: the fluid percolated while the flow saw no path. At full contact
+    d is the lowest height; without contact the plane touches the highest point.
     """
     h = heights
     n = h.size
@@ -20,7 +25,7 @@ def solve_bearing(heights: np.ndarray, area_fraction: float) -> ContactResult:
     flat = h.ravel()
     contact = np.zeros(n, dtype=bool)
     if k >= n:
-        d = float(flat.max())
+        d = float(flat.min())
         contact[:] = True
     elif k == 0:
         d = float(flat.max())
@@ -28,7 +33,7 @@ def solve_bearing(heights: np.ndarray, area_fraction: float) -> ContactResult:
         order = np.argpartition(-flat, k)
         top = order[:k]
         contact[top] = True
-        d = float(flat[order[k]])  # highest non-contact height
+        d = 0.5 * (float(flat[order[k]]) + float(flat[top].min()))
     gap = np.maximum(d - h, 0.0)
     mask = contact.reshape(h.shape)
     gap[mask] = 0.0

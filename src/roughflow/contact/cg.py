@@ -16,6 +16,7 @@ from roughflow import fft
 from roughflow.defaults import SOLVER_LOG_EVERY
 
 from ._linalg import dot as _dot
+from ._linalg import height_scale
 from ._result import SolverOutput
 from .elastic import compliance
 
@@ -50,7 +51,7 @@ def polonsky_keer(
     plan = fft.plan(shape, threads)
     kern = compliance(shape, lx, ly)
     h = heights - heights.mean()
-    hscale = float(np.sqrt(np.mean(h * h))) or 1.0
+    hscale = height_scale(h.ravel())
     n = h.size
     if p0 is None:
         p = np.full(shape, load)

@@ -101,7 +101,7 @@ from roughflow.surface import spectral_rms_gradient
 
 from . import _kernels as _k
 from ._gfmd_common import Z_MASS, load_scale, residual, spectral_factors
-from ._linalg import dot
+from ._linalg import height_scale
 from ._result import SolverOutput
 from .adhesion import Adhesion
 from .adhesive_cg import adhesive_cg
@@ -245,15 +245,11 @@ def hard_wall_setup(heights: np.ndarray, lx: float, ly: float,
         plan = gpu.plan(shape)
         k = _device_factors(shape, lx, ly)[3]
         h = xp.asarray(heights).ravel() - h0
-        hscale = math.sqrt(float(xp.dot(h, h)) / size) or 1.0
     else:
         xp = np
         plan = fft.plan(shape, threads)
         h = np.ascontiguousarray(heights - h0).ravel()
-        hscale = math.sqrt(dot(h, h) / size) or 1.0
-    if not math.isfinite(hscale):  # the squares of the heights overflow
-        raise InputError(f"surface heights out of range: rms height {hscale:.3g} (heights in "
-                         "units of L)")
+    hscale = height_scale(h, xp)
     plan.real_in.reshape(-1)[:] = h
     ht = plan.execute_forward()
     wts = xp.asarray(fft.rfft_weights(shape[1]))
@@ -632,7 +628,7 @@ def _fire(
     comp_n = spectral_factors(shape, lx, ly)[2]
     h0 = float(heights.mean())
     h = np.ascontiguousarray(heights - h0).ravel()
-    hscale = math.sqrt(dot(h, h) / size) or 1.0
+    hscale = height_scale(h)
     # masses m(q) = sqrt((z k_min)^2 + k^2), kept as 1/m
     inv_mass = np.hypot(Z_MASS * kmin, neg_k)
     soft = adhesion is not None and adhesion.repulsion == "harmonic"
