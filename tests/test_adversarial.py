@@ -456,3 +456,30 @@ def test_aggregate_study_config_must_be_an_object(files, capsys):
                      "-o", out], capsys)
     assert code == 2 and "must be a JSON object" in err, err
     assert not out.exists()
+
+
+def test_gamma_figure_refuses_two_sizes_of_one_point(files, capsys):
+    # it drew the per-seed maximum over the sizes: a point matching neither
+    d = files["dir"]
+    for size in ("4", "8"):
+        argv = ["scene", "threshold", "--model", "bearing", "--l-over-lambda-r", size,
+                "--eps-f", "0.25", "--points-per-lambda-s", "2", "--seeds", "0", "1",
+                "-o", d / f"size_{size}.nc"]
+        assert main([str(a) for a in argv]) in (0, None)
+    study = d / "two_sizes.nc"
+    assert main(["aggregate", str(d / "size_4.nc"), str(d / "size_8.nc"),
+                 "-o", str(study)]) in (0, None)
+    code, err = run(["figure", "threshold_vs_gamma", study, "-o", d / "g.png"], capsys)
+    assert code == 2 and "one system size per point" in err, err
+    assert not (d / "g.png").exists()
+
+
+def test_figure_of_another_study_is_refused(files, capsys):
+    # a flow_anisotropic dataset drawn as flow_isotropic averaged x and y without a word
+    d = files["dir"]
+    study = d / "named_study.nc"
+    assert main(["aggregate", str(files["job"]), str(files["job2"]), "--study",
+                 "threshold_vs_size", "-o", str(study)]) in (0, None)
+    code, err = run(["figure", "threshold_vs_gamma", study, "-o", d / "other.png"], capsys)
+    assert code == 2 and "is the 'threshold_vs_size' study" in err, err
+    assert not (d / "other.png").exists()

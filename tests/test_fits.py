@@ -101,6 +101,8 @@ def test_underdetermined_fits_are_refused_not_reported():
 def test_fit_dataset_flags_underdetermined_fits():
     # the gamma = 1 group has two sizes: its fixed-nu fit is determined, its free-nu fit not
     res = fit_dataset(_threshold_dataset(), n_boot=0)
+    # self-describing: the string coordinates too (they had no long_name)
+    assert all(res[c].attrs.get("long_name") for c in ("group", "fit", "nu_mode"))
     iso = res.sel(group="isotropic", fit="joint")
     assert np.isfinite(float(iso["a_star"].sel(nu_mode="fixed")))
     assert int(iso["underdetermined"].sel(nu_mode="fixed")) == 0
@@ -167,3 +169,17 @@ def test_fit_dataset_refuses_mixed_settings_and_empty_data(tmp_path):
     assert np.isnan(res["a_star"].sel(group="isotropic")).all()
     assert np.isfinite(float(res["a_star"].sel(group="anisotropic", fit="joint",
                                                nu_mode="fixed")))
+
+
+def test_no_bootstrap_error_from_points_with_one_seed(caplog):
+    # one seed per size: every resample that keeps both sizes is the same fit, and the
+    # error came out 0.000 ("a_c* = 0.316 +- 0.000" in the figure)
+    eps = {"both": np.array([0.25, 0.5])}
+    a = {"both": np.array([[0.40, np.nan], [np.nan, 0.43]])}  # seed 0 at one size, 1 at other
+    with caplog.at_level("WARNING", logger="roughflow.fits"):
+        f = bootstrap_fit(eps, a, n_boot=50)
+    assert np.isfinite(f.a_star) and np.isnan(f.a_star_err) and f.n_boot == 0
+    assert "only one seed" in caplog.text
+    # two seeds at every size: an error again
+    a2 = {"both": np.array([[0.40, 0.42], [0.41, 0.44]])}
+    assert np.isfinite(bootstrap_fit(eps, a2, n_boot=50).a_star_err)

@@ -393,3 +393,47 @@ def test_cli_import_refusal_exits_2(tmp_path, capsys):
     assert exc.value.code == 2
     assert "6 missing points" in capsys.readouterr().err
     assert not (tmp_path / "s.nc").exists()
+
+
+def _fake_reader(monkeypatch, tmp_path, channels):
+    """read_scan on a stand-in for a SurfaceTopography reader with these channels."""
+    from types import SimpleNamespace
+
+    import roughflow.scan as scan
+
+    reader = SimpleNamespace(channels=channels, default_channel=channels[0],
+                             name=lambda: "fake")
+    monkeypatch.setattr(scan, "_open", lambda path: reader)
+    (tmp_path / "scan.fake").write_bytes(b"x")
+    return tmp_path / "scan.fake"
+
+
+def _fake_channel(index, name, unit):
+    from types import SimpleNamespace
+
+    return SimpleNamespace(index=index, name=name, unit=unit, dim=2, is_uniform=True,
+                           physical_sizes=(np.float64(500.0), np.float64(500.0)),
+                           nb_grid_pts=(8, 8))
+
+
+def test_a_channel_that_is_not_a_height_map_is_named(monkeypatch, tmp_path):
+    # an AFM phase channel (units ('nm', None)) failed with 'cannot parse "1 ('nm', None)"'
+    chans = [_fake_channel(0, "Height", "nm"), _fake_channel(2, "Phase", ("nm", None))]
+    path = _fake_reader(monkeypatch, tmp_path, chans)
+    with pytest.raises(InputError, match="channel 'Phase' is not a height map.*0: Height"):
+        read_scan(path, channel="Phase")
+    # the file's size is quoted as plain numbers, not numpy's repr
+    with pytest.raises(InputError, match=r"already gives its size \(500.0, 500.0\) nm"):
+        read_scan(path, size="1um")
+
+
+def test_channel_label_says_which_of_two_same_named_channels():
+    from types import SimpleNamespace
+
+    from roughflow.scan import _channel_label
+
+    trace, retrace, phase = (_fake_channel(0, "Height", "nm"), _fake_channel(1, "Height", "nm"),
+                             _fake_channel(2, "Phase", ("nm", None)))
+    reader = SimpleNamespace(channels=[trace, retrace, phase])
+    assert _channel_label(reader, retrace) == "Height (channel 1)"
+    assert _channel_label(reader, phase) == "Phase"

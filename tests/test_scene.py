@@ -59,6 +59,9 @@ _LADDER = {**_SMALL, "area_fraction": [0.2, 0.4]}
     ("threshold_vs_hurst", {**_SMALL, "eps_f": [0.25, 0.125]}, "one eps_f"),
     ("flow_isotropic", {**_LADDER, "hurst": [0.3, 0.8]}, "one hurst for model elastic"),
     ("flow_anisotropic", {**_LADDER, "gamma": [2, 4]}, "one gamma for model elastic"),
+    # the gamma and H figures took a per-seed maximum over several sizes
+    ("threshold_vs_gamma", {**_SMALL, "l_over_lambda_r": [4, 8]}, "one system size"),
+    ("threshold_vs_hurst", {**_SMALL, "l_over_lambda_r": [4, 8]}, "one system size"),
     # keys nothing reads
     ("threshold_vs_gamma", {**_SMALL, "series": [{"area_fraction": [0.2]}]}, "area_fraction"),
     ("threshold_vs_gamma", {**_SMALL, "fit": {"bootstrap": 5}}, "threshold_vs_size only"),

@@ -5,6 +5,12 @@ files are written back as int32 with the explicit fill value -1; float coordinat
 no ``_FillValue``. Attributes that differ between jobs are dropped; the job ids are kept
 in the ``jobs`` attribute.
 
+Leak files (``roughflow leak``, the measured study) are concatenated along ``scan`` with an
+outer join on ``pressure`` (scans may have different pressure grids: NaN where a scan has
+no value), so per-scan variables keep their dimensions (``scan``[, ``axis``]); what
+describes each scan (boundary treatment, the question, the scan's provenance) is kept as
+variables over ``scan`` (:func:`roughflow.datasets.leak.with_scan_variables`).
+
 Only job files of one scene (threshold or ladder) combine, and no two of them may fill the
 same cells: jobs with the same parameters (model, gamma, hurst, eps_t, eps_f) must have
 distinct seeds and equal settings (:func:`check_disjoint`). Anything else would silently
@@ -22,6 +28,7 @@ import numpy as np
 import xarray as xr
 
 from roughflow.datasets.kinds import check_kind
+from roughflow.datasets.leak import with_scan_variables
 from roughflow.datasets.sweep import INT_FILL, PARAM_DIMS
 from roughflow.defaults import JOB_KINDS
 from roughflow.errors import InputError
@@ -98,6 +105,18 @@ def _check_scans_disjoint(datasets: Sequence[xr.Dataset], sources: Sequence[str]
             seen[name] = src
 
 
+def _concat_scans(datasets: Sequence[xr.Dataset]) -> xr.Dataset:
+    """Leak datasets concatenated along ``scan`` (sorted by name), outer-joined on the
+    other coordinates (``pressure``): a variable gains no dimension it does not have."""
+    order = sorted(range(len(datasets)), key=lambda i: str(datasets[i]["scan"].values[0]))
+    out = xr.concat([datasets[i] for i in order], dim="scan", data_vars="minimal",
+                    coords="minimal", compat="override", join="outer",
+                    combine_attrs="drop_conflicts")
+    if not out.indexes["pressure"].is_monotonic_increasing:
+        out = out.sortby("pressure")
+    return out
+
+
 def combine(datasets: Sequence[xr.Dataset], sources: Sequence[str] | None = None) -> xr.Dataset:
     """Outer combination by coordinates (``xr.combine_by_coords``, falling back to merge) of
     job datasets of one scene that fill disjoint cells (:func:`check_disjoint`)."""
@@ -112,6 +131,7 @@ def combine(datasets: Sequence[xr.Dataset], sources: Sequence[str] | None = None
                          f"({kinds[i]}): a study dataset holds one scene")
     if kinds[0] == "leak_job":
         _check_scans_disjoint(datasets, sources)
+        datasets = with_scan_variables(datasets)
     else:
         check_disjoint(datasets, sources)
     # integer variables arrive as int (no missing values) or, decoded with a fill value,
@@ -120,6 +140,8 @@ def combine(datasets: Sequence[xr.Dataset], sources: Sequence[str] | None = None
                 if v.dtype.kind in "iu" or np.dtype(v.encoding.get("dtype", "f8")).kind in "iu"}
     if len(datasets) == 1:
         out = datasets[0].copy()
+    elif kinds[0] == "leak_job":
+        out = _concat_scans(datasets)
     else:
         try:
             # compat and coords as today's defaults, which xarray is about to change

@@ -135,7 +135,8 @@ def bootstrap_fit(eps: dict[str, np.ndarray], a_seed: dict[str, np.ndarray], *,
     """Fit the seed means, with bootstrap errors over seeds.
 
     ``eps[d]`` has shape (n_points,), ``a_seed[d]`` shape (n_seeds, n_points) with NaN
-    where a seed was not run; the same seed index is resampled in every direction.
+    where a seed was not run; the same seed index is resampled in every direction. The
+    errors stay NaN where a point has fewer than two seeds (nothing to resample there).
     """
     rng = np.random.default_rng(rng)
     names = list(eps)
@@ -151,6 +152,15 @@ def bootstrap_fit(eps: dict[str, np.ndarray], a_seed: dict[str, np.ndarray], *,
 
     best = fit_scaling(means(np.arange(ns)), nu=nu)
     if n_boot <= 0 or ns < 2:
+        return best
+    # a point with one seed has no scatter to resample: every resample that keeps it is the
+    # same fit, and the error came out 0 (or ignored that point's spread); none is given
+    single = sorted({f"{d} at eps {e:g}" for d in names
+                     for e, n in zip(eps[d], np.isfinite(np.asarray(a_seed[d], float)).sum(0),
+                                     strict=True) if n < 2})
+    if single:
+        log.warning("no bootstrap error: %s %s only one seed", ", ".join(single),
+                    "has" if len(single) == 1 else "have")
         return best
     samples = []
     for _ in range(n_boot):
@@ -302,8 +312,15 @@ def fit_dataset(ds: xr.Dataset, *, n_boot: int = FIT_BOOTSTRAP, nu: float = NU_P
                            "sizes): values NaN",
     }
     data = {k: (dims, v, {"units": DIMENSIONLESS, "long_name": meta[k]}) for k, v in out.items()}
-    res = xr.Dataset(data, coords={"group": list(groups), "fit": list(fits),
-                                   "nu_mode": list(modes)},
+    coords = {
+        "group": ("group", list(groups), {"long_name": "surfaces fitted: anisotropic (gamma "
+                                          "!= 1) or isotropic (gamma = 1)"}),
+        "fit": ("fit", list(fits), {"long_name": "direction fitted: easy or hard alone, or "
+                                    "joint (a shared a_c*)"}),
+        "nu_mode": ("nu_mode", list(modes), {"long_name": "exponent nu: fixed (given) or "
+                                             "free (fitted)"}),
+    }
+    res = xr.Dataset(data, coords=coords,
                      attrs={"title": "finite-size-scaling fits a_c*(eps) = a_c* + A eps^(1/nu)",
                             "nu_fixed": nu, "n_boot": n_boot,
                             "eps": "eps_t = max(sqrt(gamma), 1/sqrt(gamma)) lambda_r / L"})

@@ -316,6 +316,13 @@ def _channel(reader, channel):
     raise InputError(f"channel {channel!r} not in the scan (channels: {names})")
 
 
+def _channel_label(reader, ch) -> str:
+    """The channel's name, with its index where another channel has the same name (the
+    record must say which was read: an AFM file may hold trace and retrace "Height")."""
+    twins = [c for c in reader.channels if c.name == ch.name]
+    return str(ch.name) if len(twins) == 1 else f"{ch.name} (channel {ch.index})"
+
+
 def read_scan(path: str | os.PathLike, *, size=None, unit: str | None = None,
               height_unit: str | None = None, detrend_mode: str = SCAN_DETREND,
               fill: str = SCAN_FILL, crop: str | None = None, channel=None,
@@ -355,6 +362,16 @@ def read_scan(path: str | os.PathLike, *, size=None, unit: str | None = None,
                          f"{'uniform' if ch.is_uniform else 'non-uniform'} topography; "
                          "roughflow needs a 2D map on a uniform grid")
     file_unit, file_size = ch.unit, ch.physical_sizes
+    if isinstance(file_unit, tuple):  # (lateral, data) units: the data are not heights
+        lateral_unit, data_unit = (file_unit + (None, None))[:2]
+        if data_unit is None or data_unit != lateral_unit:
+            names = ", ".join(f"{c.index}: {c.name}" for c in reader.channels)
+            raise InputError(f"{str(path)!r} channel {ch.name!r} is not a height map (its "
+                             f"data unit is {data_unit!r}, its lateral unit "
+                             f"{lateral_unit!r}); pick a height channel (channels: {names})")
+        file_unit = lateral_unit
+    if file_size is not None:  # plain floats in messages, not numpy's repr
+        file_size = tuple(float(v) for v in file_size)
     if file_unit is not None and (unit is not None or height_unit is not None):
         raise InputError(f"{str(path)!r} already gives its unit ({file_unit}): drop "
                          f"unit={unit!r} / height_unit={height_unit!r}")
@@ -425,7 +442,7 @@ def read_scan(path: str | os.PathLike, *, size=None, unit: str | None = None,
     lx, ly = lx_m / length, ly_m / length
     h /= length
     info = ScanInfo(
-        source=str(path), reader=str(reader.name()), channel=str(ch.name),
+        source=str(path), reader=str(reader.name()), channel=_channel_label(reader, ch),
         length_scale=length, rms_gradient=rms_gradient(h, lx, ly, periodic=periodic),
         detrend=detrend_mode, fill=fill, filled=n_missing,
         crop="none" if window is None else _window_text(window, (nx0, ny0)),

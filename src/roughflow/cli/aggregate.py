@@ -15,7 +15,8 @@ def register(sub: argparse._SubParsersAction) -> None:
         description="Combine per-job datasets by their coordinates (outer join): missing jobs "
                     "stay NaN, integer variables keep the fill value -1.")
     add_input(p, "inputs", kinds=JOB_KINDS, what="job file", nargs="+",
-              metavar="JOB.nc", help="per-job datasets (roughflow scene threshold or ladder)")
+              metavar="JOB.nc", help="per-job datasets (roughflow scene threshold or ladder, "
+                                     "or roughflow leak)")
     p.add_argument("--study", default=None, help="study name stored as an attribute")
     p.add_argument("--study-config", default=None, metavar="JSON",
                    help="the study's config block (JSON), stored as the study_config "

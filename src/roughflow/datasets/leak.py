@@ -6,14 +6,23 @@ or y). The dimensionless results keep their reference units (L, E*, eta) with th
 values as attributes (:data:`~roughflow.datasets.units.REFERENCE_ATTRS`) and, since those
 differ between scans, also as variables over ``scan``; the physical answers (conductance,
 leak rate, sealing pressure) are stored in SI units as well.
+
+A study dataset (``roughflow aggregate``) concatenates leak files along ``scan`` and keeps
+what describes each scan as variables over ``scan`` (:func:`with_scan_variables`): always
+those of :data:`SCAN_ATTRS` (boundary treatment, question, scan provenance), and any other
+attribute whose value differs between the scans; the attributes survive only where all
+scans agree.
 """
 
 from __future__ import annotations
 
+from collections.abc import Sequence
 from typing import TYPE_CHECKING
 
 import numpy as np
 import xarray as xr
+
+from roughflow.provenance import PROVENANCE_ATTRS
 
 from .results import (
     AXIS_COORD,
@@ -29,6 +38,7 @@ from .units import (
     LENGTH_UNITS,
     METRES,
     PASCAL,
+    PASCAL_SECONDS,
     PRESSURE_UNITS,
     RESIDUAL_UNITS,
     SIGMA_UNITS,
@@ -153,3 +163,90 @@ BOUNDARY_TEXT = {
     "window": "scan solved as periodic; an interior window analysed with walls across the flow",
     "periodic": "the surface taken as periodic",
 }
+
+
+#: Attributes of a leak file that describe its scan, kept in a study dataset as variables
+#: over ``scan`` (they may differ between scans): attribute -> (variable, units, long_name).
+#: ``ref_length_m`` and ``ref_pressure_Pa`` are there as ``length_scale`` and ``modulus``.
+SCAN_ATTRS: dict[str, tuple[str, str, str]] = {
+    "boundary": ("boundary", DIMENSIONLESS,
+                 "non-periodic treatment of the scan (roughflow leak --boundary)"),
+    "boundary_description": ("boundary_description", DIMENSIONLESS,
+                             "what the boundary treatment of the scan does"),
+    "ref_viscosity_Pa_s": ("viscosity", PASCAL_SECONDS,
+                           "fluid viscosity eta (viscosities are in units of eta)"),
+    "fluid_pressure_Pa": ("fluid_pressure", PASCAL, "fluid pressure drop across the seal"),
+    "seal_width_m": ("seal_width", METRES, "seal width w (along the flow)"),
+    "seal_length_m": ("seal_length", METRES, "seal length l (across the flow)"),
+    "surface_file": ("surface_file", DIMENSIONLESS, "surface file the leak curve was run on"),
+    "scan_source": ("scan_source", DIMENSIONLESS, "file the scan was imported from"),
+    "scan_reader": ("scan_reader", DIMENSIONLESS, "reader of the scan file"),
+    "scan_channel": ("scan_channel", DIMENSIONLESS, "channel of the scan file"),
+    "scan_length_scale": ("scan_length_scale", METRES,
+                          "reference length L of the imported scan"),
+    "scan_rms_gradient": ("scan_rms_gradient", DIMENSIONLESS,
+                          "rms gradient of the imported scan"),
+    "scan_detrend": ("scan_detrend", DIMENSIONLESS, "detrending of the imported scan"),
+    "scan_fill": ("scan_fill", DIMENSIONLESS, "filling of missing points of the scan"),
+    "scan_filled": ("scan_filled", DIMENSIONLESS, "number of missing points filled"),
+    "scan_crop": ("scan_crop", DIMENSIONLESS, "grid window kept of the scan"),
+    "scan_periodic": ("scan_periodic", DIMENSIONLESS, "1 if the scan is taken as periodic"),
+}
+
+#: Attributes that are not about a scan (provenance, the study) or that are variables of a
+#: leak file already; they never become variables over ``scan``.
+NOT_PER_SCAN = frozenset({*PROVENANCE_ATTRS, "title", "job_id", "jobs", "n_jobs", "study",
+                          "ref_length_m", "ref_pressure_Pa"})
+
+#: Units of other attributes (by name, else by the suffix of the name; else "1").
+_OTHER_UNITS = {"lx": LENGTH_UNITS, "ly": LENGTH_UNITS, "window_lx": LENGTH_UNITS,
+                "window_ly": LENGTH_UNITS}
+_SUFFIX_UNITS = (("_Pa_s", PASCAL_SECONDS), ("_Pa", PASCAL), ("_m", METRES))
+
+
+def _units(attr: str) -> str:
+    if attr in _OTHER_UNITS:
+        return _OTHER_UNITS[attr]
+    return next((u for suffix, u in _SUFFIX_UNITS if attr.endswith(suffix)), DIMENSIONLESS)
+
+
+def _attr_variable(value, n: int, kind: str, attrs: dict) -> xr.Variable:
+    """The attribute ``value`` repeated over ``n`` scans as text, integer or float
+    (``kind`` "U", "i", "f"); missing (None): "", :data:`INT_FILL` (the integer fill
+    value) or NaN."""
+    if kind == "U":
+        return xr.Variable("scan", np.array(["" if value is None else str(value)] * n), attrs)
+    if kind == "i":
+        return _int("scan", [INT_FILL if value is None else int(value)] * n, attrs)
+    return xr.Variable("scan", np.full(n, np.nan if value is None else float(value)), attrs)
+
+
+def with_scan_variables(datasets: Sequence[xr.Dataset]) -> list[xr.Dataset]:
+    """Copies of leak datasets to be concatenated along ``scan``, each with the variables
+    over ``scan`` of its per-scan attributes (module docstring): those of
+    :data:`SCAN_ATTRS` that any dataset has, and every other attribute (not
+    :data:`NOT_PER_SCAN`) whose value differs between the datasets or that some lack. A
+    dataset that holds such a variable already (a study dataset) keeps it."""
+    names = list(dict.fromkeys(a for ds in datasets for a in ds.attrs))
+    per_scan = {}
+    for attr in names:
+        values = [ds.attrs.get(attr) for ds in datasets]
+        if attr in SCAN_ATTRS:
+            var, units, long_name = SCAN_ATTRS[attr]
+        elif attr in NOT_PER_SCAN or all(
+                v is not None and np.array_equal(v, values[0]) for v in values):
+            continue
+        else:
+            var, units, long_name = attr, _units(attr), f"the leak file's {attr!r} attribute"
+        given = [v for v in values if v is not None]
+        kinds = {np.asarray(v).dtype.kind for v in given}
+        kind = "U" if kinds - set("biuf") else "f" if "f" in kinds else "i"
+        per_scan[attr] = (var, kind, {"units": units, "long_name": long_name})
+    out = []
+    for ds in datasets:
+        ds = ds.copy()
+        for attr, (var, kind, attrs) in per_scan.items():
+            if var not in ds.variables:
+                ds[var] = _attr_variable(ds.attrs.get(attr), ds.sizes["scan"], kind, attrs)
+        out.append(ds)
+    return out

@@ -48,6 +48,10 @@ def make_figure(study: str, dataset, output: str | os.PathLike, fit=None, *,
         source = f"study dataset {str(dataset)!r}"
         dataset = load(dataset)
     check_kind(dataset, STUDY_KINDS[study], source)
+    made_for = dataset.attrs.get("study")  # roughflow aggregate --study
+    if made_for is not None and str(made_for) != study:
+        raise InputError(f"{source} is the {made_for!r} study (its 'study' attribute): draw it "
+                         f"as {made_for}, not {study}")
     fit_ds = load(fit, "fit") if isinstance(fit, (str, os.PathLike)) else fit
     fig = mod.draw(dataset, fit=fit_ds)
     for path in (out, pdf):

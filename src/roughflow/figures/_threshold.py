@@ -6,8 +6,28 @@ import numpy as np
 import xarray as xr
 
 from roughflow.defaults import A_C_STAR_PAPER
+from roughflow.errors import InputError
 
 from ._style import AXIS_COLOR, seed_stats
+
+
+def one_size(a: xr.DataArray) -> xr.DataArray:
+    """``a`` without its ``eps_t`` dimension, where each point (gamma, H, ...) has data at
+    one system size (each gamma may have its own); InputError where one has several: the
+    maximum over eps_t taken before mixed the sizes seed by seed (measured: a point matching
+    neither size)."""
+    if "eps_t" not in a.dims:
+        return a
+    has = a.notnull().any([d for d in ("seed", "axis") if d in a.dims])
+    several = has.sum("eps_t") > 1
+    if bool(several.any()):
+        where = several.where(several, drop=True)
+        point = ", ".join(f"{d}={where[d].values[0]}" for d in where.dims)
+        sizes = has.sel({d: where[d].values[0] for d in where.dims})
+        found = ", ".join(f"{e:g}" for e in a["eps_t"].values[sizes.values])
+        raise InputError(f"this figure shows one system size per point; {point} has data at "
+                         f"eps_t {found} (threshold_vs_size draws the sizes)")
+    return a.max("eps_t", skipna=True)
 
 
 def plot_vs_gamma(ax, a: xr.DataArray, *, marker: str = "o", filled: bool = True,

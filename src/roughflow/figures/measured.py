@@ -14,36 +14,62 @@ CAPTION = (
     "(dashed) for the seal width, length, fluid pressure drop and viscosity of the config. "
     "Q = 0 once the fluid no longer percolates; the shaded bands mark each scan's sealing "
     "pressure along x and y (between the highest pressure found leaking and the lowest found "
-    "sealed). Right: the relative contact area a_c. The non-periodic treatment of the scans "
-    "is in the dataset's 'boundary' attribute."
+    "sealed). Right: the relative contact area a_c. Each scan's non-periodic treatment is "
+    "in the dataset's per-scan 'boundary' variable (the title names it where all scans "
+    "share it, the legend per scan where they differ); the seal, fluid and scan provenance "
+    "are per-scan variables too. Scans with different pressure grids are each drawn at "
+    "their own pressures."
 )
 MARKERS = "osD^v<>p*h"
+
+
+def _per_scan(d: xr.Dataset, name: str) -> float:
+    """The value of a per-scan variable of one scan (and axis); a dataset written before
+    per-scan variables kept their dimensions has them over ``pressure`` too, with NaN
+    where the scan has no pressure: the value is the one finite there."""
+    v = np.asarray(d[name].values, dtype=float).ravel()
+    v = v[np.isfinite(v)]
+    return float(v[0]) if v.size else np.nan
+
+
+def boundaries(ds: xr.Dataset) -> list[str]:
+    """The boundary treatment of each scan: the per-scan ``boundary`` variable of a study
+    dataset, else the ``boundary`` attribute (a leak file), else "unknown"."""
+    n = ds.sizes["scan"]
+    if "boundary" in ds.variables:
+        return [str(b) or "unknown" for b in np.asarray(ds["boundary"].values).ravel()]
+    return [str(ds.attrs.get("boundary", "unknown"))] * n
 
 
 def draw(ds: xr.Dataset, fit=None) -> plt.Figure:
     fig, (ax_q, ax_a) = plt.subplots(1, 2, figsize=(10, 4.2), constrained_layout=True)
     p = ds["pressure"].values
+    bounds = boundaries(ds)
+    shared = len(set(bounds)) == 1
     for k, scan in enumerate(ds["scan"].values):
         d = ds.sel(scan=scan)
         marker = MARKERS[k % len(MARKERS)]
+        label = str(scan) if shared else f"{scan} ({bounds[k]})"
         for axis, style in (("x", "-"), ("y", "--")):
             q = d["leak_rate"].sel(axis=axis).values
             leaking = q > 0
             ax_q.plot(p[leaking], q[leaking], style, marker=marker, ms=4,
-                      color=AXIS_COLOR[axis], label=f"{scan}, flow along {axis}")
-            lo = float(d["sealing_pressure_lo"].sel(axis=axis))
-            hi = float(d["sealing_pressure"].sel(axis=axis))
+                      color=AXIS_COLOR[axis], label=f"{label}, flow along {axis}")
+            lo = _per_scan(d.sel(axis=axis), "sealing_pressure_lo")
+            hi = _per_scan(d.sel(axis=axis), "sealing_pressure")
             if np.isfinite(lo) and np.isfinite(hi):
                 ax_q.axvspan(lo, hi, color=AXIS_COLOR[axis], alpha=0.25)
                 ax_q.axvline(hi, color=AXIS_COLOR[axis], ls=style, lw=0.8,
                              label=f"{scan}: sealed along {axis} from {hi:.3g} Pa")
-        ax_a.plot(p, d["area_fraction"].values, "-", marker=marker, ms=4, color="k",
-                  label=str(scan))
+        a = d["area_fraction"].values
+        known = np.isfinite(a)
+        ax_a.plot(p[known], a[known], "-", marker=marker, ms=4, color="k", label=label)
     ax_q.set_xscale("log")
     ax_q.set_yscale("log")
     ax_q.set_xlabel("nominal contact pressure [Pa]")
     ax_q.set_ylabel("leak rate Q [m$^3$/s]")
-    ax_q.set_title(f"boundary: {ds.attrs.get('boundary', 'per scan')}", fontsize=9)
+    ax_q.set_title(f"boundary: {bounds[0]}" if shared else
+                   "boundary: differs between scans (in the legend)", fontsize=9)
     ax_q.grid(alpha=0.3, which="both")
     ax_q.legend(fontsize=7)
     ax_a.set_xscale("log")

@@ -6,10 +6,10 @@ import numpy as np
 import xarray as xr
 from matplotlib.figure import Figure
 
-from roughflow.datasets.sweep import threshold_values
+from roughflow.datasets.sweep import single_setting, threshold_values
 from roughflow.defaults import A_C_STAR_PAPER
 
-from ._threshold import format_gamma_axis, plot_vs_gamma
+from ._threshold import format_gamma_axis, one_size, plot_vs_gamma
 
 CAPTION = (
     "a_c* is perimeter-corrected (first-order grid bias of the contact area removed, "
@@ -29,15 +29,10 @@ def draw(ds: xr.Dataset, fit=None) -> Figure:
     models = [m for m in ("elastic", "bearing", "adhesive") if m in ds["model"].values]
     fig = Figure(figsize=(5.2 * len(models), 4.2), layout="constrained")
     axes = fig.subplots(1, len(models), squeeze=False)
-    a_all = threshold_values(ds)
-    for dim in ("hurst",):
-        if dim in a_all.dims and a_all.sizes[dim] == 1:
-            a_all = a_all.isel({dim: 0})
+    # one H, and one size per gamma (each gamma may have its own, e.g. the paper's)
+    a_all = one_size(single_setting(threshold_values(ds), ("hurst",)))
     for ax, model, tag in zip(axes[0], models, "abc", strict=False):
         am = a_all.sel(model=model)
-        # one eps_t per gamma (the paper's default size): collapse eps_t by taking data
-        if "eps_t" in am.dims:
-            am = am.max("eps_t", skipna=True) if am.sizes["eps_t"] > 1 else am.isel(eps_t=0)
         eps_list = [e for e in sorted(am["eps_f"].values, reverse=True)
                     if np.isfinite(am.sel(eps_f=e).values).any()]
         for i, e in enumerate(eps_list):

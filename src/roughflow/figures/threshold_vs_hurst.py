@@ -8,7 +8,7 @@ from matplotlib.figure import Figure
 
 from roughflow.datasets.sweep import single_setting, threshold_values
 
-from ._threshold import format_gamma_axis, plot_vs_gamma
+from ._threshold import format_gamma_axis, one_size, plot_vs_gamma
 
 CAPTION = (
     "a_c* is perimeter-corrected (first-order grid bias of the contact area removed, "
@@ -25,8 +25,7 @@ def draw(ds: xr.Dataset, fit=None) -> Figure:
     fig = Figure(figsize=(5.5, 4.2), layout="constrained")
     ax = fig.subplots()
     a = single_setting(threshold_values(ds), ("model", "eps_f"))  # one curve per hurst
-    if "eps_t" in a.dims:
-        a = a.max("eps_t", skipna=True) if a.sizes["eps_t"] > 1 else a.isel(eps_t=0)
+    a = one_size(a)
     hursts = sorted(a["hurst"].values)
     for h in hursts:
         sub = a.sel(hurst=h)

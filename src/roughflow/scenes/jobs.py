@@ -504,6 +504,20 @@ def _check_one_series(name: str, jobs) -> None:
     job ran: several values of a parameter it draws one series of."""
     from roughflow.datasets.sweep import PARAM_DIMS
 
+    if name in ("threshold_vs_gamma", "threshold_vs_hurst"):  # one size per point
+        sizes: dict[tuple, set] = {}
+        for job in jobs:
+            key = dict(zip(PARAM_DIMS, job.key, strict=True))
+            eps_t = key.pop("eps_t")
+            sizes.setdefault(tuple(key.items()), set()).add(eps_t)
+        for point, found in sizes.items():
+            if len(found) > 1:
+                shown = ", ".join(f"{d}={v:g}" if isinstance(v, float) else f"{d}={v}"
+                                  for d, v in point)
+                raise InputError(f"config studies.{name}: its figure shows one system size "
+                                 f"per point, {shown} has {len(found)} (eps_t "
+                                 f"{', '.join(f'{e:g}' for e in sorted(found))}); "
+                                 "threshold_vs_size draws the sizes")
     dims = _ONE_VALUE.get(name)
     if dims is None:
         return

@@ -1,0 +1,158 @@
+"""The measured study dataset (roughflow aggregate of leak files) and its figure: scans
+with different pressure grids keep their per-scan variables over ``scan`` only, and what
+describes each scan (boundary treatment, scan provenance) survives as variables over
+``scan`` when it differs between scans (roughflow.aggregate, roughflow.datasets.leak,
+roughflow.figures.measured). Leak files are built with the library's dataset builder from
+small synthetic leak curves: no solve runs."""
+
+from __future__ import annotations
+
+import matplotlib
+
+matplotlib.use("Agg")
+
+import matplotlib.pyplot as plt  # noqa: E402
+import numpy as np  # noqa: E402
+import pytest  # noqa: E402
+import xarray as xr  # noqa: E402
+
+from roughflow.aggregate import aggregate  # noqa: E402
+from roughflow.cli import main  # noqa: E402
+from roughflow.datasets import leak_dataset  # noqa: E402
+from roughflow.figures import measured  # noqa: E402
+from roughflow.io import write_dataset  # noqa: E402
+from roughflow.leak import LeakCurve  # noqa: E402
+from roughflow.search import Threshold  # noqa: E402
+from roughflow.surface import ScanInfo, Surface  # noqa: E402
+from roughflow.units import Scales  # noqa: E402
+
+MODULUS = 200e9
+
+
+def _threshold(axis: int, p_lo: float, p_hi: float) -> Threshold:
+    return Threshold(axis=axis, a_c_star=0.4, a_lo=0.39, a_hi=0.41, p_lo=p_lo, p_hi=p_hi,
+                     n_solves=3, model="elastic", tol=0.02)
+
+
+def leak_file(name: str, pressures_pa, *, boundary: str = "window",
+              length: float = 1e-5, source: str = "scan.opd") -> xr.Dataset:
+    """A one-scan leak dataset of a 16 x 16 'scan' at ``pressures_pa`` (Pa), built by
+    :func:`roughflow.datasets.leak_dataset` from a synthetic curve."""
+    p = np.asarray(pressures_pa, dtype=float) / MODULUS
+    n = p.size
+    area = np.linspace(0.1, 0.3, n)
+    sigma = np.outer(np.linspace(2e-3, 1e-3, n), [1.0, 0.8])
+    curve = LeakCurve(
+        pressure=p, area_fraction=area, mean_gap=np.full(n, 0.05),
+        percolating=np.ones((n, 2), bool), sigma=sigma, iterations=np.full(n, 7),
+        residual=np.full(n, 1e-7), flow_imbalance=np.zeros((n, 2)),
+        flow_sigma_error=np.zeros((n, 2)),
+        thresholds={0: _threshold(0, 2 * p[-1], 3 * p[-1]),
+                    1: _threshold(1, 2 * p[-1], 4 * p[-1])},
+        boundary=boundary, rms_gradient=0.9, window_lx=0.75, window_ly=0.75,
+        window_shape=(12, 12), settings={"contact_tol": 1e-6})
+    info = ScanInfo(source=source, reader="test", channel="h", length_scale=length,
+                    rms_gradient=0.9, detrend="plane", fill="none", filled=0,
+                    crop="0:16,0:16")
+    surface = Surface(heights=np.zeros((16, 16)), lx=1.0, ly=1.0, scan=info)
+    return leak_dataset(curve, surface,
+                        scales=Scales(length=length, modulus=MODULUS, viscosity=1e-3),
+                        fluid_pressure=1e6, seal_width=2e-3, seal_length=60e-3, name=name)
+
+
+def _write(tmp_path, datasets: dict[str, xr.Dataset]) -> list:
+    paths = []
+    for stem, ds in datasets.items():
+        paths.append(tmp_path / f"{stem}.nc")
+        write_dataset(ds, paths[-1])
+    return paths
+
+
+def _study(tmp_path, datasets: dict[str, xr.Dataset]) -> xr.Dataset:
+    out = tmp_path / "study.nc"
+    aggregate(_write(tmp_path, datasets), out, study="measured")
+    return xr.load_dataset(out)
+
+
+PER_SCAN = {"a_c_star": ("scan", "axis"), "sealing_pressure": ("scan", "axis"),
+            "sealing_pressure_lo": ("scan", "axis"), "bracketed": ("scan", "axis"),
+            "length_scale": ("scan",), "modulus": ("scan",), "rms_gradient": ("scan",)}
+
+
+def _all_have_units(ds: xr.Dataset) -> None:
+    for name in ds.data_vars:
+        assert ds[name].attrs.get("units") and ds[name].attrs.get("long_name"), name
+
+
+def test_different_pressure_grids_keep_per_scan_dims(tmp_path):
+    a = leak_file("a", [1e9, 2e9])
+    c = leak_file("c", [1e7, 1e8])
+    ds = _study(tmp_path, {"A": a, "C": c})
+    assert ds.sizes == {"scan": 2, "pressure": 4, "axis": 2}
+    np.testing.assert_allclose(ds["pressure"], [1e7, 1e8, 1e9, 2e9])
+    for name, dims in PER_SCAN.items():
+        assert ds[name].dims == dims, name
+        assert np.isfinite(ds[name].values).all(), name
+    np.testing.assert_allclose(ds["sealing_pressure"].sel(scan="a"),
+                               a["sealing_pressure"].isel(scan=0), rtol=1e-12)
+    np.testing.assert_allclose(ds["sealing_pressure"].sel(scan="c"),
+                               c["sealing_pressure"].isel(scan=0), rtol=1e-12)
+    # per-pressure variables: each scan's own pressures, NaN at the other scan's
+    q = ds["leak_rate"].sel(scan="a", axis="x").values
+    assert np.isnan(q[:2]).all() and np.isfinite(q[2:]).all()
+    assert ds["percolating"].sel(scan="c", axis="y").values.tolist()[:2] == [1, 1]
+    _all_have_units(ds)
+
+
+def test_figure_draws_scans_with_different_pressure_grids(tmp_path):
+    ds = _study(tmp_path, {"A": leak_file("a", [1e9, 2e9]), "C": leak_file("c", [1e7, 1e8])})
+    fig = measured.draw(ds)
+    try:
+        ax_q, ax_a = fig.axes[:2]
+        # each scan drawn at its own pressures only
+        drawn = {ln.get_label(): ln.get_xdata() for ln in ax_a.get_lines()}
+        np.testing.assert_allclose(drawn["a"], [1e9, 2e9])
+        np.testing.assert_allclose(drawn["c"], [1e7, 1e8])
+        assert ax_q.get_title() == "boundary: window"
+    finally:
+        plt.close(fig)
+    png = tmp_path / "f.png"
+    assert main(["figure", "measured", str(tmp_path / "study.nc"), "-o", str(png)]) == 0
+    assert png.stat().st_size > 0
+
+
+def test_boundary_and_scan_provenance_are_kept_per_scan(tmp_path):
+    w = leak_file("w", [1e8, 1e9], boundary="window", length=1e-5, source="one.opd")
+    m = leak_file("m", [1e8, 1e9], boundary="mirror", length=2e-5, source="two.opd")
+    ds = _study(tmp_path, {"W": w, "M": m})
+    assert "boundary" not in ds.attrs and "ref_length_m" not in ds.attrs
+    for name, want in {"boundary": {"w": "window", "m": "mirror"},
+                       "scan_source": {"w": "one.opd", "m": "two.opd"},
+                       "scan_length_scale": {"w": 1e-5, "m": 2e-5},
+                       "length_scale": {"w": 1e-5, "m": 2e-5}}.items():
+        assert ds[name].dims == ("scan",), name
+        assert {s: ds[name].sel(scan=s).item() for s in want} == pytest.approx(want), name
+    assert ds["boundary_description"].sel(scan="m").item().startswith("non-periodic scan "
+                                                                      "mirror-tiled")
+    # values all scans share are variables too (and the attribute stays)
+    assert ds["scan_detrend"].dims == ("scan",) and ds.attrs["scan_detrend"] == "plane"
+    assert ds["scan_filled"].values.tolist() == [0, 0]
+    _all_have_units(ds)
+    fig = measured.draw(ds)
+    try:
+        ax_q, ax_a = fig.axes[:2]
+        assert "per scan" not in ax_q.get_title() and "differs" in ax_q.get_title()
+        labels = {ln.get_label() for ln in ax_a.get_lines()}
+        assert labels == {"w (window)", "m (mirror)"}
+    finally:
+        plt.close(fig)
+    assert "'boundary' attribute" not in measured.CAPTION
+    assert "'boundary' variable" in measured.CAPTION
+
+
+def test_a_single_scan_study_has_the_same_per_scan_variables(tmp_path):
+    ds = _study(tmp_path, {"A": leak_file("a", [1e8, 1e9], boundary="mirror")})
+    assert ds["boundary"].dims == ("scan",) and ds["boundary"].values.tolist() == ["mirror"]
+    assert ds["viscosity"].attrs["units"] == "Pa*s"
+    np.testing.assert_allclose(ds["viscosity"], [1e-3])
+    _all_have_units(ds)
