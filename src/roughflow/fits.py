@@ -154,7 +154,7 @@ def bootstrap_fit(eps: dict[str, np.ndarray], a_seed: dict[str, np.ndarray], *,
     if n_boot <= 0 or ns < 2:
         return best
     # a point with one seed has no scatter to resample: every resample that keeps it is the
-    # same fit, and the error came out 0 (or ignored that point's spread); none is given
+    # same fit, and the error would be 0 (or blind to that point's spread); none is given
     single = sorted({f"{d} at eps {e:g}" for d in names
                      for e, n in zip(eps[d], np.isfinite(np.asarray(a_seed[d], float)).sum(0),
                                      strict=True) if n < 2})

@@ -19,7 +19,7 @@ def height_scale(h, xp=np) -> float:
     """rms of the centred heights ``h`` (flat; ``xp``: its array module), the unit of every
     contact residual; 1 for a flat surface. Heights whose squares overflow or underflow
     raise :class:`InputError`: the residual would be infinite, or absolute and below any
-    tolerance at the start (a solve at 1e-200 stopped at once with a_c = 1, measured)."""
+    tolerance at the start (heights x 1e-200 would stop a solve at once with a_c = 1)."""
     mean_square = (dot(h, h) if xp is np else float(xp.dot(h, h))) / h.size
     if not math.isfinite(mean_square):
         raise InputError("surface heights out of range: their squares overflow (heights in "

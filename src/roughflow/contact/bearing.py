@@ -14,10 +14,11 @@ def solve_bearing(heights: np.ndarray, area_fraction: float) -> ContactResult:
     d lies halfway between the lowest contact height and the highest non-contact one, so
     the contact points are exactly the k highest (ties broken by order), their gap is 0 and
     every other point's gap is positive (unless it ties with a contact height): the mask
-    and the gap agree on what is open, for percolation and flow alike. On d at the highest
-    non-contact height, that point had gap 0 without contact, and at a threshold state it
-    is the critical point: the fluid percolated while the flow saw no path. At full contact
-    d is the lowest height; without contact the plane touches the highest point.
+    and the gap agree on what is open, for percolation and flow alike (a plane on the
+    highest non-contact height would give that point gap 0 without contact; at a threshold
+    state it is the critical point, and the flow would see no path where the fluid
+    percolates). At full contact d is the lowest height; without contact the plane touches
+    the highest point.
     """
     h = heights
     n = h.size

@@ -13,9 +13,9 @@ from ._style import AXIS_COLOR, seed_stats
 
 def one_size(a: xr.DataArray) -> xr.DataArray:
     """``a`` without its ``eps_t`` dimension, where each point (gamma, H, ...) has data at
-    one system size (each gamma may have its own); InputError where one has several: the
-    maximum over eps_t taken before mixed the sizes seed by seed (measured: a point matching
-    neither size)."""
+    one system size (each gamma may have its own); InputError where one has several: a
+    maximum over eps_t would mix the sizes seed by seed, giving a point that matches
+    neither size."""
     if "eps_t" not in a.dims:
         return a
     has = a.notnull().any([d for d in ("seed", "axis") if d in a.dims])
