@@ -119,3 +119,25 @@ def test_results_folder_root_is_refused(tmp_path):
     out = res.stdout + res.stderr
     assert res.returncode != 0
     assert "invalid config" in out and "'results'" in out and "'/'" in out, out[-2000:]
+
+
+def test_duplicate_keys_named_with_their_lines(tmp_path):
+    from roughflow.errors import InputError
+    from roughflow.scenes.config_file import check_config_file, duplicate_keys
+
+    text = ("studies:\n"
+            "  a: {seeds: [0]}\n"
+            "  b:\n"
+            "    series:\n"
+            "      - {gamma: [1], gamma: [2]}\n"
+            "  a: {seeds: [1]}\n")
+    found = sorted(duplicate_keys(yaml.compose(text, Loader=yaml.SafeLoader)))
+    assert found == [("studies.a", 2, 6), ("studies.b.series[0].gamma", 5, 5)]
+    # an anchor used twice, or a merge key overridden, is not a duplicate
+    ok = "base: &b {x: 1}\none: *b\ntwo: {<<: *b, x: 2}\n"
+    assert duplicate_keys(yaml.compose(ok, Loader=yaml.SafeLoader)) == []
+    (tmp_path / "c.yaml").write_text(text)
+    # the first repetition in the file is named
+    with pytest.raises(InputError, match=r"'studies.b.series\[0\].gamma' is given twice "
+                                         r"\(lines 5 and 5\)"):
+        check_config_file(tmp_path / "c.yaml")

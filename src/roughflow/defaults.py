@@ -153,6 +153,14 @@ FLOW_STUDIES = ("flow_isotropic", "flow_anisotropic")
 MEASURED_STUDY = "measured"
 #: Every study, one figure each (channels: paper Fig. 1).
 STUDIES = ("channels", *THRESHOLD_STUDIES, *FLOW_STUDIES, MEASURED_STUDY)
+#: Parameters of which a study's figure (and fit) shows one value, per model for the flow
+#: studies; and the studies whose figure shows one system size per point. The figures refuse
+#: other datasets, and the planner (roughflow.scenes.jobs) other configs, before any job.
+STUDY_ONE_VALUE = {"threshold_vs_gamma": ("hurst",),
+                   "threshold_vs_size": ("model", "hurst", "eps_f"),
+                   "threshold_vs_hurst": ("model", "eps_f"),
+                   **{s: ("gamma", "hurst", "eps_t", "eps_f") for s in FLOW_STUDIES}}
+STUDY_ONE_SIZE = ("threshold_vs_gamma", "threshold_vs_hurst")
 #: L / lambda_r of a flow study when none is given (the paper's Fig. 5).
 FLOW_L_OVER_LAMBDA_R = 16.0
 #: The channels scene (paper Fig. 1): H = 0.8, gamma = 4, lambda_r = 0.25, lambda_s = 0.025

@@ -33,53 +33,6 @@ def _validate_config(config):
     validate(config, "../schemas/config.schema.yaml", set_default=False)
 
 
-def _duplicate_keys(node, path=()):
-    """(dotted key, first line, second line) of each key given twice in one mapping of a
-    composed YAML node tree (PyYAML, and so Snakemake, silently keep the last one)."""
-    import yaml
-
-    stack, seen_nodes, found = [(node, path)], set(), []
-    while stack:
-        node, path = stack.pop()
-        if id(node) in seen_nodes:  # an alias: the anchored node was checked already
-            continue
-        seen_nodes.add(id(node))
-        if isinstance(node, yaml.MappingNode):
-            lines = {}
-            for key, value in node.value:
-                if key.tag == "tag:yaml.org,2002:merge" or not isinstance(key, yaml.ScalarNode):
-                    stack.append((value, path))
-                    continue
-                name = ".".join((*path, key.value))
-                if (key.tag, key.value) in lines:
-                    found.append((name, lines[key.tag, key.value], key.start_mark.line + 1))
-                lines.setdefault((key.tag, key.value), key.start_mark.line + 1)
-                stack.append((value, (*path, key.value)))
-        elif isinstance(node, yaml.SequenceNode):
-            stack += [(item, (*path[:-1], f"{path[-1]}[{i}]") if path else (f"[{i}]",))
-                      for i, item in enumerate(node.value)]
-    return found
-
-
-def _refuse_duplicate_keys(configfiles):
-    """Refuse a config file (YAML or JSON) that gives a key twice in one mapping."""
-    import yaml
-
-    for configfile in configfiles:
-        try:
-            root = yaml.compose(Path(configfile).read_text(encoding="utf-8"),
-                                Loader=yaml.SafeLoader)
-        except (OSError, yaml.YAMLError):
-            continue  # Snakemake has loaded it already and reports what it cannot read
-        found = _duplicate_keys(root) if root is not None else []
-        if found:
-            name, first, second = min(found, key=lambda f: f[2])
-            raise WorkflowError(
-                f"invalid config: config file {str(configfile)!r}: key {name!r} is given twice "
-                f"(lines {first} and {second}); Snakemake would silently keep only the last one"
-            )
-
-
 def _results_dir(results):
     """The results folder without trailing or doubled slashes ('out/' -> 'out'): Snakemake
     warns about '//' in the paths built from it and matches such paths inconsistently."""
@@ -90,11 +43,17 @@ def _results_dir(results):
     return norm
 
 
-_refuse_duplicate_keys(workflow.configfiles)
+from roughflow.errors import InputError  # noqa: E402
+from roughflow.scenes.config_file import check_config_file  # noqa: E402
+
+try:
+    for _configfile in workflow.configfiles:
+        check_config_file(_configfile)
+except InputError as exc:
+    raise WorkflowError(f"invalid config: {exc}") from None
 _validate_config(config)
 
 from roughflow.defaults import FLOW_STUDIES, MEASURED_STUDY, THRESHOLD_STUDIES  # noqa: E402
-from roughflow.errors import InputError  # noqa: E402
 from roughflow.resources import total_bytes  # noqa: E402
 from roughflow.scenes import expand_study, study_defaults  # noqa: E402
 from roughflow.scenes.jobs import (  # noqa: E402

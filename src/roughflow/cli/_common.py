@@ -170,7 +170,7 @@ def add_surface_options(group, flags=tuple(SURFACE_OPTIONS), **overrides) -> Non
     ``overrides`` maps a destination name to another default."""
     for flag in flags:
         kind, default, text = SURFACE_OPTIONS[flag]
-        dest = flag[2:].replace("-", "_")
+        dest = dest_of(flag)
         default = overrides.get(dest, default)
         extra = {"choices": defaults.ROLLOFF_FORMS} if flag == "--rolloff" else {"type": kind}
         shown = "" if default is None else f" ({default:g})" if kind is float else f" ({default})"

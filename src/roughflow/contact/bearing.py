@@ -31,10 +31,10 @@ def solve_bearing(heights: np.ndarray, area_fraction: float) -> ContactResult:
     elif k == 0:
         d = float(flat.max())
     else:
-        order = np.argpartition(-flat, k)
-        top = order[:k]
-        contact[top] = True
-        d = 0.5 * (float(flat[order[k]]) + float(flat[top].min()))
+        # positions k - 1 and k sorted: the lowest contact and highest non-contact heights
+        order = np.argpartition(-flat, (k - 1, k))
+        contact[order[:k]] = True
+        d = 0.5 * (float(flat[order[k - 1]]) + float(flat[order[k]]))
     gap = np.maximum(d - h, 0.0)
     mask = contact.reshape(h.shape)
     gap[mask] = 0.0

@@ -13,6 +13,7 @@ from typing import TYPE_CHECKING
 import numpy as np
 import xarray as xr
 
+from roughflow.defaults import STUDY_ONE_VALUE
 from roughflow.errors import InputError
 
 from .results import AXIS_COORD
@@ -110,7 +111,8 @@ def threshold_values(ds: xr.Dataset) -> xr.DataArray:
     return xr.where(fine & corrected.notnull(), corrected, raw).transpose(*raw.dims)
 
 
-def single_setting(a: xr.DataArray, dims: tuple[str, ...] = ("model", "hurst", "eps_f"),
+def single_setting(a: xr.DataArray,
+                   dims: tuple[str, ...] = STUDY_ONE_VALUE["threshold_vs_size"],
                    ) -> xr.DataArray:
     """``a`` at its single value of each of ``dims`` (those it has); InputError naming the
     values where it has several: a finite-size fit or a figure of one series mixes no

@@ -5,13 +5,14 @@ from __future__ import annotations
 import numpy as np
 import xarray as xr
 
+from roughflow.defaults import STUDY_ONE_VALUE
 from roughflow.errors import InputError
 
 
 def ladder(ds: xr.Dataset, model: str) -> xr.Dataset:
     """The model's ladder with length-1 parameter dimensions dropped."""
     sub = ds.sel(model=model)
-    for dim in ("gamma", "hurst", "eps_t", "eps_f"):
+    for dim in STUDY_ONE_VALUE["flow_isotropic"]:  # the same for both flow studies
         if dim in sub.dims:
             # models may run at different sizes (series): keep the entries with data
             other = [d for d in sub["area_fraction"].dims if d != dim]

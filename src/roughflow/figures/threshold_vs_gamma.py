@@ -7,7 +7,7 @@ import xarray as xr
 from matplotlib.figure import Figure
 
 from roughflow.datasets.sweep import single_setting, threshold_values
-from roughflow.defaults import A_C_STAR_PAPER
+from roughflow.defaults import A_C_STAR_PAPER, STUDY_ONE_VALUE
 
 from ._threshold import format_gamma_axis, one_size, plot_vs_gamma
 
@@ -30,7 +30,7 @@ def draw(ds: xr.Dataset, fit=None) -> Figure:
     fig = Figure(figsize=(5.2 * len(models), 4.2), layout="constrained")
     axes = fig.subplots(1, len(models), squeeze=False)
     # one H, and one size per gamma (each gamma may have its own, e.g. the paper's)
-    a_all = one_size(single_setting(threshold_values(ds), ("hurst",)))
+    a_all = one_size(single_setting(threshold_values(ds), STUDY_ONE_VALUE["threshold_vs_gamma"]))
     for ax, model, tag in zip(axes[0], models, "abc", strict=False):
         am = a_all.sel(model=model)
         eps_list = [e for e in sorted(am["eps_f"].values, reverse=True)

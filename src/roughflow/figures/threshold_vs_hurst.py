@@ -7,6 +7,7 @@ import xarray as xr
 from matplotlib.figure import Figure
 
 from roughflow.datasets.sweep import single_setting, threshold_values
+from roughflow.defaults import STUDY_ONE_VALUE
 
 from ._threshold import format_gamma_axis, one_size, plot_vs_gamma
 
@@ -24,7 +25,7 @@ CAPTION = (
 def draw(ds: xr.Dataset, fit=None) -> Figure:
     fig = Figure(figsize=(5.5, 4.2), layout="constrained")
     ax = fig.subplots()
-    a = single_setting(threshold_values(ds), ("model", "eps_f"))  # one curve per hurst
+    a = single_setting(threshold_values(ds), STUDY_ONE_VALUE["threshold_vs_hurst"])
     a = one_size(a)
     hursts = sorted(a["hurst"].values)
     for h in hursts:

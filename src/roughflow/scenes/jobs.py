@@ -20,7 +20,13 @@ from pathlib import Path
 
 from roughflow import defaults
 from roughflow.datasets.sweep import param_key, rnd
-from roughflow.defaults import FLOW_STUDIES, STUDIES, THRESHOLD_STUDIES
+from roughflow.defaults import (
+    FLOW_STUDIES,
+    STUDIES,
+    STUDY_ONE_SIZE,
+    STUDY_ONE_VALUE,
+    THRESHOLD_STUDIES,
+)
 from roughflow.errors import InputError, require_positive, require_seeds
 from roughflow.surface import SurfaceSpec, paper_l_over_lambda_r
 
@@ -492,19 +498,12 @@ def _add_job(jobs: dict[str, Job], job: Job) -> None:
                          "to the 6 significant digits of job ids): make them differ more")
 
 
-#: Parameters a study's figure (and fit) shows one value of, per model for the flow
-#: studies (datasets.sweep.single_setting, figures._flow.ladder).
-_ONE_VALUE = {"threshold_vs_size": ("model", "hurst", "eps_f"),
-              "threshold_vs_hurst": ("model", "eps_f"),
-              **{s: ("gamma", "hurst", "eps_t", "eps_f") for s in FLOW_STUDIES}}
-
-
 def _check_one_series(name: str, jobs) -> None:
     """Refuse at planning a study whose figure or fit would refuse its dataset after every
     job ran: several values of a parameter it draws one series of."""
     from roughflow.datasets.sweep import PARAM_DIMS
 
-    if name in ("threshold_vs_gamma", "threshold_vs_hurst"):  # one size per point
+    if name in STUDY_ONE_SIZE:  # one system size per point
         sizes: dict[tuple, set] = {}
         for job in jobs:
             key = dict(zip(PARAM_DIMS, job.key, strict=True))
@@ -518,7 +517,7 @@ def _check_one_series(name: str, jobs) -> None:
                                  f"per point, {shown} has {len(found)} (eps_t "
                                  f"{', '.join(f'{e:g}' for e in sorted(found))}); "
                                  "threshold_vs_size draws the sizes")
-    dims = _ONE_VALUE.get(name)
+    dims = STUDY_ONE_VALUE.get(name)
     if dims is None:
         return
     per_model = name in FLOW_STUDIES
