@@ -182,19 +182,24 @@ def test_rs_vcycle_is_pyamgs_cycle_bit_for_bit(heights, smoothers):
 @pytest.mark.parametrize("explicit_zeros", [False, True])
 def test_rs_hierarchy_is_pyamgs(heights, explicit_zeros):
     """Our set-up calls pyamg's kernels with its own bookkeeping between them, and its own
-    kernel for the interpolation weights, so it must give pyamg's hierarchy: the same C/F
-    splitting on every level (the splitting depends on the order of each row's strong
-    connections, which is why ours sorts them), the same interpolation pattern and, up to
-    summation order, the same weights and coarse matrices. The coarse levels' Galerkin
+    kernel for the interpolation weights, so each of its coarsening steps must be pyamg's
+    step on the same matrix: the same C/F splitting (it depends on the order of each row's
+    strong connections, which is why ours sorts them), the same interpolation pattern and,
+    up to summation order, the same weights and coarse matrix. The coarse levels' Galerkin
     matrices have positive off-diagonal entries, where a strong F neighbour can have no
     entry of the opposite sign in the row's C points: pyamg leaves it out rather than
     lumping it into the diagonal (6 weights of level 1 with explicit zeros, off by up to
-    0.8 when lumped).
+    0.8 when lumped). With explicit zeros in A (which pyamg drops from the strength pattern)
+    as well.
+    Each step is compared on our own matrix of that level: the coarse matrices of the two
+    set-ups differ by round-off (summation order), and a strength test |a_ij| >= theta
+    max |a_ik| that ties on a coarse level can split it differently from there on (seen
+    with FFTW_PATIENT plans, whose heights differ from MEASURE's at round-off).
     Classical weights divide by a_ii plus the weak connections, which nearly cancel on rows
     whose conductances span decades: reordered sums differ there by up to 7e-11 relative
-    (measured at 512^2); 1e-9 leaves room and still catches any change of the formula or of
-    the pattern (those move weights by O(1)). The cycles then agree to round-off. With
-    explicit zeros in A (which pyamg drops from the strength pattern) as well."""
+    (measured at 512^2); rtol 1e-9 leaves room and still catches any change of the formula
+    or of the pattern (those move weights by O(1)). atol 1e-13: a weight that cancels to
+    zero is round-off (-6.0e-18 against -4.5e-18 seen), and weights are at most 1."""
     from roughflow.flow import amg
 
     matrix = _reynolds_matrix(heights, 0.3)
@@ -202,21 +207,22 @@ def test_rs_hierarchy_is_pyamgs(heights, explicit_zeros):
         rows = np.repeat(np.arange(matrix.shape[0]), np.diff(matrix.indptr))
         off = np.flatnonzero(rows != matrix.indices)
         matrix.data[off[::7]] = 0.0
-    ref = amg.pyamg_rs_hierarchy(matrix)
     ours = amg.rs_hierarchy(matrix)
-    assert len(ours.levels) == len(ref.levels) >= 3
-    for mine, theirs in zip(ours.levels[:-1], ref.levels[:-1], strict=True):
-        assert np.array_equal(mine.splitting.astype(bool), theirs.splitting)
+    assert len(ours.levels) >= 3
+    for k, (mine, coarse) in enumerate(zip(ours.levels[:-1], ours.levels[1:], strict=True)):
+        theirs, their_coarse = amg.pyamg_rs_hierarchy(mine.A).levels[:2]
+        assert np.array_equal(mine.splitting.astype(bool), theirs.splitting), k
         p, q = mine.P.tocsr(), theirs.P.tocsr()
         p.sort_indices()
         q.sort_indices()
-        assert np.array_equal(p.indptr, q.indptr) and np.array_equal(p.indices, q.indices)
-        np.testing.assert_allclose(p.data, q.data, rtol=1e-9)
-    assert ours.levels[-1].A.shape == ref.levels[-1].A.shape
-    b = np.random.default_rng(2).standard_normal(matrix.shape[0])
-    x, y = amg.rs_vcycle(ours).matvec(b), amg.rs_vcycle(ref).matvec(b)
-    # measured 1e-15: weights equal to 7e-11 cannot move a cycle by more than about that
-    assert np.linalg.norm(x - y) <= 1e-9 * np.linalg.norm(y)
+        assert np.array_equal(p.indptr, q.indptr) and np.array_equal(p.indices, q.indices), k
+        np.testing.assert_allclose(p.data, q.data, rtol=1e-9, atol=1e-13, err_msg=str(k))
+        a, b = coarse.A.tocsr(), their_coarse.A.tocsr()
+        a.sort_indices()
+        b.sort_indices()
+        # entries are conductances summed over faces: compare against the row's scale
+        scale = abs(a).max()
+        assert a.shape == b.shape and abs(a - b).max() <= 1e-9 * scale, k
 
 
 def test_rs_vcycle_refuses_smoothers_it_does_not_implement():
