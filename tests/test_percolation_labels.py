@@ -239,13 +239,20 @@ def test_mask_must_be_2d_boolean(bad):
         contact_percolates(bad, 0)
 
 
-@pytest.mark.parametrize("axis", [2, -1, "x", None, True])
+@pytest.mark.parametrize("axis", [2, -1, "X", "z", None, True, 1.0, np.float64(0)])
 def test_axis_must_be_0_or_1(axis):
     m = np.ones((3, 3), dtype=bool)
     with pytest.raises(InputError, match="axis"):
         percolates(m, axis)
     with pytest.raises(InputError, match="axis"):
         spanning_cells(m, axis)
+
+
+def test_axis_by_name_is_the_axis_by_number():
+    m = np.zeros((6, 5), dtype=bool)
+    m[:, 2] = True  # open along x only
+    assert percolates(m, "x") == percolates(m, np.int64(0)) is True
+    assert percolates(m, "y") == percolates(m, 1) is False
 
 
 def test_connectivity_must_be_4_or_8():

@@ -16,6 +16,7 @@ from roughflow.scan import (
     fill_missing,
     largest_defined_window,
     level_lines,
+    parse_crop,
     read_scan,
 )
 from roughflow.surface import from_scan
@@ -204,6 +205,14 @@ def test_crop_defined_refuses_a_window_too_small(tmp_path):
         read_scan(tmp_path / "scan.npy", size="1um", unit="um", crop="defined")
 
 
+def test_crop_beyond_the_grid_is_refused_not_clamped():
+    assert parse_crop("0:12,2:", (12, 10)) == (slice(0, 12), slice(2, None))
+    with pytest.raises(InputError, match="index 13 along x.*12 points"):
+        parse_crop("0:13,:", (12, 10))
+    with pytest.raises(InputError, match="index 40 along y.*10 points"):
+        parse_crop(":,30:40", (12, 10))
+
+
 def test_harmonic_fill_is_exact_for_a_plane_inside():
     plane = np.add.outer(0.3 * np.arange(20.0), -0.7 * np.arange(15.0))
     miss = np.zeros(plane.shape, bool)
@@ -282,7 +291,7 @@ def test_line_levelling_fits_the_defined_points_only():
 
 def test_line_levelling_refuses_bad_input_naming_it():
     h = heights()
-    for axis in (2, -1, True, "x"):
+    for axis in (2, -1, True, 1.0, "X"):
         with pytest.raises(InputError, match="axis"):
             level_lines(h, axis)
     with pytest.raises(InputError, match=r"defined has shape \(3, 4\)"):

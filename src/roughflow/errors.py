@@ -77,12 +77,15 @@ def require_seeds(name: str, seeds) -> tuple[int, ...]:
 
 
 def check_axis(axis) -> int:
-    """Return ``axis`` as 0 (x) or 1 (y), or raise :class:`InputError`."""
-    import numpy as np
+    """Return ``axis`` as 0 (x) or 1 (y); ``"x"`` and ``"y"`` name them too. Anything else,
+    including ``True`` and ``1.0`` (which compare equal to 1), raises :class:`InputError`."""
+    from roughflow.defaults import AXIS_NAMES
 
-    if isinstance(axis, (bool, np.bool_)) or axis not in (0, 1):
-        raise InputError(f"axis must be 0 (x) or 1 (y), got {axis!r}")
-    return int(axis)
+    if isinstance(axis, str) and axis in AXIS_NAMES:
+        return AXIS_NAMES.index(axis)
+    if isinstance(axis, Integral) and not isinstance(axis, bool) and axis in (0, 1):
+        return int(axis)
+    raise InputError(f"axis must be 0 or 'x', 1 or 'y', got {axis!r}")
 
 
 def require_field(name: str, array, *, ndim: int = 2):

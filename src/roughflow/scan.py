@@ -221,6 +221,13 @@ def parse_crop(text: str | None, shape: tuple[int, int]) -> tuple[slice, slice] 
     if m is None:
         return None
     v = [int(g) if g else None for g in m.groups()]
+    for name, (lo, hi), n in zip("xy", (v[:2], v[2:]), shape, strict=True):
+        # a slice would clamp an end past the grid, and the user would get a smaller window
+        # than asked for without a word
+        beyond = [e for e in (lo, hi) if e is not None and e > n]
+        if beyond:
+            raise InputError(f"crop {text!r} reaches index {beyond[-1]} along {name}, but "
+                             f"the scan has {n} points there (indices 0:{n})")
     sx, sy = slice(v[0], v[1]), slice(v[2], v[3])
     _check_window((sx, sy), shape, f"crop {text!r}")
     return sx, sy

@@ -29,7 +29,13 @@ from roughflow.defaults import (
     FLOW_TOL,
     FLOW_TOL_MAX,
 )
-from roughflow.errors import ConvergenceError, InputError, require_field, require_positive
+from roughflow.errors import (
+    ConvergenceError,
+    InputError,
+    check_axis,
+    require_field,
+    require_positive,
+)
 from roughflow.percolation import spanning_cells
 from roughflow.resources import check_memory, describe
 
@@ -196,16 +202,6 @@ def reynolds_system(sigma_local: np.ndarray, active: np.ndarray, axis: int, *, l
     matrix, rhs, cells = assemble(faces, act)
     return ReynoldsSystem(faces, act, cells, matrix, rhs, h_flow, h_across, l_flow,
                           l_across)
-
-
-_AXES = {0: 0, 1: 1, "x": 0, "y": 1}
-
-
-def _check_axis(axis) -> int:
-    try:
-        return _AXES[axis]
-    except (KeyError, TypeError):
-        raise InputError(f"axis must be 0, 1, 'x' or 'y', got {axis!r}") from None
 
 
 def check_gap(gap) -> np.ndarray:
@@ -646,7 +642,7 @@ def solve(
     round-off, and logs a warning where it is not).
     """
     g = check_gap(gap)
-    ax = _check_axis(axis)
+    ax = check_axis(axis)
     if not isinstance(periodic, (bool, np.bool_)):  # a string such as "no" is truthy
         raise InputError(f"periodic must be True or False, got {periodic!r}")
     lx = require_positive("lx", lx)
