@@ -131,9 +131,20 @@ def test_default_adhesion_reproduces_the_papers_adhesive_case():
 
     ad = adhesion_for(s.heights, s.lx, s.ly, gamma_over_v_full=ADHESION_SURFACE_ENERGY_RATIO,
                       range=ADHESION_RANGE_OVER_LAMBDA_S * spec.lambda_s)
+    p10, p40 = load_for(0.10) / 8, load_for(0.40) / 4
     a0 = solve(s, 0.0, model="adhesive", adhesion=ad, tol=1e-5)
-    a10 = solve(s, load_for(0.10) / 8, model="adhesive", adhesion=ad, tol=1e-5, init=a0)
-    a40 = solve(s, load_for(0.40) / 4, model="adhesive", adhesion=ad, tol=1e-5, init=a10)
+    a10 = solve(s, p10, model="adhesive", adhesion=ad, tol=1e-5, init=a0)
+    a40 = solve(s, p40, model="adhesive", adhesion=ad, tol=1e-5, init=a10)
     assert 0.005 < a0.area_fraction < 0.025
     assert a10.area_fraction == pytest.approx(0.10, rel=0.25)
     assert a40.area_fraction == pytest.approx(0.40, rel=0.25)
+    # What this model does NOT reproduce (docs/contact.md "Adhesion"): the paper's mean gap
+    # about 10 % below the non-adhesive one. Cells in contact sink into the soft harmonic
+    # wall, and the gap is 0.679 / 0.519 of the non-adhesive one at p10/8 / p40/4 (seeds 0,
+    # 1, 2: 0.679-0.687 / 0.515-0.519). The bands (+-0.05) hold the seeds and the
+    # tolerances above; a change of the model that moves the gap toward the paper's fails
+    # here, and the docs must then say so.
+    ratio10 = a10.mean_gap / solve(s, p10, tol=1e-5).mean_gap
+    ratio40 = a40.mean_gap / solve(s, p40, tol=1e-5).mean_gap
+    assert 0.63 < ratio10 < 0.73
+    assert 0.47 < ratio40 < 0.57

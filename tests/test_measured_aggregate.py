@@ -156,3 +156,23 @@ def test_a_single_scan_study_has_the_same_per_scan_variables(tmp_path):
     assert ds["viscosity"].attrs["units"] == "Pa*s"
     np.testing.assert_allclose(ds["viscosity"], [1e-3])
     _all_have_units(ds)
+
+
+def test_units_of_a_study_whose_scans_differ_in_length_convert_per_scan(tmp_path):
+    from roughflow.errors import InputError
+    from roughflow.units import registry
+
+    study = _study(tmp_path, {"a": leak_file("a", [1e6, 2e6], length=1e-5),
+                              "b": leak_file("b", [1e6, 2e6], length=4e-5)})
+    assert "ref_length_m" not in study.attrs  # the scans disagree, so no attribute holds it
+    with pytest.raises(InputError, match="differ in length_scale.*sel\\(scan=name\\)"):
+        registry(study)
+    for name, length in (("a", 1e-5), ("b", 4e-5)):
+        one = study.sel(scan=name)
+        ureg = registry(one)
+        gap = ureg.Quantity(one["mean_gap"].values, one["mean_gap"].attrs["units"])
+        # the synthetic curve's mean gap is 0.05 L at every pressure
+        np.testing.assert_allclose(gap.to("m").magnitude, 0.05 * length, rtol=1e-12)
+        sigma = ureg.Quantity(one["sigma"].values, one["sigma"].attrs["units"])
+        np.testing.assert_allclose(sigma.to("m^3/(Pa*s)").magnitude,
+                                   one["conductance"].values, rtol=1e-12)

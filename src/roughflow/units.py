@@ -24,7 +24,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from roughflow.datasets.units import REFERENCE_ATTRS
+from roughflow.datasets.units import REFERENCE_ATTRS, REFERENCE_VARIABLES
 from roughflow.errors import InputError
 
 #: What each kind of quantity must convert to (pint dimensionality, SI unit).
@@ -54,17 +54,35 @@ def _registry(scales: tuple[tuple[str, float | None], ...]):
     return ureg
 
 
-def registry(attrs: Mapping | None = None):
+def registry(source: Mapping | None = None):
     """A pint UnitRegistry that parses every ``units`` string roughflow writes.
 
-    The reference units are defined from ``attrs`` (a dataset's attributes, see
-    :data:`roughflow.datasets.units.REFERENCE_ATTRS`) where they hold a positive finite
-    SI value, and as base dimensions of their own otherwise. Registries are cached.
+    ``source`` is a dataset's attributes, or the dataset itself. The reference units are
+    defined from the attributes of :data:`roughflow.datasets.units.REFERENCE_ATTRS` where
+    they hold a positive finite SI value; given a dataset, an attribute it lacks is taken
+    from the matching per-scan variable
+    (:data:`~roughflow.datasets.units.REFERENCE_VARIABLES`) where that holds one value, as
+    after ``ds.sel(scan=name)`` on a measured study whose scans differ in it. A reference
+    unit found nowhere is a base dimension of its own (the strings parse, but do not
+    convert to SI). Registries are cached.
+
+    Raises :class:`InputError` for a dataset whose scans differ in a reference unit: no
+    one registry converts all of them.
     """
-    attrs = {} if attrs is None else attrs
+    attrs = {} if source is None else getattr(source, "attrs", source)
+    variables = getattr(source, "variables", {})
     scales = []
     for name, (key, _) in REFERENCE_ATTRS.items():
         value = attrs.get(key)
+        var = REFERENCE_VARIABLES[name]
+        if value is None and var in variables:
+            values = np.unique(np.asarray(variables[var].values, dtype=float).ravel())
+            if values.size > 1:
+                raise InputError(
+                    f"the scans of this dataset differ in {var} ({values.size} values, "
+                    f"{values.min():g} - {values.max():g}), which defines {name}; take one "
+                    "scan's registry: registry(ds.sel(scan=name))")
+            value = values[0] if values.size else None
         try:
             v = float(value)
         except (TypeError, ValueError):

@@ -15,7 +15,9 @@ The paper's adhesive case (Sect. 3.3: about 1 % contact at zero load, 10 % (40 %
 gamma_s / v_ela^full = ``roughflow.defaults.ADHESION_SURFACE_ENERGY_RATIO`` and rho =
 ``ADHESION_RANGE_OVER_LAMBDA_S`` lambda_s, calibrated on the surface of the paper's Fig. 5
 (H = 0.8, L/lambda_r = 16, eps_f = 1/16): contact [0.012, 0.096, 0.417] at 4 points per
-lambda_s, [0.012, 0.089, 0.394] at 2 (docs/contact.md, "Adhesion"). On a smaller cell
+lambda_s, [0.012, 0.089, 0.394] at 2 (docs/contact.md, "Adhesion"). Its mean gap is not
+the paper's (about 10 % below the non-adhesive one): cells in contact sink into the soft
+harmonic wall, and the gap is 32 % and 48 % below at 1/8 and 1/4 of those loads. On a smaller cell
 (L/lambda_r = 4) the same targets need 0.06 and 0.35 instead. The paper's nominal
 mu_T = 2 and gamma_s / v_ela^full = 0.203, evaluated with our R_c (:func:`curvature_radius`),
 give a range of 0.04 lambda_s and far too little contact ([0.020, 0.024, 0.137] instead of

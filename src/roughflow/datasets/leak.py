@@ -40,6 +40,11 @@ from .units import (
     PASCAL,
     PASCAL_SECONDS,
     PRESSURE_UNITS,
+    REF_LENGTH,
+    REF_PRESSURE,
+    REF_VISCOSITY,
+    REFERENCE_ATTRS,
+    REFERENCE_VARIABLES,
     RESIDUAL_UNITS,
     SIGMA_UNITS,
 )
@@ -122,9 +127,9 @@ def leak_dataset(curve: LeakCurve, surface: Surface, *, scales: Scales, fluid_pr
         "bracketed": _int(sa, np.array([[0 if t is None else int(t.bracketed) for t in th]]), {
             "units": DIMENSIONLESS, "long_name": "1 if the sealing search found both sides "
                                                  "within its pressure range"}),
-        "length_scale": ("scan", [scales.length], {
+        REFERENCE_VARIABLES[REF_LENGTH]: ("scan", [scales.length], {
             "units": METRES, "long_name": "reference length L (lengths are in units of L)"}),
-        "modulus": ("scan", [scales.modulus], {
+        REFERENCE_VARIABLES[REF_PRESSURE]: ("scan", [scales.modulus], {
             "units": PASCAL, "long_name": "contact modulus E* (pressures are in units of E*)"}),
         "rms_gradient": ("scan", [curve.rms_gradient], {
             "units": DIMENSIONLESS, "long_name": "rms gradient gbar of the surface"}),
@@ -167,13 +172,14 @@ BOUNDARY_TEXT = {
 
 #: Attributes of a leak file that describe its scan, kept in a study dataset as variables
 #: over ``scan`` (they may differ between scans): attribute -> (variable, units, long_name).
-#: ``ref_length_m`` and ``ref_pressure_Pa`` are there as ``length_scale`` and ``modulus``.
+#: ``ref_length_m`` and ``ref_pressure_Pa`` are there as ``length_scale`` and ``modulus``
+#: (:data:`~roughflow.datasets.units.REFERENCE_VARIABLES`).
 SCAN_ATTRS: dict[str, tuple[str, str, str]] = {
     "boundary": ("boundary", DIMENSIONLESS,
                  "non-periodic treatment of the scan (roughflow leak --boundary)"),
     "boundary_description": ("boundary_description", DIMENSIONLESS,
                              "what the boundary treatment of the scan does"),
-    "ref_viscosity_Pa_s": ("viscosity", PASCAL_SECONDS,
+    REFERENCE_ATTRS[REF_VISCOSITY][0]: (REFERENCE_VARIABLES[REF_VISCOSITY], PASCAL_SECONDS,
                            "fluid viscosity eta (viscosities are in units of eta)"),
     "fluid_pressure_Pa": ("fluid_pressure", PASCAL, "fluid pressure drop across the seal"),
     "seal_width_m": ("seal_width", METRES, "seal width w (along the flow)"),

@@ -34,6 +34,14 @@ REFERENCE_ATTRS = {
     REF_VISCOSITY: ("ref_viscosity_Pa_s", "Pa*s"),
 }
 
+#: Variable over ``scan`` of a leak dataset holding the SI value of each reference unit:
+#: the scans of a measured study may differ in it (then no attribute holds it).
+REFERENCE_VARIABLES = {
+    REF_LENGTH: "length_scale",
+    REF_PRESSURE: "modulus",
+    REF_VISCOSITY: "viscosity",
+}
+
 LENGTH_UNITS = REF_LENGTH
 PRESSURE_UNITS = REF_PRESSURE
 #: Local and effective conductance u^3 / (12 eta): volume flow per unit width per unit

@@ -7,7 +7,7 @@ import xarray as xr
 from matplotlib.figure import Figure
 
 from roughflow.datasets.sweep import area_values
-from roughflow.defaults import MODELS
+from roughflow.defaults import MODELS, STUDY_FIXED
 from roughflow.errors import InputError
 
 from ._flow import curve, ladder, points, sigma_ref
@@ -28,10 +28,13 @@ TITLES = {"elastic": "elastic, non-adhesive", "adhesive": "short-range adhesion"
 
 
 def draw(ds: xr.Dataset, fit=None) -> Figure:
-    gammas = [float(g) for g in np.atleast_1d(ds["gamma"].values)] if "gamma" in ds else []
-    if any(not np.isclose(g, 1.0) for g in gammas):  # x and y would be averaged
-        raise InputError(f"the isotropic flow figure needs gamma = 1, the dataset has gamma "
-                         f"{', '.join(f'{g:g}' for g in gammas)} (flow_anisotropic draws it)")
+    fixed, other = STUDY_FIXED["flow_isotropic"]
+    for key, value in fixed.items():
+        values = [float(v) for v in np.atleast_1d(ds[key].values)] if key in ds else []
+        if any(not np.isclose(v, value) for v in values):
+            raise InputError(f"the isotropic flow figure needs {key} = {value:g}, the dataset "
+                             f"has {key} {', '.join(f'{v:g}' for v in values)} ({other} "
+                             "draws it)")
     models = [m for m in MODELS if m in ds["model"].values]
     fig = Figure(figsize=(4.6 * len(models), 4.2), layout="constrained")
     axes = fig.subplots(1, len(models), squeeze=False)

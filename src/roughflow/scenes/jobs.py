@@ -23,6 +23,7 @@ from roughflow.datasets.sweep import param_key, rnd
 from roughflow.defaults import (
     FLOW_STUDIES,
     STUDIES,
+    STUDY_FIXED,
     STUDY_ONE_SIZE,
     STUDY_ONE_VALUE,
     THRESHOLD_STUDIES,
@@ -568,13 +569,14 @@ def _check_keys_apply(name: str, block: dict) -> None:
         if unused:
             raise InputError(f"{where}: a_c_star of {', '.join(unused)}, a model this study "
                              f"does not run (models: {', '.join(sorted(models))})")
-    if name == "flow_isotropic":
-        gammas = set(_as_list(block.get("gamma", [1.0])))
+    fixed, other = STUDY_FIXED.get(name, ({}, None))
+    for key, value in fixed.items():
+        values = set(_as_list(block.get(key, [value])))
         for s in block.get("series") or []:
-            gammas |= set(_as_list(s.get("gamma", [])))
-        if gammas - {1.0}:
-            raise InputError(f"{where}: the isotropic study takes gamma = 1, got "
-                             f"{sorted(gammas)} (anisotropic surfaces: flow_anisotropic)")
+            values |= set(_as_list(s.get(key, [])))
+        if values - {value}:
+            raise InputError(f"{where}: this study takes {key} = {value:g}, got "
+                             f"{sorted(values)} (other values: {other})")
 
 
 def expand_studies(studies: dict) -> dict[str, Job]:
