@@ -14,7 +14,7 @@ from roughflow.surface import SurfaceSpec, generate
 
 
 def sigma_of(u):
-    """Local conductivity u^3 / (12 eta), eta = 1 (paper Eq. 4)."""
+    """Local conductivity u^3 / (12 eta), eta = 1 (paper Eq. 3)."""
     return np.asarray(u, float) ** 3 / 12.0
 
 

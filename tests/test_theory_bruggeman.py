@@ -150,7 +150,7 @@ def test_corrected_ratio_tends_to_gamma_squared_at_threshold(gamma):
 
 @pytest.mark.parametrize("a_c", (0.0, 0.1, 0.3, 0.41))
 def test_noncontact_decomposition_eq12_to_15(a_c):
-    # sigma_nc from Eq. (15) (its own solve on the non-contact distribution) must satisfy
+    # sigma_nc from Eq. (13) (its own solve on the non-contact distribution) must satisfy
     # sigma_0 = sigma_nc (1 - a_c/a_c*) with sigma_0 from Eq. (5), and equal Eq. (11).
     a_star = 0.415
     values, weights = _with_contact(_continuous_sample(), a_c)
@@ -161,7 +161,7 @@ def test_noncontact_decomposition_eq12_to_15(a_c):
 
 
 def test_noncontact_at_threshold_is_harmonic_mean():
-    # Da~ = 0 at a_c = a_c*: Eq. (15) becomes 1/sigma_nc = <1/sigma>_nc.
+    # Da~ = 0 at a_c = a_c*: Eq. (13) becomes 1/sigma_nc = <1/sigma>_nc.
     sigma = _continuous_sample(500)
     values, weights = _with_contact(sigma, 0.415)
     nc = noncontact_decomposition(values, a_c_star=0.415, weights=weights)

@@ -207,6 +207,10 @@ def test_height_peklenik_number_of_random_phase_surfaces(gamma):
     spec = SurfaceSpec.from_sweep(gamma=gamma, points_per_lambda_s=2)
     s = generate(spec)
     assert peklenik_number(s.heights, s.lx, s.ly) == pytest.approx(gamma, rel=1e-3)
+    # the default cell is square like the generated one (not square pixels: the grid is
+    # 2^k x 2^(k+1) at gamma = 2, where square pixels gave 1.00001)
+    assert s.heights.shape[0] != s.heights.shape[1]
+    assert peklenik_number(s.heights) == pytest.approx(gamma, rel=1e-3)
 
 
 def test_correlation_lengths_of_a_stretched_gaussian():

@@ -280,3 +280,19 @@ def test_cite_prints_the_references_a_file_used(files, capsys):
     assert "[PK99]" not in out  # CG was not used
     code, out, _ = run(["cite", "--method", "cg", "--format", "bibtex"], capsys)
     assert code == 0 and out.startswith("@article{PK99,")
+
+
+def test_help_names_a_rule_for_a_default_only_where_there_is_no_value():
+    """An option whose help explains what its missing default means ("default: the
+    paper's ...") must have no default value; `scene channels` once showed the paper's rule
+    for --l-over-lambda-r and then used 4."""
+    from roughflow.cli import _subparsers, build_parser
+
+    checked = 0
+    for parser in _subparsers(build_parser()):
+        for action in parser._actions:
+            if action.help and "(default:" in action.help:
+                checked += 1
+                assert action.default is None, (parser.prog, action.option_strings,
+                                                action.default, action.help)
+    assert checked >= 3  # surface, contact, threshold, ... have --l-over-lambda-r

@@ -28,14 +28,15 @@ AXES = {"x": 0, "y": 1, "both": None}
 SURFACE_OPTIONS = {
     "--gamma": (float, defaults.GAMMA, "Peklenik number; > 1 stretches along x"),
     "--hurst": (float, defaults.HURST, "Hurst exponent H in (0, 1]"),
-    "--l-over-lambda-r": (float, None, "L / lambda_r (default: the paper's "
-                                       "4 max(sqrt(gamma), 1/sqrt(gamma)))"),
+    "--l-over-lambda-r": (float, None, "L / lambda_r"),
     "--eps-f": (float, defaults.EPS_F, "lambda_s / lambda_r"),
     "--points-per-lambda-s": (float, defaults.POINTS_PER_LAMBDA_S,
                               "grid points per shortest wavelength"),
     "--aspect": (float, defaults.ASPECT, "lx / ly of a unit-area cell"),
     "--rolloff": (str, defaults.ROLLOFF_FORMS[0], "roll-off form of the spectrum"),
 }
+#: What a default of None means, for the help of the options that have one.
+_NONE_DEFAULTS = {"--l-over-lambda-r": "the paper's 4 max(sqrt(gamma), 1/sqrt(gamma))"}
 
 
 def _record(parser: argparse.ArgumentParser, attr: str, entry: tuple) -> None:
@@ -173,7 +174,8 @@ def add_surface_options(group, flags=tuple(SURFACE_OPTIONS), **overrides) -> Non
         dest = dest_of(flag)
         default = overrides.get(dest, default)
         extra = {"choices": defaults.ROLLOFF_FORMS} if flag == "--rolloff" else {"type": kind}
-        shown = "" if default is None else f" ({default:g})" if kind is float else f" ({default})"
+        shown = (f" (default: {_NONE_DEFAULTS[flag]})" if default is None
+                 else f" ({default:g})" if kind is float else f" ({default})")
         group.add_argument(flag, default=default, help=text + shown, **extra)
 
 

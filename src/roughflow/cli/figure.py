@@ -13,7 +13,8 @@ def register(sub: argparse._SubParsersAction) -> None:
     p = sub.add_parser(
         "figure", help="draw a study's figure (PNG + PDF) from its aggregated dataset",
         description="Draw the paper figure of a study from its aggregated dataset; writes "
-                    "the PNG given by -o and a PDF next to it, and prints the caption.")
+                    "the PNG given by -o and a PDF next to it (--caption: and prints the "
+                    "caption).")
     p.add_argument("study", choices=STUDIES, help="study name")
     add_input(p, "dataset", kinds=None, what="study dataset", metavar="DATASET.nc",
               help="aggregated study dataset (roughflow aggregate; channels: roughflow scene "

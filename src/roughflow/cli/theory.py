@@ -241,7 +241,7 @@ _GAP_COLUMNS = {
     "area_fraction": ("1", "relative contact area (fraction of sigma = 0 cells)"),
     "mean_gap": ("L", "mean gap over the cell"),
     "sigma_bruggeman": ("sigma", "isotropic Bruggeman conductance, Eq. 5-6"),
-    "sigma_nc": ("sigma", "non-contact conductivity, Eq. 15"),
+    "sigma_nc": ("sigma", "non-contact conductivity, Eq. 13"),
     "peklenik": ("1", "Peklenik number used in Eq. 7-9"),
     "sigma_x_corrected": ("sigma", "anisotropic Bruggeman sigma_x, corrected Eq. 9"),
     "sigma_y_corrected": ("sigma", "anisotropic Bruggeman sigma_y, corrected Eq. 9"),

@@ -78,7 +78,7 @@ def solve(
       residual to reach: the largest gap error (cg: max |gap - 0| on the contact set and
       max overlap off it; gfmd: the same measured after the solve) in units of the rms
       height, at most ``CONTACT_TOL_MAX``. The default 1e-6 converges a_c and the mean
-      gap to about 1e-5 relative.
+      gap to about 1e-7 relative (docs/contact.md).
     max_iter:
       iteration cap; if it is reached first a :class:`ConvergenceError` carrying the
       residual is raised.

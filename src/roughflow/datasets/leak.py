@@ -97,7 +97,7 @@ def leak_dataset(curve: LeakCurve, surface: Surface, *, scales: Scales, fluid_pr
                                                  "along axis (the seal leaks)"}),
         "sigma": (spa, curve.sigma[None], {
             "units": SIGMA_UNITS, "long_name": "effective conductance u^3/(12 eta) along axis "
-                                               "(Eq. 4; 0 where the fluid does not span)"}),
+                                               "(Eq. 3-4; 0 where the fluid does not span)"}),
         "conductance": (spa, conductance[None], {
             "units": CONDUCTANCE_SI, "long_name": "effective conductance along axis per unit "
                                                   "width per unit pressure gradient"}),

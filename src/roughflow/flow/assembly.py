@@ -1,8 +1,9 @@
-"""Finite-volume assembly of the Reynolds equation div(sigma grad p) = 0 (paper Eq. 3).
+"""Finite-volume assembly of the Reynolds equation div(sigma grad p) = 0 (paper Eq. 4
+with div j = 0).
 
 Cell-centred finite volumes on the contact grid, written for flow along axis 0
 (callers transpose for flow along y). Local conductivity sigma = u^3 / (12 eta)
-(paper Eq. 4). The conductance of a face between two cells is the harmonic mean
+(paper Eq. 3). The conductance of a face between two cells is the harmonic mean
 of the two cells' sigma, so a contact cell (sigma = 0) closes its faces; the
 transmissibility of a face is that conductance times face length / centre
 distance. Reservoirs: p = 1 at the inlet (before cell row 0) and p = 0 at the

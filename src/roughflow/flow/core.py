@@ -190,7 +190,7 @@ class ReynoldsSystem:
 def reynolds_system(sigma_local: np.ndarray, active: np.ndarray, axis: int, *, lx: float,
                     ly: float, periodic: bool = True) -> ReynoldsSystem:
     """Assemble A p = b for flow along ``axis`` (0 or 1) from the local conductivities
-    ``sigma_local`` = u^3 / (12 eta) (Eq. 4) and the flowing cells ``active``
+    ``sigma_local`` = u^3 / (12 eta) (Eq. 3) and the flowing cells ``active``
     (:func:`flowing_cells`), both on the gap's grid of cell lengths ``lx`` x ``ly``."""
     nx, ny = sigma_local.shape
     hx, hy = lx / nx, ly / ny

@@ -11,7 +11,7 @@ weight of the closed (contact, sigma = 0) cells:
 * isotropic, Eq. (5): A = D, B = D - 1 with D = 1/(1 - a_c*) (Eq. 6);
 * anisotropic, Persson's form, Eq. (7): A = D - 1 + g^(+-1), B = (D - 1) g^(+-1);
 * anisotropic, corrected form, Eq. (9): A = 1 + (D - 1) g^(+-1), B = (D - 1) g^(+-1);
-* non-contact conductivity, Eq. (15): A = 1 + Delta a~, B = Delta a~, z = 0.
+* non-contact conductivity, Eq. (13): A = 1 + Delta a~, B = Delta a~, z = 0.
 
 The right-hand side of (*) increases monotonically in x and is concave, so the
 root is unique and both ends of a bracket follow in closed form (see
@@ -109,9 +109,9 @@ class NonContact:
     """Non-contact decomposition of the isotropic solution (Eq. 10-15).
 
     sigma_0: full Bruggeman conductance (Eq. 5).
-    sigma_nc: characteristic non-contact conductivity, from Eq. (15) solved directly.
+    sigma_nc: characteristic non-contact conductivity, from Eq. (13) solved directly.
     sigma_nc_eq11: sigma_nc from Eq. (11) given sigma_0 (should equal ``sigma_nc``;
-        their agreement checks Eq. 12-13, sigma_0 = sigma_nc (1 - a_c/a_c*)).
+        their agreement checks Eq. 12, sigma_0 = sigma_nc (1 - a_c/a_c*)).
     delta_a_tilde: (a_c* - a_c)/(1 - a_c*); delta_a_prime: 1 - a_c/a_c*.
     """
 
@@ -278,9 +278,9 @@ def bruggeman_anisotropic(
 def noncontact_decomposition(sigma_values, *, a_c_star: float, weights=None) -> NonContact:
     """Split the isotropic solution into contact and non-contact parts (Eq. 10-15).
 
-    sigma_nc solves Eq. (15), 1/sigma_nc = <(1 + Da~)/(sigma + sigma_nc Da~)>_nc with
+    sigma_nc solves Eq. (13), 1/sigma_nc = <(1 + Da~)/(sigma + sigma_nc Da~)>_nc with
     Da~ = (a_c* - a_c)/(1 - a_c*) and <...>_nc the average over non-contact cells,
-    so that sigma_0 = sigma_nc (1 - a_c/a_c*) (Eq. 12-13). ``sigma_nc_eq11`` is the value
+    so that sigma_0 = sigma_nc (1 - a_c/a_c*) (Eq. 12). ``sigma_nc_eq11`` is the value
     from Eq. (11) given the full sigma_0 (nan at or beyond a_c*, where sigma_0 = 0).
     ``sigma_values``, ``weights``: as for :func:`bruggeman`.
     """
@@ -295,7 +295,7 @@ def noncontact_decomposition(sigma_values, *, a_c_star: float, weights=None) -> 
     dap = 1.0 - z / a_c_star
     if dat < 0:
         raise InputError(
-            f"contact fraction a_c={z:.6g} exceeds a_c*={a_c_star!r}: Eq. (15) needs "
+            f"contact fraction a_c={z:.6g} exceeds a_c*={a_c_star!r}: Eq. (13) needs "
             "a_c <= a_c*"
         )
     wn = w / w.sum()

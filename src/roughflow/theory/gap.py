@@ -3,7 +3,7 @@
 :func:`gap_theory` is what the command line (``roughflow theory CONTACT.nc``) and the
 pressure ladder evaluate on each contact state: the isotropic Bruggeman conductance
 (Eq. 5-6), both anisotropic forms (Persson's Eq. 7-8 and the corrected Eq. 9), the closed
-form of Eq. 16 and, on request, the non-contact conductivity of Eq. 15.
+form of Eq. 16 and, on request, the non-contact conductivity of Eq. 13.
 
 Continuum area. The Bruggeman sums run over grid cells, whose contact fraction exceeds the
 continuum contact area by the grid bias (docs/accuracy.md). Given a continuum estimate
@@ -49,7 +49,7 @@ class GapTheory:
     the anisotropic forms; sigma_isotropic (Eq. 5-6) and its residual; sigma_alt: the
     isotropic form with ``a_c_star_alt`` (NaN if none); corrected (Eq. 9) and persson
     (Eq. 7-8): :class:`~roughflow.theory.AnisotropicResult`; sigma_closed_form (Eq. 16);
-    sigma_nc (Eq. 15, NaN unless asked for and defined); residual: the largest of the
+    sigma_nc (Eq. 13, NaN unless asked for and defined); residual: the largest of the
     self-consistent equations' residuals.
     """
 
@@ -75,7 +75,7 @@ def gap_theory(gap, *, a_c_star: float, contact=None, gamma: float = 1.0,
     ``contact``: boolean contact mask (default gap <= 0); ``gamma``: Peklenik number of the
     anisotropic forms; ``kind``: closed form of Eq. 16; ``area_fraction``: continuum estimate
     of the contact area (module docstring); ``a_c_star_alt``: a second threshold for the
-    isotropic form; ``noncontact``: also solve Eq. 15 for sigma_nc (defined while some
+    isotropic form; ``noncontact``: also solve Eq. 13 for sigma_nc (defined while some
     fluid cell is open and a_c <= a_c*).
     """
     from roughflow.resources import check_memory

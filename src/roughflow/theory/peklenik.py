@@ -55,13 +55,15 @@ def correlation_lengths(
 ) -> tuple[float, float]:
     """Correlation lengths (xi_x, xi_y) of ``field[ix, iy]``: where C first drops to ``level``.
 
-    Lengths in units of ``lx`` (cell size along x; ``ly`` defaults to square pixels).
-    Only the first half of the periodic cell is searched along each axis.
+    ``lx``, ``ly``: the cell's side lengths; ``ly`` defaults to ``lx`` (a square cell, as
+    :func:`roughflow.flow.solve` takes it and as :func:`roughflow.surface.generate` makes
+    it at any gamma, whose grids have fewer points along the stretched axis). Only the
+    first half of the periodic cell is searched along each axis.
     """
     acf = autocorrelation(field)
     nx, ny = acf.shape
     lx = require_positive("lx", lx)
-    ly = lx * ny / nx if ly is None else require_positive("ly", ly)
+    ly = lx if ly is None else require_positive("ly", ly)
     if not 0.0 < level < 1.0:
         raise InputError(f"level must lie in (0, 1), got {level!r}")
     xi_x = _crossing(acf[: nx // 2 + 1, 0], lx / nx, level, "x")
