@@ -16,8 +16,10 @@ smoothing (a symmetric Gauss-Seidel sweep before and after each coarse-grid corr
 twice ours) and SA-AMG preconditioning; our direct solver
 (``"direct"``: QDLDL's LDL^T with AMD ordering, n <= --direct-max); ``"auto"`` (whichever of the
 two ``roughflow.flow.linsolve.choose`` picks for the state); CG without preconditioner
-(our assembly, n <= --cg-max, capped at 20 000 iterations); reynoldsflow with
-``scipy.amg-rs`` (its default), ``scipy.amg-sa`` and ``scipy-spsolve`` (n <= --direct-max).
+(our assembly, n <= --cg-max, capped at --cg-iters iterations, default 5000: too few
+from 128^2 on, where its rows are failures unless the cap is raised to about 20 000);
+reynoldsflow with ``scipy.amg-rs`` (its default), ``scipy.amg-sa`` and ``scipy-spsolve``
+(n <= --direct-max).
 
     OPENBLAS_NUM_THREADS=1 .venv/bin/python benchmarks/bench_flow.py --sizes 512 1024 2048
 

@@ -6,7 +6,7 @@ Usage:
         [--before] [--before-max-n 8192] [--before-skip 8192/1] [--threshold] \
         [--rows-from earlier.log] [--repeats 5] [--tag _x]
     ROUGHFLOW_FFT_THREADS=1 python benchmarks/bench_scaling.py --sizes 512 1024 \
-        --l-over-lambda-r 4 --threshold-seeds 10 [--threshold-tol 0.008]
+        --l-over-lambda-r 4 --threshold-seeds 10 [--threshold-tol 0.002]
 
 Surfaces: H = 0.8, 4 points per lambda_s (lambda_r/lambda_s = n / (4 L/lambda_r)), seed 0;
 load 0.2 E* gbar (a_c about 0.4), tol 1e-6, one FFT thread. Per row: the iterations and
@@ -17,8 +17,9 @@ replaced (``gfmd(..., minimizer="fire")``, up to ``--before-max-iter`` steps, si
 same run, before and after the solves: ``RealFFT2.forward`` + ``inverse`` (what a caller of
 ``roughflow.fft`` pays, with the copy into the plan and the normalisation) and the bare
 FFTW executes (what the solver's kernels use). ``--threshold`` adds the cost of the
-critical-area search for both axes (``percolation.threshold``, bisection tol 0.008,
-contact tol 1e-4 as in the default workflow) in cold-solve equivalents: its wall time over
+critical-area search for both axes (``search.threshold``; bisection tol ``--threshold-tol``,
+default ``THRESHOLD_TOL`` = 0.002, the library's; the default workflow's config uses 0.008;
+contact tol 1e-4) in cold-solve equivalents: its wall time over
 that of one cold solve at the same contact tolerance; ``--threshold-seeds`` also splits each
 search into the time inside the minimizer and outside it, with the fit of a solve's time
 to a fixed cost plus one per iteration (docs/percolation.md, "Cost model and floor").
