@@ -319,7 +319,8 @@ def test_reported_threshold_is_the_predictions_root_and_beats_the_midpoint():
 
 @pytest.mark.parametrize(("kwargs", "match"), [
     ({"tol": 0.0}, "tol"), ({"tol": -1e-3}, "tol"), ({"tol": 1.5}, "tol"),
-    ({"axis": 2}, "axis"), ({"axis": "x"}, "axis"), ({"model": "plastic"}, "model"),
+    ({"axis": 2}, "axis"), ({"axis": "z"}, "axis"), ({"axis": 1.0}, "axis"),
+    ({"model": "plastic"}, "model"),
     ({"model": "adhesive"}, "adhesion"), ({"options": {"tol": 1}}, "options"),
     ({"options": SearchOptions(pressure_range=(-1.0, 1.0))}, "pressure_range"),
 ])
