@@ -8,6 +8,7 @@ import xarray as xr
 
 from roughflow.cli import main
 from roughflow.datasets.units import PRESSURE_UNITS, grid_coords
+from roughflow.defaults import A_C_STAR_THEORY
 from roughflow.io import write_dataset
 from roughflow.surface import SurfaceSpec, generate
 from roughflow.theory import bruggeman, bruggeman_anisotropic, closed_form, predict_conductance
@@ -52,6 +53,19 @@ def test_gap_file(tmp_path, capsys):
         assert np.all(ds["sigma_x_corrected"] > ds["sigma_y_corrected"])
 
 
+@pytest.mark.parametrize(("kind", "a_star"), [(None, 0.5), ("bearing", 0.5),
+                                              ("elastic", 0.4), ("adhesive", 0.4)])
+def test_default_a_c_star_is_the_theory_lines_value_of_the_kind(tmp_path, kind, a_star):
+    # the flow figures draw their theory lines with defaults.A_C_STAR_THEORY; the command
+    # once took the paper's elastic 0.415 for every kind, also for bearing gaps (exactly 0.5)
+    _gap_file(tmp_path / "r.nc")  # model "bearing": the kind when --kind is not given
+    out = tmp_path / "t.nc"
+    argv = ["theory", str(tmp_path / "r.nc"), "-o", str(out)]
+    assert main(argv + ([] if kind is None else ["--kind", kind])) == 0
+    with xr.open_dataset(out) as ds:
+        assert ds.attrs["a_c_star"] == a_star
+
+
 def test_gap_file_conductivity_peklenik(tmp_path):
     _gap_file(tmp_path / "r.nc")
     out = tmp_path / "t.nc"
@@ -66,7 +80,7 @@ def test_spec_form(tmp_path, capsys):
     main(["theory", "--points-per-lambda-s", "2", "--pressures", "0.01,0.1", "-o", str(out)])
     assert "mean_gap" in capsys.readouterr().out
     ref = predict_conductance(SurfaceSpec.from_sweep(points_per_lambda_s=2), [0.01, 0.1],
-                              a_c_star=0.415)
+                              a_c_star=A_C_STAR_THEORY["elastic"])
     with xr.open_dataset(out) as ds:
         np.testing.assert_allclose(ds["mean_gap"].values, ref.mean_gap, rtol=1e-12)
         np.testing.assert_allclose(ds["sigma"].values, ref.sigma, rtol=1e-12)
@@ -79,7 +93,7 @@ def test_surface_file_form(tmp_path, capsys):
     main(["theory", str(surf), "--pressures", "0.05"])
     line = capsys.readouterr().out.strip().splitlines()[-1].split()
     ref = predict_conductance(SurfaceSpec.from_sweep(points_per_lambda_s=2), [0.05],
-                              a_c_star=0.415)
+                              a_c_star=A_C_STAR_THEORY["elastic"])
     assert float(line[2]) == pytest.approx(ref.mean_gap[0], rel=1e-4)
 
 

@@ -196,6 +196,23 @@ def test_report_shows_every_figure(test_run):
     assert (wd / "report.html").stat().st_size > 10000
     assert res.stdout.count("Adding figure.png") + res.stderr.count("Adding figure.png") \
         == len(STUDIES)
+    # every caption is the library's (figure.rst renders the rule's caption parameter): the
+    # report once had a hand-copied set that had drifted (and none for the measured study)
+    import html
+
+    from roughflow.figures.captions import _CORRECTED, CAPTIONS
+
+    text = (wd / "report.html").read_text()
+    for study in STUDIES:
+        caption = CAPTIONS[study].removeprefix(_CORRECTED)
+        for part in (caption[:60], caption[-60:]):
+            assert html.escape(part.strip(), quote=False) in text, (study, part)
+
+    html = (wd / "report.html").read_text()
+    for study in STUDIES:
+        start = CAPTIONS[study].split(". ")[0][:60].replace("*", "\\*")
+        assert start.split("(")[0].strip()[:40] in html.replace("\\*", "*") or \
+            CAPTIONS[study][:40] in html, study
 
 
 @pytest.mark.slow

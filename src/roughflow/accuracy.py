@@ -13,7 +13,7 @@ the measurements):
   faces by their length times the geometric-mean spacing instead under-weights x-normal
   faces by 1/sqrt(gamma) and over-weights y-normal ones by sqrt(gamma): on gamma = 2 and 4
   surfaces the constant fitted that way drifts with gamma while the per-face one does not;
-  issue 20, docs/accuracy.md.) ``c`` is fitted to converged references with
+  docs/accuracy.md.) ``c`` is fitted to converged references with
   :func:`fit_perimeter_constant`; :data:`PERIMETER_C` is the value measured by
   ``benchmarks/convergence.py`` on the default sweep surfaces (elastic, H = 0.8,
   eps_f = 1/16). Yastrebov, Anciaux & Molinari (Tribol. Int. 114 (2017) 161) derived a
@@ -35,7 +35,7 @@ from roughflow.errors import InputError, require_finite, require_positive
 #: Perimeter constant c fitted by ``benchmarks/convergence.py`` (elastic contact, default
 #: sweep surfaces, 4 to 16 points per lambda_s; docs/accuracy.md): the misclassified area
 #: per contact/non-contact face, in cell areas. Fitted on square cells (gamma = 1) and
-#: confirmed per face on the rectangular cells of gamma = 2 and 4 surfaces (issue 20).
+#: confirmed per face on the rectangular cells of gamma = 2 and 4 surfaces.
 #: Faces are counted along the grid axes (Manhattan length, on average 4/pi times the
 #: Euclidean length).
 PERIMETER_C = 0.105

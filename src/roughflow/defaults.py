@@ -30,6 +30,9 @@ ROLLOFF_FORMS = ("smooth", "plateau")
 #: L / lambda_r in the easy direction when none is given: the paper's
 #: L / lambda_r = PAPER_SIZE_FACTOR max(sqrt(gamma), 1/sqrt(gamma)).
 PAPER_SIZE_FACTOR = 4.0
+#: Fewest grid points per lambda_s at which a_c is perimeter-corrected: the constant is
+#: calibrated on 4 to 16 points per lambda_s (docs/accuracy.md).
+CORRECTION_MIN_POINTS = 4.0
 
 # --- contact (docs/contact.md) -------------------------------------------------------------
 #: Contact methods: mass-weighted GFMD (the default; hard wall: projected CG in the mass
@@ -175,6 +178,8 @@ CHANNELS = {"gamma": 4.0, "hurst": 0.8, "l_over_lambda_r": 4.0, "eps_f": 0.1,
 # --- finite-size scaling (paper Fig. 3) ----------------------------------------------------
 #: Correlation-length exponent of 2D percolation.
 NU_PERCOLATION = 4 / 3
+#: Range a free nu is searched in, and that a fixed one must lie in (errors.check_nu).
+NU_BOUNDS = (0.3, 6.0)
 #: Bootstrap resamples over seeds for the fit errors.
 FIT_BOOTSTRAP = 200
 

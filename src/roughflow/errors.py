@@ -88,6 +88,17 @@ def check_axis(axis) -> int:
     raise InputError(f"axis must be 0 or 'x', 1 or 'y', got {axis!r}")
 
 
+def check_nu(nu: float) -> float:
+    """A fixed finite-size-scaling exponent nu inside ``defaults.NU_BOUNDS`` (the range a
+    free nu is searched in), or :class:`InputError`."""
+    from roughflow.defaults import NU_BOUNDS
+
+    v = require_finite("nu", nu)
+    if not NU_BOUNDS[0] <= v <= NU_BOUNDS[1]:
+        raise InputError(f"nu must lie in [{NU_BOUNDS[0]:g}, {NU_BOUNDS[1]:g}], got {nu!r}")
+    return v
+
+
 def require_field(name: str, array, *, ndim: int = 2):
     """Return ``array`` as a float64 numpy array, or raise if it has the wrong rank or
     non-finite values."""

@@ -21,24 +21,13 @@ from scipy.optimize import least_squares
 
 from roughflow.datasets.sweep import single_setting, threshold_values
 from roughflow.datasets.units import DIMENSIONLESS
-from roughflow.defaults import FIT_BOOTSTRAP, NU_PERCOLATION
-from roughflow.errors import InputError, require_finite, require_int
+from roughflow.defaults import FIT_BOOTSTRAP, NU_BOUNDS, NU_PERCOLATION
+from roughflow.errors import InputError, check_nu, require_int
 
 log = logging.getLogger(__name__)
 
-NU_BOUNDS = (0.3, 6.0)
-
-
 class UnderdeterminedFit(InputError):
     """The data cannot determine the fit's parameters (too few distinct system sizes)."""
-
-
-def check_nu(nu: float) -> float:
-    """A fixed exponent nu inside :data:`NU_BOUNDS` (the range a free nu is searched in)."""
-    v = require_finite("nu", nu)
-    if not NU_BOUNDS[0] <= v <= NU_BOUNDS[1]:
-        raise InputError(f"nu must lie in [{NU_BOUNDS[0]:g}, {NU_BOUNDS[1]:g}], got {nu!r}")
-    return v
 
 
 def scaling(eps, a_star: float, amplitude: float, nu: float = NU_PERCOLATION) -> np.ndarray:

@@ -24,8 +24,27 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from roughflow.datasets.units import REFERENCE_ATTRS, REFERENCE_VARIABLES
 from roughflow.errors import InputError
+
+#: The reference units of the dimensionless system (roughflow.datasets.units describes them;
+#: they live here, below the datasets, because scan import and the leak question use them).
+REF_LENGTH = "ref_length"
+REF_PRESSURE = "ref_pressure"
+REF_VISCOSITY = "ref_viscosity"
+#: Dataset attribute holding the SI value of each reference unit, and that SI unit.
+REFERENCE_ATTRS = {
+    REF_LENGTH: ("ref_length_m", "m"),
+    REF_PRESSURE: ("ref_pressure_Pa", "Pa"),
+    REF_VISCOSITY: ("ref_viscosity_Pa_s", "Pa*s"),
+}
+
+#: Variable over ``scan`` of a leak dataset holding the SI value of each reference unit:
+#: the scans of a measured study may differ in it (then no attribute holds it).
+REFERENCE_VARIABLES = {
+    REF_LENGTH: "length_scale",
+    REF_PRESSURE: "modulus",
+    REF_VISCOSITY: "viscosity",
+}
 
 #: What each kind of quantity must convert to (pint dimensionality, SI unit).
 DIMENSIONS = {

@@ -54,6 +54,7 @@ except InputError as exc:
 _validate_config(config)
 
 from roughflow.defaults import FLOW_STUDIES, MEASURED_STUDY, THRESHOLD_STUDIES  # noqa: E402
+from roughflow.figures import caption as figure_caption  # noqa: E402
 from roughflow.resources import total_bytes  # noqa: E402
 from roughflow.scenes import expand_study, study_defaults  # noqa: E402
 from roughflow.scenes.jobs import (  # noqa: E402

@@ -63,6 +63,9 @@ rule figure:
         pdf=f"{RESULTS}/{{study}}/figure.pdf",
     params:
         fit=lambda wc, input: f"--fit {input.fit}" if "fit" in input.keys() else "",
+        # for the report (report/figure.rst): the library's caption, the one `figure
+        # --caption` prints
+        caption=lambda wc: figure_caption(wc.study),
     log:
         f"{RESULTS}/logs/{{study}}/figure.log",
     benchmark:

@@ -20,7 +20,7 @@ def register(sub: argparse._SubParsersAction) -> None:
     p.add_argument("--bootstrap", type=int, default=FIT_BOOTSTRAP,
                    help=f"bootstrap resamples over seeds ({FIT_BOOTSTRAP}; 0 = none)")
     p.add_argument("--nu", type=float, default=NU_PERCOLATION,
-                   help="fixed exponent nu (4/3, 2D percolation)")
+                   help=f"fixed exponent nu ({NU_PERCOLATION:.6g}: 4/3, 2D percolation)")
     p.add_argument("--seed", type=int, default=0, help="seed of the bootstrap (0)")
     add_output(p)
     p.set_defaults(func=run)

@@ -20,7 +20,7 @@ from pathlib import Path
 from typing import TYPE_CHECKING
 
 from roughflow import defaults
-from roughflow.defaults import A_C_STAR_PAPER, MODELS
+from roughflow.defaults import A_C_STAR_PAPER, A_C_STAR_THEORY, MODELS
 from roughflow.errors import InputError
 
 from ._common import add_input, add_output, add_surface_options, refuse_given, track_given
@@ -51,9 +51,11 @@ def register(sub: argparse._SubParsersAction) -> None:
     add_input(p, "file", kinds=("gap", "surface"), what="input file", nargs="?", default=None,
               metavar="FILE.nc",
               help="netCDF file with 'gap' (result) or 'heights' (surface); optional")
-    p.add_argument("--a-c-star", type=float, default=A_C_STAR_PAPER,
-                   help=f"percolation threshold a_c* in (0, 1) ({A_C_STAR_PAPER}, the paper's "
-                        "large-system elastic value)")
+    p.add_argument("--a-c-star", type=float, default=None,
+                   help="percolation threshold a_c* in (0, 1) (default: per --kind, the value "
+                        "the flow figures' theory lines use: " + ", ".join(
+                            f"{k} {v:g}" for k, v in A_C_STAR_THEORY.items())
+                        + f"; the paper's large-system elastic value is {A_C_STAR_PAPER})")
     p.add_argument("--kind", choices=MODELS, default=None,
                    help="closed-form kind of Eq. 16 (default: the file's 'model' attribute "
                         "when it is one of these, else elastic)")
@@ -146,6 +148,11 @@ def _kind(args: argparse.Namespace, attrs: dict) -> str:
     return model if model in MODELS else "elastic"
 
 
+def _a_c_star(args: argparse.Namespace, kind: str) -> float:
+    """--a-c-star, or the theory lines' value for ``kind`` (defaults.A_C_STAR_THEORY)."""
+    return A_C_STAR_THEORY[kind] if args.a_c_star is None else args.a_c_star
+
+
 def _run_persson(args: argparse.Namespace, src, *, source: str) -> None:
     import xarray as xr
 
@@ -155,13 +162,14 @@ def _run_persson(args: argparse.Namespace, src, *, source: str) -> None:
 
     pressures = _parse_pressures(args.pressures)
     kind = args.kind or "elastic"
+    a_star = _a_c_star(args, kind)
     energy_factor = DEFAULT_ENERGY_FACTOR if args.energy_factor is None else args.energy_factor
     pred = predict_conductance(
-        src, pressures, a_c_star=args.a_c_star, kind=kind, eta=args.eta,
+        src, pressures, a_c_star=a_star, kind=kind, eta=args.eta,
         energy_factor=energy_factor,
     )
     out = sys.stdout
-    out.write(f"# Persson theory + Eq. 16 ({kind}, a_c* = {args.a_c_star}) from {source}\n")
+    out.write(f"# Persson theory + Eq. 16 ({kind}, a_c* = {a_star:g}) from {source}\n")
     out.write(f"{'pressure':>12} {'a_c':>10} {'mean_gap':>12} {'sigma':>12}\n")
     for p_, a, u, sg in zip(pred.pressure, pred.area_fraction, pred.mean_gap, pred.sigma,
                              strict=True):
@@ -182,7 +190,7 @@ def _run_persson(args: argparse.Namespace, src, *, source: str) -> None:
         coords={"pressure": ("pressure", pred.pressure, p_attrs)},
         attrs={
             "title": "roughflow theory: Persson prediction", "source": source, "kind": kind,
-            "a_c_star": args.a_c_star, "eta": args.eta, "energy_factor": energy_factor,
+            "a_c_star": a_star, "eta": args.eta, "energy_factor": energy_factor,
         },
     )
     spec = src if not hasattr(src, "heights") else getattr(src, "spec", None)
@@ -291,7 +299,7 @@ def _run_gap(args: argparse.Namespace, ds) -> None:
     if gamma is None:
         gamma = float(ds.attrs.get("spec_gamma", defaults.GAMMA))
     kind = _kind(args, ds.attrs)
-    a_star = args.a_c_star
+    a_star = _a_c_star(args, kind)
     cols: dict[str, list[float]] = {k: [] for k in _GAP_COLUMNS}
     for i, u in enumerate(fields):
         mask = None if masks is None else masks[i]

@@ -35,6 +35,7 @@ from .units import (
     CONDUCTANCE_SI,
     DIMENSIONLESS,
     FLOW_RATE_SI,
+    INT_FILL,
     LENGTH_UNITS,
     METRES,
     PASCAL,
@@ -54,8 +55,6 @@ if TYPE_CHECKING:
     from roughflow.surface import Surface
     from roughflow.units import Scales
 
-#: Fill value of the integer variables.
-INT_FILL = -1
 
 
 def _int(dims, values, attrs) -> xr.Variable:

@@ -13,21 +13,17 @@ from typing import TYPE_CHECKING
 import numpy as np
 import xarray as xr
 
-from roughflow.defaults import STUDY_ONE_VALUE
+from roughflow.defaults import CORRECTION_MIN_POINTS, STUDY_ONE_VALUE
 from roughflow.errors import InputError
 
 from .results import AXIS_COORD
-from .units import DIMENSIONLESS
+from .units import DIMENSIONLESS, INT_FILL
 
 if TYPE_CHECKING:
     from roughflow.scenes.jobs import SurfaceParams
 
 #: Dimensions of every per-job dataset (length 1 in a job, filled by the aggregation).
 PARAM_DIMS = ("model", "gamma", "hurst", "eps_t", "eps_f")
-#: Fill value of integer variables (NaN cannot be stored in an integer).
-INT_FILL = -1
-#: The perimeter constant is calibrated on 4 to 16 points per lambda_s (docs/accuracy.md).
-CORRECTION_MIN_POINTS = 4.0
 
 __all__ = ["AXIS_COORD", "CORRECTION_MIN_POINTS", "INT_FILL", "PARAM_DIMS", "area_values",
            "expand", "no_fill_on_coords", "param_coords", "param_key", "rnd", "surface_vars",

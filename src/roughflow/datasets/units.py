@@ -23,24 +23,16 @@ from __future__ import annotations
 
 import numpy as np
 
-#: The reference units of the dimensionless system (see the module docstring).
-REF_LENGTH = "ref_length"
-REF_PRESSURE = "ref_pressure"
-REF_VISCOSITY = "ref_viscosity"
-#: Dataset attribute holding the SI value of each reference unit, and that SI unit.
-REFERENCE_ATTRS = {
-    REF_LENGTH: ("ref_length_m", "m"),
-    REF_PRESSURE: ("ref_pressure_Pa", "Pa"),
-    REF_VISCOSITY: ("ref_viscosity_Pa_s", "Pa*s"),
-}
+from roughflow.units import (  # noqa: F401 (re-exported: the names of the dataset units)
+    REF_LENGTH,
+    REF_PRESSURE,
+    REF_VISCOSITY,
+    REFERENCE_ATTRS,
+    REFERENCE_VARIABLES,
+)
 
-#: Variable over ``scan`` of a leak dataset holding the SI value of each reference unit:
-#: the scans of a measured study may differ in it (then no attribute holds it).
-REFERENCE_VARIABLES = {
-    REF_LENGTH: "length_scale",
-    REF_PRESSURE: "modulus",
-    REF_VISCOSITY: "viscosity",
-}
+#: Fill value of integer variables (NaN cannot be stored in an integer).
+INT_FILL = -1
 
 LENGTH_UNITS = REF_LENGTH
 PRESSURE_UNITS = REF_PRESSURE

@@ -24,7 +24,12 @@ def module(study: str):
 
 
 def caption(study: str) -> str:
-    return module(study).CAPTION
+    """The caption of ``study``'s figure (without loading matplotlib)."""
+    from .captions import CAPTIONS
+
+    if study not in CAPTIONS:
+        raise InputError(f"unknown study {study!r}; known: {', '.join(STUDIES)}")
+    return CAPTIONS[study]
 
 
 def make_figure(study: str, dataset, output: str | os.PathLike, fit=None, *,

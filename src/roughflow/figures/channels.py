@@ -8,15 +8,9 @@ from matplotlib.colors import ListedColormap
 from matplotlib.figure import Figure
 from matplotlib.patches import Rectangle
 
-CAPTION = (
-    "Fluid channels of an isotropic and an anisotropic surface (paper Fig. 1). "
-    "(a) Height of the isotropic surface on its 0.5 x 2 cell (gamma = 1), which is also the "
-    "anisotropic gamma = 4 unit square after stretching x by 2 and compressing y by 2, in "
-    "units of the maximum height. (b) Isotropic and (c) anisotropic elastic contact at "
-    "a_c ~ 0.4: contact in orange, fluid channels percolating from left to right (along x) "
-    "in dark blue, other non-contact in light blue. Both maps are drawn on the same square "
-    "frame, so x and y are not to scale for the isotropic cell."
-)
+from .captions import CAPTIONS
+
+CAPTION = CAPTIONS["channels"]
 
 PHASE_COLORS = ListedColormap(["#f28e2b", "#1f3b99", "#a6cee3"])
 

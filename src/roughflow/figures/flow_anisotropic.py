@@ -9,19 +9,9 @@ from roughflow.datasets.sweep import area_values
 
 from ._flow import curve, ladder, points, sigma_ref
 from ._style import EASY, HARD
+from .captions import CAPTIONS
 
-CAPTION = (
-    "Fluid conductance in the stretching (easy, x, blue) and contraction (y, red) "
-    "directions for an anisotropic surface (paper Fig. 6: elastic, Fig. 7: bearing-area "
-    "contact), normalised by sigma_ref (mean full Reynolds conductance at a_c -> 0+). "
-    "Symbols: full Reynolds (every seed); solid lines: the corrected anisotropic Bruggeman "
-    "theory (Eq. 9); dashed: Persson's form (Eq. 7-8); grey dotted: isotropic Bruggeman. "
-    "Right panel: the ratio chi = sigma_x / sigma_y of full Reynolds (symbols) and the "
-    "corrected theory (lines) with the height value gamma^2 (grey); the paper reports "
-    "chi ~ 8 near a_c* for the elastic contact at gamma = 2 versus 4 from the theory. "
-    "Elastic a_c is perimeter-corrected (first-order grid bias of the contact area "
-    "removed, docs/accuracy.md); bearing and adhesive a_c are cell counts."
-)
+CAPTION = CAPTIONS["flow_anisotropic"]
 MODEL_MARKER = {"elastic": "o", "bearing": "s", "adhesive": "^"}
 
 

@@ -11,18 +11,9 @@ from roughflow.defaults import MODELS, STUDY_FIXED
 from roughflow.errors import InputError
 
 from ._flow import curve, ladder, points, sigma_ref
+from .captions import CAPTIONS
 
-CAPTION = (
-    "Fluid-flow conductance sigma versus relative contact area a_c (paper Fig. 5), "
-    "normalised by sigma_ref, the full Reynolds conductance at a_c -> 0+: full Reynolds "
-    "(circles, every seed, mean of x and y), full Bruggeman effective-medium theory (solid "
-    "lines) and the closed forms of Eq. 16 (dashed lines) for (a) elastic, non-adhesive "
-    "contact, (b) short-range adhesive contact, (c) the bearing-area model, as far as the "
-    "config contains them. In (a) a dotted line shows the full Bruggeman treatment with "
-    "a_c* = 0.5; the other lines use the a_c* of the config (paper: 0.4 for (a), (b)). "
-    "Elastic a_c is perimeter-corrected (first-order grid bias of the contact area "
-    "removed, docs/accuracy.md); bearing and adhesive a_c are cell counts."
-)
+CAPTION = CAPTIONS["flow_isotropic"]
 TITLES = {"elastic": "elastic, non-adhesive", "adhesive": "short-range adhesion",
           "bearing": "bearing-area model"}
 

@@ -7,21 +7,12 @@ import xarray as xr
 from matplotlib.figure import Figure
 
 from roughflow.datasets.sweep import single_setting, threshold_values
-from roughflow.defaults import A_C_STAR_PAPER, STUDY_ONE_VALUE
+from roughflow.defaults import STUDY_ONE_VALUE
 
 from ._threshold import format_gamma_axis, one_size, plot_vs_gamma
+from .captions import CAPTIONS
 
-CAPTION = (
-    "a_c* is perimeter-corrected (first-order grid bias of the contact area removed, "
-    "docs/accuracy.md) on grids with >= 4 points per lambda_s, raw on coarser ones (raw "
-    "values there are biased high by about 0.03). "
-    "Critical contact areas a_c* in the stretching (x, blue) and contraction (y, red) "
-    "directions versus the Peklenik number gamma (paper Fig. 2): seed means with standard "
-    "errors. (a) Elastic contact for the ratios eps_f = lambda_s/lambda_r of the config "
-    "(circles: the largest eps_f, squares: smaller ones); (b) bearing-area contact. H = 0.8 "
-    "and L/lambda_r = 4 max(sqrt(gamma), 1/sqrt(gamma)). The dotted line marks the paper's "
-    f"large-system threshold {A_C_STAR_PAPER}."
-)
+CAPTION = CAPTIONS["threshold_vs_gamma"]
 MARKERS = ("o", "s", "^", "D")
 
 

@@ -10,16 +10,9 @@ from roughflow.datasets.sweep import single_setting, threshold_values
 from roughflow.defaults import STUDY_ONE_VALUE
 
 from ._threshold import format_gamma_axis, one_size, plot_vs_gamma
+from .captions import CAPTIONS
 
-CAPTION = (
-    "a_c* is perimeter-corrected (first-order grid bias of the contact area removed, "
-    "docs/accuracy.md) on grids with >= 4 points per lambda_s, raw on coarser ones (raw "
-    "values there are biased high by about 0.03). "
-    "Critical contact areas a_c* along x (stretching, blue) and y (contraction, red) versus "
-    "the Peklenik number gamma for the Hurst exponents of the config (paper Fig. 4: "
-    "H = 0.3 full triangles, H = 0.8 open circles), elastic contact, eps_f = 1/16, "
-    "L/lambda_r = 4 max(sqrt(gamma), 1/sqrt(gamma)); seed means with standard errors."
-)
+CAPTION = CAPTIONS["threshold_vs_hurst"]
 
 
 def draw(ds: xr.Dataset, fit=None) -> Figure:

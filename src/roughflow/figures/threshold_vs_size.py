@@ -7,33 +7,18 @@ import xarray as xr
 from matplotlib.figure import Figure
 
 from roughflow.datasets.sweep import single_setting, threshold_values
+from roughflow.defaults import NU_PERCOLATION
 from roughflow.fits import scaling
 
 from ._style import EASY, HARD, seed_stats
+from .captions import CAPTIONS
 
-CAPTION = (
-    "a_c* is perimeter-corrected (first-order grid bias of the contact area removed, "
-    "docs/accuracy.md) on grids with >= 4 points per lambda_s, raw on coarser ones (raw "
-    "values there are biased high by about 0.03). "
-    "Size dependence of a_c* in the stretching (x, blue) and contraction (y, red) "
-    "directions, H = 0.8 (paper Fig. 3), versus eps_t = max(sqrt(gamma), 1/sqrt(gamma)) "
-    "lambda_r / L. Circles: the anisotropic gamma with the most system sizes, varying "
-    "L/lambda_r; triangles: fixed L/lambda_r with other gamma (labelled); black crosses: "
-    "isotropic surfaces. Seed means with standard errors. Lines: joint fit "
-    "a_c*(eps) = a_c* + A eps^(1/nu) with nu = 4/3 and a shared a_c* (solid) and with nu "
-    "free (dashed); grey band: a_c* of the nu = 4/3 fit +- its bootstrap error over seeds. "
-    "What the fits show (issue 20, docs/accuracy.md section 4, 20-40 seeds, gamma = 2 up to "
-    "L/lambda_r = 22.6): easy and hard extrapolate to the same a_c* within their errors, "
-    "but the anisotropic (gamma = 2) extrapolation lies 0.016 +- 0.006 below the isotropic "
-    "one (0.394 against 0.410), and the easy-hard midpoint at the largest size is already "
-    "0.009 +- 0.003 below the isotropic a_c* at the same eps_t. Perimeter correction, "
-    "resolution and correlated seeds do not explain it, and the same analysis finds no "
-    "difference for the bearing model (-0.004 +- 0.006); whether it is a genuine gamma "
-    "dependence of the elastic threshold or a correction to scaling needs larger cells. "
-    "With the default 10 seeds the error of the difference is about 0.012: this figure "
-    "cannot decide it; the isotropic crosses sit at the eps_t of the gamma = 2 series so that "
-    "the midpoint can be compared at equal eps_t without extrapolating."
-)
+CAPTION = CAPTIONS["threshold_vs_size"]
+
+
+def _nu_text(nu: float) -> str:
+    """The fixed exponent as the legend shows it: 4/3 by name, any other by value."""
+    return "4/3" if np.isclose(nu, NU_PERCOLATION) else f"{nu:.3g}"
 
 
 def _fit_row(fit: xr.Dataset, group: str, which: str, mode: str) -> dict | None:
@@ -97,13 +82,14 @@ def draw(ds: xr.Dataset, fit: xr.Dataset | None = None) -> Figure:
             r = _fit_row(fit, "anisotropic", which, mode)
             if r is not None and mode == "fixed":
                 err = f" +- {r['a_star_err']:.3f}" if np.isfinite(r["a_star_err"]) else ""
-                lines.append(f"{which} alone, nu 4/3: a_c* = {r['a_star']:.3f}{err}")
+                lines.append(f"{which} alone, nu {_nu_text(r['nu'])}: "
+                             f"a_c* = {r['a_star']:.3f}{err}")
     iso = _fit_row(fit, "isotropic", "joint", "fixed")
     if iso is not None:
         ax.plot(eps, scaling(eps, iso["a_star"], iso["amp_easy"], iso["nu"]), color="k",
                 lw=0.8, ls=":")
         err = f" +- {iso['a_star_err']:.3f}" if np.isfinite(iso["a_star_err"]) else ""
-        lines.append(f"isotropic, nu 4/3: a_c* = {iso['a_star']:.3f}{err}")
+        lines.append(f"isotropic, nu {_nu_text(iso['nu'])}: a_c* = {iso['a_star']:.3f}{err}")
     if lines:
         ax.text(0.02, 0.02, "\n".join(lines), transform=ax.transAxes, fontsize=6.5,
                 va="bottom", bbox={"facecolor": "white", "alpha": 0.8, "lw": 0})

@@ -28,7 +28,7 @@ from roughflow.defaults import (
     STUDY_ONE_VALUE,
     THRESHOLD_STUDIES,
 )
-from roughflow.errors import InputError, require_positive, require_seeds
+from roughflow.errors import InputError, check_nu, require_positive, require_seeds
 from roughflow.surface import SurfaceSpec, paper_l_over_lambda_r
 
 SWEEP_KEYS = ("model", "gamma", "hurst", "l_over_lambda_r", "eps_f", "points_per_lambda_s")
@@ -540,8 +540,6 @@ def _check_one_series(name: str, jobs) -> None:
 
 def _check_keys_apply(name: str, block: dict) -> None:
     """Refuse keys of a study block that nothing would use (they were silently ignored)."""
-    from roughflow.fits import check_nu
-
     where = f"config studies.{name}"
     if name in THRESHOLD_STUDIES:
         for n, s in enumerate(block.get("series") or []):

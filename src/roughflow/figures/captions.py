@@ -1,0 +1,98 @@
+"""The captions of the study figures, one per study (the figure modules, the command's
+``--caption`` and the workflow report all read them here). Importing this module loads
+no plotting library, so the workflow can fill the report's captions while it plans."""
+
+from __future__ import annotations
+
+from roughflow.defaults import A_C_STAR_PAPER, CORRECTION_MIN_POINTS
+
+_CORRECTED = (
+    "a_c* is perimeter-corrected (first-order grid bias of the contact area removed, "
+    f"docs/accuracy.md) on grids with >= {CORRECTION_MIN_POINTS:g} points per lambda_s, raw "
+    "on coarser ones (raw values there are biased high by about 0.03). "
+)
+
+CAPTIONS: dict[str, str] = {
+    "channels": (
+        "Fluid channels of an isotropic and an anisotropic surface (paper Fig. 1). "
+        "(a) Height of the isotropic surface on its 0.5 x 2 cell (gamma = 1), which is also the "
+        "anisotropic gamma = 4 unit square after stretching x by 2 and compressing y by 2, in "
+        "units of the maximum height. (b) Isotropic and (c) anisotropic elastic contact at "
+        "a_c ~ 0.4: contact in orange, fluid channels percolating from left to right (along x) "
+        "in dark blue, other non-contact in light blue. Both maps are drawn on the same square "
+        "frame, so x and y are not to scale for the isotropic cell."
+    ),
+    "threshold_vs_gamma": (
+        _CORRECTED
+        + "Critical contact areas a_c* in the stretching (x, blue) and contraction (y, red) "
+        "directions versus the Peklenik number gamma (paper Fig. 2): seed means with standard "
+        "errors. (a) Elastic contact for the ratios eps_f = lambda_s/lambda_r of the config "
+        "(circles: the largest eps_f, squares: smaller ones); (b) bearing-area contact. H = 0.8 "
+        "and L/lambda_r = 4 max(sqrt(gamma), 1/sqrt(gamma)). The dotted line marks the paper's "
+        f"large-system threshold {A_C_STAR_PAPER}."
+    ),
+    "threshold_vs_size": (
+        _CORRECTED
+        + "Size dependence of a_c* in the stretching (x, blue) and contraction (y, red) "
+        "directions, H = 0.8 (paper Fig. 3), versus eps_t = max(sqrt(gamma), 1/sqrt(gamma)) "
+        "lambda_r / L. Circles: the anisotropic gamma with the most system sizes, varying "
+        "L/lambda_r; triangles: fixed L/lambda_r with other gamma (labelled); black crosses: "
+        "isotropic surfaces. Seed means with standard errors. Lines: joint fit "
+        "a_c*(eps) = a_c* + A eps^(1/nu) with a fixed nu (2D percolation's 4/3 unless the fit "
+        "was run with another, as the legend says) and a shared a_c* (solid) and with nu "
+        "free (dashed); grey band: a_c* of the fixed-nu fit +- its bootstrap error over seeds. "
+        "What the fits show (docs/accuracy.md section 4, 20-40 seeds, gamma = 2 up to "
+        "L/lambda_r = 22.6): easy and hard extrapolate to the same a_c* within their errors, "
+        "but the anisotropic (gamma = 2) extrapolation lies 0.016 +- 0.006 below the isotropic "
+        "one (0.394 against 0.410), and the easy-hard midpoint at the largest size is already "
+        "0.009 +- 0.003 below the isotropic a_c* at the same eps_t. Perimeter correction, "
+        "resolution and correlated seeds do not explain it, and the same analysis finds no "
+        "difference for the bearing model (-0.004 +- 0.006); whether it is a genuine gamma "
+        "dependence of the elastic threshold or a correction to scaling needs larger cells. "
+        "With the default 10 seeds the error of the difference is about 0.012: this figure "
+        "cannot decide it; the isotropic crosses sit at the eps_t of the gamma = 2 series so that "
+        "the midpoint can be compared at equal eps_t without extrapolating."
+    ),
+    "threshold_vs_hurst": (
+        _CORRECTED
+        + "Critical contact areas a_c* along x (stretching, blue) and y (contraction, red) versus "
+        "the Peklenik number gamma for the Hurst exponents of the config (paper Fig. 4: "
+        "H = 0.3 full triangles, H = 0.8 open circles), elastic contact, eps_f = 1/16, "
+        "L/lambda_r = 4 max(sqrt(gamma), 1/sqrt(gamma)); seed means with standard errors."
+    ),
+    "flow_isotropic": (
+        "Fluid-flow conductance sigma versus relative contact area a_c (paper Fig. 5), "
+        "normalised by sigma_ref, the full Reynolds conductance at a_c -> 0+: full Reynolds "
+        "(circles, every seed, mean of x and y), full Bruggeman effective-medium theory (solid "
+        "lines) and the closed forms of Eq. 16 (dashed lines) for (a) elastic, non-adhesive "
+        "contact, (b) short-range adhesive contact, (c) the bearing-area model, as far as the "
+        "config contains them. In (a) a dotted line shows the full Bruggeman treatment with "
+        "a_c* = 0.5; the other lines use the a_c* of the config (paper: 0.4 for (a), (b)). "
+        "Elastic a_c is perimeter-corrected (first-order grid bias of the contact area "
+        "removed, docs/accuracy.md); bearing and adhesive a_c are cell counts."
+    ),
+    "flow_anisotropic": (
+        "Fluid conductance in the stretching (easy, x, blue) and contraction (y, red) "
+        "directions for an anisotropic surface (paper Fig. 6: elastic, Fig. 7: bearing-area "
+        "contact), normalised by sigma_ref (mean full Reynolds conductance at a_c -> 0+). "
+        "Symbols: full Reynolds (every seed); solid lines: the corrected anisotropic Bruggeman "
+        "theory (Eq. 9); dashed: Persson's form (Eq. 7-8); grey dotted: isotropic Bruggeman. "
+        "Right panel: the ratio chi = sigma_x / sigma_y of full Reynolds (symbols) and the "
+        "corrected theory (lines) with the height value gamma^2 (grey); the paper reports "
+        "chi ~ 8 near a_c* for the elastic contact at gamma = 2 versus 4 from the theory. "
+        "Elastic a_c is perimeter-corrected (first-order grid bias of the contact area "
+        "removed, docs/accuracy.md); bearing and adhesive a_c are cell counts."
+    ),
+    "measured": (
+        "Leak rate Q of a seal versus the nominal contact pressure for each measured scan "
+        "(roughflow import + roughflow leak; docs/measured.md): flow along x (solid) and y "
+        "(dashed) for the seal width, length, fluid pressure drop and viscosity of the config. "
+        "Q = 0 once the fluid no longer percolates; the shaded bands mark each scan's sealing "
+        "pressure along x and y (between the highest pressure found leaking and the lowest found "
+        "sealed). Right: the relative contact area a_c. Each scan's non-periodic treatment is "
+        "in the dataset's per-scan 'boundary' variable (the title names it where all scans "
+        "share it, the legend per scan where they differ); the seal, fluid and scan provenance "
+        "are per-scan variables too. Scans with different pressure grids are each drawn at "
+        "their own pressures."
+    ),
+}
