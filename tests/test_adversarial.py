@@ -483,3 +483,52 @@ def test_figure_of_another_study_is_refused(files, capsys):
     code, err = run(["figure", "threshold_vs_gamma", study, "-o", d / "other.png"], capsys)
     assert code == 2 and "is the 'threshold_vs_size' study" in err, err
     assert not (d / "other.png").exists()
+
+
+def test_flow_file_and_its_plot_appear_together(files, capsys, monkeypatch, tmp_path):
+    # the flow file was published before the plot was drawn: a failed or killed plot left a
+    # complete flow file without the plot asked for
+    from matplotlib.figure import Figure
+
+    def broken(self, *a, **k):
+        raise RuntimeError("renderer died")
+
+    monkeypatch.setattr(Figure, "savefig", broken)
+    with pytest.raises(RuntimeError, match="renderer died"):
+        main(["flow", str(files["contact"]), "-o", str(tmp_path / "f.nc"),
+              "--plot", str(tmp_path / "f.png")])
+    assert list(tmp_path.iterdir()) == []
+    capsys.readouterr()
+
+
+def test_a_full_disk_exits_5_naming_the_output(files, capsys, monkeypatch, tmp_path):
+    import errno
+
+    def full(self, path, *a, **k):
+        raise OSError(errno.ENOSPC, "No space left on device")
+
+    monkeypatch.setattr(xr.Dataset, "to_netcdf", full)
+    code, err = run(["flow", files["contact"], "-o", tmp_path / "f.nc"], capsys)
+    assert code == 5 and "f.nc" in err and "no space left" in err and "Traceback" not in err
+    assert list(tmp_path.iterdir()) == []
+
+
+def test_sigterm_removes_the_temporary_files_like_ctrl_c(files, capsys, monkeypatch, tmp_path):
+    # SIGTERM (kill, scancel, a time limit) ended the process where it stood and left
+    # tmpXXXX.png.part files; it now unwinds like Ctrl-C and exits 143
+    import os
+    import signal
+
+    from matplotlib.figure import Figure
+
+    def killed_while_rendering(self, fname, *a, **k):
+        open(fname, "wb").write(b"half a figure")
+        os.kill(os.getpid(), signal.SIGTERM)
+
+    before = signal.getsignal(signal.SIGTERM)
+    monkeypatch.setattr(Figure, "savefig", killed_while_rendering)
+    code, err = run(["figure", "threshold_vs_gamma", files["study"], "-o",
+                     tmp_path / "fig.png"], capsys)
+    assert code == 143 and "terminated" in err, err
+    assert list(tmp_path.iterdir()) == []
+    assert signal.getsignal(signal.SIGTERM) is before  # main() restores the handler

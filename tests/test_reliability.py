@@ -227,3 +227,66 @@ def test_write_is_atomic_and_leaves_no_partial_file(tmp_path, monkeypatch):
     with pytest.raises(OSError, match="disk full"):
         write_dataset(xr.Dataset({"a": ("x", np.arange(3))}), tmp_path / "a.nc")
     assert list(tmp_path.iterdir()) == []
+
+
+# --- outputs of one command appear together; write failures name the file ------------------
+
+def test_a_figures_png_and_pdf_appear_together_or_not_at_all(tmp_path):
+    # the PNG used to be published before the PDF was rendered: a failed or killed PDF
+    # render left a new PNG beside no PDF (or beside the PDF of an earlier figure)
+    from matplotlib.figure import Figure
+
+    from roughflow.io import save_figure
+
+    class PdfFails(Figure):
+        def savefig(self, fname, format=None, **kw):
+            if format == "pdf":
+                raise RuntimeError("pdf backend died")
+            return super().savefig(fname, format=format, **kw)
+
+    (tmp_path / "fig.pdf").write_bytes(b"an earlier figure's PDF")
+    with pytest.raises(RuntimeError, match="pdf backend died"):
+        save_figure(PdfFails(), tmp_path / "fig.png", tmp_path / "fig.pdf")
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["fig.pdf"]
+    assert (tmp_path / "fig.pdf").read_bytes() == b"an earlier figure's PDF"
+    save_figure(Figure(), tmp_path / "fig.png", tmp_path / "fig.pdf")
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["fig.pdf", "fig.png"]
+
+
+@pytest.mark.parametrize("failure", ["enospc", "hdf_error_on_a_full_disk"])
+def test_a_full_disk_is_an_output_error_naming_the_file(tmp_path, monkeypatch, failure):
+    # netCDF reports a full disk as "NetCDF: HDF error" (a RuntimeError), mkstemp as a
+    # PermissionError, matplotlib as an AttributeError: each ended in a traceback (exit 1)
+    import errno
+    import shutil
+
+    from roughflow.errors import OutputError
+    from roughflow.io import write_dataset
+
+    if failure == "enospc":
+        def write(self, path, *a, **k):
+            raise OSError(errno.ENOSPC, "No space left on device")
+    else:
+        def write(self, path, *a, **k):
+            raise RuntimeError("NetCDF: HDF error")
+
+        usage = shutil.disk_usage(tmp_path)
+        monkeypatch.setattr(shutil, "disk_usage",
+                            lambda p: usage._replace(free=4096))
+    monkeypatch.setattr(xr.Dataset, "to_netcdf", write)
+    with pytest.raises(OutputError, match=r"cannot write '.*a\.nc': no space left"):
+        write_dataset(xr.Dataset({"a": ("x", np.arange(3))}), tmp_path / "a.nc")
+    assert list(tmp_path.iterdir()) == []
+
+
+def test_a_writer_bug_on_a_disk_with_room_stays_a_bug(tmp_path, monkeypatch):
+    # only the file system's failures become OutputError; a writer's own error propagates
+    from roughflow.io import write_dataset
+
+    def write(self, path, *a, **k):
+        raise RuntimeError("NetCDF: HDF error")
+
+    monkeypatch.setattr(xr.Dataset, "to_netcdf", write)
+    with pytest.raises(RuntimeError, match="HDF error"):
+        write_dataset(xr.Dataset({"a": ("x", np.arange(3))}), tmp_path / "a.nc")
+    assert list(tmp_path.iterdir()) == []

@@ -92,12 +92,23 @@ def test_an_unreadable_file_is_reported_once_and_replaced(tmp_path):
     assert set(json.loads((tmp_path / name).read_text())) == {"double", "single", "long_double"}
 
 
+def test_a_file_with_a_non_ascii_byte_is_replaced_too(tmp_path):
+    # json.loads never saw it: the ascii read raised UnicodeDecodeError, and every later
+    # FFT command of the machine stopped on it (exit 1) until the file was deleted by hand
+    name = f"wisdom-{wisdom.machine_key()}.json"
+    (tmp_path / name).write_bytes(b'{"double": "\xff"}')
+    out = run_plan({wisdom.ENV: str(tmp_path), "ROUGHFLOW_FFTW_EFFORT": "FFTW_MEASURE"})
+    assert "exact True" in out
+    assert out.count("is not a wisdom file and will be replaced") == 1
+    assert set(json.loads((tmp_path / name).read_text())) == {"double", "single", "long_double"}
+
+
 def test_a_directory_that_cannot_be_made_costs_a_warning_not_the_run(tmp_path):
     blocker = tmp_path / "file"
     blocker.write_text("")
     out = run_plan({wisdom.ENV: str(blocker / "fftw"), "ROUGHFLOW_FFTW_EFFORT": "FFTW_MEASURE"})
     assert "exact True" in out
-    assert out.count("FFTW wisdom: cannot use") == 1
+    assert out.count("FFTW wisdom: cannot write to") == 1
     assert out.count("FFTW wisdom:") == 1  # one warning for one problem
 
 

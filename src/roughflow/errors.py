@@ -15,6 +15,11 @@ class ResourceError(InputError):
     before anything is allocated (:mod:`roughflow.resources`)."""
 
 
+class OutputError(OSError):
+    """An output could not be written after the work was done (the disk or quota full, the
+    folder made unwritable meanwhile); raised naming the file, with nothing of it left."""
+
+
 class ConvergenceError(RuntimeError):
     """A solver did not reach its tolerance; carries the residual it reached, and ``inputs``:
     the arrays and values that reproduce the failed solve, where a caller that knows them

@@ -8,9 +8,12 @@ file gets its provenance attributes (:mod:`roughflow.provenance`).
 
 from __future__ import annotations
 
+import errno
 import math
 import os
+import shutil
 import tempfile
+from collections.abc import Callable, Sequence
 from dataclasses import fields
 from pathlib import Path
 
@@ -19,7 +22,7 @@ import xarray as xr
 
 from roughflow.datasets.results import spec_attrs
 from roughflow.datasets.units import LENGTH_UNITS, grid_coords
-from roughflow.errors import InputError, require_field, require_positive
+from roughflow.errors import InputError, OutputError, require_field, require_positive
 from roughflow.provenance import PROVENANCE_ATTRS, Provenance
 from roughflow.surface import ScanInfo, Surface, SurfaceSpec
 
@@ -83,28 +86,88 @@ def check_output(path: str | os.PathLike, *, option: str = "--output",
     os.unlink(tmp)
 
 
-def save_figure(fig, path: str | os.PathLike, **savefig_kw) -> Path:
-    """Render the matplotlib ``fig`` to ``path`` atomically (temporary file + rename, the
-    format from the suffix), creating missing folders; a failed render leaves nothing."""
+Writer = tuple[Path, Callable[[str], object]]
+
+
+def figure_writer(fig, path: str | os.PathLike, **savefig_kw) -> Writer:
+    """``(path, write)`` for :func:`write_together`: renders the matplotlib ``fig`` in the
+    format of ``path``'s suffix."""
     path = Path(path)
-    return _write_atomically(path, lambda tmp: fig.savefig(
-        tmp, format=path.suffix.lstrip(".").lower(), **savefig_kw))
+    return path, lambda tmp: fig.savefig(tmp, format=path.suffix.lstrip(".").lower(),
+                                         **savefig_kw)
 
 
-def _write_atomically(path: Path, write) -> Path:
-    """Call ``write(tmp)`` on a temporary file next to ``path`` (missing folders created),
-    then :func:`publish` it as ``path``; a failed write leaves nothing behind."""
-    path.parent.mkdir(parents=True, exist_ok=True)
-    fd, tmp = tempfile.mkstemp(suffix=path.suffix + ".part", dir=path.parent)
-    os.close(fd)
+def save_figure(fig, *paths: str | os.PathLike, **savefig_kw) -> Path:
+    """Render the matplotlib ``fig`` to each of ``paths`` (the format from each suffix),
+    published together (:func:`write_together`), creating missing folders; a failed render
+    leaves none of them. Returns the first path."""
+    return write_together([figure_writer(fig, p, **savefig_kw) for p in paths])[0]
+
+
+#: Free bytes below which a failed write is taken for a full disk: netCDF and matplotlib
+#: report it as "NetCDF: HDF error" or an AttributeError, not as ENOSPC.
+_NEARLY_FULL = 1 << 20
+_NO_SPACE = {errno.ENOSPC, getattr(errno, "EDQUOT", errno.ENOSPC)}
+
+
+def _write_failure(path: Path, exc: BaseException) -> OutputError | None:
+    """An :class:`OutputError` naming ``path`` where ``exc`` came from the file system (no
+    space, a folder that became unwritable), else None (an error of the writer itself)."""
     try:
-        write(tmp)
-        publish(tmp, path)
-    except BaseException:
-        if os.path.exists(tmp):
-            os.unlink(tmp)
+        free = shutil.disk_usage(path.parent).free
+    except OSError:
+        free = None
+    if getattr(exc, "errno", None) in _NO_SPACE or (free is not None and free < _NEARLY_FULL):
+        shown = "" if free is None else f", {free} bytes free"
+        return OutputError(f"cannot write {str(path)!r}: no space left on its disk or quota "
+                           f"({type(exc).__name__}: {exc}{shown})")
+    if isinstance(exc, OSError):
+        return OutputError(f"cannot write {str(path)!r}: {exc}")
+    return None
+
+
+def write_together(writers: Sequence[Writer]) -> list[Path]:
+    """Call each ``write(tmp)`` on a temporary file next to its path (missing folders
+    created), and only when all have succeeded :func:`publish` them all, so that a command's
+    outputs (a figure's PNG and PDF, a flow file and its plot) appear together or not at
+    all. A failure leaves none of the temporary files; one of the file system (disk full)
+    raises :class:`~roughflow.errors.OutputError` naming the file."""
+    tmps: list[str] = []
+    path = None
+    try:
+        for path, write in writers:
+            path.parent.mkdir(parents=True, exist_ok=True)
+            fd, tmp = tempfile.mkstemp(suffix=path.suffix + ".part", dir=path.parent)
+            os.close(fd)
+            tmps.append(tmp)
+            write(tmp)
+        for tmp, (path, _) in zip(tmps, writers, strict=True):
+            publish(tmp, path)
+    except BaseException as exc:
+        # judged before the temporary files go: they are what filled the disk
+        failure = (_write_failure(path, exc) if path is not None and isinstance(exc, Exception)
+                   else None)
+        for tmp in tmps:
+            if os.path.exists(tmp):
+                os.unlink(tmp)
+        if failure is not None:
+            raise failure from exc
         raise
-    return path
+    return [p for p, _ in writers]
+
+
+def dataset_writer(ds: xr.Dataset, path: str | os.PathLike, *,
+                   provenance: Provenance | None = None) -> Writer:
+    """``(path, write)`` for :func:`write_together`: ``ds`` with the attributes of
+    ``provenance`` (default: the Python API's, :class:`~roughflow.provenance.Provenance`) in
+    place of any it carried, attributes netCDF can store, written as netCDF."""
+    ds = ds.copy()
+    attrs = {k: v for k, v in ds.attrs.items() if k not in PROVENANCE_ATTRS}
+    attrs.update((provenance or Provenance()).attrs())
+    ds.attrs = clean_attrs(attrs)
+    for name in ds.variables:
+        ds[name].attrs = clean_attrs(ds[name].attrs)
+    return Path(path), ds.to_netcdf
 
 
 def write_dataset(ds: xr.Dataset, path: str | os.PathLike, *,
@@ -112,14 +175,7 @@ def write_dataset(ds: xr.Dataset, path: str | os.PathLike, *,
     """Write ``ds`` to ``path`` atomically (temporary file + rename), with the permissions
     of a newly created file and the attributes of ``provenance`` (default: the Python
     API's, :class:`~roughflow.provenance.Provenance`) in place of any it carried."""
-    path = Path(path)
-    ds = ds.copy()
-    attrs = {k: v for k, v in ds.attrs.items() if k not in PROVENANCE_ATTRS}
-    attrs.update((provenance or Provenance()).attrs())
-    ds.attrs = clean_attrs(attrs)
-    for name in ds.variables:
-        ds[name].attrs = clean_attrs(ds[name].attrs)
-    return _write_atomically(path, ds.to_netcdf)
+    return write_together([dataset_writer(ds, path, provenance=provenance)])[0]
 
 
 def read_dataset(path: str | os.PathLike, kinds: str | tuple[str, ...] | None = None, *,

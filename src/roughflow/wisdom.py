@@ -83,21 +83,22 @@ def path() -> Path | None:
     return None if d is None else d / f"wisdom-{machine_key()}.json"
 
 
-def _report(problem: str, err: Exception) -> None:
+def _report(problem: str, err: Exception, consequence: str = "planning goes on without the "
+            "file") -> None:
     if problem not in _reported:
         _reported.add(problem)
-        log.warning("FFTW wisdom: %s (%s); planning goes on without the file", problem, err)
+        log.warning("FFTW wisdom: %s (%s); %s", problem, err, consequence)
 
 
 def _load(file: Path) -> None:
     import pyfftw
 
     try:
-        text = file.read_text(encoding="ascii")
+        raw = file.read_bytes()
     except (FileNotFoundError, NotADirectoryError):  # nothing saved (yet)
         return
-    try:
-        data = json.loads(text)
+    try:  # UnicodeDecodeError (a stray non-ASCII byte) is a ValueError too
+        data = json.loads(raw.decode("ascii"))
         wisdom = tuple(data[k].encode("ascii") for k in _PRECISIONS)
     except (ValueError, KeyError, TypeError, AttributeError) as err:
         _report(f"{file} is not a wisdom file and will be replaced", err)
@@ -126,7 +127,9 @@ def _locked(file: Path) -> Iterator[bool]:
         file.parent.mkdir(parents=True, exist_ok=True)
         handle = open(file.with_name(file.name + ".lock"), "a")  # noqa: SIM115 - closed below
     except OSError as err:
-        _report(f"cannot use {file.parent}", err)
+        # a folder that cannot be written may still hold wisdom, which shared() reads
+        _report(f"cannot write to {file.parent}", err,
+                "its wisdom is read if there is any, but what this run plans is not saved")
         handle = None
     if handle is None:
         yield False

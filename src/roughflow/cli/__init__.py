@@ -20,12 +20,14 @@ import argparse
 import importlib
 import logging
 import pkgutil
+import signal
 import sys
+import threading
 from dataclasses import replace
 from pathlib import Path
 
 from roughflow import __version__
-from roughflow.errors import ConvergenceError, InputError
+from roughflow.errors import ConvergenceError, InputError, OutputError
 from roughflow.progress import log_progress
 
 from ._common import check_outputs, read_inputs
@@ -36,7 +38,18 @@ EXIT_STATUS = {0: "success", 1: "unexpected error (a bug: please report the trac
                   "or a surface whose threshold lies outside the search's pressure range",
                3: "a solver did not converge (its residual is printed)",
                4: "out of memory although the estimate fitted (roughflow.resources)",
-               130: "interrupted"}
+               5: "an output could not be written (disk or quota full, folder unwritable); "
+                  "none of the command's outputs was left",
+               130: "interrupted", 143: "terminated (SIGTERM: kill, scancel, a time limit)"}
+
+
+class _Terminated(BaseException):
+    """SIGTERM, turned into an exception so that temporary files are removed on the way
+    out, as they are for Ctrl-C (the default action ends the process where it stands)."""
+
+
+def _on_sigterm(signum, frame) -> None:
+    raise _Terminated
 
 
 def build_parser() -> argparse.ArgumentParser:
@@ -114,6 +127,8 @@ def main(argv: list[str] | None = None) -> int:
     args = parser.parse_args(argv)
     log_progress(_level(args))
     name = f"roughflow {args.command}"
+    in_main_thread = threading.current_thread() is threading.main_thread()
+    previous = signal.signal(signal.SIGTERM, _on_sigterm) if in_main_thread else None
     try:
         check_environment()  # FFT settings from the environment, before any work
         check_outputs(args)
@@ -136,8 +151,15 @@ def main(argv: list[str] | None = None) -> int:
     except MemoryError:
         parser.exit(4, f"{name}: out of memory (the estimate of roughflow.resources fitted "
                        "the available memory, which other processes may have taken since)\n")
+    except OutputError as exc:
+        parser.exit(5, f"{name}: error: {exc}\n")
     except KeyboardInterrupt:
         parser.exit(130, f"{name}: interrupted\n")
+    except _Terminated:
+        parser.exit(143, f"{name}: terminated\n")
+    finally:
+        if in_main_thread:
+            signal.signal(signal.SIGTERM, previous)
     return 0
 
 

@@ -67,7 +67,7 @@ def _read_gap(ds):
 def run(args: argparse.Namespace) -> None:
     from roughflow.datasets import flow_dataset
     from roughflow.flow import check_sigma_tol, solve
-    from roughflow.io import write_dataset
+    from roughflow.io import dataset_writer, figure_writer, write_together
     from roughflow.provenance import PROVENANCE_ATTRS
 
     sigma_tol = check_sigma_tol(args.sigma_tol)
@@ -89,21 +89,21 @@ def run(args: argparse.Namespace) -> None:
         # the contact's provenance continues in this file's history and references
         if k not in ("title", "lx", "ly", *PROVENANCE_ATTRS):
             out.attrs[f"contact_{k}"] = v
-    write_dataset(out, args.output, provenance=args.provenance.using("reynolds"))
+    writers = [dataset_writer(out, args.output, provenance=args.provenance.using("reynolds"))]
     if args.plot:
-        _plot(results, contact, args.plot)
+        writers.append(figure_writer(_plot(results, contact), args.plot, dpi=120))
+    write_together(writers)  # the flow file and its plot appear together or not at all
 
 
-def _plot(results: dict, contact: np.ndarray, path: str) -> None:
+def _plot(results: dict, contact: np.ndarray):
     # a Figure without pyplot: no backend is selected or switched (savefig renders with Agg)
     from matplotlib.figure import Figure
 
     from roughflow.flow import plot_flux
-    from roughflow.io import save_figure
 
     fig = Figure(figsize=(5 * len(results), 4.2))
     axes = fig.subplots(1, len(results), squeeze=False)
     for ax, r in zip(axes[0], results.values(), strict=True):
         plot_flux(r, contact, ax=ax)
     fig.tight_layout()
-    save_figure(fig, path, dpi=120)
+    return fig

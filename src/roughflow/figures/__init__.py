@@ -59,6 +59,5 @@ def make_figure(study: str, dataset, output: str | os.PathLike, fit=None, *,
                          f"as {made_for}, not {study}")
     fit_ds = load(fit, "fit") if isinstance(fit, (str, os.PathLike)) else fit
     fig = mod.draw(dataset, fit=fit_ds)
-    for path in (out, pdf):
-        save_figure(fig, path, dpi=150)
+    save_figure(fig, out, pdf, dpi=150)  # both or neither
     return mod.CAPTION
