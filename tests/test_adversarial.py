@@ -179,19 +179,21 @@ def test_01_aggregate_keeps_every_seed_of_disjoint_jobs(files, capsys):
         assert np.isfinite(ds["a_c_star"].values).all()
 
 
-def test_02_huge_grids_are_refused_before_allocating(capsys):
+def test_02_huge_grids_are_refused_before_allocating(capsys, tmp_path):
     # 2e5 x 2e5 points need terabytes on any machine; the refusal names the grid and memory
+    never = tmp_path / "never.nc"
     code, err = run(["surface", "--nx", "200000", "--ny", "200000", "--lambda-r", "0.25",
-                     "--lambda-s", "0.001", "-o", "/tmp/never.nc"], capsys)
+                     "--lambda-s", "0.001", "-o", never], capsys)
     assert code == 2 and "200000 x 200000" in err and "TB" in err, err
-    for argv in (["surface", "--eps-f", "1e-5", "-o", "/tmp/never.nc"],
-                 ["scene", "threshold", "--eps-f", "1e-5", "-o", "/tmp/never.nc"],
+    for argv in (["surface", "--eps-f", "1e-5", "-o", never],
+                 ["scene", "threshold", "--eps-f", "1e-5", "-o", never],
                  ["scene", "ladder", "--eps-f", "1e-5", "--area-fractions", "0.1",
-                  "-o", "/tmp/never.nc"],
-                 ["scene", "channels", "--eps-f", "1e-5", "-o", "/tmp/never.nc"],
+                  "-o", never],
+                 ["scene", "channels", "--eps-f", "1e-5", "-o", never],
                  ["theory", "--eps-f", "1e-5"]):
         code, err = run(argv, capsys)
         assert code == 2 and "memory" in err, (argv, err)
+    assert list(tmp_path.iterdir()) == []
 
 
 def test_03_flow_tol_has_an_upper_bound(files, capsys):

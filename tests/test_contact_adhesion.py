@@ -148,3 +148,20 @@ def test_default_adhesion_reproduces_the_papers_adhesive_case():
     ratio40 = a40.mean_gap / solve(s, p40, tol=1e-5).mean_gap
     assert 0.63 < ratio10 < 0.73
     assert 0.47 < ratio40 < 0.57
+
+
+def test_curvature_radius_of_a_sinusoid():
+    # h = A cos(2 pi k x / lx): laplacian h = -A q^2 cos(...), <(laplacian h)^2> = A^2 q^4 / 2,
+    # so kappa_bar^2 = <(laplacian h)^2> / 4 = A^2 q^4 / 8 and R_c = sqrt(8) / (A q^2)
+    # (docs/physics.md Sect. 3.3), exactly for one Fourier mode; a rectangular cell as well
+    from roughflow.contact.adhesion import curvature_radius
+
+    amp, k, lx, ly = 0.03, 3, 2.0, 0.5
+    x = (np.arange(64) + 0.5) * lx / 64
+    h = np.repeat((amp * np.cos(2 * np.pi * k * x / lx))[:, None], 16, axis=1)
+    q = 2 * np.pi * k / lx
+    assert curvature_radius(h, lx, ly) == pytest.approx(math.sqrt(8) / (amp * q**2), rel=1e-12)
+    # and the Tabor parameter built on it, (R_c gamma_s^2 / (E*^2 rho^3))^(1/3)
+    ad = Adhesion(surface_energy=1e-3, range=0.01)
+    mu = (math.sqrt(8) / (amp * q**2) * 1e-6 / 1e-6) ** (1 / 3)
+    assert tabor_parameter(h, lx, ly, ad) == pytest.approx(mu, rel=1e-12)

@@ -49,19 +49,22 @@ def test_cli_bearing(surface_file, tmp_path):
 
 
 @pytest.mark.parametrize(
-    ("extra", "code"),
+    ("extra", "code", "message"),
     [
-        (["--pressure", "-1"], 2),
-        (["--model", "bearing", "--area-fraction", "1.5"], 2),
-        (["--pressure", "0.1", "--tol", "0"], 2),
-        (["--model", "adhesive", "--pressure", "0.1", "--surface-energy", "1e-4"], 2),
-        (["--pressure", "0.1", "--max-iter", "2"], 3),
+        (["--pressure", "-1"], 2, "pressure"),
+        (["--model", "bearing", "--area-fraction", "1.5"], 2, "area_fraction"),
+        (["--pressure", "0.1", "--tol", "0"], 2, "tol"),
+        (["--model", "adhesive", "--pressure", "0.1", "--surface-energy", "1e-4"], 2,
+         "needs both --surface-energy and --range"),
+        (["--pressure", "0.1", "--max-iter", "2"], 3, "did not converge"),
     ],
 )
-def test_cli_errors(surface_file, tmp_path, extra, code):
+def test_cli_errors(surface_file, tmp_path, capsys, extra, code, message):
+    # the message too: exit 2 is also argparse's for an option it does not know
     with pytest.raises(SystemExit) as exc:
         main(["contact", str(surface_file), *extra, "-o", str(tmp_path / "x.nc")])
     assert exc.value.code == code
+    assert message in capsys.readouterr().err
     assert not (tmp_path / "x.nc").exists()
 
 

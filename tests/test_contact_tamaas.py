@@ -38,9 +38,12 @@ def test_matches_tamaas(spec_kw, pressure, method):
     traction, gap = _tamaas(s.heights, s.lx, s.ly, pressure)
     ours = solve(s, pressure, method=method, tol=1e-8)
     a_tm = float((traction > 0).mean())
-    # Target agreement 1e-3 relative; both codes solve the identical discrete problem to
-    # tight tolerances (measured agreement ~1e-12), so 1e-3 is a loose, safe bound.
-    assert ours.area_fraction == pytest.approx(a_tm, rel=1e-3)
-    assert ours.mean_gap == pytest.approx(float(np.maximum(gap, 0).mean()), rel=1e-3)
+    # Both codes solve the identical discrete problem, ours to tol 1e-8, Tamaas to 1e-12.
+    # Measured (these six cases): the same contact cells, mean gaps within 9e-10 relative
+    # (gfmd; cg 3e-11). So the area may differ by one marginal cell at most, and the mean
+    # gap by 1e-7 (100x the largest measured): an E* off by 5e-4 moves the gap by about 5e-4
+    # and fails here, which 1e-3 let pass at p = 0.05.
+    assert abs(ours.area_fraction - a_tm) <= 1.0 / s.heights.size
+    assert ours.mean_gap == pytest.approx(float(np.maximum(gap, 0).mean()), rel=1e-7)
     # the contact sets agree point by point up to a few marginal pixels
     assert int((ours.contact != (traction > 0)).sum()) <= 3

@@ -630,3 +630,23 @@ def test_periodic_tiling_leaves_sigma_unchanged(ny):
     s1 = conductance(g, 0, ly=0.4, method="direct")
     s3 = conductance(np.tile(g, (1, 3)), 0, ly=1.2, method="direct")
     assert s3 == pytest.approx(s1, rel=1e-12)  # same linear system up to round-off
+
+
+def test_rectangular_cells_discretise_the_same_medium_as_square_ones():
+    """Anisotropic sweeps solve on gamma : 1 rectangular cells, where the faces across the
+    flow carry sigma dx/dy and those along it sigma dy/dx. A random checkerboard of square
+    blocks (16 x 16, contrast 10) drawn on square cells (8 x 8 per block) and on 2 : 1 cells
+    (8 x 4 and 4 x 8 per block) is one medium: measured ratios 0.981-0.989 (seeds 0-2), the
+    staircase error of 4 cells per block along one axis, against 1.14 / 0.85 where the
+    rectangular cells are taken as square (a wrong face ratio). So both conductances within
+    3 %, and their ratio, which the staircase error moves alike on both axes (measured
+    within 0.1 %), within 1 %."""
+    s1, s2 = 1.0, 10.0
+    u1, u2 = (12 * s1) ** (1 / 3), (12 * s2) ** (1 / 3)
+    phase = np.random.default_rng(0).random((16, 16)) < 0.5
+    square = conductance(np.where(np.kron(phase, np.ones((8, 8), bool)), u1, u2))
+    for block in ((8, 4), (4, 8)):
+        rect = conductance(np.where(np.kron(phase, np.ones(block, bool)), u1, u2))
+        assert rect[0] == pytest.approx(square[0], rel=0.03), block
+        assert rect[1] == pytest.approx(square[1], rel=0.03), block
+        assert rect[0] / rect[1] == pytest.approx(square[0] / square[1], rel=0.01), block

@@ -78,3 +78,14 @@ def test_cluster_stats_of_a_contact_state():
     assert st.patch_sizes.sum() == c.sum() and st.fluid_sizes.sum() == (~c).sum()
     assert st.n_patches == st.patch_sizes.size > 10
     assert 0.5 < st.percolating_fraction_x <= 0.7 and 0.5 < st.percolating_fraction_y <= 0.7
+
+
+def test_contact_patches_are_4_connected_by_default_as_in_the_paper():
+    # two contact cells touching at a corner are two patches (4-connected, the paper's
+    # convention for patches); with patch_connectivity=8 they are one
+    from roughflow.percolation import cluster_stats
+
+    c = np.zeros((8, 8), bool)
+    c[2, 2] = c[3, 3] = True
+    assert cluster_stats(c).n_patches == 2
+    assert cluster_stats(c, patch_connectivity=8).n_patches == 1

@@ -24,7 +24,9 @@ from roughflow import contact, flow
 from roughflow.percolation import contact_percolates, percolates
 from roughflow.surface import Surface, SurfaceSpec, generate
 
-SETTINGS = settings(max_examples=12, deadline=None,
+# derandomize: the same examples on every run (a failure that shows on some runs only would
+# be a flaky CI), and no .hypothesis database written into the working directory
+SETTINGS = settings(max_examples=12, deadline=None, derandomize=True, database=None,
                     suppress_health_check=[HealthCheck.too_slow])
 #: contact tolerance: gap error 1e-10 rms heights, so the contact set is decided far from
 #: round-off except at cells whose pressure is within ~1e-10 of zero

@@ -181,3 +181,21 @@ def test_same_seed_same_surface_at_every_resolution(gamma):
     a, b = generate(coarse).heights, generate(fine).heights
     # Same modes, same phases, same normalisation: equal up to FFT round-off.
     np.testing.assert_allclose(b[::2, ::2], a, rtol=0, atol=1e-12 * np.abs(a).max())
+
+
+def test_plateau_rolloff_is_flat_below_q_r_and_self_affine_above():
+    """rolloff="plateau": C(q) = C(q_r) for q < q_r and C(q_r) (q/q_r)^(-2(1+H)) up to q_s.
+    Checked on the generated heights' power against this formula written out here (the
+    amplitudes are deterministic, so the ratio of two modes' powers is that of C)."""
+    hurst = 0.8
+    s = spec(nx=256, ny=256, lambda_r=1 / 4, lambda_s=1 / 64, hurst=hurst, rolloff="plateau")
+    power = np.abs(np.fft.fft2(generate(s).heights)) ** 2
+    q = 2 * np.pi * np.fft.fftfreq(s.nx, d=s.dx)
+    qq = np.hypot(q[:, None], q[None, :])
+    qr, qs = 2 * np.pi / s.lambda_r, 2 * np.pi / s.lambda_s
+    ref = power[1, 0]  # q = 2 pi / L < q_r: on the plateau
+    below = (qq > 0) & (qq < qr)
+    np.testing.assert_allclose(power[below], ref, rtol=1e-9)
+    above = (qq > qr) & (qq < qs)
+    np.testing.assert_allclose(power[above], ref * (qq[above] / qr) ** (-2 * (1 + hurst)),
+                               rtol=1e-9)

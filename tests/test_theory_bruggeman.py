@@ -301,3 +301,23 @@ def test_medium_solves_an_equation_once(monkeypatch):
     assert len(solved) == 2
     with pytest.raises(InputError, match="weights"):
         bruggeman(m, a_c_star=0.415, weights=weights)
+
+
+def test_gap_theory_moves_the_thresholds_by_the_grid_bias_of_the_area():
+    # With a continuum area estimate (the elastic ladders pass the perimeter-corrected a_c),
+    # the Bruggeman thresholds move onto the grid by (grid fraction - estimate), so that
+    # every a_c* refers to the continuum area, as the closed form's does (theory.gap).
+    from roughflow.theory import gap_theory
+
+    rng = np.random.default_rng(4)
+    gap = np.where(rng.random((64, 64)) < 0.3, 0.0, rng.uniform(0.2, 1.0, (64, 64)))
+    contact = gap == 0.0
+    grid_a = contact.mean()
+    estimate = grid_a - 0.03  # a grid bias of 0.03
+    t = gap_theory(gap, a_c_star=0.4, contact=contact, area_fraction=estimate)
+    plain = gap_theory(gap, a_c_star=0.4, contact=contact)
+    m = medium(local_conductivity(gap, 1.0, contact=contact).ravel())
+    assert t.area_fraction == estimate and plain.area_fraction == pytest.approx(grid_a)
+    assert t.sigma_isotropic == pytest.approx(bruggeman(m, a_c_star=0.43).sigma, rel=1e-12)
+    assert plain.sigma_isotropic == pytest.approx(bruggeman(m, a_c_star=0.4).sigma, rel=1e-12)
+    assert t.sigma_isotropic > plain.sigma_isotropic  # a later threshold: more conductance

@@ -248,3 +248,16 @@ def test_peklenik_bad_input():
         peklenik_number(np.ones((8, 8)))
     with pytest.raises(InputError, match="negative"):
         conductivity_peklenik(-np.ones((8, 8)))
+
+
+def test_default_energy_factor_is_the_papers():
+    # gamma_P of the elastic energy, the literature value docs/theory.md cites (Yang & Persson
+    # 2008), pinned here because every test above uses the default on both sides; every call
+    # that does not pass energy_factor uses it. (Not the paper's a_c* "0.42 +- 0.02".)
+    import inspect
+
+    from roughflow.theory import DEFAULT_ENERGY_FACTOR, predict_conductance
+
+    assert DEFAULT_ENERGY_FACTOR == 0.42
+    default = inspect.signature(predict_conductance).parameters["energy_factor"].default
+    assert default == DEFAULT_ENERGY_FACTOR

@@ -46,22 +46,21 @@ def test_cli_threshold_elastic_one_axis(surface_file, tmp_path):
         assert float(ds["p_lo"][0]) < float(ds["p_hi"][0])
 
 
-def test_cli_threshold_errors(surface_file, tmp_path):
+def test_cli_threshold_errors(surface_file, tmp_path, capsys):
     _, path = surface_file
     out = tmp_path / "t.nc"
-    with pytest.raises(SystemExit) as e:
-        main(["threshold", str(path), "--tol", "0", "-o", str(out)])
-    assert e.value.code == 2
-    with pytest.raises(SystemExit) as e:  # one of the two adhesion values only
-        main(["threshold", str(path), "--model", "adhesive", "--surface-energy", "1e-4",
-              "-o", str(out)])
-    assert e.value.code == 2
-    with pytest.raises(SystemExit) as e:  # adhesion values for a model without adhesion
-        main(["threshold", str(path), "--adhesion-range", "0.01", "-o", str(out)])
-    assert e.value.code == 2
-    with pytest.raises(SystemExit) as e:  # always percolates below p = 1e-2
-        main(["threshold", str(path), "--p-max", "0.01", "-o", str(out)])
-    assert e.value.code == 2
+    # each with its message: exit 2 is also argparse's for an option it does not know
+    for argv, message in (
+            (["--tol", "0"], "tol"),
+            (["--model", "adhesive", "--surface-energy", "1e-4"], "adhesion-range"),
+            (["--adhesion-range", "0.01"], "adhesive"),
+            (["--p-max", "0.01"], "still spans"),  # always percolates below p = 1e-2
+    ):
+        with pytest.raises(SystemExit) as e:
+            main(["threshold", str(path), *argv, "-o", str(out)])
+        assert e.value.code == 2
+        err = capsys.readouterr().err
+        assert message in err and "unrecognized" not in err, (argv, err)
     assert not out.exists()
     assert main(["threshold", str(path), "--p-max", "0.01", "--allow-unbracketed",
                  "-o", str(out)]) == 0
