@@ -113,7 +113,14 @@ def test_flow_datasets_are_physical(test_run):
     with xr.open_dataset(wd / "results" / "channels" / "dataset.nc") as ds:
         for name in ("iso", "aniso"):
             assert abs(ds.attrs[f"{name}_area_fraction"] - 0.4) < 0.01
-            assert set(np.unique(ds[f"phase_{name}"].values)) <= {0, 1, 2}
+            phase = ds[f"phase_{name}"]
+            assert set(np.unique(phase.values)) <= {0, 1, 2}
+            # the library's one encoding (the scene once had its own, with 1 and 2 swapped)
+            from roughflow.percolation import percolation_map
+
+            np.testing.assert_array_equal(phase.values, percolation_map(phase.values == 0, 0))
+            assert bool((phase == 2).any()) == bool(ds.attrs[f"{name}_fluid_percolates_x"])
+            assert phase.attrs["flag_meanings"].split()[2] == "percolating_fluid"
 
 
 @pytest.mark.slow

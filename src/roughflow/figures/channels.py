@@ -12,7 +12,9 @@ from .captions import CAPTIONS
 
 CAPTION = CAPTIONS["channels"]
 
-PHASE_COLORS = ListedColormap(["#f28e2b", "#1f3b99", "#a6cee3"])
+#: Colours of the phase codes 0 contact, 1 other fluid, 2 fluid percolating along x
+#: (percolation.percolation_map): orange, light blue, dark blue as in the paper's Fig. 1.
+PHASE_COLORS = ListedColormap(["#f28e2b", "#a6cee3", "#1f3b99"])
 
 
 def draw(ds: xr.Dataset, fit=None) -> Figure:
@@ -38,6 +40,6 @@ def draw(ds: xr.Dataset, fit=None) -> Figure:
         ax.set_xlabel("x / Lx")
         ax.set_ylabel("y / Ly")
     handles = [Rectangle((0, 0), 1, 1, color=c) for c in PHASE_COLORS.colors]
-    fig.legend(handles, ["contact", "fluid percolating along x", "other fluid"],
+    fig.legend(handles, ["contact", "other fluid", "fluid percolating along x"],
                loc="outside lower center", ncol=3, fontsize=8, frameon=False)
     return fig

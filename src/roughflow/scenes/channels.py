@@ -17,7 +17,8 @@ import xarray as xr
 
 from roughflow import contact
 from roughflow.datasets.units import DIMENSIONLESS, LENGTH_UNITS
-from roughflow.percolation import contact_percolates, percolates, spanning_cells
+from roughflow.percolation import contact_percolates, percolates, percolation_map
+from roughflow.percolation.clusters import CONTACT, FLUID, PERCOLATING
 from roughflow.search import LoadSearch, warm_start_compliance
 from roughflow.surface import Surface, generate
 
@@ -25,7 +26,9 @@ from .jobs import ChannelsJob
 
 log = logging.getLogger(__name__)
 
-CLASSES = {0: "contact", 1: "percolating fluid (along x)", 2: "non-percolating fluid"}
+#: The phase codes of percolation.percolation_map, which the scene writes.
+CLASSES = {CONTACT: "contact", FLUID: "non-percolating fluid",
+           PERCOLATING: "percolating fluid (along x)"}
 
 
 #: Largest |a_c - target| of the channels scene's contact.
@@ -52,16 +55,6 @@ def contact_at_area(surface: Surface, target: float, model: str, *, tol: float =
     return found.result
 
 
-def classify(contact_mask: np.ndarray) -> np.ndarray:
-    """0 contact, 1 fluid percolating along x, 2 other fluid."""
-    open_mask = ~contact_mask
-    span = np.asarray(spanning_cells(open_mask, 0), dtype=bool)
-    out = np.full(contact_mask.shape, 2, dtype=np.int8)
-    out[contact_mask] = 0
-    out[span] = 1
-    return out
-
-
 def run_channels(job: ChannelsJob, *, threads: int | None = None) -> xr.Dataset:
     """Heights, gap and phase maps of both cells at the target contact area."""
     data, attrs = {}, {"title": "roughflow channels scene (paper Fig. 1)", "scene": "channels",
@@ -74,7 +67,7 @@ def run_channels(job: ChannelsJob, *, threads: int | None = None) -> xr.Dataset:
                  spec.lx, spec.ly, spec.gamma)
         res = contact_at_area(surface, job.area_fraction, job.model, threads=threads)
         mask = np.asarray(res.contact, dtype=bool)
-        phase = classify(mask)
+        phase = percolation_map(mask, 0)
         dims = (f"ix_{name}", f"iy_{name}")
         data[f"heights_{name}"] = (dims, surface.heights, {
             "units": LENGTH_UNITS, "long_name": f"height of the {name} surface"})
@@ -82,9 +75,9 @@ def run_channels(job: ChannelsJob, *, threads: int | None = None) -> xr.Dataset:
                                               "long_name": f"gap of the {name} contact"})
         data[f"phase_{name}"] = (dims, phase, {
             "units": DIMENSIONLESS,
-            "long_name": "0 contact, 1 fluid percolating along x, 2 other fluid",
+            "long_name": "0 contact, 1 other fluid, 2 fluid percolating along x",
             "flag_values": np.array(list(CLASSES), dtype=np.int8),
-            "flag_meanings": "contact percolating_fluid non_percolating_fluid"})
+            "flag_meanings": "contact non_percolating_fluid percolating_fluid"})
         attrs.update({
             f"{name}_lx": spec.lx, f"{name}_ly": spec.ly, f"{name}_gamma": spec.gamma,
             f"{name}_lambda_r": spec.lambda_r, f"{name}_lambda_s": spec.lambda_s,
