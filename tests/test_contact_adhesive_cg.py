@@ -10,7 +10,7 @@ from roughflow.contact import gfmd as G
 from roughflow.contact import solve
 from roughflow.contact.adhesion import Adhesion, adhesion_for
 from roughflow.defaults import ADHESION_RANGE_OVER_LAMBDA_S, ADHESION_SURFACE_ENERGY_RATIO
-from roughflow.errors import ConvergenceError
+from roughflow.errors import ConvergenceError, InputError
 from roughflow.surface import SurfaceSpec, generate
 
 
@@ -179,7 +179,7 @@ def test_a_nan_stops_the_solver_at_once():
 
 def test_cg_needs_the_harmonic_repulsion():
     s, _ = _papers_case(128)
-    with pytest.raises(ValueError, match="harmonic"):
+    with pytest.raises(InputError, match="harmonic"):
         from roughflow.contact.adhesive_cg import adhesive_cg
 
         adhesive_cg(s.heights, s.lx, s.ly, 0.1, tol=1e-4, max_iter=10,

@@ -13,7 +13,7 @@ from roughflow.contact import _kernels as K
 from roughflow.contact import gfmd as G
 from roughflow.contact import solve
 from roughflow.contact.elastic import compliance, stiffness
-from roughflow.errors import ConvergenceError
+from roughflow.errors import ConvergenceError, InputError
 from roughflow.surface import SurfaceSpec, generate
 
 
@@ -185,7 +185,7 @@ def test_fire_minimizer_still_solves_the_hard_wall():
     assert a.converged and b.converged
     # the same minimum: gaps agree to the tolerance (1e-8 rms(h)) up to a small factor
     np.testing.assert_allclose(a.gap, b.gap, rtol=0, atol=1e-7 * s.heights.std())
-    with pytest.raises(ValueError, match="minimizer"):
+    with pytest.raises(InputError, match="minimizer"):
         G.gfmd(s.heights, s.lx, s.ly, 0.1, tol=1e-8, max_iter=10, minimizer="newton")
 
 

@@ -228,7 +228,7 @@ def test_rs_hierarchy_is_pyamgs(heights, explicit_zeros):
 def test_rs_vcycle_refuses_smoothers_it_does_not_implement():
     from roughflow.flow.amg import rs_vcycle
 
-    with pytest.raises(ValueError, match="jacobi"):
+    with pytest.raises(InputError, match="jacobi"):
         rs_vcycle(None, {"presmoother": ("jacobi", {})})
 
 

@@ -205,7 +205,7 @@ def test_percolates_along_on_correlated_masks_near_the_threshold():
             assert got == {ax: percolates(m, ax, periodic=periodic) for ax in (0, 1)}
             seen.add((got[0], got[1]))
     assert len(seen) == 4  # every combination of the two axes occurred
-    with pytest.raises(ValueError, match="sweep work"):
+    with pytest.raises(InputError, match="sweep work"):
         percolates_along(m[:10], work=work)
 
 

@@ -71,7 +71,7 @@ def test_sweep_by_key_equals_the_full_sweep():
             for expect in (0.0, 0.2, 0.5, 0.8, 1.0):
                 assert critical_open_count_by_key(key, axis, expect=expect) == full
                 assert critical_open_count_by_key(key, axis, expect=expect, work=work) == full
-    with pytest.raises(ValueError, match="sweep work"):
+    with pytest.raises(InputError, match="sweep work"):
         critical_open_count_by_key(key, 0, work=sweep_work(key.size + 1))
 
 

@@ -161,6 +161,8 @@ def bootstrap_fit(eps: dict[str, np.ndarray], a_seed: dict[str, np.ndarray], *,
         samples.append([f.a_star, *[f.amplitude[d] for d in names], f.nu])
     s = np.asarray(samples)
     if len(s) < 2:
+        log.warning("no bootstrap error: %d of %d resamples could be fitted (the others "
+                    "lacked the sizes the fit needs)", len(s), n_boot)
         return best
     err = s.std(axis=0, ddof=1)
     return ScalingFit(

@@ -41,6 +41,7 @@ import numpy as np
 
 from roughflow import fft
 from roughflow.defaults import SOLVER_LOG_EVERY
+from roughflow.errors import InputError
 
 from . import _kernels as _k
 from ._gfmd_common import Z_MASS, load_scale, residual, spectral_factors
@@ -85,7 +86,7 @@ def adhesive_cg(
     """Minimise with the harmonic ``adhesion``; arguments and result as ``gfmd.gfmd``
     (``iterations`` counts CG iterations, the residual is checked every ``check_every``)."""
     if adhesion.repulsion != "harmonic":
-        raise ValueError(f"adhesive_cg needs the harmonic repulsion, got {adhesion.repulsion!r}")
+        raise InputError(f"adhesive_cg needs the harmonic repulsion, got {adhesion.repulsion!r}")
     if use_numba:
         pressures, line = _k.adhesive_pressures, _k.adhesive_line
         move, direction = _k.adhesive_move, _k.adhesive_direction

@@ -395,9 +395,9 @@ def gfmd(
     holds CuPy arrays, and the output is copied to numpy.
     """
     if minimizer not in ("auto", "fire"):
-        raise ValueError(f"minimizer must be 'auto' or 'fire', got {minimizer!r}")
+        raise InputError(f"minimizer must be 'auto' or 'fire', got {minimizer!r}")
     if backend != "cpu" and (adhesion is not None or minimizer != "auto"):
-        raise ValueError(f"backend={backend!r} serves the hard wall's CG only")
+        raise InputError(f"backend={backend!r} serves the hard wall's CG only")
     if u0 is not None:
         require_field("u0", u0)  # a nan start would leave every minimizer on nan
     if adhesion is None and minimizer == "auto":
@@ -465,20 +465,20 @@ def _hard_wall(
     if setup is None:
         setup = hard_wall_setup(heights, lx, ly, threads, backend)
     elif setup.h.size != size or (setup.lx, setup.ly) != (lx, ly):
-        raise ValueError(f"setup of a {setup.lx} x {setup.ly} cell with {setup.h.size} points "
+        raise InputError(f"setup of a {setup.lx} x {setup.ly} cell with {setup.h.size} points "
                          f"passed for {shape} points on {lx} x {ly}")
     h0, h, pre, hscale = setup.h0, setup.h, setup.pre, setup.hscale
     if on_gpu and gpu.array_module(h) is np:
         h, pre = _on_device(setup)
     elif not on_gpu and gpu.array_module(h) is not np:
-        raise ValueError("setup built on the GPU (backend='cupy') passed to a CPU solve")
+        raise InputError("setup built on the GPU (backend='cupy') passed to a CPU solve")
     scale = load_scale(kmin, hscale, load, False)
     eps = 1e-12 * hscale  # round-off of the FFT round trip: points this close touch
 
     if work is None:
         work = hard_wall_work(shape, xp)
     elif work.shape != shape:
-        raise ValueError(f"work for a {work.shape} grid passed for {shape} points")
+        raise InputError(f"work for a {work.shape} grid passed for {shape} points")
     g, f, d, active, rt_old = work.g, work.f, work.d, work.active, work.rt_old
     d.fill(0.0)
     active.fill(False)

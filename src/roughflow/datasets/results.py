@@ -14,6 +14,7 @@ import numpy as np
 import xarray as xr
 
 from roughflow.defaults import AXIS_NAMES
+from roughflow.errors import InputError
 
 from .units import (
     DIMENSIONLESS,
@@ -124,7 +125,7 @@ def threshold_dataset(results: Mapping[int, Threshold], surface: Surface | None 
     ``adhesion`` (and ``surface``) its parameters are attributes, as for a contact.
     """
     if adhesion is not None and surface is None:
-        raise ValueError("threshold_dataset: adhesion= needs the surface (its summary)")
+        raise InputError("threshold_dataset: adhesion= needs the surface (its summary)")
     axes = sorted(results)
     r = [results[a] for a in axes]
     data = {}

@@ -25,6 +25,8 @@ import numpy as np
 import scipy.sparse as sp
 import scipy.sparse.linalg as spla
 
+from roughflow.errors import InputError
+
 #: classical strength of connection: j is a strong neighbour of i if |a_ij| >= theta
 #: max_k!=i |a_ik| (pyamg's and the classical choice)
 STRENGTH_THETA = 0.25
@@ -256,7 +258,7 @@ def _sweeps(spec) -> tuple[bool, ...]:
     name, opts = spec if isinstance(spec, tuple) else (spec, {})
     sweep = opts.get("sweep", "forward")
     if name != "gauss_seidel" or set(opts) - {"sweep"} or sweep not in _SWEEP_ORDER:
-        raise ValueError(f"rs_vcycle smooths with plain Gauss-Seidel sweeps only, got {spec!r}")
+        raise InputError(f"rs_vcycle smooths with plain Gauss-Seidel sweeps only, got {spec!r}")
     return _SWEEP_ORDER[sweep]
 
 

@@ -14,6 +14,8 @@ import numba
 import numpy as np
 from scipy import ndimage
 
+from roughflow.errors import InputError
+
 from .labels import _STRUCTURES, check_axis, check_connectivity, check_mask, merge_seams
 from .sweep import SweepWork, _find, _link, sweep_work
 
@@ -164,7 +166,7 @@ def percolates_along(open_mask, axes=(0, 1), *, connectivity: int = 4,
         if work is None:
             work = sweep_work(m.size)
         elif work.parent.size != m.size:
-            raise ValueError(f"sweep work for {work.parent.size} cells passed for a mask of "
+            raise InputError(f"sweep work for {work.parent.size} cells passed for a mask of "
                              f"{m.size}")
         spans = _spans_4(np.ascontiguousarray(m).reshape(-1), m.shape[0], m.shape[1],
                          bool(periodic), work.parent, work.size, work.flags, work.nxt)

@@ -19,6 +19,8 @@ from typing import NamedTuple
 import numba
 import numpy as np
 
+from roughflow.errors import InputError
+
 from .labels import check_axis
 
 _LOW, _HIGH = 1, 2
@@ -139,10 +141,10 @@ def critical_open_count(order: np.ndarray, shape: tuple[int, int], axis: int) ->
     ax = check_axis(axis)
     nx, ny = (int(s) for s in shape)
     if nx * ny >= 2**31:
-        raise ValueError(f"grid {nx} x {ny} too large for the int32 union-find")
+        raise InputError(f"grid {nx} x {ny} too large for the int32 union-find")
     order = np.ascontiguousarray(order, dtype=np.int64)
     if order.size and (order.min() < 0 or order.max() >= nx * ny):
-        raise ValueError("order holds indices outside the grid")
+        raise InputError("order holds indices outside the grid")
     return int(_sweep(order, nx, ny, ax, *_union_find_state(nx * ny)))
 
 
@@ -197,12 +199,12 @@ def critical_open_count_by_key(key: np.ndarray, axis: int, *, expect: float = 0.
     nx, ny = (int(v) for v in key.shape)
     n = nx * ny
     if n >= 2**31:
-        raise ValueError(f"grid {nx} x {ny} too large for the int32 union-find")
+        raise InputError(f"grid {nx} x {ny} too large for the int32 union-find")
     flat = key.ravel()
     if work is None:
         work = sweep_work(n)
     elif work.nxt.size != n:
-        raise ValueError(f"sweep work for {work.nxt.size} cells passed for {n} keys")
+        raise InputError(f"sweep work for {work.nxt.size} cells passed for {n} keys")
     sample = np.sort(flat[:: max(1, n // _CUT_SAMPLES) | 1])
     start = min(max(float(expect), 0.0), 1.0) - _BLOCK_BELOW
     while True:
