@@ -6,7 +6,13 @@ import argparse
 import logging
 from typing import TYPE_CHECKING
 
-from roughflow.defaults import FLOW_METHODS, FLOW_SIGMA_RTOL, FLOW_SIGMA_TOL, FLOW_TOL
+from roughflow.defaults import (
+    AXIS_NAMES,
+    FLOW_METHODS,
+    FLOW_SIGMA_RTOL,
+    FLOW_SIGMA_TOL,
+    FLOW_TOL,
+)
 
 from ._common import add_input, add_output, axis_arg, warn_if_nonperiodic_scan
 
@@ -81,7 +87,8 @@ def run(args: argparse.Namespace) -> None:
                             method=args.method, sigma_tol=sigma_tol)
         r = results[ax]
         log.info("sigma_%s = %.6e (%s, %d iterations, residual %.1e, sigma's error at most "
-                 "%.1e)", "xy"[ax], r.sigma, r.method, r.iterations, r.residual, r.sigma_error)
+                 "%.1e)", AXIS_NAMES[ax], r.sigma, r.method, r.iterations, r.residual,
+                 r.sigma_error)
     out = flow_dataset(results, contact, lx=lx, ly=ly, eta=args.eta, tol=args.tol,
                        sigma_tol=sigma_tol)
     out.attrs["source"] = str(args.input)

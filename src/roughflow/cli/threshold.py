@@ -7,6 +7,7 @@ import logging
 
 from roughflow.defaults import (
     A_C_STAR_PAPER,
+    AXIS_NAMES,
     CONTACT_METHODS,
     MODELS,
     THRESHOLD_CONTACT_TOL,
@@ -97,7 +98,7 @@ def run(args: argparse.Namespace) -> None:
     if args.axis is not None:
         res = {args.axis: res}
     for ax, r in res.items():
-        log.info("a_c*(%s) = %.4f in [%.4f, %.4f] after %d contact solves", "xy"[ax],
+        log.info("a_c*(%s) = %.4f in [%.4f, %.4f] after %d contact solves", AXIS_NAMES[ax],
                  r.a_c_star, r.a_lo, r.a_hi, r.n_solves)
     ds = threshold_dataset(res, surface, adhesion=adhesion)
     ds.attrs["surface_file"] = str(args.surface)

@@ -172,7 +172,10 @@ log = logging.getLogger(__name__)
 def _spectral_single(shape: tuple[int, int], lx: float, ly: float):
     """float32 copies of -k(q)/N and G(q)/N for the single-precision transforms."""
     _, neg_k, comp, _ = spectral_factors(shape, lx, ly)
-    return neg_k.astype(np.float32), comp.astype(np.float32)
+    out = neg_k.astype(np.float32), comp.astype(np.float32)
+    for a in out:  # cached and shared: a caller's in-place change would reach every solve
+        a.setflags(write=False)
+    return out
 
 
 def _band(hpow: np.ndarray, k: np.ndarray) -> tuple[float, float] | None:

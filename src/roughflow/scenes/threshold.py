@@ -16,6 +16,7 @@ from roughflow.accuracy import PERIMETER_C
 from roughflow.datasets import threshold_dataset
 from roughflow.datasets.sweep import no_fill_on_coords, param_coords, surface_vars, var
 from roughflow.datasets.units import RESIDUAL_UNITS, SECONDS
+from roughflow.defaults import AXIS_NAMES
 from roughflow.search import SearchOptions, threshold
 from roughflow.surface import generate
 
@@ -43,9 +44,9 @@ def run_threshold(job: ThresholdJob, *, threads: int | None = None) -> xr.Datase
         for ax, r in res.items():
             if not r.bracketed:
                 log.warning("seed %d axis %s: threshold not bracketed (%s); stored as NaN",
-                            seed, "xy"[ax], r.message)
-            log.info("seed %d axis %s: a_c* = %.4f in [%.4f, %.4f], %d solves", seed, "xy"[ax],
-                     r.a_c_star, r.a_lo, r.a_hi, r.n_solves)
+                            seed, AXIS_NAMES[ax], r.message)
+            log.info("seed %d axis %s: a_c* = %.4f in [%.4f, %.4f], %d solves", seed,
+                     AXIS_NAMES[ax], r.a_c_star, r.a_lo, r.a_hi, r.n_solves)
         per_seed.append(threshold_dataset(res, solve_log=False))
         seconds[i] = time.perf_counter() - t0
         log.info("seed %d done in %.1f s", seed, seconds[i])

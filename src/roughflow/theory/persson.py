@@ -164,6 +164,8 @@ def _k_table(energy_factor: float) -> tuple[np.ndarray, np.ndarray]:
     integrand = erf(t) ** 2 * np.exp(-t * t)  # dt/t = ds
     cum = cumulative_simpson(integrand[::-1], x=-s[::-1], initial=0.0)[::-1]
     j = energy_factor * 0.5 * exp1(t * t) + 3.0 * (1.0 - energy_factor) * cum
+    for a in (s, j):  # cached and shared: read-only
+        a.setflags(write=False)
     return s, j
 
 
