@@ -136,3 +136,14 @@ def test_refusals_leave_no_output(files, capsys):
     out = files["dir"] / "never.nc"
     refused(["surface", "--ly", "2", "-o", str(out)], capsys, "--ly")
     assert not out.exists()
+
+
+def test_long_options_are_never_taken_by_a_prefix(tmp_path, capsys):
+    # argparse took `scene ladder --surface-energy 0.05` (the absolute gamma_s of `contact`)
+    # as --surface-energy-ratio, a different quantity, without a word
+    with pytest.raises(SystemExit) as exc:
+        main(["scene", "ladder", "--model", "adhesive", "--surface-energy", "0.05",
+              "--area-fractions", "0.1", "-o", str(tmp_path / "x.nc")])
+    assert exc.value.code == 2
+    assert "unrecognized arguments: --surface-energy" in capsys.readouterr().err
+    assert not (tmp_path / "x.nc").exists()

@@ -68,6 +68,10 @@ def build_parser() -> argparse.ArgumentParser:
         module.register(sub)
     for p in _subparsers(parser):
         _add_verbosity(p, default=False)
+    for p in (parser, *_subparsers(parser)):
+        # no prefixes of long options: `scene ladder --surface-energy 0.05` (the absolute
+        # gamma_s of `contact`) was taken as --surface-energy-ratio, a different quantity
+        p.allow_abbrev = False
     return parser
 
 

@@ -5,7 +5,13 @@ from __future__ import annotations
 import argparse
 from pathlib import Path
 
-from roughflow.defaults import BOUNDARY, BOUNDARY_METHODS, CONTACT_TOL, THRESHOLD_TOL
+from roughflow.defaults import (
+    BOUNDARY,
+    BOUNDARY_METHODS,
+    CONTACT_TOL,
+    THRESHOLD_CONTACT_TOL,
+    THRESHOLD_TOL,
+)
 from roughflow.errors import InputError
 
 from ._common import add_input, add_output
@@ -47,8 +53,9 @@ def register(sub: argparse._SubParsersAction) -> None:
                         "for a periodic surface; docs/measured.md)")
     p.add_argument("--name", default=None, help="label of the surface (default: file stem)")
     p.add_argument("--contact-tol", type=float, default=CONTACT_TOL,
-                   help=f"residual of each contact solve, gap error / rms height "
-                        f"({CONTACT_TOL:g})")
+                   help=f"residual of the contact solves of the pressure curve, gap error "
+                        f"/ rms height ({CONTACT_TOL:g}); the sealing search solves to "
+                        f"{THRESHOLD_CONTACT_TOL:g}, as `threshold` does (docs/measured.md)")
     p.add_argument("--threshold-tol", type=float, default=THRESHOLD_TOL,
                    help=f"width of the sealing bracket in contact area ({THRESHOLD_TOL:g})")
     p.add_argument("--threads", type=int, default=None,

@@ -65,7 +65,11 @@ def register(sub: argparse._SubParsersAction) -> None:
                           description="Contact at each target area of an increasing ladder "
                                       "(warm-started load search), full Reynolds conductance "
                                       "along x and y where the fluid percolates, Bruggeman and "
-                                      "closed forms.")
+                                      "closed forms. The workflow's flow studies pass "
+                                      "--l-over-lambda-r (default "
+                                      f"{defaults.FLOW_L_OVER_LAMBDA_R:g}, the paper's Fig. 5) "
+                                      f"and --a-c-star-alt {defaults.A_C_STAR_ALT:g}; without "
+                                      "them a ladder takes the defaults below.")
     track_given(ld)  # adhesion options with another model are refused (_check_ladder)
     _surface_options(ld)
     ld.add_argument("--model", choices=defaults.MODELS, default="elastic",
@@ -79,7 +83,9 @@ def register(sub: argparse._SubParsersAction) -> None:
     ld.add_argument("--a-c-star", type=float, default=None,
                     help=f"a_c* of the theory lines (default per model: {theory_stars})")
     ld.add_argument("--a-c-star-alt", type=float, default=None,
-                    help="a second a_c* for the isotropic Bruggeman line (none)")
+                    help="a second a_c* for the isotropic Bruggeman line (none; the "
+                         f"workflow's flow studies pass {defaults.A_C_STAR_ALT:g}, the "
+                         "dotted line of Fig. 5a)")
     ld.add_argument("--surface-energy-ratio", type=float, default=ADHESION_SURFACE_ENERGY_RATIO,
                     help="gamma_s / v_ela^full of the adhesive model "
                          f"({ADHESION_SURFACE_ENERGY_RATIO}, the paper's case)")
