@@ -55,7 +55,7 @@ def test_cli_bearing(surface_file, tmp_path):
         (["--model", "bearing", "--area-fraction", "1.5"], 2, "area_fraction"),
         (["--pressure", "0.1", "--tol", "0"], 2, "tol"),
         (["--model", "adhesive", "--pressure", "0.1", "--surface-energy", "1e-4"], 2,
-         "needs both --surface-energy and --range"),
+         "needs both --surface-energy and --adhesion-range"),
         (["--pressure", "0.1", "--max-iter", "2"], 3, "did not converge"),
     ],
 )
@@ -93,3 +93,13 @@ def test_cli_missing_file(tmp_path):
         main(["contact", str(tmp_path / "nope.nc"), "--pressure", "0.1",
               "-o", str(tmp_path / "x.nc")])
     assert exc.value.code == 2
+
+
+def test_adhesion_range_has_the_same_name_as_in_threshold():
+    from roughflow.cli import build_parser
+
+    for flag in ("--adhesion-range", "--range"):  # --range: the older name, still taken
+        args = build_parser().parse_args(["contact", "s.nc", "--pressure", "0.1", "-o", "x.nc",
+                                          "--model", "adhesive", "--surface-energy", "1e-4",
+                                          flag, "0.01"])
+        assert args.adhesion_range == 0.01

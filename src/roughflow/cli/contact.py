@@ -60,8 +60,10 @@ def register(sub: argparse._SubParsersAction) -> None:
                    help="iteration cap; not converging by then is an error (exit 3)")
     p.add_argument("--surface-energy", type=float, default=None,
                    help=adhesion_help("surface energy gamma_s (units E* L)"))
-    p.add_argument("--range", type=float, default=None, dest="adhesion_range",
-                   help="adhesive model: range rho of the cosine attraction (units L)")
+    p.add_argument("--adhesion-range", "--range", type=float, default=None,
+                   dest="adhesion_range",
+                   help="adhesive model: range rho of the cosine attraction (units L); "
+                        "--adhesion-range as in `threshold`, --range its older name")
     add_backend(p)
     add_output(p)
     p.set_defaults(func=run)
@@ -78,7 +80,7 @@ def run(args: argparse.Namespace) -> None:
     if args.model != "bearing":  # the bearing model is local: no edges to join
         warn_if_nonperiodic_scan(args.data["surface"], args.surface, "contact")
     adhesion = resolve_adhesion(args.model, args.surface_energy, args.adhesion_range, surface,
-                                flags=("--surface-energy", "--range"), source=args.surface)
+                                flags=("--surface-energy", "--adhesion-range"), source=args.surface)
     t0 = time.perf_counter()
     result = solve(
         surface, args.pressure, model=args.model, method=args.method,
