@@ -290,3 +290,30 @@ def test_a_writer_bug_on_a_disk_with_room_stays_a_bug(tmp_path, monkeypatch):
     with pytest.raises(RuntimeError, match="HDF error"):
         write_dataset(xr.Dataset({"a": ("x", np.arange(3))}), tmp_path / "a.nc")
     assert list(tmp_path.iterdir()) == []
+
+
+def test_a_rename_that_fails_midway_takes_back_the_outputs_already_published(tmp_path,
+                                                                             monkeypatch):
+    # the PNG was renamed into place and the PDF's rename failed: the new PNG stayed beside
+    # the old PDF, and exit 5 said no output was left
+    import errno
+    import os
+
+    from matplotlib.figure import Figure
+
+    from roughflow import io
+    from roughflow.errors import OutputError
+
+    real = os.replace
+    calls = []
+
+    def second_fails(src, dst):
+        calls.append(dst)
+        if len(calls) == 2:
+            raise OSError(errno.EIO, "I/O error")
+        return real(src, dst)
+
+    monkeypatch.setattr(io.os, "replace", second_fails)
+    with pytest.raises(OutputError, match="fig.pdf"):
+        io.save_figure(Figure(), tmp_path / "fig.png", tmp_path / "fig.pdf")
+    assert list(tmp_path.iterdir()) == []

@@ -296,3 +296,22 @@ def test_help_names_a_rule_for_a_default_only_where_there_is_no_value():
                 assert action.default is None, (parser.prog, action.option_strings,
                                                 action.default, action.help)
     assert checked >= 3  # surface, contact, threshold, ... have --l-over-lambda-r
+
+
+def test_channels_figure_colours_follow_the_files_phase_codes():
+    # the scene once wrote 1 = percolating, 2 = other fluid; a workflow upgraded past that
+    # redraws the figure (its caption parameter changed) from the old dataset: the colours
+    # must come from the file's flag_meanings, not from the code numbers
+    import numpy as np
+    import xarray as xr
+
+    from roughflow.figures.channels import PHASES, phase_colors
+
+    dark, light = PHASES["percolating_fluid"][0], PHASES["non_percolating_fluid"][0]
+    old = xr.DataArray(np.zeros((2, 2), np.int8), attrs={
+        "flag_values": np.array([0, 1, 2], np.int8),
+        "flag_meanings": "contact percolating_fluid non_percolating_fluid"})
+    new = old.copy(deep=False)
+    new.attrs = {**old.attrs, "flag_meanings": "contact non_percolating_fluid percolating_fluid"}
+    assert list(phase_colors(old).colors) == [PHASES["contact"][0], dark, light]
+    assert list(phase_colors(new).colors) == [PHASES["contact"][0], light, dark]

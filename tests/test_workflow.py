@@ -203,9 +203,18 @@ def test_report_shows_every_figure(test_run):
     assert (wd / "report.html").stat().st_size > 10000
     assert res.stdout.count("Adding figure.png") + res.stderr.count("Adding figure.png") \
         == len(STUDIES)
-    # every caption is the library's (figure.rst renders the rule's caption parameter): the
-    # report once had a hand-copied set that had drifted (and none for the measured study)
+    # every caption is the library's, rendered by figure.rst from the rule's caption
+    # parameter (the report once had a hand-copied set that had drifted, and none for the
+    # measured study). "<p>" + the text: the rendered caption; the report also lists each
+    # job's parameters, where the caption stands without the paragraph tag.
     import html
+
+    from roughflow.figures.captions import CAPTIONS
+
+    text = (wd / "report.html").read_text()
+    for study in STUDIES:
+        # the first 300 characters hold text of each study's own (after the shared note)
+        assert "<p>" + html.escape(CAPTIONS[study][:300], quote=False) in text, study
 
     from roughflow.figures.captions import _CORRECTED, CAPTIONS
 

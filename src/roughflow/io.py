@@ -8,10 +8,12 @@ file gets its provenance attributes (:mod:`roughflow.provenance`).
 
 from __future__ import annotations
 
+import contextlib
 import errno
 import math
 import os
 import shutil
+import signal
 import tempfile
 from collections.abc import Callable, Sequence
 from dataclasses import fields
@@ -126,6 +128,20 @@ def _write_failure(path: Path, exc: BaseException) -> OutputError | None:
     return None
 
 
+@contextlib.contextmanager
+def _sigterm_held():
+    """Hold SIGTERM back (POSIX, this thread) for the few renames that publish a set of
+    outputs; a signal that arrives meanwhile is delivered after them."""
+    if not hasattr(signal, "pthread_sigmask"):
+        yield
+        return
+    old = signal.pthread_sigmask(signal.SIG_BLOCK, {signal.SIGTERM})
+    try:
+        yield
+    finally:
+        signal.pthread_sigmask(signal.SIG_SETMASK, old)
+
+
 def write_together(writers: Sequence[Writer]) -> list[Path]:
     """Call each ``write(tmp)`` on a temporary file next to its path (missing folders
     created), and only when all have succeeded :func:`publish` them all, so that a command's
@@ -133,6 +149,7 @@ def write_together(writers: Sequence[Writer]) -> list[Path]:
     all. A failure leaves none of the temporary files; one of the file system (disk full)
     raises :class:`~roughflow.errors.OutputError` naming the file."""
     tmps: list[str] = []
+    published: list[Path] = []
     path = None
     try:
         for path, write in writers:
@@ -141,9 +158,17 @@ def write_together(writers: Sequence[Writer]) -> list[Path]:
             os.close(fd)
             tmps.append(tmp)
             write(tmp)
-        for tmp, (path, _) in zip(tmps, writers, strict=True):
-            publish(tmp, path)
+        with _sigterm_held():  # a SIGTERM waits until every output is in place
+            for tmp, (path, _) in zip(tmps, writers, strict=True):
+                publish(tmp, path)
+                published.append(path)
     except BaseException as exc:
+        if published and len(published) < len(writers):
+            # a rename failed after others succeeded: take those back, so that no
+            # half-set of outputs is left (their previous versions are gone already)
+            for done in published:
+                with contextlib.suppress(OSError):
+                    os.unlink(done)
         # judged before the temporary files go: they are what filled the disk
         failure = (_write_failure(path, exc) if path is not None and isinstance(exc, Exception)
                    else None)

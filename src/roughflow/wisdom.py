@@ -13,8 +13,9 @@ instead of timing. Runs on one machine are then bit-identical, as they are with
 Where: the directory ``ROUGHFLOW_FFTW_WISDOM`` (default ``$XDG_CACHE_HOME/roughflow/fftw``,
 that is ``~/.cache/roughflow/fftw``), one JSON file per CPU model and pyFFTW version, because
 wisdom holds only for the machine that measured it; ``ROUGHFLOW_FFTW_WISDOM=off`` keeps it
-in the process. The file can only ever cost speed: one that cannot be read is replaced, a
-directory that cannot be written is reported once, and planning goes on without it.
+in the process. The file can only ever cost speed: one that cannot be read is replaced, and
+a directory that cannot be written is reported once: the wisdom it holds is still read, but
+what a run plans is not saved there.
 """
 
 from __future__ import annotations

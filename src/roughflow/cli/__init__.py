@@ -116,7 +116,16 @@ def _save_failed(exc: ConvergenceError, args: argparse.Namespace) -> str:
         return ""
     import numpy as np
 
-    np.savez(path, **exc.inputs)
+    from roughflow.io import write_together
+
+    def save(tmp: str) -> None:
+        with open(tmp, "wb") as f:  # a file object: np.savez would append ".npz" to a name
+            np.savez(f, **exc.inputs)
+
+    try:  # atomic like every output; a full disk costs the saved inputs, not the message
+        write_together([(Path(path), save)])
+    except OSError as err:
+        return f"; its inputs could not be saved ({err})"
     keys = ", ".join(k for k in exc.inputs if k != "gap")
     return f"; the failed solve's gap and {keys} are saved in {path}"
 
@@ -131,7 +140,9 @@ def main(argv: list[str] | None = None) -> int:
     args = parser.parse_args(argv)
     log_progress(_level(args))
     name = f"roughflow {args.command}"
-    in_main_thread = threading.current_thread() is threading.main_thread()
+    # in the main thread only (signal's rule), and not where a launcher set SIGTERM ignored
+    in_main_thread = (threading.current_thread() is threading.main_thread()
+                      and signal.getsignal(signal.SIGTERM) is not signal.SIG_IGN)
     previous = signal.signal(signal.SIGTERM, _on_sigterm) if in_main_thread else None
     try:
         check_environment()  # FFT settings from the environment, before any work

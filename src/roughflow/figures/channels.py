@@ -12,9 +12,23 @@ from .captions import CAPTIONS
 
 CAPTION = CAPTIONS["channels"]
 
-#: Colours of the phase codes 0 contact, 1 other fluid, 2 fluid percolating along x
-#: (percolation.percolation_map): orange, light blue, dark blue as in the paper's Fig. 1.
-PHASE_COLORS = ListedColormap(["#f28e2b", "#a6cee3", "#1f3b99"])
+#: Colour and legend of each phase, by its name in the phase map's ``flag_meanings``:
+#: orange, light blue, dark blue as in the paper's Fig. 1.
+PHASES = {"contact": ("#f28e2b", "contact"),
+          "non_percolating_fluid": ("#a6cee3", "other fluid"),
+          "percolating_fluid": ("#1f3b99", "fluid percolating along x")}
+#: The codes' meanings where a file has none (percolation.percolation_map's codes 0, 1, 2).
+PHASE_MEANINGS = "contact non_percolating_fluid percolating_fluid"
+
+
+def phase_colors(phase: xr.DataArray) -> ListedColormap:
+    """Colours of the codes 0, 1, 2 of ``phase`` read from its ``flag_meanings``, so that a
+    file written with another order of codes (before the scene used percolation_map's, 1
+    meant percolating) is drawn right."""
+    meanings = str(phase.attrs.get("flag_meanings", PHASE_MEANINGS)).split()
+    values = [int(v) for v in np.atleast_1d(phase.attrs.get("flag_values", range(3)))]
+    by_code = dict(zip(values, meanings, strict=True))
+    return ListedColormap([PHASES[by_code[code]][0] for code in range(3)])
 
 
 def draw(ds: xr.Dataset, fit=None) -> Figure:
@@ -29,7 +43,8 @@ def draw(ds: xr.Dataset, fit=None) -> Figure:
     for ax, name, label in ((axes[1], "iso", "(b) isotropic"), (axes[2], "aniso",
                                                                 "(c) anisotropic")):
         a = ds.attrs
-        ax.imshow(ds[f"phase_{name}"].values.T, origin="lower", cmap=PHASE_COLORS, vmin=-0.5,
+        phase = ds[f"phase_{name}"]
+        ax.imshow(phase.values.T, origin="lower", cmap=phase_colors(phase), vmin=-0.5,
                   vmax=2.5, aspect="auto", extent=(0, 1, 0, 1), interpolation="nearest")
         perc = "percolates" if a[f"{name}_fluid_percolates_x"] else "does not percolate"
         ax.set_title(f"{label}: gamma = {a[f'{name}_gamma']:g}, "
@@ -39,7 +54,7 @@ def draw(ds: xr.Dataset, fit=None) -> Figure:
     for ax in axes:
         ax.set_xlabel("x / Lx")
         ax.set_ylabel("y / Ly")
-    handles = [Rectangle((0, 0), 1, 1, color=c) for c in PHASE_COLORS.colors]
-    fig.legend(handles, ["contact", "other fluid", "fluid percolating along x"],
+    handles = [Rectangle((0, 0), 1, 1, color=c) for c, _ in PHASES.values()]
+    fig.legend(handles, [label for _, label in PHASES.values()],
                loc="outside lower center", ncol=3, fontsize=8, frameon=False)
     return fig

@@ -412,4 +412,6 @@ def predicted_thresholds(order: np.ndarray, shape: tuple[int, int],
     first spans, taken at the middle of the critical cell (exact for the bearing model with
     heights as the order, first order for an elastic state with :func:`open_first_order`)."""
     n = order.size
-    return {ax: _area_at_count(critical_open_count(order, shape, ax), n) for ax in axes}
+    # keyed by axis number whether an axis was given as 0/1 or "x"/"y"
+    return {check_axis(ax): _area_at_count(critical_open_count(order, shape, ax), n)
+            for ax in axes}
