@@ -27,10 +27,16 @@ Units: lengths in L (cell side), areas as fractions of the cell area.
 from __future__ import annotations
 
 from dataclasses import dataclass
+from typing import TYPE_CHECKING
 
 import numpy as np
 
 from roughflow.errors import InputError, require_finite, require_positive
+
+if TYPE_CHECKING:
+    from collections.abc import Hashable, Iterable
+
+    from numpy.typing import ArrayLike
 
 #: Perimeter constant c fitted by ``benchmarks/convergence.py`` (elastic contact, default
 #: sweep surfaces, 4 to 16 points per lambda_s; docs/accuracy.md): the misclassified area
@@ -50,7 +56,7 @@ def _mask(contact) -> np.ndarray:
     return m
 
 
-def contact_faces(contact) -> tuple[int, int]:
+def contact_faces(contact: ArrayLike) -> tuple[int, int]:
     """Number of contact/non-contact cell faces normal to x and normal to y (periodic)."""
     m = _mask(contact)
     fx = int(np.count_nonzero(m != np.roll(m, -1, axis=0)))
@@ -58,7 +64,7 @@ def contact_faces(contact) -> tuple[int, int]:
     return fx, fy
 
 
-def contact_line_length(contact, lx: float = 1.0, ly: float | None = None) -> float:
+def contact_line_length(contact: ArrayLike, lx: float = 1.0, ly: float | None = None) -> float:
     """Length of the contact line (units of L) counted along cell faces.
 
     A face between cells ix and ix+1 has length dy; one between iy and iy+1 has length dx.
@@ -71,7 +77,7 @@ def contact_line_length(contact, lx: float = 1.0, ly: float | None = None) -> fl
     return fx * ly / ny + fy * lx / nx
 
 
-def perimeter_term(contact) -> float:
+def perimeter_term(contact: ArrayLike) -> float:
     """Contact/non-contact cell faces per cell (dimensionless, periodic).
 
     The quantity multiplied by ``c`` in :func:`perimeter_corrected_area`: each face stands
@@ -85,7 +91,7 @@ def perimeter_term(contact) -> float:
     return (fx + fy) / m.size
 
 
-def perimeter_corrected_area(contact, *, c: float = PERIMETER_C) -> float:
+def perimeter_corrected_area(contact: ArrayLike, *, c: float = PERIMETER_C) -> float:
     """Relative contact area corrected for the first-order grid bias: a_c - c * faces / cells.
 
     ``contact``: boolean mask ``[ix, iy]`` (any cell aspect ratio); ``c``: the perimeter
@@ -126,7 +132,8 @@ class PerimeterFit:
     n: int
 
 
-def fit_perimeter_constant(groups, areas, perimeter_terms) -> PerimeterFit:
+def fit_perimeter_constant(groups: Iterable[Hashable], areas: ArrayLike,
+                           perimeter_terms: ArrayLike) -> PerimeterFit:
     """Fit a shared c in a_c = a_inf(group) + c * perimeter_term over all points.
 
     ``groups``: labels identifying the same physical state (same surface and load) at

@@ -4,6 +4,13 @@ from __future__ import annotations
 
 import math
 from numbers import Integral
+from typing import TYPE_CHECKING
+
+if TYPE_CHECKING:
+    from collections.abc import Iterable
+
+    import numpy as np
+    from numpy.typing import ArrayLike
 
 
 class InputError(ValueError):
@@ -55,7 +62,7 @@ def require_positive(name: str, value: float) -> float:
 MAX_SEED = 2**63 - 1
 
 
-def require_int(name: str, value, *, minimum: int | None = None,
+def require_int(name: str, value: int | np.integer, *, minimum: int | None = None,
                 maximum: int | None = None) -> int:
     """Return ``value`` as an int, or raise :class:`InputError` naming it if it is not an
     integer (bools and floats are refused) or lies outside [``minimum``, ``maximum``]."""
@@ -69,7 +76,7 @@ def require_int(name: str, value, *, minimum: int | None = None,
     return v
 
 
-def require_seeds(name: str, seeds) -> tuple[int, ...]:
+def require_seeds(name: str, seeds: Iterable[int | np.integer]) -> tuple[int, ...]:
     """A non-empty tuple of distinct seeds in [0, :data:`MAX_SEED`] (a duplicate seed would
     give a duplicate coordinate in the datasets)."""
     out = tuple(require_int(f"{name} entry", s, minimum=0, maximum=MAX_SEED) for s in seeds)
@@ -81,7 +88,7 @@ def require_seeds(name: str, seeds) -> tuple[int, ...]:
     return out
 
 
-def check_axis(axis) -> int:
+def check_axis(axis: int | str) -> int:
     """Return ``axis`` as 0 (x) or 1 (y); ``"x"`` and ``"y"`` name them too. Anything else,
     including ``True`` and ``1.0`` (which compare equal to 1), raises :class:`InputError`."""
     from roughflow.defaults import AXIS_NAMES
@@ -104,7 +111,7 @@ def check_nu(nu: float) -> float:
     return v
 
 
-def require_field(name: str, array, *, ndim: int = 2):
+def require_field(name: str, array: ArrayLike, *, ndim: int = 2) -> np.ndarray:
     """Return ``array`` as a float64 numpy array, or raise if it has the wrong rank or
     non-finite values."""
     import numpy as np

@@ -14,6 +14,7 @@ from __future__ import annotations
 
 import logging
 from dataclasses import dataclass, field
+from typing import TYPE_CHECKING
 
 import numpy as np
 import xarray as xr
@@ -24,13 +25,17 @@ from roughflow.datasets.units import DIMENSIONLESS
 from roughflow.defaults import FIT_BOOTSTRAP, NU_BOUNDS, NU_PERCOLATION
 from roughflow.errors import InputError, check_nu, require_int
 
+if TYPE_CHECKING:
+    from numpy.typing import ArrayLike
+
 log = logging.getLogger(__name__)
 
 class UnderdeterminedFit(InputError):
     """The data cannot determine the fit's parameters (too few distinct system sizes)."""
 
 
-def scaling(eps, a_star: float, amplitude: float, nu: float = NU_PERCOLATION) -> np.ndarray:
+def scaling(eps: ArrayLike, a_star: float, amplitude: float,
+            nu: float = NU_PERCOLATION) -> np.ndarray:
     """a_c*(eps) = a_star + amplitude eps^(1/nu)."""
     return a_star + amplitude * np.asarray(eps, dtype=float) ** (1.0 / nu)
 

@@ -13,6 +13,7 @@ from __future__ import annotations
 
 from functools import lru_cache
 from types import ModuleType
+from typing import TYPE_CHECKING
 
 import numpy as np
 
@@ -20,6 +21,9 @@ from roughflow.defaults import BACKENDS
 from roughflow.errors import InputError
 from roughflow.fft import PlanPair
 from roughflow.resources import check_memory as _check_memory
+
+if TYPE_CHECKING:
+    import cupy as cp
 
 
 def check_backend(backend: str, model: str = "elastic", method: str | None = None,
@@ -84,14 +88,14 @@ def describe(backend: str) -> str:
     return f"cupy {cp.__version__} on {name}"
 
 
-def array_module(a) -> ModuleType:
+def array_module(a: np.ndarray | cp.ndarray) -> ModuleType:
     """``cupy`` for a CuPy array, else ``numpy`` (CuPy is imported only for its arrays)."""
     if type(a).__module__.split(".")[0] == "cupy":
         return cupy()
     return np
 
 
-def to_host(a) -> np.ndarray:
+def to_host(a: np.ndarray | cp.ndarray) -> np.ndarray:
     """A numpy array of ``a`` (a copy from the GPU for a CuPy array, ``a`` itself otherwise)."""
     if array_module(a) is np:
         return a
@@ -122,11 +126,11 @@ class CupyRealFFT2(PlanPair):
         self._forward_dir = cufft.CUFFT_FORWARD
         self._inverse_dir = cufft.CUFFT_INVERSE
 
-    def execute_forward(self):
+    def execute_forward(self) -> cp.ndarray:
         self._fwd.fft(self._real, self._cplx, self._forward_dir)
         return self._cplx
 
-    def execute_inverse(self):
+    def execute_inverse(self) -> cp.ndarray:
         self._inv.fft(self._cplx_in, self._real_out, self._inverse_dir)
         return self._real_out
 

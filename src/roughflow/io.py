@@ -18,6 +18,7 @@ import tempfile
 from collections.abc import Callable, Sequence
 from dataclasses import fields
 from pathlib import Path
+from typing import TYPE_CHECKING
 
 import numpy as np
 import xarray as xr
@@ -27,6 +28,9 @@ from roughflow.datasets.units import LENGTH_UNITS, grid_coords
 from roughflow.errors import InputError, OutputError, require_field, require_positive
 from roughflow.provenance import PROVENANCE_ATTRS, Provenance
 from roughflow.surface import ScanInfo, Surface, SurfaceSpec
+
+if TYPE_CHECKING:
+    from matplotlib.figure import Figure
 
 
 def _attr_value(v):
@@ -91,7 +95,7 @@ def check_output(path: str | os.PathLike, *, option: str = "--output",
 Writer = tuple[Path, Callable[[str], object]]
 
 
-def figure_writer(fig, path: str | os.PathLike, **savefig_kw) -> Writer:
+def figure_writer(fig: Figure, path: str | os.PathLike, **savefig_kw) -> Writer:
     """``(path, write)`` for :func:`write_together`: renders the matplotlib ``fig`` in the
     format of ``path``'s suffix."""
     path = Path(path)
@@ -99,7 +103,7 @@ def figure_writer(fig, path: str | os.PathLike, **savefig_kw) -> Writer:
                                          **savefig_kw)
 
 
-def save_figure(fig, *paths: str | os.PathLike, **savefig_kw) -> Path:
+def save_figure(fig: Figure, *paths: str | os.PathLike, **savefig_kw) -> Path:
     """Render the matplotlib ``fig`` to each of ``paths`` (the format from each suffix),
     published together (:func:`write_together`), creating missing folders; a failed render
     leaves none of them. Returns the first path."""

@@ -17,6 +17,7 @@ from __future__ import annotations
 import dataclasses
 import logging
 from dataclasses import dataclass, field
+from typing import TYPE_CHECKING
 
 import numpy as np
 
@@ -38,6 +39,9 @@ from roughflow.percolation import percolates
 from roughflow.resources import check_memory
 from roughflow.search import SearchOptions, Threshold, first_pressure, threshold
 from roughflow.surface import Surface, rms_gradient
+
+if TYPE_CHECKING:
+    from numpy.typing import ArrayLike
 
 log = logging.getLogger(__name__)
 
@@ -81,7 +85,7 @@ class LeakCurve:
     settings: dict = field(default_factory=dict)
 
 
-def check_pressures(pressures) -> np.ndarray:
+def check_pressures(pressures: ArrayLike) -> np.ndarray:
     """Nominal pressures as a strictly increasing array of positive numbers."""
     p = np.atleast_1d(np.asarray(pressures, dtype=np.float64))
     if p.ndim != 1 or p.size == 0:
@@ -116,7 +120,7 @@ def sealing_search(emb: Embedding, *, gbar: float, tol: float = THRESHOLD_TOL,
             for ax, t in res.items()}
 
 
-def leak_curve(surface: Surface, pressures, *, boundary: str | None = None,
+def leak_curve(surface: Surface, pressures: ArrayLike, *, boundary: str | None = None,
                contact_tol: float = CONTACT_TOL, flow_tol: float = FLOW_TOL,
                flow_sigma_tol: float | None = FLOW_SIGMA_TOL,
                threshold_tol: float = THRESHOLD_TOL,

@@ -19,6 +19,7 @@ import math
 import os
 import re
 from pathlib import Path
+from typing import TYPE_CHECKING
 
 import numba
 import numpy as np
@@ -35,6 +36,9 @@ from roughflow.defaults import (
 )
 from roughflow.errors import InputError, check_axis
 from roughflow.surface import ScanInfo, Surface, rms_gradient
+
+if TYPE_CHECKING:
+    from collections.abc import Sequence
 
 log = logging.getLogger(__name__)
 
@@ -64,7 +68,7 @@ def detrend(heights: np.ndarray, lx: float, ly: float, mode: str,
     return heights - (a @ coef).reshape(heights.shape)
 
 
-def level_lines(heights: np.ndarray, axis: int, defined: np.ndarray | None = None
+def level_lines(heights: np.ndarray, axis: int | str, defined: np.ndarray | None = None
                 ) -> np.ndarray:
     """``heights`` with every line along ``axis`` (0: x, 1: y) levelled: each line minus
     the least-squares line (mean and tilt) through its ``defined`` points; a line with one
@@ -330,9 +334,11 @@ def _channel_label(reader, ch) -> str:
     return str(ch.name) if len(twins) == 1 else f"{ch.name} (channel {ch.index})"
 
 
-def read_scan(path: str | os.PathLike, *, size=None, unit: str | None = None,
+def read_scan(path: str | os.PathLike, *,
+              size: str | float | Sequence[str | float] | None = None, unit: str | None = None,
               height_unit: str | None = None, detrend_mode: str = SCAN_DETREND,
-              fill: str = SCAN_FILL, crop: str | None = None, channel=None,
+              fill: str = SCAN_FILL, crop: str | None = None,
+              channel: str | int | None = None,
               periodic: bool = False) -> Surface:
     """Read a measured topography into a dimensionless :class:`Surface` with
     :class:`~roughflow.surface.ScanInfo`.

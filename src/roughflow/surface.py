@@ -22,6 +22,7 @@ from __future__ import annotations
 
 import math
 from dataclasses import asdict, dataclass
+from typing import TYPE_CHECKING
 
 import numpy as np
 
@@ -29,6 +30,11 @@ from roughflow import defaults, fft
 from roughflow.defaults import ROLLOFF_FORMS
 from roughflow.errors import MAX_SEED, InputError, require_finite, require_int, require_positive
 from roughflow.gpu import array_module
+
+if TYPE_CHECKING:
+    import os
+
+    from numpy.typing import ArrayLike
 
 
 def paper_l_over_lambda_r(gamma: float) -> float:
@@ -230,7 +236,7 @@ class Surface:
         return self.ly / self.heights.shape[1]
 
     @classmethod
-    def from_array(cls, heights, lx: float = 1.0, ly: float | None = None) -> Surface:
+    def from_array(cls, heights: ArrayLike, lx: float = 1.0, ly: float | None = None) -> Surface:
         """Wrap a user height map (validated: 2D, finite, at least 4 x 4)."""
         from roughflow.errors import require_field
 
@@ -242,7 +248,7 @@ class Surface:
         return cls(heights=h, lx=lx, ly=ly)
 
 
-def from_scan(path, **options) -> Surface:
+def from_scan(path: str | os.PathLike, **options) -> Surface:
     """Read a measured topography (every format SurfaceTopography reads; the optional
     extra ``topography``). See :func:`roughflow.scan.read_scan` for the options."""
     from roughflow.scan import read_scan

@@ -21,10 +21,15 @@ import math
 import re
 from collections.abc import Mapping
 from dataclasses import dataclass
+from typing import TYPE_CHECKING
 
 import numpy as np
 
 from roughflow.errors import InputError
+
+if TYPE_CHECKING:
+    import pint
+    from numpy.typing import ArrayLike
 
 #: The reference units of the dimensionless system (roughflow.datasets.units describes them;
 #: they live here, below the datasets, because scan import and the leak question use them).
@@ -73,7 +78,7 @@ def _registry(scales: tuple[tuple[str, float | None], ...]):
     return ureg
 
 
-def registry(source: Mapping | None = None):
+def registry(source: Mapping | None = None) -> pint.UnitRegistry:
     """A pint UnitRegistry that parses every ``units`` string roughflow writes.
 
     ``source`` is a dataset's attributes, or the dataset itself. The reference units are
@@ -110,7 +115,7 @@ def registry(source: Mapping | None = None):
     return _registry(tuple(scales))
 
 
-def parse_quantity(text, kind: str, name: str) -> float:
+def parse_quantity(text: str | float, kind: str, name: str) -> float:
     """SI value of ``text`` ("200GPa", "1 mPa s", "2mm", or a number already in SI units),
     which must be a positive quantity of ``kind`` (:data:`DIMENSIONS`); ``name`` is the
     option or key reported in the error."""
@@ -182,19 +187,19 @@ class Scales:
             if not (isinstance(v, (int, float)) and math.isfinite(v) and v > 0):
                 raise InputError(f"{name} scale must be a positive number, got {v!r}")
 
-    def pressure_to_si(self, p):
+    def pressure_to_si(self, p: ArrayLike) -> np.ndarray | float:
         """Pressure in E* -> Pa."""
         return np.asarray(p, dtype=float) * self.modulus
 
-    def pressure_from_si(self, p):
+    def pressure_from_si(self, p: ArrayLike) -> np.ndarray | float:
         """Pressure in Pa -> E*."""
         return np.asarray(p, dtype=float) / self.modulus
 
-    def length_to_si(self, u):
+    def length_to_si(self, u: ArrayLike) -> np.ndarray | float:
         """Length in L -> m."""
         return np.asarray(u, dtype=float) * self.length
 
-    def conductance_to_si(self, sigma):
+    def conductance_to_si(self, sigma: ArrayLike) -> np.ndarray | float:
         """Conductance u^3/(12 eta) in L^3/eta -> m^3/(Pa s) (per unit width per unit
         pressure gradient)."""
         return np.asarray(sigma, dtype=float) * self.length**3 / self.viscosity
@@ -206,8 +211,8 @@ class Scales:
                 keys["ref_viscosity"]: self.viscosity}
 
 
-def leak_rate(conductance_si, *, fluid_pressure: float, seal_width: float,
-              seal_length: float):
+def leak_rate(conductance_si: ArrayLike, *, fluid_pressure: float, seal_width: float,
+              seal_length: float) -> np.ndarray | float:
     """Volume leak rate Q (m^3/s) through a seal of width ``seal_width`` (m, along the
     flow) and length ``seal_length`` (m, across it, e.g. the circumference) under the
     pressure drop ``fluid_pressure`` (Pa): Q = sigma_eff l dp / w (paper Eq. 4 with the

@@ -91,6 +91,7 @@ import functools
 import logging
 import math
 from dataclasses import dataclass
+from typing import TYPE_CHECKING
 
 import numpy as np
 
@@ -107,6 +108,9 @@ from .adhesion import Adhesion
 from .adhesive_cg import adhesive_cg
 from .elastic import stiffness
 from .law import elastic_area
+
+if TYPE_CHECKING:
+    from types import ModuleType
 
 # FIRE parameters (Bitzek et al. 2006), time in units of 1/omega of the mass-weighted modes.
 # Tuned on 256^2 rough surfaces (a_c 0.1 and 0.4; benchmarks/bench_contact.py): strong
@@ -328,7 +332,7 @@ class HardWallWork:
         return self.gap.shape
 
 
-def hard_wall_work(shape: tuple[int, int], xp=np) -> HardWallWork:
+def hard_wall_work(shape: tuple[int, int], xp: ModuleType = np) -> HardWallWork:
     """An empty :class:`HardWallWork` for grids of ``shape`` (``xp``: the array module,
     ``cupy`` for the GPU backend)."""
     nx, ny = (int(v) for v in shape)

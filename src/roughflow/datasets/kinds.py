@@ -10,12 +10,16 @@ variables whose values must all be finite (the fields the solvers start from).
 from __future__ import annotations
 
 from dataclasses import dataclass, field
+from typing import TYPE_CHECKING
 
 import numpy as np
 
 from roughflow.errors import InputError
 
 from .sweep import PARAM_DIMS
+
+if TYPE_CHECKING:
+    import xarray as xr
 
 
 @dataclass(frozen=True)
@@ -28,7 +32,7 @@ class Kind:
     any_of: tuple[str, ...] = ()
     finite: tuple[str, ...] = ()
 
-    def problems(self, ds, *, values: bool = True) -> list[str]:
+    def problems(self, ds: xr.Dataset, *, values: bool = True) -> list[str]:
         """Why ``ds`` is not of this kind (empty when it is); ``values=False``: its layout
         only (variables, dimensions, attributes), not the finite values."""
         out = []
@@ -86,12 +90,12 @@ STUDY_KINDS = {"channels": "channels", "threshold_vs_gamma": "threshold_study",
                "measured": "leak_study"}
 
 
-def kinds_of(ds) -> list[str]:
+def kinds_of(ds: xr.Dataset) -> list[str]:
     """Every kind ``ds`` satisfies (most specific kinds may come with general ones)."""
     return [name for name, kind in KINDS.items() if not kind.problems(ds)]
 
 
-def check_kind(ds, kinds: str | tuple[str, ...], source: str) -> str:
+def check_kind(ds: xr.Dataset, kinds: str | tuple[str, ...], source: str) -> str:
     """Return the first of ``kinds`` that ``ds`` (read from ``source``) is, or raise
     :class:`InputError` saying what is missing and what the dataset looks like."""
     kinds = (kinds,) if isinstance(kinds, str) else tuple(kinds)

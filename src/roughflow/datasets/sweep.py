@@ -20,6 +20,8 @@ from .results import AXIS_COORD
 from .units import DIMENSIONLESS, INT_FILL
 
 if TYPE_CHECKING:
+    from numpy.typing import ArrayLike
+
     from roughflow.scenes.jobs import SurfaceParams
 
 #: Dimensions of every per-job dataset (length 1 in a job, filled by the aggregation).
@@ -55,13 +57,13 @@ def param_coords(p: SurfaceParams, model: str) -> dict:
     return {dim: (dim, [values[dim]], attrs[dim]) for dim in PARAM_DIMS}
 
 
-def expand(values, extra_dims: tuple[str, ...]) -> tuple[tuple[str, ...], np.ndarray]:
+def expand(values: ArrayLike, extra_dims: tuple[str, ...]) -> tuple[tuple[str, ...], np.ndarray]:
     """Array over ``extra_dims`` -> (PARAM_DIMS + extra_dims, array with length-1 axes)."""
     a = np.asarray(values)
     return PARAM_DIMS + extra_dims, a.reshape((1,) * len(PARAM_DIMS) + a.shape)
 
 
-def var(values, extra_dims: tuple[str, ...], units: str, long_name: str,
+def var(values: ArrayLike, extra_dims: tuple[str, ...], units: str, long_name: str,
         **attrs) -> xr.Variable:
     """A job variable over PARAM_DIMS + ``extra_dims``; integers get the fill value -1."""
     dims, a = expand(values, extra_dims)

@@ -19,6 +19,7 @@ the weights pyamg's up to summation order, and the cycle is pyamg's arithmetic
 from __future__ import annotations
 
 from dataclasses import dataclass
+from typing import TYPE_CHECKING
 
 import numba
 import numpy as np
@@ -26,6 +27,9 @@ import scipy.sparse as sp
 import scipy.sparse.linalg as spla
 
 from roughflow.errors import InputError
+
+if TYPE_CHECKING:
+    from pyamg.multilevel import MultilevelSolver
 
 #: classical strength of connection: j is a strong neighbour of i if |a_ij| >= theta
 #: max_k!=i |a_ik| (pyamg's and the classical choice)
@@ -69,7 +73,7 @@ class Hierarchy:
     levels: tuple[Level, ...]
     coarse_lu: spla.SuperLU
 
-    def coarse_solver(self, _a, b: np.ndarray) -> np.ndarray:
+    def coarse_solver(self, _a: sp.csr_matrix, b: np.ndarray) -> np.ndarray:
         return self.coarse_lu.solve(b)
 
 
@@ -241,7 +245,7 @@ def rs_hierarchy(a: sp.csr_matrix) -> Hierarchy:
     return Hierarchy(tuple(levels), spla.splu(sp.csc_matrix(a)))
 
 
-def pyamg_rs_hierarchy(a: sp.csr_matrix, smoothers: dict | None = None):
+def pyamg_rs_hierarchy(a: sp.csr_matrix, smoothers: dict | None = None) -> MultilevelSolver:
     """pyamg's own build of the same hierarchy (a MultilevelSolver smoothed as
     ``smoothers``, :data:`RS_SMOOTHERS` when None): the reference of the tests and of
     ``benchmarks/bench_flow.py``."""
@@ -262,7 +266,8 @@ def _sweeps(spec) -> tuple[bool, ...]:
     return _SWEEP_ORDER[sweep]
 
 
-def rs_vcycle(ml, smoothers: dict | None = None) -> spla.LinearOperator:
+def rs_vcycle(ml: Hierarchy | MultilevelSolver,
+              smoothers: dict | None = None) -> spla.LinearOperator:
     """One V-cycle of the hierarchy ``ml`` (a :class:`Hierarchy` or pyamg's
     MultilevelSolver) from a zero guess, smoothed as ``smoothers`` (pyamg's
     presmoother/postsmoother keywords; :data:`RS_SMOOTHERS` when None). On pyamg's

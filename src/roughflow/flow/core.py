@@ -17,6 +17,7 @@ from __future__ import annotations
 
 import logging
 from dataclasses import dataclass, replace
+from typing import TYPE_CHECKING
 
 import numpy as np
 import scipy.sparse as sp
@@ -51,6 +52,9 @@ from .linsolve import (
     solve_prepared,
     solve_spd,
 )
+
+if TYPE_CHECKING:
+    from numpy.typing import ArrayLike
 
 log = logging.getLogger(__name__)
 
@@ -151,7 +155,8 @@ class CellOrdering:
         return cls(axis, shape, rank, factor.flops)
 
 
-def check_ordering(ordering, axis: int, shape: tuple[int, int]) -> CellOrdering | None:
+def check_ordering(ordering: CellOrdering | None, axis: int,
+                   shape: tuple[int, int]) -> CellOrdering | None:
     """``ordering`` for :func:`solve`: None, or a :class:`CellOrdering` of the same axis and
     gap shape; :class:`InputError` otherwise."""
     if ordering is None:
@@ -204,7 +209,7 @@ def reynolds_system(sigma_local: np.ndarray, active: np.ndarray, axis: int, *, l
                           l_across)
 
 
-def check_gap(gap) -> np.ndarray:
+def check_gap(gap: ArrayLike) -> np.ndarray:
     """Return ``gap`` as a float64 2D array, or raise :class:`InputError`."""
     g = require_field("gap", gap)
     if (g < 0).any():
@@ -593,8 +598,8 @@ def check_sigma_tol(sigma_tol: float | None) -> float | None:
 
 
 def solve(
-    gap,
-    axis,
+    gap: ArrayLike,
+    axis: int | str,
     *,
     lx: float = 1.0,
     ly: float | None = None,
@@ -716,8 +721,8 @@ def solve(
 
 
 def conductance(
-    gap,
-    axis=None,
+    gap: ArrayLike,
+    axis: int | str | None = None,
     *,
     lx: float = 1.0,
     ly: float | None = None,

@@ -2,12 +2,19 @@
 
 from __future__ import annotations
 
+from typing import TYPE_CHECKING
+
 import numpy as np
 
 from .core import FlowResult
 
+if TYPE_CHECKING:
+    from matplotlib.axes import Axes
+    from numpy.typing import ArrayLike
 
-def plot_flux(result: FlowResult, contact_mask=None, ax=None, *, log: bool = True):
+
+def plot_flux(result: FlowResult, contact_mask: ArrayLike | None = None, ax: Axes | None = None,
+              *, log: bool = True) -> Axes:
     """Draw |j| of ``result`` (log scale, 6 decades, by default) with contact cells in black.
 
     ``contact_mask``: boolean (nx, ny) array of contact cells drawn black; cells

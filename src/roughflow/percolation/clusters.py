@@ -9,6 +9,7 @@ L^2). The contact-patch-size distribution n(s) ~ s^(-tau) has a Fisher exponent 
 from __future__ import annotations
 
 from dataclasses import dataclass
+from typing import TYPE_CHECKING
 
 import numpy as np
 
@@ -17,11 +18,14 @@ from roughflow.errors import InputError
 from .labels import check_mask, label
 from .spanning import spanning_cells
 
+if TYPE_CHECKING:
+    from numpy.typing import ArrayLike
+
 #: Values of :func:`percolation_map`.
 CONTACT, FLUID, PERCOLATING = 0, 1, 2
 
 
-def cluster_sizes(mask, *, periodic: tuple[bool, bool] = (True, True),
+def cluster_sizes(mask: ArrayLike, *, periodic: tuple[bool, bool] = (True, True),
                   connectivity: int = 4) -> np.ndarray:
     """Sizes (number of cells) of the clusters of True cells, largest first."""
     lab, n = label(mask, periodic=periodic, connectivity=connectivity)
@@ -29,7 +33,8 @@ def cluster_sizes(mask, *, periodic: tuple[bool, bool] = (True, True),
     return np.sort(sizes)[::-1]
 
 
-def size_distribution(sizes, *, bins_per_decade: int = 5) -> tuple[np.ndarray, np.ndarray]:
+def size_distribution(sizes: ArrayLike, *,
+                      bins_per_decade: int = 5) -> tuple[np.ndarray, np.ndarray]:
     """Logarithmically binned cluster-number density n(s).
 
     Returns ``(s, n)``: geometric bin centres and the number of clusters per unit size in
@@ -54,7 +59,7 @@ def size_distribution(sizes, *, bins_per_decade: int = 5) -> tuple[np.ndarray, n
     return centre[keep], counts[keep] / width[keep]
 
 
-def fisher_exponent(sizes, *, s_min: float = 4.0, s_max: float | None = None,
+def fisher_exponent(sizes: ArrayLike, *, s_min: float = 4.0, s_max: float | None = None,
                     bins_per_decade: int = 5) -> float:
     """Least-squares slope -tau of log n(s) versus log s over ``s_min <= s <= s_max``."""
     s, n = size_distribution(sizes, bins_per_decade=bins_per_decade)
@@ -82,7 +87,7 @@ class ClusterStats:
     percolating_fraction_y: float
 
 
-def cluster_stats(contact_mask, *, patch_connectivity: int = 4) -> ClusterStats:
+def cluster_stats(contact_mask: ArrayLike, *, patch_connectivity: int = 4) -> ClusterStats:
     """Patches (contact, ``patch_connectivity``-connected, default 4 as in the paper) and
     fluid clusters (4-connected), both periodic, and the share of spanning fluid."""
     c = check_mask("contact_mask", contact_mask)
@@ -99,7 +104,7 @@ def cluster_stats(contact_mask, *, patch_connectivity: int = 4) -> ClusterStats:
     )
 
 
-def percolation_map(contact_mask, axis: int = 0) -> np.ndarray:
+def percolation_map(contact_mask: ArrayLike, axis: int | str = 0) -> np.ndarray:
     """int8 map: 0 contact, 1 non-percolating fluid, 2 fluid spanning along ``axis``
     (paper Fig. 1 b, c: dark blue = 2, light blue = 1, orange = 0)."""
     c = check_mask("contact_mask", contact_mask)

@@ -7,6 +7,8 @@ small graph of seam pairs. Arrays are indexed ``[ix, iy]`` (axis 0 is x, axis 1 
 
 from __future__ import annotations
 
+from typing import TYPE_CHECKING
+
 import numpy as np
 from scipy import ndimage
 from scipy.sparse import coo_matrix
@@ -14,13 +16,16 @@ from scipy.sparse.csgraph import connected_components
 
 from roughflow.errors import InputError, check_axis  # noqa: F401 (re-exported)
 
+if TYPE_CHECKING:
+    from numpy.typing import ArrayLike
+
 _STRUCTURES = {
     4: ndimage.generate_binary_structure(2, 1),
     8: ndimage.generate_binary_structure(2, 2),
 }
 
 
-def check_mask(name: str, mask) -> np.ndarray:
+def check_mask(name: str, mask: ArrayLike) -> np.ndarray:
     """Return ``mask`` as a 2D numpy bool array, or raise :class:`InputError` naming it."""
     m = np.asarray(mask)
     if m.dtype != np.bool_:
@@ -32,7 +37,7 @@ def check_mask(name: str, mask) -> np.ndarray:
     return m
 
 
-def check_connectivity(connectivity) -> int:
+def check_connectivity(connectivity: int) -> int:
     if isinstance(connectivity, (bool, np.bool_)) or connectivity not in (4, 8):
         raise InputError(f"connectivity must be 4 or 8, got {connectivity!r}")
     return int(connectivity)
@@ -104,7 +109,7 @@ def merge_seams(raw: np.ndarray, n: int, periodic: tuple[bool, bool],
 
 
 def label(
-    mask, *, periodic: tuple[bool, bool] = (True, True), connectivity: int = 4
+    mask: ArrayLike, *, periodic: tuple[bool, bool] = (True, True), connectivity: int = 4
 ) -> tuple[np.ndarray, int]:
     """Label the connected clusters of the True cells of a 2D boolean ``mask``.
 

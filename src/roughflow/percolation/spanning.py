@@ -10,6 +10,8 @@ cylinder (open in x, periodic in y), and vice versa (docs/physics.md Sect. 4).
 
 from __future__ import annotations
 
+from typing import TYPE_CHECKING
+
 import numba
 import numpy as np
 from scipy import ndimage
@@ -18,6 +20,11 @@ from roughflow.errors import InputError
 
 from .labels import _STRUCTURES, check_axis, check_connectivity, check_mask, merge_seams
 from .sweep import SweepWork, _find, _link, sweep_work
+
+if TYPE_CHECKING:
+    from collections.abc import Iterable
+
+    from numpy.typing import ArrayLike
 
 
 def _periodic_across(axis: int, periodic: bool = True) -> tuple[bool, bool]:
@@ -40,7 +47,8 @@ def _spanning_labels(open_mask: np.ndarray, axis: int, connectivity: int,
     return raw, lut, common
 
 
-def percolates(open_mask, axis: int, *, connectivity: int = 4, periodic: bool = True) -> bool:
+def percolates(open_mask: ArrayLike, axis: int | str, *, connectivity: int = 4,
+               periodic: bool = True) -> bool:
     """True when a cluster of open (True) cells connects the two ends along ``axis``.
 
     ``axis`` 0 = x, 1 = y; open boundaries along ``axis``, periodic across it (closed
@@ -153,8 +161,9 @@ def _spans_4(open_, nx, ny, periodic, parent, size, flags, aux_flags):
     return spans_x, spans_y
 
 
-def percolates_along(open_mask, axes=(0, 1), *, connectivity: int = 4,
-                     periodic: bool = True, work: SweepWork | None = None) -> dict[int, bool]:
+def percolates_along(open_mask: ArrayLike, axes: Iterable[int | str] = (0, 1), *,
+                     connectivity: int = 4, periodic: bool = True,
+                     work: SweepWork | None = None) -> dict[int, bool]:
     """:func:`percolates` along each of ``axes`` at once (the axes differ only in which seam
     is periodic); ``{axis: spans}``. 4-connected: one union-find pass (:func:`_spans_4`;
     ``work``: a :func:`~roughflow.percolation.sweep_work` of the grid's size, reused instead
@@ -183,7 +192,7 @@ def percolates_along(open_mask, axes=(0, 1), *, connectivity: int = 4,
     return out
 
 
-def spanning_cells(open_mask, axis: int, *, connectivity: int = 4,
+def spanning_cells(open_mask: ArrayLike, axis: int | str, *, connectivity: int = 4,
                    periodic: bool = True) -> np.ndarray:
     """Bool mask of the open cells in clusters that touch both ends along ``axis``.
 
@@ -254,7 +263,7 @@ def _wraps(mask: np.ndarray, axis: int, connectivity: int) -> bool:
     return False
 
 
-def contact_percolates(contact_mask, axis: int) -> bool:
+def contact_percolates(contact_mask: ArrayLike, axis: int | str) -> bool:
     """True when an 8-connected contact cluster spans the cell along ``axis``, closing on
     itself through the periodic seam of ``axis`` (a contact wall around the cylinder that
     is open across ``axis``).

@@ -14,7 +14,7 @@ gives the critical number of open cells. Compiled with numba; O(N alpha(N)).
 from __future__ import annotations
 
 import math
-from typing import NamedTuple
+from typing import TYPE_CHECKING, NamedTuple
 
 import numba
 import numpy as np
@@ -22,6 +22,9 @@ import numpy as np
 from roughflow.errors import InputError
 
 from .labels import check_axis
+
+if TYPE_CHECKING:
+    from collections.abc import Iterable
 
 _LOW, _HIGH = 1, 2
 
@@ -132,7 +135,7 @@ def _reset(work: SweepWork) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     return work.parent, work.size, work.flags
 
 
-def critical_open_count(order: np.ndarray, shape: tuple[int, int], axis: int) -> int:
+def critical_open_count(order: np.ndarray, shape: tuple[int, int], axis: int | str) -> int:
     """Smallest k such that the first k cells of ``order`` (flat C-order indices into an
     array of ``shape``) form an open set that spans along ``axis`` (4-connected, open
     boundaries along ``axis``, periodic across). Returns -1 if even all cells do not span
@@ -177,7 +180,7 @@ def _cut_at(sample: np.ndarray, fraction: float) -> float:
     return float(sample[min(int((1.0 - fraction) * sample.size), sample.size - 1)])
 
 
-def critical_open_count_by_key(key: np.ndarray, axis: int, *, expect: float = 0.5,
+def critical_open_count_by_key(key: np.ndarray, axis: int | str, *, expect: float = 0.5,
                                work: SweepWork | None = None) -> int:
     """:func:`critical_open_count` for the order of decreasing ``key`` (cells with a larger
     key open first), without sorting all cells.
@@ -352,7 +355,7 @@ class BearingBracket(NamedTuple):
     height: float
 
 
-def bearing_bracket(heights: np.ndarray, axis: int) -> BearingBracket:
+def bearing_bracket(heights: np.ndarray, axis: int | str) -> BearingBracket:
     """Exact fluid percolation threshold of the bearing model along ``axis``.
 
     Contact is the top fraction of heights, so the open set grows from the lowest cell up;
@@ -407,7 +410,7 @@ def _area_at_count(k: int, n: int) -> float:
 
 
 def predicted_thresholds(order: np.ndarray, shape: tuple[int, int],
-                         axes=(0, 1)) -> dict[int, float]:
+                         axes: Iterable[int | str] = (0, 1)) -> dict[int, float]:
     """Predicted a_c* per axis: the contact area at which the open set built in ``order``
     first spans, taken at the middle of the critical cell (exact for the bearing model with
     heights as the order, first order for an elastic state with :func:`open_first_order`)."""

@@ -34,7 +34,7 @@ import logging
 import math
 from collections.abc import Callable
 from dataclasses import dataclass, field
-from typing import NamedTuple
+from typing import TYPE_CHECKING, NamedTuple
 
 import numpy as np
 
@@ -75,6 +75,9 @@ from .load import (
     warm_start,
     warm_start_compliance,
 )
+
+if TYPE_CHECKING:
+    from roughflow.contact.adhesion import Adhesion
 
 log = logging.getLogger(__name__)
 
@@ -546,7 +549,7 @@ def threshold(
     *,
     model: str = "elastic",
     tol: float = THRESHOLD_TOL,
-    adhesion=None,
+    adhesion: Adhesion | None = None,
     options: SearchOptions | None = None,
     threads: int | None = None,
     backend: str = "cpu",

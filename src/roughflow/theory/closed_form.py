@@ -10,6 +10,8 @@ a_c = 0; sigma = 0 for a_c >= a_c*. Units: ubar in L, sigma in L^3/eta.
 
 from __future__ import annotations
 
+from typing import TYPE_CHECKING
+
 import numpy as np
 
 from roughflow.defaults import MODELS
@@ -17,13 +19,16 @@ from roughflow.errors import InputError, require_positive
 
 from .effective_medium import _check_a_c_star
 
+if TYPE_CHECKING:
+    from numpy.typing import ArrayLike
+
 #: Eq. 16 has one closed form per contact model.
 KINDS = MODELS
 #: critical exponent beta of sigma ~ Da'^beta near a_c* (bearing: 1 with a log correction)
 EXPONENTS = {"elastic": 69.0 / 20.0, "adhesive": 1.0, "bearing": 1.0}
 
 
-def criticality_factor(a_c, *, a_c_star: float, kind: str = "elastic") -> np.ndarray:
+def criticality_factor(a_c: ArrayLike, *, a_c_star: float, kind: str = "elastic") -> np.ndarray:
     """The factor multiplying ubar^3/(12 eta) in Eq. (16); 1 at a_c = 0, 0 for a_c >= a_c*."""
     a_c_star = _check_a_c_star(a_c_star)
     if kind not in KINDS:
@@ -43,7 +48,7 @@ def criticality_factor(a_c, *, a_c_star: float, kind: str = "elastic") -> np.nda
 
 
 def closed_form(
-    mean_gap, a_c, *, a_c_star: float, kind: str = "elastic", eta: float = 1.0
+    mean_gap: ArrayLike, a_c: ArrayLike, *, a_c_star: float, kind: str = "elastic", eta: float = 1.0
 ) -> np.ndarray | float:
     """Closed-form conductance of Eq. (16) for ``kind`` in ("elastic", "adhesive", "bearing").
 

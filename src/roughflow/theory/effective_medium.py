@@ -28,12 +28,16 @@ from __future__ import annotations
 
 import math
 from dataclasses import dataclass
+from typing import TYPE_CHECKING
 
 import numba
 import numpy as np
 from scipy.optimize import brentq
 
 from roughflow.errors import ConvergenceError, InputError, require_finite, require_positive
+
+if TYPE_CHECKING:
+    from numpy.typing import ArrayLike
 
 FORMS = ("corrected", "persson")
 
@@ -131,7 +135,8 @@ def effective_dimension(a_c_star: float) -> float:
     return 1.0 / (1.0 - a)
 
 
-def local_conductivity(gap, eta: float = 1.0, *, contact=None) -> np.ndarray:
+def local_conductivity(gap: ArrayLike, eta: float = 1.0, *,
+                       contact: ArrayLike | None = None) -> np.ndarray:
     """Local Reynolds conductivity sigma = u^3/(12 eta) of a gap field (units L^3/eta).
 
     ``contact`` (optional boolean mask of the same shape) forces sigma = 0 there, for
@@ -148,7 +153,8 @@ def local_conductivity(gap, eta: float = 1.0, *, contact=None) -> np.ndarray:
     return sigma
 
 
-def bruggeman(sigma_values, *, a_c_star: float, weights=None) -> BruggemanResult:
+def bruggeman(sigma_values: ArrayLike | Medium, *, a_c_star: float,
+              weights: ArrayLike | None = None) -> BruggemanResult:
     """Isotropic Bruggeman conductance sigma_0 (Eq. 5) with D = 1/(1 - a_c*) (Eq. 6).
 
     ``sigma_values``: local conductivities (any shape, flattened; contact cells are
@@ -165,18 +171,19 @@ def bruggeman(sigma_values, *, a_c_star: float, weights=None) -> BruggemanResult
     return BruggemanResult(sigma=x, residual=res, a_c=m.z, a_c_star=a_c_star, dimension=d)
 
 
-def bruggeman_gap(gap, *, a_c_star: float, contact=None, eta: float = 1.0) -> BruggemanResult:
+def bruggeman_gap(gap: ArrayLike, *, a_c_star: float, contact: ArrayLike | None = None,
+                  eta: float = 1.0) -> BruggemanResult:
     """:func:`bruggeman` of a gap field: sigma = gap^3/(12 eta), contact cells sigma = 0."""
     return bruggeman(local_conductivity(gap, eta, contact=contact), a_c_star=a_c_star)
 
 
 def bruggeman_anisotropic(
-    sigma_values,
+    sigma_values: ArrayLike | Medium,
     *,
     a_c_star: float,
     gamma: float,
     form: str = "corrected",
-    weights=None,
+    weights: ArrayLike | None = None,
 ) -> AnisotropicResult:
     """Anisotropic Bruggeman conductances sigma_x, sigma_y (Eq. 7-9).
 
@@ -275,7 +282,8 @@ def bruggeman_anisotropic(
     return result(sx, sy, g, res)
 
 
-def noncontact_decomposition(sigma_values, *, a_c_star: float, weights=None) -> NonContact:
+def noncontact_decomposition(sigma_values: ArrayLike | Medium, *, a_c_star: float,
+                             weights: ArrayLike | None = None) -> NonContact:
     """Split the isotropic solution into contact and non-contact parts (Eq. 10-15).
 
     sigma_nc solves Eq. (13), 1/sigma_nc = <(1 + Da~)/(sigma + sigma_nc Da~)>_nc with
@@ -414,7 +422,7 @@ class Medium:
         return self._sample
 
 
-def medium(sigma_values, weights=None) -> Medium:
+def medium(sigma_values: ArrayLike, weights: ArrayLike | None = None) -> Medium:
     """The :class:`Medium` of local conductivities ``sigma_values`` (any shape; contact
     cells exact zeros) with optional histogram ``weights`` (see :func:`bruggeman`), checked
     once for every equation solved on it."""

@@ -19,6 +19,7 @@ from __future__ import annotations
 
 import math
 from dataclasses import dataclass
+from typing import TYPE_CHECKING
 
 import numpy as np
 
@@ -33,6 +34,9 @@ from .effective_medium import (
     medium,
     noncontact_decomposition,
 )
+
+if TYPE_CHECKING:
+    from numpy.typing import ArrayLike
 
 # keeps a shifted threshold inside (0, 1), where D = 1/(1 - a_c*) is finite
 _MAX_GRID_THRESHOLD = 0.999
@@ -67,9 +71,10 @@ class GapTheory:
     residual: float
 
 
-def gap_theory(gap, *, a_c_star: float, contact=None, gamma: float = 1.0,
-               kind: str = "elastic", eta: float = 1.0, area_fraction: float | None = None,
-               a_c_star_alt: float | None = None, noncontact: bool = False) -> GapTheory:
+def gap_theory(gap: ArrayLike, *, a_c_star: float, contact: ArrayLike | None = None,
+               gamma: float = 1.0, kind: str = "elastic", eta: float = 1.0,
+               area_fraction: float | None = None, a_c_star_alt: float | None = None,
+               noncontact: bool = False) -> GapTheory:
     """Bruggeman (isotropic, both anisotropic forms) and Eq. 16 for one gap field.
 
     ``contact``: boolean contact mask (default gap <= 0); ``gamma``: Peklenik number of the

@@ -18,6 +18,7 @@ contact cells at sigma = 0.
 from __future__ import annotations
 
 import math
+from typing import TYPE_CHECKING
 
 import numpy as np
 
@@ -26,8 +27,11 @@ from roughflow.errors import InputError, require_field, require_positive
 
 from .effective_medium import local_conductivity
 
+if TYPE_CHECKING:
+    from numpy.typing import ArrayLike
 
-def autocorrelation(field) -> np.ndarray:
+
+def autocorrelation(field: ArrayLike) -> np.ndarray:
     """Normalised periodic autocorrelation C[ix, iy] of the fluctuations of ``field`` (C[0,0]=1)."""
     f = require_field("field", field)
     df = f - f.mean()
@@ -51,7 +55,7 @@ def _crossing(profile: np.ndarray, step: float, level: float, axis: str) -> floa
 
 
 def correlation_lengths(
-    field, lx: float = 1.0, ly: float | None = None, *, level: float = math.exp(-1.0)
+    field: ArrayLike, lx: float = 1.0, ly: float | None = None, *, level: float = math.exp(-1.0)
 ) -> tuple[float, float]:
     """Correlation lengths (xi_x, xi_y) of ``field[ix, iy]``: where C first drops to ``level``.
 
@@ -71,7 +75,7 @@ def correlation_lengths(
     return xi_x, xi_y
 
 
-def peklenik_number(field, lx: float = 1.0, ly: float | None = None, *,
+def peklenik_number(field: ArrayLike, lx: float = 1.0, ly: float | None = None, *,
                     level: float = math.exp(-1.0)) -> float:
     """xi_x / xi_y of ``field`` (> 1 when it is correlated longer along x)."""
     xi_x, xi_y = correlation_lengths(field, lx, ly, level=level)
@@ -79,7 +83,8 @@ def peklenik_number(field, lx: float = 1.0, ly: float | None = None, *,
 
 
 def conductivity_peklenik(
-    gap, lx: float = 1.0, ly: float | None = None, *, contact=None, eta: float = 1.0,
+    gap: ArrayLike, lx: float = 1.0, ly: float | None = None, *,
+    contact: ArrayLike | None = None, eta: float = 1.0,
     level: float = math.exp(-1.0),
 ) -> float:
     """Conductivity Peklenik number: :func:`peklenik_number` of sigma = gap^3/(12 eta).

@@ -39,6 +39,7 @@ from __future__ import annotations
 import math
 from dataclasses import dataclass
 from functools import lru_cache
+from typing import TYPE_CHECKING
 
 import numpy as np
 from scipy.integrate import cumulative_simpson
@@ -50,6 +51,9 @@ from roughflow.surface import Surface, SurfaceSpec, peklenik_wavenumber, spectru
 
 from .closed_form import closed_form
 from .effective_medium import _wsum
+
+if TYPE_CHECKING:
+    from numpy.typing import ArrayLike
 
 DEFAULT_ENERGY_FACTOR = 0.42
 
@@ -141,7 +145,8 @@ def _check_factor(energy_factor: float) -> float:
     return g
 
 
-def persson_area(pressure, rms_slope: float = 1.0, *, modulus: float = 1.0):
+def persson_area(pressure: ArrayLike, rms_slope: float = 1.0, *,
+                 modulus: float = 1.0) -> np.ndarray | float:
     """Persson's relative contact area a_c(p) = erf(sqrt(2) p/(E* gbar)).
 
     Small-load slope da_c/dp = sqrt(8/pi)/(E* gbar) = 1.596/(E* gbar). ``pressure`` >= 0
@@ -183,9 +188,9 @@ def _j(t0: np.ndarray, energy_factor: float) -> np.ndarray:
 
 
 def persson_mean_gap(
-    pressure, spec: SurfaceSpec | Surface | DiscreteSpectrum, *,
+    pressure: ArrayLike, spec: SurfaceSpec | Surface | DiscreteSpectrum, *,
     energy_factor: float = DEFAULT_ENERGY_FACTOR, modulus: float = 1.0,
-):
+) -> np.ndarray | float:
     """Persson's mean gap u(p) (Yang & Persson 2008, see module doc), in units of L.
 
     ``pressure`` > 0 (scalar or array) in units of ``modulus`` (E*). Decreases
@@ -215,9 +220,9 @@ def persson_u0(
 
 
 def persson_elastic_energy(
-    pressure, spec: SurfaceSpec | Surface | DiscreteSpectrum, *,
+    pressure: ArrayLike, spec: SurfaceSpec | Surface | DiscreteSpectrum, *,
     energy_factor: float = DEFAULT_ENERGY_FACTOR, modulus: float = 1.0,
-):
+) -> np.ndarray | float:
     """Stored elastic energy per unit area U_el(p) (module doc), units E* L.
 
     Tends to the full-contact energy (E*/4) sum_q |q| |h_q|^2 as p -> infinity.
@@ -234,7 +239,7 @@ def persson_elastic_energy(
 
 
 def predict_conductance(
-    spec: SurfaceSpec | Surface, pressures, *, a_c_star: float, kind: str = "elastic",
+    spec: SurfaceSpec | Surface, pressures: ArrayLike, *, a_c_star: float, kind: str = "elastic",
     eta: float = 1.0, energy_factor: float = DEFAULT_ENERGY_FACTOR, modulus: float = 1.0,
 ) -> PerssonPrediction:
     """sigma(p) from the spectrum alone: Persson a_c(p) and u(p) in the closed form Eq. (16).
