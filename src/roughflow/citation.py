@@ -15,6 +15,10 @@ from __future__ import annotations
 
 import textwrap
 from dataclasses import dataclass
+from typing import TYPE_CHECKING
+
+if TYPE_CHECKING:
+    from collections.abc import Collection
 
 
 @dataclass(frozen=True)
@@ -155,7 +159,7 @@ METHODS = {
 }
 
 
-def references(methods=None) -> list[Reference]:
+def references(methods: Collection[str] | None = None) -> list[Reference]:
     """The references of ``methods`` (names of :data:`METHODS`; None: all), the paper first,
     each once."""
     if methods is None:

@@ -4,6 +4,7 @@ from __future__ import annotations
 
 import argparse
 from pathlib import Path
+from typing import TYPE_CHECKING
 
 from roughflow.defaults import (
     BOUNDARY,
@@ -15,6 +16,9 @@ from roughflow.defaults import (
 from roughflow.errors import InputError
 
 from ._common import add_input, add_output
+
+if TYPE_CHECKING:  # xarray is imported when the command runs, not for --help
+    import xarray as xr
 
 
 def register(sub: argparse._SubParsersAction) -> None:
@@ -101,7 +105,7 @@ def run(args: argparse.Namespace) -> None:
     print(format_table(ds))
 
 
-def format_table(ds) -> str:
+def format_table(ds: xr.Dataset) -> str:
     """The leak curve of a (one-scan) leak dataset as a text table."""
     d = ds.isel(scan=0)
     lines = [f"{d['scan'].item()}: boundary {ds.attrs['boundary']}, E* = "

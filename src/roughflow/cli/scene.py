@@ -10,12 +10,16 @@ from __future__ import annotations
 import argparse
 import logging
 import time
+from typing import TYPE_CHECKING
 
 from roughflow import defaults
 from roughflow.defaults import ADHESION_RANGE_OVER_LAMBDA_S, ADHESION_SURFACE_ENERGY_RATIO
 from roughflow.errors import InputError
 
 from ._common import add_output, add_surface_options, refuse_given, track_given
+
+if TYPE_CHECKING:  # the scenes (numpy, xarray) are imported when the command runs
+    from roughflow.scenes import ChannelsJob, LadderJob, ThresholdJob
 
 log = logging.getLogger(__name__)
 
@@ -114,7 +118,7 @@ def register(sub: argparse._SubParsersAction) -> None:
     c.set_defaults(func=run)
 
 
-def job_from_args(args: argparse.Namespace):
+def job_from_args(args: argparse.Namespace) -> ChannelsJob | ThresholdJob | LadderJob:
     """The job dataclass described by the parsed arguments."""
     from roughflow.scenes import ChannelsJob, LadderJob, SurfaceParams, ThresholdJob
 

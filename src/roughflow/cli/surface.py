@@ -4,10 +4,14 @@ from __future__ import annotations
 
 import argparse
 import logging
+from typing import TYPE_CHECKING
 
 from roughflow.errors import InputError
 
 from ._common import add_output, add_surface_options, dest_of, refuse_given, track_given
+
+if TYPE_CHECKING:  # numpy is imported when the command runs, not for --help
+    from roughflow.surface import SurfaceSpec
 
 log = logging.getLogger(__name__)
 
@@ -45,7 +49,7 @@ def register(sub: argparse._SubParsersAction) -> None:
     p.set_defaults(func=run)
 
 
-def spec_from_args(args: argparse.Namespace):
+def spec_from_args(args: argparse.Namespace) -> SurfaceSpec:
     explicit = (args.nx, args.ny, args.lambda_r, args.lambda_s)
     if any(v is not None for v in explicit):
         return _explicit_spec(args)

@@ -12,12 +12,18 @@ from __future__ import annotations
 import importlib
 import os
 from pathlib import Path
+from typing import TYPE_CHECKING
 
 from roughflow.defaults import STUDIES
 from roughflow.errors import InputError
 
+if TYPE_CHECKING:
+    from types import ModuleType
 
-def module(study: str):
+    import xarray as xr
+
+
+def module(study: str) -> ModuleType:
     if study not in STUDIES:
         raise InputError(f"unknown study {study!r}; known: {', '.join(STUDIES)}")
     return importlib.import_module(f"{__name__}.{study}")
@@ -32,7 +38,8 @@ def caption(study: str) -> str:
     return CAPTIONS[study]
 
 
-def make_figure(study: str, dataset, output: str | os.PathLike, fit=None, *,
+def make_figure(study: str, dataset: xr.Dataset | str | os.PathLike,
+                output: str | os.PathLike, fit: xr.Dataset | str | os.PathLike | None = None, *,
                 source: str = "the dataset") -> str:
     """Draw ``study`` from ``dataset`` (xr.Dataset or path) into ``output`` (a .png file) and
     the PDF next to it; returns the caption. The dataset must be of the study's kind

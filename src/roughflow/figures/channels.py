@@ -31,7 +31,7 @@ def phase_colors(phase: xr.DataArray) -> ListedColormap:
     return ListedColormap([PHASES[by_code[code]][0] for code in range(3)])
 
 
-def draw(ds: xr.Dataset, fit=None) -> Figure:
+def draw(ds: xr.Dataset, fit: xr.Dataset | None = None) -> Figure:
     fig = Figure(figsize=(12, 4.6), layout="constrained")
     axes = fig.subplots(1, 3)
     h = ds["heights_iso"].values

@@ -15,7 +15,7 @@ CAPTION = CAPTIONS["flow_anisotropic"]
 MODEL_MARKER = {"elastic": "o", "bearing": "s", "adhesive": "^"}
 
 
-def draw(ds: xr.Dataset, fit=None) -> Figure:
+def draw(ds: xr.Dataset, fit: xr.Dataset | None = None) -> Figure:
     models = [m for m in ("elastic", "bearing", "adhesive") if m in ds["model"].values]
     n = len(models) + 1
     fig = Figure(figsize=(4.6 * n, 4.2), layout="constrained")

@@ -18,7 +18,7 @@ TITLES = {"elastic": "elastic, non-adhesive", "adhesive": "short-range adhesion"
           "bearing": "bearing-area model"}
 
 
-def draw(ds: xr.Dataset, fit=None) -> Figure:
+def draw(ds: xr.Dataset, fit: xr.Dataset | None = None) -> Figure:
     fixed, other = STUDY_FIXED["flow_isotropic"]
     for key, value in fixed.items():
         values = [float(v) for v in np.atleast_1d(ds[key].values)] if key in ds else []

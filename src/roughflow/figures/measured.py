@@ -31,7 +31,7 @@ def boundaries(ds: xr.Dataset) -> list[str]:
     return [str(ds.attrs.get("boundary", "unknown"))] * n
 
 
-def draw(ds: xr.Dataset, fit=None) -> plt.Figure:
+def draw(ds: xr.Dataset, fit: xr.Dataset | None = None) -> plt.Figure:
     fig, (ax_q, ax_a) = plt.subplots(1, 2, figsize=(10, 4.2), constrained_layout=True)
     p = ds["pressure"].values
     bounds = boundaries(ds)

@@ -16,7 +16,7 @@ CAPTION = CAPTIONS["threshold_vs_gamma"]
 MARKERS = ("o", "s", "^", "D")
 
 
-def draw(ds: xr.Dataset, fit=None) -> Figure:
+def draw(ds: xr.Dataset, fit: xr.Dataset | None = None) -> Figure:
     models = [m for m in ("elastic", "bearing", "adhesive") if m in ds["model"].values]
     fig = Figure(figsize=(5.2 * len(models), 4.2), layout="constrained")
     axes = fig.subplots(1, len(models), squeeze=False)

@@ -15,7 +15,7 @@ from .captions import CAPTIONS
 CAPTION = CAPTIONS["threshold_vs_hurst"]
 
 
-def draw(ds: xr.Dataset, fit=None) -> Figure:
+def draw(ds: xr.Dataset, fit: xr.Dataset | None = None) -> Figure:
     fig = Figure(figsize=(5.5, 4.2), layout="constrained")
     ax = fig.subplots()
     a = single_setting(threshold_values(ds), STUDY_ONE_VALUE["threshold_vs_hurst"])

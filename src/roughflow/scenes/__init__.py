@@ -9,7 +9,10 @@ jobs with :func:`expand_study`. The runners are imported on first use, so planni
 (the workflow's job graph, cost estimates) does not load the solvers.
 """
 
+from __future__ import annotations
+
 from importlib import import_module
+from typing import TYPE_CHECKING
 
 from .jobs import (
     ChannelsJob,
@@ -25,6 +28,11 @@ from .jobs import (
     study_defaults,
 )
 
+if TYPE_CHECKING:
+    import xarray as xr
+
+    from .jobs import Job
+
 _RUNNERS = {"run_threshold": "threshold", "run_ladder": "ladder", "run_channels": "channels"}
 
 __all__ = ["ChannelsJob", "LadderJob", "SurfaceParams", "ThresholdJob", "check_job_memory",
@@ -38,7 +46,7 @@ def __getattr__(name: str):
     raise AttributeError(f"module {__name__!r} has no attribute {name!r}")
 
 
-def run(job, *, threads: int | None = None):
+def run(job: Job, *, threads: int | None = None) -> xr.Dataset:
     """Run any job and return its dataset (refused before any work if the job would need
     more memory than the machine has, :func:`roughflow.scenes.jobs.check_job_memory`)."""
     from roughflow.fft import check_threads

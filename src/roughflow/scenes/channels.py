@@ -36,7 +36,7 @@ AREA_TOL = 2e-3
 
 
 def contact_at_area(surface: Surface, target: float, model: str, *, tol: float = AREA_TOL,
-                    threads: int | None = None):
+                    threads: int | None = None) -> contact.ContactResult:
     """Contact result whose area fraction is within ``tol`` of ``target`` (bearing: exact;
     elastic: :class:`roughflow.search.LoadSearch`; the closest solve if none is within)."""
     if model == "bearing":

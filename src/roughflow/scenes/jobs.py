@@ -17,6 +17,7 @@ import re
 import shlex
 from dataclasses import dataclass, field, fields
 from pathlib import Path
+from typing import TYPE_CHECKING, Any
 
 from roughflow import defaults
 from roughflow.datasets.sweep import param_key, rnd
@@ -31,6 +32,9 @@ from roughflow.defaults import (
 from roughflow.errors import InputError, check_nu, require_positive, require_seeds
 from roughflow.surface import SurfaceSpec, paper_l_over_lambda_r
 
+if TYPE_CHECKING:
+    from collections.abc import Iterable
+
 SWEEP_KEYS = ("model", "gamma", "hurst", "l_over_lambda_r", "eps_f", "points_per_lambda_s")
 
 
@@ -39,7 +43,7 @@ def fmt(v: float) -> str:
     return f"{float(v):.6g}"
 
 
-def field_default(cls, name: str):
+def field_default(cls: type, name: str) -> Any:
     """The default of dataclass field ``name`` of ``cls`` (for argparse and schema checks)."""
     for f in fields(cls):
         if f.name == name:
@@ -646,7 +650,7 @@ def describe_key(key: tuple) -> str:
                      for d, v in zip(PARAM_DIMS, key, strict=True))
 
 
-def check_collisions(study: str, jobs) -> None:
+def check_collisions(study: str, jobs: Iterable[Job]) -> None:
     """Refuse jobs of one study that would fill the same cells of its dataset.
 
     Jobs with the same :attr:`~ThresholdJob.key` (model, gamma, hurst, eps_t, eps_f) are

@@ -15,6 +15,7 @@ from __future__ import annotations
 import logging
 import math
 import time
+from typing import TYPE_CHECKING
 
 import numpy as np
 import xarray as xr
@@ -43,6 +44,9 @@ from roughflow.surface import Surface, generate
 
 from .jobs import LadderJob
 
+if TYPE_CHECKING:
+    from collections.abc import Iterator
+
 log = logging.getLogger(__name__)
 
 EMT_FORMS = ("isotropic", "isotropic_alt", "anisotropic_corrected", "anisotropic_persson")
@@ -69,7 +73,9 @@ def _adhesion_attrs(surface: Surface, adhesion, lambda_s: float, job: LadderJob)
             "adhesion_range": adhesion.range, "adhesion_repulsion": adhesion.repulsion}
 
 
-def contact_ladder(surface: Surface, job: LadderJob, threads: int | None, adhesion=None):
+def contact_ladder(surface: Surface, job: LadderJob, threads: int | None,
+                   adhesion: contact.Adhesion | None = None,
+                   ) -> Iterator[tuple[float, contact.ContactResult, float]]:
     """Yield (target, ContactResult, corrected area) along the job's area ladder.
 
     The targets are met in the perimeter-corrected area for the elastic model (the
