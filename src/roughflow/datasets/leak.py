@@ -178,8 +178,9 @@ SCAN_ATTRS: dict[str, tuple[str, str, str]] = {
                  "non-periodic treatment of the scan (roughflow leak --boundary)"),
     "boundary_description": ("boundary_description", DIMENSIONLESS,
                              "what the boundary treatment of the scan does"),
-    REFERENCE_ATTRS[REF_VISCOSITY][0]: (REFERENCE_VARIABLES[REF_VISCOSITY], PASCAL_SECONDS,
-                           "fluid viscosity eta (viscosities are in units of eta)"),
+    REFERENCE_ATTRS[REF_VISCOSITY][0]: (
+        REFERENCE_VARIABLES[REF_VISCOSITY], PASCAL_SECONDS,
+        "fluid viscosity eta (viscosities are in units of eta)"),
     "fluid_pressure_Pa": ("fluid_pressure", PASCAL, "fluid pressure drop across the seal"),
     "seal_width_m": ("seal_width", METRES, "seal width w (along the flow)"),
     "seal_length_m": ("seal_length", METRES, "seal length l (across the flow)"),

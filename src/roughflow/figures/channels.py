@@ -8,6 +8,8 @@ from matplotlib.colors import ListedColormap
 from matplotlib.figure import Figure
 from matplotlib.patches import Rectangle
 
+from roughflow.percolation.clusters import PHASE_NAMES
+
 from .captions import CAPTIONS
 
 CAPTION = CAPTIONS["channels"]
@@ -17,17 +19,18 @@ CAPTION = CAPTIONS["channels"]
 PHASES = {"contact": ("#f28e2b", "contact"),
           "non_percolating_fluid": ("#a6cee3", "other fluid"),
           "percolating_fluid": ("#1f3b99", "fluid percolating along x")}
-#: The codes' meanings where a file has none (percolation.percolation_map's codes 0, 1, 2).
-PHASE_MEANINGS = "contact non_percolating_fluid percolating_fluid"
 
 
 def phase_colors(phase: xr.DataArray) -> ListedColormap:
     """Colours of the codes 0, 1, 2 of ``phase`` read from its ``flag_meanings``, so that a
     file written with another order of codes (before the scene used percolation_map's, 1
     meant percolating) is drawn right."""
-    meanings = str(phase.attrs.get("flag_meanings", PHASE_MEANINGS)).split()
-    values = [int(v) for v in np.atleast_1d(phase.attrs.get("flag_values", range(3)))]
-    by_code = dict(zip(values, meanings, strict=True))
+    if "flag_meanings" in phase.attrs:
+        meanings = str(phase.attrs["flag_meanings"]).split()
+        values = [int(v) for v in np.atleast_1d(phase.attrs["flag_values"])]
+        by_code = dict(zip(values, meanings, strict=True))
+    else:  # percolation_map's codes
+        by_code = PHASE_NAMES
     return ListedColormap([PHASES[by_code[code]][0] for code in range(3)])
 
 

@@ -23,6 +23,9 @@ if TYPE_CHECKING:
 
 #: Values of :func:`percolation_map`.
 CONTACT, FLUID, PERCOLATING = 0, 1, 2
+#: Their names, by value, as CF ``flag_meanings`` words.
+PHASE_NAMES = {CONTACT: "contact", FLUID: "non_percolating_fluid",
+               PERCOLATING: "percolating_fluid"}
 
 
 def cluster_sizes(mask: ArrayLike, *, periodic: tuple[bool, bool] = (True, True),

@@ -18,7 +18,7 @@ import xarray as xr
 from roughflow import contact
 from roughflow.datasets.units import DIMENSIONLESS, LENGTH_UNITS
 from roughflow.percolation import contact_percolates, percolates, percolation_map
-from roughflow.percolation.clusters import CONTACT, FLUID, PERCOLATING
+from roughflow.percolation.clusters import PHASE_NAMES
 from roughflow.search import LoadSearch, warm_start_compliance
 from roughflow.surface import Surface, generate
 
@@ -26,9 +26,6 @@ from .jobs import ChannelsJob
 
 log = logging.getLogger(__name__)
 
-#: The phase codes of percolation.percolation_map, which the scene writes.
-CLASSES = {CONTACT: "contact", FLUID: "non-percolating fluid",
-           PERCOLATING: "percolating fluid (along x)"}
 
 
 #: Largest |a_c - target| of the channels scene's contact.
@@ -76,8 +73,8 @@ def run_channels(job: ChannelsJob, *, threads: int | None = None) -> xr.Dataset:
         data[f"phase_{name}"] = (dims, phase, {
             "units": DIMENSIONLESS,
             "long_name": "0 contact, 1 other fluid, 2 fluid percolating along x",
-            "flag_values": np.array(list(CLASSES), dtype=np.int8),
-            "flag_meanings": "contact non_percolating_fluid percolating_fluid"})
+            "flag_values": np.array(list(PHASE_NAMES), dtype=np.int8),
+            "flag_meanings": " ".join(PHASE_NAMES.values())})
         attrs.update({
             f"{name}_lx": spec.lx, f"{name}_ly": spec.ly, f"{name}_gamma": spec.gamma,
             f"{name}_lambda_r": spec.lambda_r, f"{name}_lambda_s": spec.lambda_s,
