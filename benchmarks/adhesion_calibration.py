@@ -13,13 +13,14 @@ mere 10 % adhesion-induced reduction of the mean gap"), and writes
     python benchmarks/adhesion_calibration.py --ratios 0.1 --ranges 0.42 --ppl 2 4
 
 Add ``--paper`` to evaluate the paper's nominal mu_T = 2, gamma_s / v_full = 0.203 as well.
-``--repulsion hard`` puts a hard wall in place of the harmonic repulsion, and
-``--contact-within F`` counts a cell as contact where its gap is below F rho (default 0: the
-model's own contact, g < 0 harmonic or g = 0 hard), e.g. the hard wall with contact inside
-half the range, where the attraction's tension peaks:
+``--repulsion`` picks the wall (default: the model's, ``defaults.ADHESION_REPULSION``), and
+``--contact-within F`` counts a cell as contact where its gap is below F rho (default: the
+repulsion's ``defaults.ADHESION_CONTACT_WITHIN``), e.g. the calibration of each wall:
 
-    python benchmarks/adhesion_calibration.py --repulsion hard --contact-within 0.5 \
-        --ratios 0.1 --ranges 0.8 --seeds 0 1 2
+    python benchmarks/adhesion_calibration.py --repulsion hard --ratios 0.1 --ranges 0.8 \
+        --seeds 0 1 2
+    python benchmarks/adhesion_calibration.py --repulsion harmonic --ratios 0.1 \
+        --ranges 0.42 --seeds 0 1 2
 """
 
 from __future__ import annotations
@@ -27,11 +28,11 @@ from __future__ import annotations
 import argparse
 import json
 import time
-from dataclasses import replace
 from pathlib import Path
 
 from roughflow import contact
 from roughflow.contact.adhesion import adhesion_for, adhesion_summary
+from roughflow.defaults import ADHESION_RANGE_OVER_LAMBDA_S, ADHESION_REPULSION
 from roughflow.search import LoadSearch
 from roughflow.surface import SurfaceSpec, generate
 
@@ -48,19 +49,15 @@ def load_for(search: LoadSearch, target: float) -> float:
     return found.result.pressure
 
 
-def measure(surface, adhesion, p10: float, p40: float, gaps: dict,
-            within: float = 0.0) -> dict:
+def measure(surface, adhesion, p10: float, p40: float, gaps: dict) -> dict:
     """Contact area and iterations at [0, p10/8, p40/4] (warm-started in that order), and
-    the mean gap over the non-adhesive one (``gaps``, by name) at the last two loads. With
-    ``within`` > 0 the area counts the cells whose gap is below ``within`` rho."""
+    the mean gap over the non-adhesive one (``gaps``, by name) at the last two loads."""
     row, prev = {}, None
     for name, load in (("a0", 0.0), ("a10", p10 / 8), ("a40", p40 / 4)):
         t0 = time.perf_counter()
         res = contact.solve(surface, load, model="adhesive", adhesion=adhesion, tol=1e-5,
                             max_iter=30000, init=prev)
-        area = (res.area_fraction if within <= 0
-                else float((res.gap < within * adhesion.range).mean()))
-        row[name], row[f"{name}_iterations"] = area, res.iterations
+        row[name], row[f"{name}_iterations"] = res.area_fraction, res.iterations
         row[f"{name}_seconds"] = time.perf_counter() - t0
         if name in gaps:
             row[f"{name}_gap_ratio"] = res.mean_gap / gaps[name]
@@ -72,18 +69,22 @@ def main() -> None:
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--ratios", type=float, nargs="+", default=[0.1],
                     help="gamma_s / v_ela^full values")
-    ap.add_argument("--ranges", type=float, nargs="+", default=[0.42],
-                    help="rho / lambda_s values")
+    ap.add_argument("--ranges", type=float, nargs="+", default=None,
+                    help="rho / lambda_s values (default: the repulsion's "
+                         "ADHESION_RANGE_OVER_LAMBDA_S)")
     ap.add_argument("--seeds", type=int, nargs="+", default=[0])
     ap.add_argument("--ppl", type=float, nargs="+", default=[2.0], help="points per lambda_s")
     ap.add_argument("--l-over-lambda-r", type=float, default=16.0)
     ap.add_argument("--eps-f", type=float, default=1 / 16)
     ap.add_argument("--paper", action="store_true",
                     help="also the paper's nominal mu_T = 2, gamma_s / v_full = 0.203")
-    ap.add_argument("--repulsion", choices=("harmonic", "hard"), default="harmonic")
-    ap.add_argument("--contact-within", type=float, default=0.0,
-                    help="count gaps below this fraction of rho as contact (0: the model's)")
+    ap.add_argument("--repulsion", choices=("harmonic", "hard"), default=ADHESION_REPULSION)
+    ap.add_argument("--contact-within", type=float, default=None,
+                    help="count gaps below this fraction of rho as contact (default: the "
+                         "repulsion's)")
     args = ap.parse_args()
+    if args.ranges is None:
+        args.ranges = [ADHESION_RANGE_OVER_LAMBDA_S[args.repulsion]]
     OUT.mkdir(parents=True, exist_ok=True)
     rows = []
     with open(OUT / "adhesion_calibration.jsonl", "a") as log:
@@ -99,26 +100,28 @@ def main() -> None:
                 p10, p40 = load_for(elastic, 0.10), load_for(elastic, 0.40)
                 gaps = {name: contact.solve(s, load, tol=1e-5).mean_gap
                         for name, load in (("a10", p10 / 8), ("a40", p40 / 4))}
+                wall = {"repulsion": args.repulsion, "contact_within": args.contact_within}
                 cases = [(r, rho, adhesion_for(s.heights, s.lx, s.ly, gamma_over_v_full=r,
-                                               range=rho * spec.lambda_s))
+                                               range=rho * spec.lambda_s, **wall))
                          for r in args.ratios for rho in args.ranges]
                 if args.paper:
-                    ad = adhesion_for(s.heights, s.lx, s.ly, gamma_over_v_full=0.203, tabor=2.0)
+                    ad = adhesion_for(s.heights, s.lx, s.ly, gamma_over_v_full=0.203, tabor=2.0,
+                                      **wall)
                     cases.append((0.203, ad.range / spec.lambda_s, ad))
                 for ratio, rho, ad in cases:
-                    ad = replace(ad, repulsion=args.repulsion)
                     row = {"ppl": ppl, "n": s.heights.shape[0], "seed": seed, "ratio": ratio,
                            "rho_over_lambda_s": rho, "repulsion": args.repulsion,
-                           "contact_within": args.contact_within,
+                           "contact_within": ad.contact_within,
                            "tabor": adhesion_summary(s.heights, s.lx, s.ly, ad)["tabor"],
                            "p10": p10, "p40": p40,
-                           **measure(s, ad, p10, p40, gaps, args.contact_within)}
+                           **measure(s, ad, p10, p40, gaps)}
                     rows.append(row)
                     log.write(json.dumps(row) + "\n")
                     log.flush()
                     print(json.dumps(row), flush=True)
-    contact_is = ("the model's own" if args.contact_within <= 0
-                  else f"gap < {args.contact_within:g} rho")
+    within = {r["contact_within"] for r in rows}
+    contact_is = ", ".join("overlap or on the wall" if w <= 0 else f"gap < {w:g} rho"
+                           for w in sorted(within))
     lines = [f"# Adhesive model against the paper's case (L/lambda_r = {args.l_over_lambda_r:g}, "
              f"eps_f = {args.eps_f:g}); targets a_c = {list(TARGETS)}; {args.repulsion} "
              f"repulsion, contact: {contact_is}", "",

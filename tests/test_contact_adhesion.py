@@ -14,7 +14,7 @@ from roughflow.surface import SurfaceSpec, generate
 
 
 def test_potential_shape():
-    ad = Adhesion(surface_energy=0.3, range=0.02)
+    ad = Adhesion(surface_energy=0.3, range=0.02, repulsion="harmonic")
     g = np.array([0.0, 0.01, 0.02, 0.05])
     # v(0) = -gamma_s, v(rho) = 0, nothing beyond the range (exact by construction)
     np.testing.assert_allclose(ad.energy(g), [-0.3, -0.15, 0.0, 0.0], atol=1e-15)
@@ -26,7 +26,7 @@ def test_potential_shape():
 
 
 def test_pressure_is_minus_derivative_and_smooth():
-    ad = Adhesion(surface_energy=0.7, range=0.1)
+    ad = Adhesion(surface_energy=0.7, range=0.1, repulsion="harmonic")
     g = np.linspace(-0.05, 0.15, 2001)
     d = 1e-9
     numeric = -(ad.energy(g + d) - ad.energy(g - d)) / (2 * d)
@@ -61,13 +61,15 @@ def test_bad_adhesion(gs, rho):
         Adhesion(surface_energy=gs, range=rho)
 
 
-def test_adhesive_solve_pulls_surfaces_together():
+@pytest.mark.parametrize("repulsion", ["hard", "harmonic"])
+def test_adhesive_solve_pulls_surfaces_together(repulsion):
     # At equal load, attraction can only add contact and shrink the gap; the load is still
     # carried (mean contact pressure = load up to the solver tolerance on the mean force).
     from roughflow.contact import solve
 
     s = generate(SurfaceSpec.from_sweep(points_per_lambda_s=2, seed=3))
-    ad = adhesion_for(s.heights, s.lx, s.ly, tabor=2.0, gamma_over_v_full=0.203)
+    ad = adhesion_for(s.heights, s.lx, s.ly, tabor=2.0, gamma_over_v_full=0.203,
+                      repulsion=repulsion)
     rep = solve(s, 0.05)
     adh = solve(s, 0.05, model="adhesive", adhesion=ad, max_iter=5000)
     assert adh.area_fraction > rep.area_fraction
@@ -77,12 +79,13 @@ def test_adhesive_solve_pulls_surfaces_together():
 
 
 def test_hard_wall_adhesion_keeps_gap_nonnegative_and_adds_contact():
-    # Hard-wall repulsion (kappa -> infinity): contact is gap == 0 exactly, the gap never
-    # goes negative, attraction adds contact at equal load and the load is carried.
+    # Hard-wall repulsion (kappa -> infinity) counting only the wall as contact: contact is
+    # gap == 0 exactly, the gap never goes negative, attraction adds contact at equal load
+    # and the load is carried.
     from roughflow.contact import solve
 
     s = generate(SurfaceSpec.from_sweep(points_per_lambda_s=4, seed=0))
-    ad = Adhesion(surface_energy=4e-4, range=3 * s.dx, repulsion="hard")
+    ad = Adhesion(surface_energy=4e-4, range=3 * s.dx, repulsion="hard", contact_within=0.0)
     rep = solve(s, 0.05)
     adh = solve(s, 0.05, model="adhesive", adhesion=ad)
     assert adh.gap.min() >= 0 and np.all(adh.gap[adh.contact] == 0)
@@ -104,21 +107,16 @@ def test_adhesion_for_takes_a_range_or_a_tabor_parameter():
         adhesion_for(s.heights, s.lx, s.ly, gamma_over_v_full=0.1, range=-1.0)
 
 
-@pytest.mark.slow
-def test_default_adhesion_reproduces_the_papers_adhesive_case():
-    # Paper Sect. 3.3: about 1 % contact at zero load; 10 % (40 %) contact at 1/8 (1/4) of the
-    # load that gives 10 % (40 %) without adhesion. Surface of Fig. 5: H = 0.8, L/lambda_r = 16,
-    # eps_f = 1/16, here at 2 points per lambda_s (512^2, seed 0).
-    # Tolerances: over seeds 0 and 1 these values agree to 0.001 (docs/contact.md), but going
-    # from 2 to 4 points per lambda_s raises a_c by up to 10 % (first order in the spacing), and
-    # the paper quotes its targets as "about": a(p10/8), a(p40/4) within 25 % of 0.10 and 0.40,
-    # and the zero-load contact between 0.5 % and 2.5 %.
+def _papers_adhesive_case(repulsion: str, seed: int = 0):
+    """Contact area at [0, p10/8, p40/4] and mean gap over the non-adhesive one at the last two
+    loads, with the ``repulsion``'s calibrated adhesion on the surface of the paper's Fig. 5
+    (H = 0.8, L/lambda_r = 16, eps_f = 1/16) at 2 points per lambda_s (512^2)."""
     from roughflow.contact import ContactLaw, solve
     from roughflow.defaults import ADHESION_RANGE_OVER_LAMBDA_S, ADHESION_SURFACE_ENERGY_RATIO
     from roughflow.search import LoadSearch
 
     spec = SurfaceSpec.from_sweep(l_over_lambda_r=16, eps_f=1 / 16, points_per_lambda_s=2,
-                                  seed=0)
+                                  seed=seed)
     s = generate(spec)
     # non-adhesive load at a_c = target; the area tolerance 0.002 moves these loads by well
     # under 1 % (da/dp is about 2 at 10 % contact and about 1.3 at 40 %)
@@ -130,24 +128,76 @@ def test_default_adhesion_reproduces_the_papers_adhesive_case():
         return found.result.pressure
 
     ad = adhesion_for(s.heights, s.lx, s.ly, gamma_over_v_full=ADHESION_SURFACE_ENERGY_RATIO,
-                      range=ADHESION_RANGE_OVER_LAMBDA_S * spec.lambda_s)
+                      range=ADHESION_RANGE_OVER_LAMBDA_S[repulsion] * spec.lambda_s,
+                      repulsion=repulsion)
     p10, p40 = load_for(0.10) / 8, load_for(0.40) / 4
     a0 = solve(s, 0.0, model="adhesive", adhesion=ad, tol=1e-5)
     a10 = solve(s, p10, model="adhesive", adhesion=ad, tol=1e-5, init=a0)
     a40 = solve(s, p40, model="adhesive", adhesion=ad, tol=1e-5, init=a10)
-    assert 0.005 < a0.area_fraction < 0.025
-    assert a10.area_fraction == pytest.approx(0.10, rel=0.25)
-    assert a40.area_fraction == pytest.approx(0.40, rel=0.25)
-    # What this model does NOT reproduce (docs/contact.md "Adhesion"): the paper's mean gap
-    # about 10 % below the non-adhesive one. Cells in contact sink into the soft harmonic
-    # wall, and the gap is 0.679 / 0.519 of the non-adhesive one at p10/8 / p40/4 (seeds 0,
-    # 1, 2: 0.679-0.687 / 0.515-0.519). The bands (+-0.05) hold the seeds and the
-    # tolerances above; a change of the model that moves the gap toward the paper's fails
-    # here, and the docs must then say so.
-    ratio10 = a10.mean_gap / solve(s, p10, tol=1e-5).mean_gap
-    ratio40 = a40.mean_gap / solve(s, p40, tol=1e-5).mean_gap
-    assert 0.63 < ratio10 < 0.73
-    assert 0.47 < ratio40 < 0.57
+    areas = (a0.area_fraction, a10.area_fraction, a40.area_fraction)
+    gaps = (a10.mean_gap / solve(s, p10, tol=1e-5).mean_gap,
+            a40.mean_gap / solve(s, p40, tol=1e-5).mean_gap)
+    return areas, gaps
+
+
+def _assert_papers_areas(areas):
+    # Paper Sect. 3.3: about 1 % contact at zero load; 10 % (40 %) contact at 1/8 (1/4) of the
+    # load that gives 10 % (40 %) without adhesion. Over seeds 0-2 these values agree to 0.001
+    # at the loads and to 0.007-0.013 at zero load (docs/contact.md), but going from 2 to 4
+    # points per lambda_s raises a_c by up to 10 % (first order in the spacing), and the paper
+    # quotes its targets as "about": a(p10/8), a(p40/4) within 25 % of 0.10 and 0.40, and the
+    # zero-load contact between 0.5 % and 2.5 %.
+    assert 0.005 < areas[0] < 0.025
+    assert areas[1] == pytest.approx(0.10, rel=0.25)
+    assert areas[2] == pytest.approx(0.40, rel=0.25)
+
+
+@pytest.mark.slow
+@pytest.mark.parametrize(("repulsion", "gap10", "gap40"), [
+    # The default model (hard wall, contact within half the range) reproduces the areas and
+    # the paper's "roughly constant, mere 10 % adhesion-induced reduction of the mean gap":
+    # measured 0.881-0.885 at p10/8 and 0.835 at p40/4 (seeds 0-2; a contact cell counts as
+    # closed, gap 0). Bands +-0.04: they hold the seeds and the area tolerances, and exclude
+    # the harmonic wall's values.
+    ("hard", (0.84, 0.92), (0.79, 0.87)),
+    # The harmonic wall, calibrated the same way (rho = 0.42 lambda_s), gives the areas but not
+    # the gap (docs/contact.md "Adhesion"): cells in contact sink into the soft wall, and the
+    # gap is 0.679 / 0.519 of the non-adhesive one (seeds 0-2: 0.679-0.687 / 0.515-0.519).
+    ("harmonic", (0.63, 0.73), (0.47, 0.57)),
+])
+def test_calibrated_adhesion_against_the_papers_adhesive_case(repulsion, gap10, gap40):
+    areas, gaps = _papers_adhesive_case(repulsion)
+    _assert_papers_areas(areas)
+    assert gap10[0] < gaps[0] < gap10[1]
+    assert gap40[0] < gaps[1] < gap40[1]
+
+
+def test_hard_wall_contact_is_the_gap_below_half_the_range():
+    # The default contact criterion: a cell is in contact where its gap is below
+    # contact_within x rho, and a contact cell is closed (gap 0); contact_within = 0 counts
+    # only the cells on the wall. Same minimum either way: the criterion only labels it.
+    from dataclasses import replace
+
+    from roughflow.contact import solve
+    from roughflow.defaults import ADHESION_CONTACT_WITHIN
+
+    s = generate(SurfaceSpec.from_sweep(points_per_lambda_s=2, seed=0))
+    ad = adhesion_for(s.heights, s.lx, s.ly, gamma_over_v_full=0.1, range=0.8 * s.spec.lambda_s)
+    assert ad.repulsion == "hard" and ad.contact_within == ADHESION_CONTACT_WITHIN["hard"] == 0.5
+    near = solve(s, 0.02, model="adhesive", adhesion=ad)
+    wall = solve(s, 0.02, model="adhesive", adhesion=replace(ad, contact_within=0.0))
+    assert np.all(near.gap[near.contact] == 0) and np.all(wall.gap[wall.contact] == 0)
+    assert np.all(near.contact[wall.contact])  # on the wall is inside the range too
+    # the open cells of both agree where both are open; the extra contact cells are exactly
+    # the wall solution's gaps in (0, rho / 2)
+    extra = near.contact & ~wall.contact
+    assert extra.any()
+    assert np.all(wall.gap[extra] > 0) and np.all(wall.gap[extra] < 0.5 * ad.range)
+    open_ = ~near.contact
+    np.testing.assert_allclose(near.gap[open_], wall.gap[open_], rtol=0, atol=1e-6 * ad.range)
+    assert np.all(wall.gap[open_] >= 0.5 * ad.range * (1 - 1e-6))
+    with pytest.raises(InputError, match="contact_within"):
+        replace(ad, contact_within=1.5)
 
 
 def test_curvature_radius_of_a_sinusoid():

@@ -18,7 +18,8 @@ def _papers_case(n: int):
     s = generate(SurfaceSpec.from_sweep(l_over_lambda_r=4, eps_f=16.0 / n,
                                         points_per_lambda_s=4, seed=0))
     ad = adhesion_for(s.heights, s.lx, s.ly, gamma_over_v_full=ADHESION_SURFACE_ENERGY_RATIO,
-                      range=ADHESION_RANGE_OVER_LAMBDA_S * s.spec.lambda_s)
+                      range=ADHESION_RANGE_OVER_LAMBDA_S["harmonic"] * s.spec.lambda_s,
+                      repulsion="harmonic")
     return s, ad
 
 
@@ -29,7 +30,7 @@ def test_line_kernels_are_the_potentials_derivatives(numba):
     # move updates g, sigma and the carried force exactly. Round-off only: rel 1e-12.
     # (The numpy twins evaluate an Adhesion rebuilt from the kernels' amp and rho: here they
     # check that rebuild and the move's arithmetic.)
-    ad = Adhesion(surface_energy=2e-3, range=0.05)
+    ad = Adhesion(surface_energy=2e-3, range=0.05, repulsion="harmonic")
     rng = np.random.default_rng(1)
     g = rng.uniform(-0.05, 0.1, 4000)
     d = rng.normal(size=g.size)
@@ -136,7 +137,8 @@ def test_light_mean_separation_mass_speeds_up_zero_load(monkeypatch, seed):
     s = generate(SurfaceSpec.from_sweep(l_over_lambda_r=4, eps_f=16.0 / 256,
                                         points_per_lambda_s=4, seed=seed))
     ad = adhesion_for(s.heights, s.lx, s.ly, gamma_over_v_full=ADHESION_SURFACE_ENERGY_RATIO,
-                      range=ADHESION_RANGE_OVER_LAMBDA_S * s.spec.lambda_s)
+                      range=ADHESION_RANGE_OVER_LAMBDA_S["harmonic"] * s.spec.lambda_s,
+                      repulsion="harmonic")
     start = solve(s, _ADHESIVE_START_LOAD, tol=1e-4)  # contact.solve's own start
     light = solve(s, 0.0, model="adhesive", adhesion=ad, tol=1e-4, init=start)
     monkeypatch.setattr(A, "Q0_MASS", Z_MASS)

@@ -57,6 +57,8 @@ def test_cli_bearing(surface_file, tmp_path):
         (["--model", "adhesive", "--pressure", "0.1", "--surface-energy", "1e-4"], 2,
          "needs both --surface-energy and --adhesion-range"),
         (["--pressure", "0.1", "--max-iter", "2"], 3, "did not converge"),
+        (["--pressure", "0.1", "--repulsion", "harmonic"], 2,
+         "--repulsion are only for --model adhesive"),
     ],
 )
 def test_cli_errors(surface_file, tmp_path, capsys, extra, code, message):
@@ -69,7 +71,7 @@ def test_cli_errors(surface_file, tmp_path, capsys, extra, code, message):
 
 
 def test_cli_adhesive_defaults_to_the_papers_case(surface_file, tmp_path):
-    # no --surface-energy/--range: gamma_s = 0.1 v_ela^full, rho = 0.42 lambda_s of the file's
+    # no --surface-energy/--range: gamma_s = 0.1 v_ela^full, rho = 0.8 lambda_s of the file's
     # spec, and the result equals the API call with those parameters (same deterministic solve)
     from roughflow.contact import full_contact_energy
     from roughflow.contact.adhesion import adhesion_for
@@ -79,13 +81,28 @@ def test_cli_adhesive_defaults_to_the_papers_case(surface_file, tmp_path):
           "-o", str(out)])
     s = read_surface(surface_file)
     ad = adhesion_for(s.heights, s.lx, s.ly, gamma_over_v_full=0.1,
-                      range=0.42 * s.spec.lambda_s)
+                      range=0.8 * s.spec.lambda_s)
     ref = solve(s, 0.05, model="adhesive", adhesion=ad)
     with xr.open_dataset(out) as ds:
         assert ds.attrs["surface_energy"] == pytest.approx(
             0.1 * full_contact_energy(s.heights, s.lx, s.ly), rel=1e-12)
-        assert ds.attrs["adhesion_range"] == pytest.approx(0.42 * s.spec.lambda_s, rel=1e-12)
+        assert ds.attrs["adhesion_range"] == pytest.approx(0.8 * s.spec.lambda_s, rel=1e-12)
+        assert ds.attrs["adhesion_repulsion"] == "hard"
+        assert ds.attrs["adhesion_contact_within"] == 0.5
         assert ds.attrs["area_fraction"] == pytest.approx(ref.area_fraction, abs=1e-12)
+
+
+def test_cli_adhesive_harmonic_takes_its_own_calibration(surface_file, tmp_path):
+    # --repulsion harmonic without adhesion values: the harmonic wall's calibrated range
+    # (0.42 lambda_s, defaults.ADHESION_RANGE_OVER_LAMBDA_S), overlap as contact
+    out = tmp_path / "h.nc"
+    main(["contact", str(surface_file), "--model", "adhesive", "--pressure", "0.05",
+          "--repulsion", "harmonic", "-o", str(out)])
+    s = read_surface(surface_file)
+    with xr.open_dataset(out) as ds:
+        assert ds.attrs["adhesion_range"] == pytest.approx(0.42 * s.spec.lambda_s, rel=1e-12)
+        assert ds.attrs["adhesion_repulsion"] == "harmonic"
+        assert ds.attrs["adhesion_contact_within"] == 0.0
 
 
 def test_cli_missing_file(tmp_path):

@@ -388,8 +388,9 @@ def test_adhesive_ladder_needs_less_load_and_records_its_adhesion():
     assert inside.any()
     assert np.all(adh["pressure"].values.ravel()[inside] < 0.5 * p_ela[inside])
     assert adh.attrs["surface_energy_ratio"] == pytest.approx(0.1)
-    assert adh.attrs["range_over_lambda_s"] == pytest.approx(0.42)
-    assert adh.attrs["tabor"] > 0 and adh.attrs["adhesion_repulsion"] == "harmonic"
+    assert adh.attrs["range_over_lambda_s"] == pytest.approx(0.8)
+    assert adh.attrs["tabor"] > 0 and adh.attrs["adhesion_repulsion"] == "hard"
+    assert adh.attrs["adhesion_contact_within"] == 0.5
 
 
 @pytest.mark.parametrize("key", ["unit", "height_unit"])

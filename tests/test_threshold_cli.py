@@ -70,7 +70,7 @@ def test_cli_threshold_errors(surface_file, tmp_path, capsys):
 
 def test_cli_threshold_adhesive_defaults_to_the_papers_case(surface_file, tmp_path):
     # no --surface-energy/--adhesion-range: the paper's adhesive case, as `roughflow contact`
-    # takes it (gamma_s = 0.1 v_ela^full, rho = 0.42 lambda_s of the file's spec); the file
+    # takes it (gamma_s = 0.1 v_ela^full, rho = 0.8 lambda_s of the file's spec); the file
     # records them, and a_c* is the API search's with those parameters (deterministic solves)
     from roughflow.contact import full_contact_energy
     from roughflow.contact.adhesion import adhesion_for
@@ -80,12 +80,12 @@ def test_cli_threshold_adhesive_defaults_to_the_papers_case(surface_file, tmp_pa
     assert main(["threshold", str(path), "--model", "adhesive", "--axis", "y", "--tol", "4e-3",
                  "-o", str(out)]) == 0
     ad = adhesion_for(s.heights, s.lx, s.ly, gamma_over_v_full=0.1,
-                      range=0.42 * s.spec.lambda_s)
+                      range=0.8 * s.spec.lambda_s)
     ref = threshold(s, 1, model="adhesive", adhesion=ad, tol=4e-3)
     with xr.open_dataset(out) as ds:
         assert ds.attrs["model"] == "adhesive"
         assert ds.attrs["surface_energy"] == pytest.approx(
             0.1 * full_contact_energy(s.heights, s.lx, s.ly), rel=1e-12)
-        assert ds.attrs["adhesion_range"] == pytest.approx(0.42 * s.spec.lambda_s, rel=1e-12)
+        assert ds.attrs["adhesion_range"] == pytest.approx(0.8 * s.spec.lambda_s, rel=1e-12)
         assert ds.attrs["adhesion_gamma_over_v_full"] == pytest.approx(0.1, rel=1e-12)
         assert float(ds["a_c_star"][0]) == ref.a_c_star

@@ -48,12 +48,22 @@ SOLVER_LOG_EVERY = 20
 #: Loosest contact tolerance accepted: a gap error of 1 % of the rms height (a looser one
 #: returns the starting state after zero iterations as "converged").
 CONTACT_TOL_MAX = 1e-2
-#: The adhesion that reproduces the contact areas of the paper's adhesive case (not its mean
-#: gap, which comes out 30-50 % below the non-adhesive one; docs/contact.md "Adhesion"):
+#: The adhesive model (docs/contact.md "Adhesion"): a hard wall ("hard") or a harmonic
+#: repulsion ("harmonic") under the cosine attraction.
+ADHESION_REPULSIONS = ("hard", "harmonic")
+#: The default repulsion: the hard wall, the one that reproduces all four observations of the
+#: paper's adhesive case (contact at zero load, at 1/8 and 1/4 of the non-adhesive loads of
+#: 10 % and 40 %, and a mean gap about 10 % below the non-adhesive one); the harmonic wall
+#: reproduces the areas but not the gap (30-50 % below).
+ADHESION_REPULSION = "hard"
+#: A cell is in adhesive contact where its gap is below this fraction of the range rho, where
+#: the attraction's tension peaks (hard wall; the harmonic wall counts overlap, g < 0).
+ADHESION_CONTACT_WITHIN = {"hard": 0.5, "harmonic": 0.0}
+#: The paper's adhesive case, calibrated for each repulsion on the surface of its Fig. 5:
 #: surface energy gamma_s / v_ela^full ...
 ADHESION_SURFACE_ENERGY_RATIO = 0.1
 #: ... and interaction range rho / lambda_s.
-ADHESION_RANGE_OVER_LAMBDA_S = 0.42
+ADHESION_RANGE_OVER_LAMBDA_S = {"hard": 0.8, "harmonic": 0.42}
 
 # --- percolation thresholds (docs/percolation.md) ----------------------------------------
 #: The paper's large-system critical contact area of elastic contacts, 0.415 +- 0.01: the

@@ -179,39 +179,50 @@ def add_surface_options(group, flags=tuple(SURFACE_OPTIONS), **overrides) -> Non
         group.add_argument(flag, default=default, help=text + shown, **extra)
 
 
+def add_repulsion(p: argparse.ArgumentParser) -> None:
+    """The adhesive model's ``--repulsion`` option (contact, threshold, scene ladder)."""
+    p.add_argument("--repulsion", choices=defaults.ADHESION_REPULSIONS, default=None,
+                   help="adhesive model: the wall under the cosine attraction (default "
+                        f"{defaults.ADHESION_REPULSION}; docs/contact.md \"Adhesion\")")
+
+
 def resolve_adhesion(model: str, surface_energy: float | None, adhesion_range: float | None,
-                     surface, *, flags: tuple[str, str], source: str):
+                     surface, *, flags: tuple[str, str], source: str,
+                     repulsion: str | None = None):
     """The :class:`~roughflow.contact.Adhesion` of ``--model adhesive`` (None for the other
-    models): both values given, or neither for the paper's adhesive case (gamma_s =
-    ``ADHESION_SURFACE_ENERGY_RATIO`` v_ela^full, rho = ``ADHESION_RANGE_OVER_LAMBDA_S``
-    lambda_s of the surface file's spec). ``flags`` name the two options in errors,
-    ``source`` the surface file."""
+    models) on the ``repulsion`` wall (None: ``ADHESION_REPULSION``): both values given, or
+    neither for the paper's adhesive case (gamma_s = ``ADHESION_SURFACE_ENERGY_RATIO``
+    v_ela^full, rho = ``ADHESION_RANGE_OVER_LAMBDA_S[repulsion]`` lambda_s of the surface
+    file's spec). ``flags`` name the two options in errors, ``source`` the surface file."""
     from roughflow.contact import Adhesion
     from roughflow.contact.adhesion import adhesion_for
 
     given = (surface_energy, adhesion_range)
     both = " and ".join(flags)
     if model != "adhesive":
-        if any(v is not None for v in given):
-            raise InputError(f"{both} are only for --model adhesive")
+        if any(v is not None for v in given) or repulsion is not None:
+            raise InputError(f"{both} and --repulsion are only for --model adhesive")
         return None
+    repulsion = defaults.ADHESION_REPULSION if repulsion is None else repulsion
     if all(v is None for v in given):
         if surface.spec is None:
             raise InputError(f"{source} records no lambda_s (not written by roughflow "
                              f"surface): give {both}")
+        rho = defaults.ADHESION_RANGE_OVER_LAMBDA_S[repulsion] * surface.spec.lambda_s
         return adhesion_for(surface.heights, surface.lx, surface.ly,
                             gamma_over_v_full=defaults.ADHESION_SURFACE_ENERGY_RATIO,
-                            range=defaults.ADHESION_RANGE_OVER_LAMBDA_S * surface.spec.lambda_s)
+                            range=rho, repulsion=repulsion)
     if any(v is None for v in given):
         raise InputError(f"--model adhesive needs both {both} (or neither, for the paper's "
                          "adhesive case)")
-    return Adhesion(surface_energy=surface_energy, range=adhesion_range)
+    return Adhesion(surface_energy=surface_energy, range=adhesion_range, repulsion=repulsion)
 
 
 def adhesion_help(what: str) -> str:
     """Help of the surface-energy option: the default when neither value is given."""
+    ranges = ", ".join(f"{v} ({k})" for k, v in defaults.ADHESION_RANGE_OVER_LAMBDA_S.items())
     return (f"adhesive model: {what}; without both adhesion options: the paper's adhesive "
             f"case, gamma_s = {defaults.ADHESION_SURFACE_ENERGY_RATIO} v_ela^full and rho = "
-            f"{defaults.ADHESION_RANGE_OVER_LAMBDA_S} lambda_s (needs a surface file written by "
+            f"{ranges} lambda_s for the --repulsion (needs a surface file written by "
             "roughflow surface, which records lambda_s)")
 

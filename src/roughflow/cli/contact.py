@@ -17,6 +17,7 @@ from ._common import (
     add_backend,
     add_input,
     add_output,
+    add_repulsion,
     adhesion_help,
     on_backend,
     refuse_given,
@@ -64,6 +65,7 @@ def register(sub: argparse._SubParsersAction) -> None:
                    dest="adhesion_range",
                    help="adhesive model: range rho of the cosine attraction (units L); "
                         "--adhesion-range as in `threshold`, --range its older name")
+    add_repulsion(p)
     add_backend(p)
     add_output(p)
     p.set_defaults(func=run)
@@ -80,7 +82,8 @@ def run(args: argparse.Namespace) -> None:
     if args.model != "bearing":  # the bearing model is local: no edges to join
         warn_if_nonperiodic_scan(args.data["surface"], args.surface, "contact")
     adhesion = resolve_adhesion(args.model, args.surface_energy, args.adhesion_range, surface,
-                                flags=("--surface-energy", "--adhesion-range"), source=args.surface)
+                                flags=("--surface-energy", "--adhesion-range"), source=args.surface,
+                                repulsion=args.repulsion)
     t0 = time.perf_counter()
     result = solve(
         surface, args.pressure, model=args.model, method=args.method,

@@ -16,7 +16,7 @@ from roughflow import defaults
 from roughflow.defaults import ADHESION_RANGE_OVER_LAMBDA_S, ADHESION_SURFACE_ENERGY_RATIO
 from roughflow.errors import InputError
 
-from ._common import add_output, add_surface_options, refuse_given, track_given
+from ._common import add_output, add_repulsion, add_surface_options, refuse_given, track_given
 
 if TYPE_CHECKING:  # the scenes (numpy, xarray) are imported when the command runs
     from roughflow.scenes import ChannelsJob, LadderJob, ThresholdJob
@@ -26,7 +26,7 @@ log = logging.getLogger(__name__)
 _SURFACE_FLAGS = ("--gamma", "--hurst", "--l-over-lambda-r", "--eps-f",
                   "--points-per-lambda-s", "--aspect")
 #: Options of the adhesive model only (ladder scene).
-_ADHESION_FLAGS = ("--surface-energy-ratio", "--range-over-lambda-s", "--tabor")
+_ADHESION_FLAGS = ("--surface-energy-ratio", "--range-over-lambda-s", "--tabor", "--repulsion")
 
 
 def _surface_options(p: argparse.ArgumentParser, flags: tuple[str, ...] = _SURFACE_FLAGS,
@@ -95,10 +95,13 @@ def register(sub: argparse._SubParsersAction) -> None:
                          f"({ADHESION_SURFACE_ENERGY_RATIO}, the paper's case)")
     rng = ld.add_mutually_exclusive_group()
     rng.add_argument("--range-over-lambda-s", type=float, default=None,
-                     help="interaction range rho / lambda_s of the adhesive model "
-                          f"({ADHESION_RANGE_OVER_LAMBDA_S}, the paper's case)")
+                     help="interaction range rho / lambda_s of the adhesive model (the "
+                          "paper's case: "
+                          + ", ".join(f"{v} {k}" for k, v in ADHESION_RANGE_OVER_LAMBDA_S.items())
+                          + ")")
     rng.add_argument("--tabor", type=float, default=None,
                      help="Tabor parameter instead of the range (sets rho from R_c)")
+    add_repulsion(ld)
     ld.set_defaults(func=run)
 
     ch = defaults.CHANNELS
@@ -135,13 +138,12 @@ def job_from_args(args: argparse.Namespace) -> ChannelsJob | ThresholdJob | Ladd
         return ThresholdJob(surface=surface, model=args.model, seeds=tuple(args.seeds),
                             tol=args.tol, contact_tol=args.contact_tol)
     _check_ladder(args)
-    rho = args.range_over_lambda_s
-    if rho is None and args.tabor is None:
-        rho = ADHESION_RANGE_OVER_LAMBDA_S
-    return LadderJob(surface=surface, model=args.model, seeds=tuple(args.seeds),
+    adhesion = {} if args.repulsion is None else {"repulsion": args.repulsion}
+    return LadderJob(**adhesion, surface=surface, model=args.model, seeds=tuple(args.seeds),
                      area_fractions=tuple(args.area_fractions), a_c_star=args.a_c_star,
                      a_c_star_alt=args.a_c_star_alt, area_tol=args.area_tol, tabor=args.tabor,
-                     surface_energy_ratio=args.surface_energy_ratio, range_over_lambda_s=rho)
+                     surface_energy_ratio=args.surface_energy_ratio,
+                     range_over_lambda_s=args.range_over_lambda_s)
 
 
 def _check_channels(args: argparse.Namespace) -> None:

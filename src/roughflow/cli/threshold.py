@@ -20,6 +20,7 @@ from ._common import (
     add_backend,
     add_input,
     add_output,
+    add_repulsion,
     adhesion_help,
     axis_arg,
     on_backend,
@@ -76,6 +77,7 @@ def register(sub: argparse._SubParsersAction) -> None:
     p.add_argument("--allow-unbracketed", action="store_true",
                    help="write NaN (bracketed=0) instead of failing when the pressure range "
                         "does not contain the threshold")
+    add_repulsion(p)
     add_backend(p)
     add_output(p)
     p.set_defaults(func=run)
@@ -92,7 +94,7 @@ def run(args: argparse.Namespace) -> None:
     warn_if_nonperiodic_scan(args.data["surface"], args.surface, "threshold")
     adhesion = resolve_adhesion(args.model, args.surface_energy, args.adhesion_range, surface,
                                 flags=("--surface-energy", "--adhesion-range"),
-                                source=args.surface)
+                                source=args.surface, repulsion=args.repulsion)
     res = threshold(surface, args.axis, model=args.model, tol=args.tol, adhesion=adhesion,
                     options=options, backend=args.backend)
     if args.axis is not None:

@@ -494,7 +494,7 @@ def adhesive_direction(z, kz, beta, d, kd, f, sigma):  # pragma: no cover - comp
 
 def _potential_np(amp, rho):
     """The ``Adhesion`` of the kernels' parameters (max tension amp = pi gamma_s / (2 rho))."""
-    return Adhesion(surface_energy=2.0 * amp * rho / np.pi, range=rho)
+    return Adhesion(surface_energy=2.0 * amp * rho / np.pi, range=rho, repulsion="harmonic")
 
 
 def adhesive_pressures_np(g, sigma, amp, w, rho):

@@ -37,8 +37,9 @@ class ContactResult:
     gap: interfacial separation u_g(r) >= 0 (zero in contact).
     contact_pressure: local contact pressure (>= 0 for repulsive models; negative values
         are adhesive tension); its mean equals ``pressure``.
-    contact: boolean contact mask (gap == 0 for the elastic and bearing models; repulsive
-        interaction, i.e. overlap, for the adhesive model).
+    contact: boolean contact mask (gap == 0 for the elastic and bearing models; for the
+        adhesive model the adhesion's ``contact_mask``: a gap below half the range on the
+        hard wall, overlap on the harmonic one; the gap is set to zero there).
     area_fraction: relative contact area a_c = contact.mean().
     mean_gap: mean of ``gap`` over the cell.
     pressure: applied mean pressure (load per area).

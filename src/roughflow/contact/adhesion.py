@@ -1,28 +1,31 @@
-"""Short-range adhesion (docs/physics.md Sect. 3.3): harmonic repulsion plus cosine attraction.
+"""Short-range adhesion (docs/physics.md Sect. 3.3): cosine attraction on a hard or harmonic wall.
 
 Potential per unit area of the gap g (surface energy gamma_s, range rho):
-    v(g) = -gamma_s + kappa g^2 / 2                  for g < 0,   kappa = pi^2 gamma_s/(2 rho^2)
     v(g) = -(gamma_s/2) (1 + cos(pi g / rho))        for 0 <= g <= rho
     v(g) = 0                                         for g > rho
+    hard wall (``repulsion="hard"``, the default):   g >= 0
+    harmonic (``repulsion="harmonic"``):             v(g) = -gamma_s + kappa g^2 / 2 for g < 0,
+                                                     kappa = pi^2 gamma_s/(2 rho^2)
 Maximum tension pi gamma_s / (2 rho) at g = rho/2. Units: gamma_s in E* L, rho in L.
 
-The harmonic branch is the default (as in the Mueser group's code); ``repulsion="hard"``
-replaces it by a hard wall (gap >= 0), the kappa -> infinity limit. Contact means g < 0
-(harmonic) or g = 0 (hard wall).
+Contact: a cell is in adhesive contact where its gap is below ``contact_within`` rho
+(``defaults.ADHESION_CONTACT_WITHIN``: half the range on the hard wall, where the tension
+peaks; the overlap g < 0 on the harmonic wall). A contact cell is closed: its gap in the
+result is zero, for the percolation analysis and the flow alike.
 
 The paper's adhesive case (Sect. 3.3: about 1 % contact at zero load, 10 % (40 %) contact at
-1/8 (1/4) of the non-adhesive load of 10 % (40 %)) is reproduced by the harmonic model with
-gamma_s / v_ela^full = ``roughflow.defaults.ADHESION_SURFACE_ENERGY_RATIO`` and rho =
-``ADHESION_RANGE_OVER_LAMBDA_S`` lambda_s, calibrated on the surface of the paper's Fig. 5
-(H = 0.8, L/lambda_r = 16, eps_f = 1/16): contact [0.012, 0.096, 0.417] at 4 points per
-lambda_s, [0.012, 0.089, 0.394] at 2 (docs/contact.md, "Adhesion"). Its mean gap is not
-the paper's (about 10 % below the non-adhesive one): cells in contact sink into the soft
-harmonic wall, and the gap is 32 % and 48 % below at 1/8 and 1/4 of those loads. On a smaller cell
-(L/lambda_r = 4) the same targets need 0.06 and 0.35 instead. The paper's nominal
-mu_T = 2 and gamma_s / v_ela^full = 0.203, evaluated with our R_c (:func:`curvature_radius`),
-give a range of 0.04 lambda_s and far too little contact ([0.020, 0.024, 0.137] instead of
-[0.01, 0.10, 0.40] at 8 points per lambda_s): the paper's definitions of R_c and of the
-range must differ from ours by factors we cannot recover from the text.
+1/8 (1/4) of the non-adhesive load of 10 % (40 %), and a mean gap about 10 % below the
+non-adhesive one) is reproduced by the hard wall with gamma_s / v_ela^full =
+``roughflow.defaults.ADHESION_SURFACE_ENERGY_RATIO`` and rho =
+``ADHESION_RANGE_OVER_LAMBDA_S["hard"]`` lambda_s, calibrated on the surface of the paper's
+Fig. 5 (H = 0.8, L/lambda_r = 16, eps_f = 1/16; docs/contact.md, "Adhesion"). The harmonic
+wall, calibrated the same way (rho = 0.42 lambda_s), gives the contact areas but a mean gap
+32 % and 48 % below the non-adhesive one at 1/8 and 1/4 of those loads: cells in contact sink
+into the soft wall. The paper's nominal mu_T = 2 and gamma_s / v_ela^full = 0.203, evaluated
+with our R_c (:func:`curvature_radius`), give a range of 0.04 lambda_s and far too little
+contact ([0.020, 0.024, 0.137] instead of [0.01, 0.10, 0.40] at 8 points per lambda_s,
+harmonic wall): the paper's definitions of R_c and of the range must differ from ours by
+factors we cannot recover from the text.
 """
 
 from __future__ import annotations
@@ -32,25 +35,46 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from roughflow.errors import InputError, require_positive
+from roughflow.defaults import ADHESION_CONTACT_WITHIN, ADHESION_REPULSION, ADHESION_REPULSIONS
+from roughflow.errors import InputError, require_finite, require_positive
 
 from .elastic import full_contact_energy
 
 
 @dataclass(frozen=True)
 class Adhesion:
-    """Surface energy ``surface_energy`` (gamma_s, units E* L), range ``range`` (rho, L) and
-    the repulsion: ``"harmonic"`` (default, kappa above) or a ``"hard"`` wall."""
+    """Surface energy ``surface_energy`` (gamma_s, units E* L), range ``range`` (rho, L), the
+    repulsion (``"hard"`` wall, the default, or ``"harmonic"``, kappa above) and the contact
+    criterion: gap below ``contact_within`` rho (None: the repulsion's
+    ``defaults.ADHESION_CONTACT_WITHIN``; 0: on the hard wall, or overlapping the harmonic
+    one)."""
 
     surface_energy: float
     range: float
-    repulsion: str = "harmonic"
+    repulsion: str = ADHESION_REPULSION
+    contact_within: float | None = None
 
     def __post_init__(self) -> None:
         require_positive("surface_energy", self.surface_energy)
         require_positive("range", self.range)
-        if self.repulsion not in ("hard", "harmonic"):
-            raise InputError(f"repulsion must be 'hard' or 'harmonic', got {self.repulsion!r}")
+        if self.repulsion not in ADHESION_REPULSIONS:
+            raise InputError(f"repulsion must be one of {ADHESION_REPULSIONS}, got "
+                             f"{self.repulsion!r}")
+        if self.contact_within is None:
+            object.__setattr__(self, "contact_within", ADHESION_CONTACT_WITHIN[self.repulsion])
+        elif not 0.0 <= require_finite("contact_within", self.contact_within) <= 1.0:
+            raise InputError(f"contact_within must lie in [0, 1] (a fraction of the range), "
+                             f"got {self.contact_within!r}")
+
+    @property
+    def contact_gap(self) -> float:
+        """Gaps below this count as contact (units of L; 0: overlap or on the wall)."""
+        return self.contact_within * self.range
+
+    def contact_mask(self, g: np.ndarray, touching: np.ndarray) -> np.ndarray:
+        """Cells in adhesive contact: ``touching`` (overlap or on the wall, as the solver
+        decides it) or a gap ``g`` below :attr:`contact_gap`."""
+        return touching | (g < self.contact_gap) if self.contact_gap > 0 else touching
 
     @property
     def kappa(self) -> float:
@@ -114,20 +138,26 @@ def adhesion_summary(heights: np.ndarray, lx: float, ly: float, adhesion: Adhesi
 
 def adhesion_for(heights: np.ndarray, lx: float, ly: float, *,
                  gamma_over_v_full: float, tabor: float | None = None,
-                 range: float | None = None) -> Adhesion:
+                 range: float | None = None, repulsion: str = ADHESION_REPULSION,
+                 contact_within: float | None = None) -> Adhesion:
     """Adhesion with gamma_s / v_ela^full = ``gamma_over_v_full`` on this surface and either a
-    target Tabor parameter ``tabor`` or an explicit ``range`` rho (units of L).
+    target Tabor parameter ``tabor`` or an explicit ``range`` rho (units of L); ``repulsion``
+    and ``contact_within`` as :class:`Adhesion`.
 
     The paper's case: ``gamma_over_v_full=ADHESION_SURFACE_ENERGY_RATIO``,
-    ``range=ADHESION_RANGE_OVER_LAMBDA_S * lambda_s``.
+    ``range=ADHESION_RANGE_OVER_LAMBDA_S[repulsion] * lambda_s``.
     """
+    if repulsion not in ADHESION_REPULSIONS:  # before the surface's energy is computed
+        raise InputError(f"repulsion must be one of {ADHESION_REPULSIONS}, got {repulsion!r}")
     if (tabor is None) == (range is None):
         raise InputError(f"give exactly one of tabor= and range=, got tabor={tabor!r}, "
                          f"range={range!r}")
     gs = require_positive("gamma_over_v_full", gamma_over_v_full) * full_contact_energy(
         heights, lx, ly)
     if range is not None:
-        return Adhesion(surface_energy=gs, range=require_positive("range", range))
-    rc = curvature_radius(heights, lx, ly)
-    rho = (rc * gs**2 / require_positive("tabor", tabor) ** 3) ** (1 / 3)
-    return Adhesion(surface_energy=gs, range=rho)
+        rho = require_positive("range", range)
+    else:
+        rc = curvature_radius(heights, lx, ly)
+        rho = (rc * gs**2 / require_positive("tabor", tabor) ** 3) ** (1 / 3)
+    return Adhesion(surface_energy=gs, range=rho, repulsion=repulsion,
+                    contact_within=contact_within)

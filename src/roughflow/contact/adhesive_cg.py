@@ -202,8 +202,9 @@ def adhesive_cg(
             log.debug("adhesive cg iteration %d: residual %.3e (tol %.1e), step %.3g, "
                       "contact %.4f", it, res, tol, t, n_contact / size)
     separation = float(g.mean()) + float(h.mean())
-    contact = (g < 0).reshape(shape)
+    contact = adhesion.contact_mask(g, g < 0).reshape(shape)
     gap = np.maximum(g, 0.0, out=f).reshape(shape)
+    gap[contact] = 0.0  # a contact cell is closed (adhesion.Adhesion)
     return SolverOutput(pressure=sigma.reshape(shape), gap=gap, contact=contact,
                         separation=separation, iterations=it, residual=res,
                         converged=res <= tol)

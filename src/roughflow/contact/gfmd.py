@@ -67,13 +67,15 @@ exact force's; when only the bound stands between a check and the tolerance, the
 decides. Same iteration counts as double precision to tol 1e-10 (256^2 - 2048^2,
 docs/contact.md "Single precision"); the residual's own round-off is 1e-8 - 2e-7 relative.
 
-Adhesive model (``adhesion=``, not convex): with the harmonic repulsion (the default),
-nonlinear CG with exact line minima (``adhesive_cg``, 2-6x fewer iterations than FIRE);
-with ``repulsion="hard"``, mass-weighted FIRE (Bitzek et al., PRL 97, 170201, 2006) with the
-masses m_0 = z k_min, the power f.v and velocity mixing along the acceleration, the cosine
-attraction acting on the free points of the active-set wall above (velocity zeroed on the
-active set, u = max(u, h) after each step). ``minimizer="fire"`` runs FIRE on the harmonic
-repulsion too (without a wall), as before ``adhesive_cg``.
+Adhesive model (``adhesion=``, not convex): with the hard wall (the default,
+``repulsion="hard"``), mass-weighted FIRE (Bitzek et al., PRL 97, 170201, 2006) with the
+masses m_0 = z k_min (``ADHESIVE_Q0_MASS`` k_min at q = 0), the power f.v and velocity mixing
+along the acceleration, the cosine attraction acting on the free points of the active-set wall
+above (velocity zeroed on the active set, u = max(u, h) after each step); with the harmonic
+repulsion, nonlinear CG with exact line minima (``adhesive_cg``, 2-6x fewer iterations than
+FIRE there). ``minimizer="fire"`` runs FIRE on the harmonic repulsion too (without a wall), as
+before ``adhesive_cg``. The contact mask is the adhesion's (``Adhesion.contact_mask``), and a
+contact cell's gap is set to zero.
 
 Residual: max |G f_eff| / rms(h), the largest displacement the unbalanced force would still
 cause, in units of the rms height (G = compliance 2/(|q| E*)); same units as the CG
@@ -127,6 +129,12 @@ F_ALPHA = 0.97
 # kappa to them did not converge on 128^2 surfaces) and the time step is capped lower,
 # because the repulsion stiffens the contact points beyond the elastic frequency.
 ADHESIVE_DT0 = 0.2
+# Hard wall with adhesion: the q = 0 mass is ADHESIVE_Q0_MASS k_min instead of Z_MASS k_min.
+# At zero load only the few adhesive contacts hold the mean separation, and that mode
+# converged last: over the paper's adhesive case (benchmarks/adhesion_calibration.py, 512^2,
+# seeds 0-2, loads 0 / p10/8 / p40/4 warm-started) 1 takes 70-260 / 35 / 50-55 steps against
+# 275-665 / 50-55 / 35 with 3 (0.5: 45-145 / 40-45 / 90-105), the same areas and gaps.
+ADHESIVE_Q0_MASS = 1.0
 # Hard-wall CG (measured on the rows of docs/contact.md "Step count at scale"): the mass
 # floor m_0 = max(Z_MASS k_min, H_MASS k_h) (H_MASS 0, i.e. z k_min alone: 10-30 % more
 # iterations from 2048^2 on), where H_MASS follows the bandwidth through the spectrum's
@@ -381,10 +389,10 @@ def gfmd(
     """Minimise elastic + interaction + load energy; returns a :class:`SolverOutput`.
 
     Hard wall (``adhesion=None``): projected conjugate gradients in the mass metric
-    (``iterations`` counts CG iterations, two single-precision FFT pairs each). Harmonic
-    adhesion: nonlinear CG (``adhesive_cg``; iterations of three transforms); adhesion with the
-    hard wall: mass-weighted FIRE (``iterations`` counts MD steps). Both check the residual
-    every ``check_every`` iterations.
+    (``iterations`` counts CG iterations, two single-precision FFT pairs each). Adhesion with
+    the hard wall (the default): mass-weighted FIRE (``iterations`` counts MD steps); harmonic
+    adhesion: nonlinear CG (``adhesive_cg``; iterations of three transforms). Both check the
+    residual every ``check_every`` iterations.
     ``u0``: initial elastic surface height (warm start), default a flat surface: on the hard
     wall at the level of the module docstring's "Cold start", under FIRE touching the
     highest point (or one range above it with adhesion). ``use_numba=False`` runs the
@@ -639,6 +647,8 @@ def _fire(
     # masses m(q) = sqrt((z k_min)^2 + k^2), kept as 1/m
     inv_mass = np.hypot(Z_MASS * kmin, neg_k)
     soft = adhesion is not None and adhesion.repulsion == "harmonic"
+    if adhesion is not None and not soft:
+        inv_mass.flat[0] = ADHESIVE_Q0_MASS * kmin
     dt_max = ADHESIVE_DT0 if soft else DT_MAX
     np.reciprocal(inv_mass, out=inv_mass)
     neg_k *= -1.0
@@ -714,18 +724,25 @@ def _fire(
             res = r
             if debug and it >= next_log:
                 next_log += SOLVER_LOG_EVERY
-                # the harmonic repulsion has no active set: contact is g < 0 there
-                touching = np.count_nonzero(u < h) if soft else np.count_nonzero(active)
+                touching = np.count_nonzero(_fire_contact(u - h, active, eps, adhesion))
                 log.debug("gfmd step %d: residual %.3e (tol %.1e), dt %.3g, contact %.4f", it,
                           res, tol, dt, touching / size)
     separation = float(u.mean())
     g = np.subtract(u, h, out=f).reshape(shape)
-    if not soft:
-        contact = active.reshape(shape) | (g <= eps)
-        g[contact] = 0.0
-    else:
-        contact = g < 0
-        np.maximum(g, 0.0, out=g)
+    contact = _fire_contact(g, active.reshape(shape), eps, adhesion)
+    np.maximum(g, 0.0, out=g)
+    g[contact] = 0.0  # a contact cell is closed (adhesion.Adhesion)
     return SolverOutput(pressure=sigma.reshape(shape), gap=g, contact=contact,
                         separation=separation, iterations=it, residual=res,
                         converged=res <= tol)
+
+
+def _fire_contact(g: np.ndarray, active: np.ndarray, eps: float,
+                  adhesion: Adhesion | None) -> np.ndarray:
+    """The contact mask of a FIRE state with gap ``g``: on the wall (``active`` or within
+    ``eps`` of it), overlapping the harmonic wall (which has no active set), or inside the
+    adhesion's contact gap."""
+    if adhesion is not None and adhesion.repulsion == "harmonic":
+        return adhesion.contact_mask(g, g < 0)
+    touching = active | (g <= eps)
+    return touching if adhesion is None else adhesion.contact_mask(g, touching)

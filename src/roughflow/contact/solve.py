@@ -66,8 +66,9 @@ def solve(
       ``"cg"``: constrained conjugate gradients on the pressure (Polonsky-Keer), 2 FFT
       pairs per iteration. ``"gfmd"``: Green's function molecular dynamics with mass
       weighting (the paper's method), see ``roughflow.contact.gfmd``: for the hard wall
-      projected conjugate gradients in the mass metric, for the harmonic adhesive model
-      nonlinear conjugate gradients, for adhesion with a hard wall FIRE dynamics.
+      projected conjugate gradients in the mass metric, for adhesion on the hard wall (the
+      default adhesive model) FIRE dynamics, for the harmonic adhesive model nonlinear
+      conjugate gradients.
       Default: ``"gfmd"``. In ``benchmarks/bench_scaling.py`` it needs 25-45 iterations to
       the default tolerance from 512^2 to 4096^2 (docs/contact.md), while the Polonsky-Keer
       iteration count grows with the grid (about 120 at 256^2, 470 at 1024^2, a_c = 0.4);
@@ -176,8 +177,8 @@ def solve(
     else:
         from .gfmd import gfmd
 
-        # elastic surface height = heights + gap (exact for the hard wall; the adhesive
-        # overlap, of order pressure / kappa, is dropped)
+        # elastic surface height = heights + gap (exact for the hard wall; an adhesive
+        # result's contact cells, gap set to zero, start on the wall or the surface)
         if init is None and model == "adhesive":
             # start from the repulsive contact (at least a small load) so that the attraction
             # acts from the first step; a flat start floats at zero load

@@ -178,16 +178,17 @@ class ThresholdJob(_SeedGroup):
 
 def _adhesion_args(adh: dict) -> dict:
     """LadderJob keywords from a config ``adhesion`` block (a Tabor parameter replaces the
-    default range)."""
+    repulsion's default range)."""
     out = {"surface_energy_ratio": float(adh.get("surface_energy_ratio",
-                                                 defaults.ADHESION_SURFACE_ENERGY_RATIO))}
+                                                 defaults.ADHESION_SURFACE_ENERGY_RATIO)),
+           "repulsion": adh.get("repulsion", defaults.ADHESION_REPULSION)}
     if adh.get("tabor") is not None:
         if adh.get("range_over_lambda_s") is not None:
             raise InputError("adhesion: give range_over_lambda_s or tabor, not both "
                              f"(got {adh!r})")
-        return {**out, "tabor": float(adh["tabor"]), "range_over_lambda_s": None}
-    return {**out, "range_over_lambda_s": float(adh.get("range_over_lambda_s",
-                                                        defaults.ADHESION_RANGE_OVER_LAMBDA_S))}
+        return {**out, "tabor": float(adh["tabor"])}
+    rho = adh.get("range_over_lambda_s")
+    return {**out, "range_over_lambda_s": None if rho is None else float(rho)}
 
 
 @dataclass(frozen=True)
@@ -201,11 +202,13 @@ class LadderJob(_SeedGroup):
     a_c_star: float | None = None  # None: the model's defaults.A_C_STAR_THEORY
     a_c_star_alt: float | None = None
     area_tol: float = defaults.LADDER_AREA_TOL
-    # adhesive model: gamma_s / v_ela^full and either the range rho / lambda_s or the Tabor
-    # parameter (the defaults reproduce the paper's adhesive case, contact.adhesion)
+    # adhesive model: the repulsion, gamma_s / v_ela^full and either the range rho / lambda_s
+    # or the Tabor parameter (the defaults reproduce the paper's adhesive case,
+    # contact.adhesion; range None without a Tabor parameter: the repulsion's default)
     surface_energy_ratio: float = defaults.ADHESION_SURFACE_ENERGY_RATIO
-    range_over_lambda_s: float | None = defaults.ADHESION_RANGE_OVER_LAMBDA_S
+    range_over_lambda_s: float | None = None
     tabor: float | None = None
+    repulsion: str = defaults.ADHESION_REPULSION
     kind: str = field(default="ladder", init=False)
 
     def __post_init__(self) -> None:
@@ -225,10 +228,16 @@ class LadderJob(_SeedGroup):
                 raise InputError(f"{name} must lie in (0, 1), got {value!r}")
         if not (math.isfinite(self.area_tol) and 0 < self.area_tol < 1):
             raise InputError(f"area_tol must lie in (0, 1), got {self.area_tol!r}")
-        if self.model == "adhesive" and (self.tabor is None) == (self.range_over_lambda_s is None):
-            raise InputError("adhesion needs exactly one of range_over_lambda_s and tabor, got "
+        if self.repulsion not in defaults.ADHESION_REPULSIONS:
+            raise InputError(f"repulsion must be one of {defaults.ADHESION_REPULSIONS}, got "
+                             f"{self.repulsion!r}")
+        if self.tabor is not None and self.range_over_lambda_s is not None:
+            raise InputError("adhesion takes range_over_lambda_s or tabor, not both, got "
                              f"range_over_lambda_s={self.range_over_lambda_s!r}, "
                              f"tabor={self.tabor!r}")
+        if self.tabor is None and self.range_over_lambda_s is None:
+            object.__setattr__(self, "range_over_lambda_s",
+                               defaults.ADHESION_RANGE_OVER_LAMBDA_S[self.repulsion])
         for name in ("surface_energy_ratio", "range_over_lambda_s", "tabor"):
             value = getattr(self, name)
             if value is not None and not (math.isfinite(value) and value > 0):
@@ -249,7 +258,8 @@ class LadderJob(_SeedGroup):
         if self.a_c_star_alt is not None:
             args += ["--a-c-star-alt", repr(float(self.a_c_star_alt))]
         if self.model == "adhesive":
-            args += ["--surface-energy-ratio", repr(float(self.surface_energy_ratio))]
+            args += ["--repulsion", self.repulsion,
+                     "--surface-energy-ratio", repr(float(self.surface_energy_ratio))]
             args += (["--tabor", repr(float(self.tabor))] if self.tabor is not None else
                      ["--range-over-lambda-s", repr(float(self.range_over_lambda_s))])
         return args
@@ -438,8 +448,10 @@ def study_defaults(name: str) -> dict:
                 "a_c_star": dict(defaults.A_C_STAR_THEORY),
                 "a_c_star_alt": defaults.A_C_STAR_ALT,
                 "area_tol": field_default(LadderJob, "area_tol"),
-                "adhesion": {"surface_energy_ratio": defaults.ADHESION_SURFACE_ENERGY_RATIO,
-                             "range_over_lambda_s": defaults.ADHESION_RANGE_OVER_LAMBDA_S}}
+                "adhesion": {"repulsion": defaults.ADHESION_REPULSION,
+                             "surface_energy_ratio": defaults.ADHESION_SURFACE_ENERGY_RATIO,
+                             "range_over_lambda_s": defaults.ADHESION_RANGE_OVER_LAMBDA_S[
+                                 defaults.ADHESION_REPULSION]}}
     raise InputError(f"unknown study {name!r}; known studies: {', '.join(STUDIES)}")
 
 

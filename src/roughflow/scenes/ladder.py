@@ -59,7 +59,7 @@ def _adhesion(surface: Surface, job: LadderJob, lambda_s: float):
 
     rho = None if job.range_over_lambda_s is None else job.range_over_lambda_s * lambda_s
     return adhesion_for(surface.heights, surface.lx, surface.ly, tabor=job.tabor, range=rho,
-                        gamma_over_v_full=job.surface_energy_ratio)
+                        gamma_over_v_full=job.surface_energy_ratio, repulsion=job.repulsion)
 
 
 def _adhesion_attrs(surface: Surface, adhesion, lambda_s: float, job: LadderJob) -> dict:
@@ -70,7 +70,8 @@ def _adhesion_attrs(surface: Surface, adhesion, lambda_s: float, job: LadderJob)
             "range_over_lambda_s": adhesion.range / lambda_s,
             "tabor": tabor_parameter(surface.heights, surface.lx, surface.ly, adhesion),
             "adhesion_surface_energy": adhesion.surface_energy,
-            "adhesion_range": adhesion.range, "adhesion_repulsion": adhesion.repulsion}
+            "adhesion_range": adhesion.range, "adhesion_repulsion": adhesion.repulsion,
+            "adhesion_contact_within": adhesion.contact_within}
 
 
 def contact_ladder(surface: Surface, job: LadderJob, threads: int | None,
