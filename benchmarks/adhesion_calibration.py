@@ -8,9 +8,9 @@ p10/8 and p40/4 over the non-adhesive one at the same load (the paper: "a roughl
 mere 10 % adhesion-induced reduction of the mean gap"), and writes
 ``results/benchmarks/adhesion_calibration.{jsonl,md}``.
 
-    ROUGHFLOW_FFT_THREADS=1 python benchmarks/adhesion_calibration.py \\
+    ROUGHFLOW_FFT_THREADS=1 python benchmarks/adhesion_calibration.py --seeds 0 1 2
+    python benchmarks/adhesion_calibration.py --repulsion harmonic \\
         --ratios 0.06 0.1 --ranges 0.35 0.4 0.45 --seeds 0 1 --ppl 2
-    python benchmarks/adhesion_calibration.py --ratios 0.1 --ranges 0.42 --ppl 2 4
 
 Add ``--paper`` to evaluate the paper's nominal mu_T = 2, gamma_s / v_full = 0.203 as well.
 ``--repulsion`` picks the wall (default: the model's, ``defaults.ADHESION_REPULSION``), and

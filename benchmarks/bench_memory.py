@@ -51,7 +51,7 @@ def commands(task: str, n: int, d: str) -> list[str]:
         "contact_cg": ["contact", s, "--pressure", "0.1", "--method", "cg", "-o", o],
         "bearing": ["contact", s, "--model", "bearing", "--area-fraction", "0.3", "-o", o],
         "threshold": ["threshold", s, "-o", o],
-        # the paper's adhesive case (gamma_s = 0.1 v_ela^full, rho = 0.42 lambda_s)
+        # the paper's adhesive case (hard wall, gamma_s = 0.1 v_ela^full, rho = 0.8 lambda_s)
         "threshold_adhesive": ["threshold", s, "--model", "adhesive", "-o", o],
         "flow": ["flow", c, "-o", o],
         "theory_gap": ["theory", c, "-o", o],

@@ -86,6 +86,12 @@ def test_expand_study_keeps_what_applies():
         **_LADDER, "gamma": [2], "model": ["elastic", "adhesive"],
         "adhesion": {"surface_energy_ratio": 0.5}, "a_c_star": {"adhesive": 0.3}})
     assert {j.model for j in jobs.values()} == {"elastic", "adhesive"}
+    # the adhesion block's repulsion picks that wall's calibrated range unless one is given
+    for repulsion, rho in (("harmonic", 0.42), ("hard", 0.8)):
+        jobs = expand_study("flow_isotropic", {**_LADDER, "model": ["adhesive"],
+                                               "adhesion": {"repulsion": repulsion}})
+        (job,) = jobs.values()
+        assert (job.repulsion, job.range_over_lambda_s) == (repulsion, rho)
     assert len(expand_study("threshold_vs_size", {**_SMALL, "l_over_lambda_r": [2, 4],
                                                   "fit": {"nu": 1.5}})) == 2
 
@@ -95,6 +101,8 @@ def test_expand_study_keeps_what_applies():
               model="adhesive", seeds=(3, 4), area_fractions=(0.1, 0.2), a_c_star=0.41,
               a_c_star_alt=0.5, area_tol=0.01, tabor=1.5, range_over_lambda_s=None),
     LadderJob(surface=SurfaceParams(aspect=0.5), model="bearing", area_fractions=(0.3,)),
+    LadderJob(surface=SurfaceParams(), model="adhesive"),
+    LadderJob(surface=SurfaceParams(), model="adhesive", repulsion="harmonic"),
     LadderJob(surface=SurfaceParams()),
     ThresholdJob(surface=TINY, model="bearing", seeds=(0, 1), tol=0.01),
     ThresholdJob(surface=SurfaceParams()),

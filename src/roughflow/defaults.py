@@ -51,10 +51,11 @@ CONTACT_TOL_MAX = 1e-2
 #: The adhesive model (docs/contact.md "Adhesion"): a hard wall ("hard") or a harmonic
 #: repulsion ("harmonic") under the cosine attraction.
 ADHESION_REPULSIONS = ("hard", "harmonic")
-#: The default repulsion: the hard wall, the one that reproduces all four observations of the
-#: paper's adhesive case (contact at zero load, at 1/8 and 1/4 of the non-adhesive loads of
-#: 10 % and 40 %, and a mean gap about 10 % below the non-adhesive one); the harmonic wall
-#: reproduces the areas but not the gap (30-50 % below).
+#: The default repulsion: the hard wall, which reproduces the paper's adhesive contact areas
+#: (at zero load, at 1/8 and 1/4 of the non-adhesive loads of 10 % and 40 %) and comes close
+#: to its mean gap "about 10 % below" the non-adhesive one (12 % and 17 % below with contact
+#: cells closed, 11 % and 10 % counting their physical gap); the harmonic wall reproduces the
+#: areas but not the gap (32 % and 48 % below).
 ADHESION_REPULSION = "hard"
 #: A cell is in adhesive contact where its gap is below this fraction of the range rho, where
 #: the attraction's tension peaks (hard wall; the harmonic wall counts overlap, g < 0).
