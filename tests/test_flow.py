@@ -59,6 +59,9 @@ def test_stripes_arithmetic_along_harmonic_across():
     # discretisation (half-cell resistances add up), so only round-off: 1e-10.
     assert conductance(g, 0, ly=1.7) == pytest.approx(s.mean(), rel=1e-10)
     assert conductance(g, 1, ly=1.7) == pytest.approx(1.0 / np.mean(1.0 / s), rel=1e-10)
+    both = conductance(g, ly=1.7)  # named: sigma_x along the stripes, sigma_y across them
+    assert both.sigma_x == pytest.approx(s.mean(), rel=1e-10)
+    assert both.sigma_y == pytest.approx(1.0 / np.mean(1.0 / s), rel=1e-10)
 
 
 # --- Keller-Dykhne -----------------------------------------------------------------------

@@ -1,11 +1,13 @@
 """Reynolds flow through the gap of a rough contact (paper Sect. 2.2, Eq. 3-4).
 
-``solve(gap, axis, ...) -> FlowResult`` and ``conductance(gap, axis=None, ...)``
+``solve(gap, axis, ...) -> FlowResult`` and ``conductance(gap, axis=None, ...)`` (a float, or
+``Conductances(sigma_x, sigma_y)`` for both axes)
 compute the effective conductances sigma_x, sigma_y by cell-centred finite
 volumes with AMG-preconditioned CG; ``plot_flux`` draws the flux over the contact map.
 """
 
-from .core import CellOrdering, FlowResult, check_sigma_tol, conductance, solve
+from .core import CellOrdering, Conductances, FlowResult, check_sigma_tol, conductance, solve
 from .plot import plot_flux
 
-__all__ = ["CellOrdering", "FlowResult", "check_sigma_tol", "conductance", "plot_flux", "solve"]
+__all__ = ["CellOrdering", "Conductances", "FlowResult", "check_sigma_tol", "conductance",
+           "plot_flux", "solve"]

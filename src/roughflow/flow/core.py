@@ -17,7 +17,7 @@ from __future__ import annotations
 
 import logging
 from dataclasses import dataclass, replace
-from typing import TYPE_CHECKING
+from typing import TYPE_CHECKING, NamedTuple
 
 import numpy as np
 import scipy.sparse as sp
@@ -720,6 +720,14 @@ def solve(
     )
 
 
+class Conductances(NamedTuple):
+    """sigma_x and sigma_y of one gap (units L^3/eta), as :func:`conductance` returns them for
+    ``axis=None``; unpacks as ``sx, sy = ...``."""
+
+    sigma_x: float
+    sigma_y: float
+
+
 def conductance(
     gap: ArrayLike,
     axis: int | str | None = None,
@@ -731,10 +739,11 @@ def conductance(
     method: str | None = None,
     periodic: bool = True,
     sigma_tol: float | None = None,
-) -> float | tuple[float, float]:
-    """Effective conductance along ``axis``, or ``(sigma_x, sigma_y)`` when ``axis`` is None."""
+) -> float | Conductances:
+    """Effective conductance along ``axis``, or :class:`Conductances` (sigma_x, sigma_y) when
+    ``axis`` is None."""
     kw = dict(lx=lx, ly=ly, eta=eta, tol=tol, method=method, periodic=periodic,
               sigma_tol=sigma_tol)
     if axis is None:
-        return solve(gap, 0, **kw).sigma, solve(gap, 1, **kw).sigma
+        return Conductances(solve(gap, 0, **kw).sigma, solve(gap, 1, **kw).sigma)
     return solve(gap, axis, **kw).sigma
