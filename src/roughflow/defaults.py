@@ -12,6 +12,8 @@ from __future__ import annotations
 AXIS_NAMES = ("x", "y")
 #: Contact models: hard-wall elastic, elastic with short-range adhesion, bearing area.
 MODELS = ("elastic", "adhesive", "bearing")
+#: The model a solve, a search, a job or a theory line takes when none is named.
+DEFAULT_MODEL = "elastic"
 
 # --- surfaces (docs/physics.md Sect. 2) --------------------------------------------------
 #: Peklenik number (> 1 stretches along x).

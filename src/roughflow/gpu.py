@@ -17,7 +17,7 @@ from typing import TYPE_CHECKING
 
 import numpy as np
 
-from roughflow.defaults import BACKENDS
+from roughflow.defaults import BACKENDS, DEFAULT_MODEL
 from roughflow.errors import InputError
 from roughflow.fft import PlanPair
 from roughflow.resources import check_memory as _check_memory
@@ -26,7 +26,7 @@ if TYPE_CHECKING:
     import cupy as cp
 
 
-def check_backend(backend: str, model: str = "elastic", method: str | None = None,
+def check_backend(backend: str, model: str = DEFAULT_MODEL, method: str | None = None,
                   work: bool = False) -> str:
     """``backend`` or :class:`InputError` naming it (checked before any work): the GPU serves
     the elastic model's gfmd solves without a CPU workspace (``work``) only, and needs CuPy

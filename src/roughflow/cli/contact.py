@@ -9,6 +9,7 @@ import time
 from roughflow.defaults import (
     CONTACT_METHODS,
     CONTACT_TOL,
+    DEFAULT_MODEL,
     MODELS,
 )
 from roughflow.errors import InputError
@@ -46,7 +47,7 @@ def register(sub: argparse._SubParsersAction) -> None:
               help="surface file ('roughflow surface')")
     p.add_argument("--pressure", type=float, default=None,
                    help="mean applied pressure in units of E* gbar (elastic, adhesive)")
-    p.add_argument("--model", choices=MODELS, default="elastic",
+    p.add_argument("--model", choices=MODELS, default=DEFAULT_MODEL,
                    help="elastic (hard wall), adhesive (short-range adhesion) or bearing "
                         "(overlap model, no elasticity) (elastic)")
     p.add_argument("--area-fraction", type=float, default=None,

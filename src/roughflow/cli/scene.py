@@ -54,7 +54,7 @@ def register(sub: argparse._SubParsersAction) -> None:
                                      "bearing: one height-ordered pass) to the fluid "
                                      "percolation threshold along x and y, for each seed.")
     _surface_options(t)
-    t.add_argument("--model", choices=("elastic", "bearing"), default="elastic",
+    t.add_argument("--model", choices=("elastic", "bearing"), default=defaults.DEFAULT_MODEL,
                    help="contact model (elastic)")
     t.add_argument("--tol", type=float, default=defaults.THRESHOLD_TOL,
                    help="largest a_hi - a_lo of the threshold bracket "
@@ -76,7 +76,7 @@ def register(sub: argparse._SubParsersAction) -> None:
                                       "them a ladder takes the defaults below.")
     track_given(ld)  # adhesion options with another model are refused (_check_ladder)
     _surface_options(ld)
-    ld.add_argument("--model", choices=defaults.MODELS, default="elastic",
+    ld.add_argument("--model", choices=defaults.MODELS, default=defaults.DEFAULT_MODEL,
                     help="contact model (elastic)")
     ld.add_argument("--area-fractions", type=float, nargs="+", required=True, metavar="A",
                     help="target contact areas, increasing, each in (0, 1)")

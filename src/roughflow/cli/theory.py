@@ -20,7 +20,7 @@ from pathlib import Path
 from typing import TYPE_CHECKING
 
 from roughflow import defaults
-from roughflow.defaults import A_C_STAR_PAPER, A_C_STAR_THEORY, MODELS
+from roughflow.defaults import A_C_STAR_PAPER, A_C_STAR_THEORY, DEFAULT_MODEL, MODELS
 from roughflow.errors import InputError
 
 from ._common import add_input, add_output, add_surface_options, refuse_given, track_given
@@ -144,8 +144,8 @@ def _spec_from_args(args: argparse.Namespace):
 def _kind(args: argparse.Namespace, attrs: dict) -> str:
     if args.kind is not None:
         return args.kind
-    model = str(attrs.get("model", "elastic"))
-    return model if model in MODELS else "elastic"
+    model = str(attrs.get("model", DEFAULT_MODEL))
+    return model if model in MODELS else DEFAULT_MODEL
 
 
 def _a_c_star(args: argparse.Namespace, kind: str) -> float:
@@ -161,7 +161,7 @@ def _run_persson(args: argparse.Namespace, src, *, source: str) -> None:
     from roughflow.theory import DEFAULT_ENERGY_FACTOR, predict_conductance
 
     pressures = _parse_pressures(args.pressures)
-    kind = args.kind or "elastic"
+    kind = args.kind or DEFAULT_MODEL
     a_star = _a_c_star(args, kind)
     energy_factor = DEFAULT_ENERGY_FACTOR if args.energy_factor is None else args.energy_factor
     pred = predict_conductance(

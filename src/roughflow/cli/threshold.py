@@ -9,6 +9,7 @@ from roughflow.defaults import (
     A_C_STAR_PAPER,
     AXIS_NAMES,
     CONTACT_METHODS,
+    DEFAULT_MODEL,
     MODELS,
     THRESHOLD_CONTACT_TOL,
     THRESHOLD_PRESSURE_RANGE,
@@ -52,7 +53,8 @@ def register(sub: argparse._SubParsersAction) -> None:
               help="surface file written by 'roughflow surface'")
     p.add_argument("--axis", type=axis_arg, default=None, metavar="{x,y,both}",
                    help="flow direction: x, y or both (both: one shared sequence of solves)")
-    p.add_argument("--model", choices=MODELS, default="elastic", help="contact model (elastic)")
+    p.add_argument("--model", choices=MODELS, default=DEFAULT_MODEL,
+                   help=f"contact model ({DEFAULT_MODEL})")
     p.add_argument("--tol", type=float, default=THRESHOLD_TOL,
                    help=f"largest allowed a_hi - a_lo ({THRESHOLD_TOL:g})")
     p.add_argument("--method", choices=CONTACT_METHODS, default=None,

@@ -24,7 +24,7 @@ from dataclasses import dataclass
 
 from scipy.special import erf, erfinv
 
-from roughflow.defaults import MODELS
+from roughflow.defaults import DEFAULT_MODEL, MODELS
 from roughflow.errors import InputError
 
 #: Small-load slope da_c/dp of elastic contacts found in GFMD (Persson theory: 1.60).
@@ -58,7 +58,7 @@ def _adhesive_ratio(area: float) -> float:
 class ContactLaw:
     """a_c(p) of one contact model (see the module docstring)."""
 
-    model: str = "elastic"
+    model: str = DEFAULT_MODEL
 
     def __post_init__(self) -> None:
         if self.model not in MODELS:

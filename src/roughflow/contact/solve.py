@@ -7,7 +7,13 @@ from typing import TYPE_CHECKING
 
 import numpy as np
 
-from roughflow.defaults import CONTACT_METHODS, CONTACT_TOL, CONTACT_TOL_MAX, MODELS
+from roughflow.defaults import (
+    CONTACT_METHODS,
+    CONTACT_TOL,
+    CONTACT_TOL_MAX,
+    DEFAULT_MODEL,
+    MODELS,
+)
 from roughflow.errors import (
     ConvergenceError,
     InputError,
@@ -39,7 +45,7 @@ def solve(
     surface: Surface,
     pressure: float | None = None,
     *,
-    model: str = "elastic",
+    model: str = DEFAULT_MODEL,
     method: str | None = None,
     area_fraction: float | None = None,
     tol: float = CONTACT_TOL,

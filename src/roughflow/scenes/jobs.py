@@ -148,7 +148,7 @@ class ThresholdJob(_SeedGroup):
     """Percolation thresholds a_c*(x), a_c*(y) of ``seeds`` (threshold search, no flow)."""
 
     surface: SurfaceParams
-    model: str = "elastic"
+    model: str = defaults.DEFAULT_MODEL
     seeds: tuple[int, ...] = (0,)
     tol: float = defaults.THRESHOLD_TOL
     contact_tol: float = defaults.THRESHOLD_CONTACT_TOL
@@ -196,7 +196,7 @@ class LadderJob(_SeedGroup):
     """Contact along an area ladder, Reynolds flow along x and y, theory predictions."""
 
     surface: SurfaceParams
-    model: str = "elastic"
+    model: str = defaults.DEFAULT_MODEL
     seeds: tuple[int, ...] = (0,)
     area_fractions: tuple[float, ...] = (0.1, 0.2, 0.3)
     a_c_star: float | None = None  # None: the model's defaults.A_C_STAR_THEORY

@@ -45,6 +45,7 @@ from roughflow.defaults import (
     A_C_STAR_PAPER,
     AXIS_NAMES,
     CONTACT_TOL_MAX,
+    DEFAULT_MODEL,
     MODELS,
     THRESHOLD_CONTACT_TOL,
     THRESHOLD_MAX_SOLVES,
@@ -250,7 +251,7 @@ class Threshold:
         return self.a_hi - self.a_lo
 
 
-def first_pressure(model: str = "elastic") -> float:
+def first_pressure(model: str = DEFAULT_MODEL) -> float:
     """First pressure of a search: the contact law's load for the paper's a_c*."""
     return ContactLaw(model).control(A_C_STAR_PAPER)
 
@@ -547,7 +548,7 @@ def threshold(
     surface: Surface,
     axis: int | None = None,
     *,
-    model: str = "elastic",
+    model: str = DEFAULT_MODEL,
     tol: float = THRESHOLD_TOL,
     adhesion: Adhesion | None = None,
     options: SearchOptions | None = None,

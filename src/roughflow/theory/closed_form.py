@@ -14,7 +14,7 @@ from typing import TYPE_CHECKING
 
 import numpy as np
 
-from roughflow.defaults import MODELS
+from roughflow.defaults import DEFAULT_MODEL, MODELS
 from roughflow.errors import InputError, require_positive
 
 from .effective_medium import _check_a_c_star
@@ -28,7 +28,7 @@ KINDS = MODELS
 EXPONENTS = {"elastic": 69.0 / 20.0, "adhesive": 1.0, "bearing": 1.0}
 
 
-def criticality_factor(a_c: ArrayLike, *, a_c_star: float, kind: str = "elastic") -> np.ndarray:
+def criticality_factor(a_c: ArrayLike, *, a_c_star: float, kind: str = DEFAULT_MODEL) -> np.ndarray:
     """The factor multiplying ubar^3/(12 eta) in Eq. (16); 1 at a_c = 0, 0 for a_c >= a_c*."""
     a_c_star = _check_a_c_star(a_c_star)
     if kind not in KINDS:
@@ -48,7 +48,8 @@ def criticality_factor(a_c: ArrayLike, *, a_c_star: float, kind: str = "elastic"
 
 
 def closed_form(
-    mean_gap: ArrayLike, a_c: ArrayLike, *, a_c_star: float, kind: str = "elastic", eta: float = 1.0
+    mean_gap: ArrayLike, a_c: ArrayLike, *, a_c_star: float, kind: str = DEFAULT_MODEL,
+    eta: float = 1.0,
 ) -> np.ndarray | float:
     """Closed-form conductance of Eq. (16) for ``kind`` in ("elastic", "adhesive", "bearing").
 

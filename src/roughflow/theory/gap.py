@@ -23,6 +23,7 @@ from typing import TYPE_CHECKING
 
 import numpy as np
 
+from roughflow.defaults import DEFAULT_MODEL
 from roughflow.errors import require_finite
 
 from .closed_form import closed_form
@@ -72,7 +73,7 @@ class GapTheory:
 
 
 def gap_theory(gap: ArrayLike, *, a_c_star: float, contact: ArrayLike | None = None,
-               gamma: float = 1.0, kind: str = "elastic", eta: float = 1.0,
+               gamma: float = 1.0, kind: str = DEFAULT_MODEL, eta: float = 1.0,
                area_fraction: float | None = None, a_c_star_alt: float | None = None,
                noncontact: bool = False) -> GapTheory:
     """Bruggeman (isotropic, both anisotropic forms) and Eq. 16 for one gap field.

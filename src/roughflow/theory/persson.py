@@ -46,6 +46,7 @@ from scipy.integrate import cumulative_simpson
 from scipy.special import erf, exp1
 
 from roughflow import fft
+from roughflow.defaults import DEFAULT_MODEL
 from roughflow.errors import InputError, require_field, require_positive
 from roughflow.surface import Surface, SurfaceSpec, peklenik_wavenumber, spectrum
 
@@ -239,7 +240,8 @@ def persson_elastic_energy(
 
 
 def predict_conductance(
-    spec: SurfaceSpec | Surface, pressures: ArrayLike, *, a_c_star: float, kind: str = "elastic",
+    spec: SurfaceSpec | Surface, pressures: ArrayLike, *, a_c_star: float,
+    kind: str = DEFAULT_MODEL,
     eta: float = 1.0, energy_factor: float = DEFAULT_ENERGY_FACTOR, modulus: float = 1.0,
 ) -> PerssonPrediction:
     """sigma(p) from the spectrum alone: Persson a_c(p) and u(p) in the closed form Eq. (16).
