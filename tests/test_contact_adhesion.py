@@ -200,6 +200,20 @@ def test_hard_wall_contact_is_the_gap_below_half_the_range():
         replace(ad, contact_within=1.5)
 
 
+def test_hard_wall_adhesion_q0_mass_ramps_with_the_load():
+    # FIRE's q = 0 mass on the hard wall with adhesion: light (1 k_min) where only the
+    # adhesive contacts hold the mean separation (zero or negative load), the hard wall's
+    # 3 k_min (Z_MASS) once the load reaches k_min rms(h), linear in between (gfmd module
+    # constants; measured in docs/contact.md "Adhesion")
+    from roughflow.contact._gfmd_common import Z_MASS
+    from roughflow.contact.gfmd import ADHESIVE_Q0_MASS, adhesive_q0_mass
+
+    kmin, hscale = 3.0, 0.01
+    assert (ADHESIVE_Q0_MASS, Z_MASS) == (1.0, 3.0)
+    for load, mass in ((-0.5, 1.0), (0.0, 1.0), (0.015, 2.0), (0.03, 3.0), (1.0, 3.0)):
+        assert adhesive_q0_mass(load, kmin, hscale) == pytest.approx(mass * kmin, rel=1e-12)
+
+
 def test_curvature_radius_of_a_sinusoid():
     # h = A cos(2 pi k x / lx): laplacian h = -A q^2 cos(...), <(laplacian h)^2> = A^2 q^4 / 2,
     # so kappa_bar^2 = <(laplacian h)^2> / 4 = A^2 q^4 / 8 and R_c = sqrt(8) / (A q^2)
