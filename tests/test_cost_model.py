@@ -46,8 +46,8 @@ MEASURED = {
     # 2026-11-28 with the direct solver for thin clusters, two jobs side by side)
     "bearing_g1_H0.8_L16_f0.0625_p8_s0_e06675": 342.5,
     "elastic_g1_H0.8_L16_f0.0625_p8_s0_51cf43": 361.6,
-    # the hard-wall adhesion (FIRE) since 2026-12-05, a test run on the other core
-    "adhesive_g1_H0.8_L16_f0.0625_p8_s0_e15c0e": 505.8,
+    # the hard-wall adhesion (FIRE, q = 0 mass following the load) since 2026-12-05, alone
+    "adhesive_g1_H0.8_L16_f0.0625_p8_s0_e15c0e": 505.2,
     # the largest ladders, 2048 x 4096 (gamma 2): the model's 0.8 and 0.66, their
     # near-threshold flow solves (docs/workflow.md "Cost"); kept inside the first attempt's
     # time limit
@@ -108,7 +108,7 @@ MEASURED_PEAK_MB = {
     "elastic_g8_H0.8_L11.3137_f0.015625_p8_s0_t0.004_c0.0001": 8428,   # threshold, 2048 x 16384
     "elastic_g1_H0.8_L16_f0.0625_p8_s0_51cf43": 3869,                  # ladder, 2048^2
     "bearing_g1_H0.8_L16_f0.0625_p8_s0_e06675": 3779,                  # ladder, 2048^2
-    "adhesive_g1_H0.8_L16_f0.0625_p8_s0_e15c0e": 3132,                 # ladder, 2048^2
+    "adhesive_g1_H0.8_L16_f0.0625_p8_s0_e15c0e": 3200,                 # ladder, 2048^2
     "elastic_g2_H0.8_L22.6274_f0.0625_p8_s0_1f5e9e": 7886,             # ladder, 2048 x 4096
     "bearing_g2_H0.8_L22.6274_f0.0625_p8_s0_f21c47": 8635,             # ladder, 2048 x 4096
 }
