@@ -19,10 +19,7 @@ non-adhesive one) is reproduced by the hard wall with gamma_s / v_ela^full =
 ``roughflow.defaults.ADHESION_SURFACE_ENERGY_RATIO`` and rho =
 ``ADHESION_RANGE_OVER_LAMBDA_S["hard"]`` lambda_s, calibrated on the surface of the paper's
 Fig. 5 (H = 0.8, L/lambda_r = 16, eps_f = 1/16; docs/contact.md, "Adhesion"): the areas, and a
-mean gap 12 % and 17 % below (11 % and 10 % counting the contact cells' physical gap).
-
-``dataclasses.replace`` keeps a resolved ``contact_within``: replacing the repulsion alone keeps
-the old wall's criterion; give ``contact_within`` too. The harmonic
+mean gap 12 % and 17 % below (11 % and 10 % counting the contact cells' physical gap). The harmonic
 wall, calibrated the same way (rho = 0.42 lambda_s), gives the contact areas but a mean gap
 32 % and 48 % below the non-adhesive one at 1/8 and 1/4 of those loads: cells in contact sink
 into the soft wall. The paper's nominal mu_T = 2 and gamma_s / v_ela^full = 0.203, evaluated
@@ -30,6 +27,9 @@ with our R_c (:func:`curvature_radius`), give a range of 0.04 lambda_s and far t
 contact ([0.020, 0.024, 0.137] instead of [0.01, 0.10, 0.40] at 8 points per lambda_s,
 harmonic wall): the paper's definitions of R_c and of the range must differ from ours by
 factors we cannot recover from the text.
+
+``dataclasses.replace`` keeps a resolved ``contact_within``: replacing the repulsion alone keeps
+the old wall's criterion; give ``contact_within`` too.
 """
 
 from __future__ import annotations
