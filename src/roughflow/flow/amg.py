@@ -34,6 +34,10 @@ if TYPE_CHECKING:
 #: classical strength of connection: j is a strong neighbour of i if |a_ij| >= theta
 #: max_k!=i |a_ik| (pyamg's and the classical choice)
 STRENGTH_THETA = 0.25
+#: an entry a_km of a strong F neighbour k below ROUNDOFF |a_kk| is round-off of the Galerkin
+#: product (seen: 1e-25 against a_kk = 3.4e-8, its sign changing with the heights' last bits),
+#: not a connection: it neither carries a_ik to C_i nor keeps it from being left out
+ROUNDOFF = 1e-12
 #: the hierarchy stops when a level has at most this many unknowns (solved by sparse LU)
 MAX_COARSE = 500
 #: at most this many levels (pyamg's default; 2048^2 grids take 10-11)
@@ -176,17 +180,18 @@ def _classical_weights(ap, aj, ax, cp, cj, cx, splitting, pp):  # pragma: no cov
             if k == i or splitting[k] == 1:
                 continue
             akk = diag[k]
+            floor = ROUNDOFF * abs(akk)
             denominator = 0.0
             for mm in range(ap[k], ap[k + 1]):
                 m = aj[mm]
-                if slot[m] >= 0 and ax[mm] * akk < 0.0:
+                if slot[m] >= 0 and ax[mm] * akk < 0.0 and abs(ax[mm]) > floor:
                     denominator += ax[mm]
             if denominator == 0.0:  # as pyamg: left out, not lumped into the diagonal
                 continue
             share = cx[jj] / denominator
             for mm in range(ap[k], ap[k + 1]):
                 m = aj[mm]
-                if slot[m] >= 0 and ax[mm] * akk < 0.0:
+                if slot[m] >= 0 and ax[mm] * akk < 0.0 and abs(ax[mm]) > floor:
                     px[slot[m]] += share * ax[mm]
         for tt in range(k0, t):
             px[tt] = -px[tt] / diagonal
