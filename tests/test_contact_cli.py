@@ -84,7 +84,7 @@ def test_cli_adhesive_defaults_to_the_papers_case(surface_file, tmp_path):
                       range=0.8 * s.spec.lambda_s)
     ref = solve(s, 0.05, model="adhesive", adhesion=ad)
     with xr.open_dataset(out) as ds:
-        assert ds.attrs["surface_energy"] == pytest.approx(
+        assert ds.attrs["adhesion_surface_energy"] == pytest.approx(
             0.1 * full_contact_energy(s.heights, s.lx, s.ly), rel=1e-12)
         assert ds.attrs["adhesion_range"] == pytest.approx(0.8 * s.spec.lambda_s, rel=1e-12)
         assert ds.attrs["adhesion_repulsion"] == "hard"

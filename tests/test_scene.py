@@ -395,10 +395,16 @@ def test_adhesive_ladder_needs_less_load_and_records_its_adhesion():
     inside = (a >= ela["area_fraction"].values.min()) & (a <= ela["area_fraction"].values.max())
     assert inside.any()
     assert np.all(adh["pressure"].values.ravel()[inside] < 0.5 * p_ela[inside])
-    assert adh.attrs["surface_energy_ratio"] == pytest.approx(0.1)
-    assert adh.attrs["range_over_lambda_s"] == pytest.approx(0.8)
-    assert adh.attrs["tabor"] > 0 and adh.attrs["adhesion_repulsion"] == "hard"
+    assert adh.attrs["adhesion_gamma_over_v_full"] == pytest.approx(0.1)
+    assert adh.attrs["adhesion_range_over_lambda_s"] == pytest.approx(0.8)
+    assert adh.attrs["adhesion_tabor"] > 0 and adh.attrs["adhesion_repulsion"] == "hard"
     assert adh.attrs["adhesion_contact_within"] == 0.5
+    # the ladder names its adhesion as contact and threshold files do (datasets.results.
+    # adhesion_attrs), plus the range in lambda_s; no unprefixed leftovers
+    assert {k for k in adh.attrs if "adhesion" in k or "tabor" in k or "energy" in k} == {
+        "adhesion_surface_energy", "adhesion_range", "adhesion_repulsion",
+        "adhesion_contact_within", "adhesion_tabor", "adhesion_curvature_radius",
+        "adhesion_v_ela_full", "adhesion_gamma_over_v_full", "adhesion_range_over_lambda_s"}
 
 
 @pytest.mark.parametrize("key", ["unit", "height_unit"])

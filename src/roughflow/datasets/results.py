@@ -92,13 +92,15 @@ def contact_dataset(surface: Surface, result: ContactResult,
 
 
 def adhesion_attrs(surface: Surface, adhesion: Adhesion) -> dict:
-    """The adhesion of an adhesive result as attributes: surface energy, range, the wall and
-    the contact criterion, and the derived numbers of ``contact.adhesion_summary``
-    (``adhesion_*``)."""
+    """The adhesion of an adhesive result as attributes, all named ``adhesion_*``: surface
+    energy, range, the wall and the contact criterion, and the derived numbers of
+    ``contact.adhesion_summary`` (Tabor parameter, R_c, v_ela^full, gamma_s / v_ela^full).
+    Contact, threshold and ladder files share these names."""
     from roughflow.contact import adhesion_summary
 
     summary = adhesion_summary(surface.heights, surface.lx, surface.ly, adhesion)
-    return {"surface_energy": adhesion.surface_energy, "adhesion_range": adhesion.range,
+    return {"adhesion_surface_energy": adhesion.surface_energy,
+            "adhesion_range": adhesion.range,
             "adhesion_repulsion": adhesion.repulsion,
             "adhesion_contact_within": adhesion.contact_within,
             **{f"adhesion_{k}": v for k, v in summary.items()}}

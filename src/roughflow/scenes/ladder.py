@@ -27,6 +27,7 @@ from roughflow.datasets.results import (
     FLOW_IMBALANCE_FLOOR_LONG_NAME,
     FLOW_IMBALANCE_LONG_NAME,
     FLOW_SIGMA_ERROR_LONG_NAME,
+    adhesion_attrs,
 )
 from roughflow.datasets.sweep import no_fill_on_coords, param_coords, surface_vars, var
 from roughflow.datasets.units import (
@@ -62,16 +63,11 @@ def _adhesion(surface: Surface, job: LadderJob, lambda_s: float):
                         gamma_over_v_full=job.surface_energy_ratio, repulsion=job.repulsion)
 
 
-def _adhesion_attrs(surface: Surface, adhesion, lambda_s: float, job: LadderJob) -> dict:
-    """Dataset attributes of the adhesion (of the job's first seed)."""
-    from roughflow.contact.adhesion import tabor_parameter
-
-    return {"surface_energy_ratio": job.surface_energy_ratio,
-            "range_over_lambda_s": adhesion.range / lambda_s,
-            "tabor": tabor_parameter(surface.heights, surface.lx, surface.ly, adhesion),
-            "adhesion_surface_energy": adhesion.surface_energy,
-            "adhesion_range": adhesion.range, "adhesion_repulsion": adhesion.repulsion,
-            "adhesion_contact_within": adhesion.contact_within}
+def _adhesion_attrs(surface: Surface, adhesion, lambda_s: float) -> dict:
+    """Dataset attributes of the adhesion (of the job's first seed): those of a contact
+    result, and the range in units of lambda_s."""
+    return {**adhesion_attrs(surface, adhesion),
+            "adhesion_range_over_lambda_s": adhesion.range / lambda_s}
 
 
 def contact_ladder(surface: Surface, job: LadderJob, threads: int | None,
@@ -148,7 +144,7 @@ def run_ladder(job: LadderJob, *, threads: int | None = None) -> xr.Dataset:
     r["sigma_emt"] = np.full((ns, nk, len(EMT_FORMS), 2), np.nan)
     r["sigma_ref"] = np.full((ns, 2), np.nan)
     r["wall_time"] = np.zeros(ns)
-    adhesion_attrs = {}
+    job_adhesion_attrs = {}
     for i, seed in enumerate(job.seeds):
         t0 = time.perf_counter()
         spec = p.spec(seed)
@@ -165,7 +161,7 @@ def run_ladder(job: LadderJob, *, threads: int | None = None) -> xr.Dataset:
             log.info("adhesion: surface energy %.4g, range %.4g", adhesion.surface_energy,
                      adhesion.range)
             if i == 0:
-                adhesion_attrs = _adhesion_attrs(surface, adhesion, spec.lambda_s, job)
+                job_adhesion_attrs = _adhesion_attrs(surface, adhesion, spec.lambda_s)
         # each axis's last direct solve orders the next one's cells (flow.CellOrdering)
         orderings: list[flow.CellOrdering | None] = [None, None]
         for k, (target, c, a_cont) in enumerate(
@@ -279,5 +275,5 @@ def run_ladder(job: LadderJob, *, threads: int | None = None) -> xr.Dataset:
         "emt_forms": "isotropic: Eq. 5-6 with a_c_star_theory; isotropic_alt: the same with "
                      "a_c_star_alt; anisotropic_corrected: Eq. 9; anisotropic_persson: Eq. 7-8",
     })
-    ds.attrs.update(adhesion_attrs)
+    ds.attrs.update(job_adhesion_attrs)
     return no_fill_on_coords(ds)
