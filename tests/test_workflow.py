@@ -124,6 +124,26 @@ def test_flow_datasets_are_physical(test_run):
 
 
 @pytest.mark.slow
+def test_conductance_ratio_axis_is_labelled_in_plain_numbers(test_run):
+    # chi spans about a decade, where matplotlib also labels minor ticks; its default
+    # formatter wrote them as "2 x 10^0" (mathtext \times), which a reader has to decode
+    import matplotlib
+
+    matplotlib.use("Agg")
+    from roughflow.figures.flow_anisotropic import draw
+
+    wd, _ = test_run
+    with xr.open_dataset(wd / "results" / "flow_anisotropic" / "dataset.nc") as ds:
+        fig = draw(ds)
+    fig.canvas.draw()
+    ratio = fig.axes[-1]
+    labels = [t.get_text() for t in ratio.get_yticklabels(minor=True)
+              + ratio.get_yticklabels()]
+    shown = [t for t in labels if t]
+    assert shown and not any("times" in t or "^" in t for t in shown), shown
+
+
+@pytest.mark.slow
 def test_measured_study_gives_leak_curves_in_physical_units(test_run):
     from roughflow.defaults import BOUNDARY
 

@@ -4,6 +4,7 @@ from __future__ import annotations
 
 import xarray as xr
 from matplotlib.figure import Figure
+from matplotlib.ticker import LogFormatter
 
 from roughflow.datasets.sweep import area_values
 
@@ -56,6 +57,10 @@ def draw(ds: xr.Dataset, fit: xr.Dataset | None = None) -> Figure:
                  color="tab:blue" if model == "elastic" else "tab:orange")
     rax.axhline(gamma**2, color="gray", ls=":", label="gamma^2")
     rax.set_yscale("log")
+    # chi spans about one decade, where matplotlib labels the minor ticks too: plain
+    # numbers instead of "2 x 10^0"
+    rax.yaxis.set_major_formatter(LogFormatter())
+    rax.yaxis.set_minor_formatter(LogFormatter())
     rax.set_xlabel("relative contact area a_c")
     rax.set_ylabel("chi = sigma_x / sigma_y")
     rax.set_title(f"({'abcd'[n - 1]}) conductance ratio", fontsize=10)
