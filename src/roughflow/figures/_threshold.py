@@ -56,5 +56,6 @@ def format_gamma_axis(ax, gammas) -> None:
     ax.minorticks_off()
     ax.set_xlabel("Peklenik number gamma")
     ax.set_ylabel("critical contact area a_c*")
-    ax.axhline(A_C_STAR_PAPER, color="gray", lw=0.6, ls=":")
+    ax.axhline(A_C_STAR_PAPER, color="gray", lw=0.6, ls=":",
+               label=f"paper's large-system a_c* = {A_C_STAR_PAPER:g}")
     ax.grid(alpha=0.3)
