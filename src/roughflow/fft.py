@@ -13,8 +13,12 @@ Normalisation follows numpy: ``irfft2(rfft2(a)) == a``.
 
 from __future__ import annotations
 
+import functools
 import os
-from functools import lru_cache
+import threading
+from collections import OrderedDict
+from collections.abc import Callable
+from typing import TypeVar
 
 import numpy as np
 
@@ -161,12 +165,58 @@ class RealFFT2(PlanPair):
         return self._real_out
 
 
-@lru_cache(maxsize=16)
+T = TypeVar("T")
+
+
+def per_thread_cache(maxsize: int) -> Callable[[Callable[..., T]], Callable[..., T]]:
+    """``functools.lru_cache`` with one cache per Python thread, for plans with buffers.
+
+    A plan's buffers are written and read by every solve that uses it, and pyFFTW's
+    executes (cuFFT's too) and the numba kernels release the GIL: two threads sharing one
+    plan overwrite each other's transforms and return wrong numbers. With a cache per
+    thread, each thread plans its own shapes (from FFTW's wisdom, so the same algorithm
+    and bit-identical results) and the plans go with the thread. ``cache_clear()`` empties
+    the calling thread's cache."""
+    def decorate(make: Callable[..., T]) -> Callable[..., T]:
+        local = threading.local()
+
+        def entries() -> OrderedDict:
+            if not hasattr(local, "entries"):
+                local.entries = OrderedDict()
+            return local.entries
+
+        @functools.wraps(make)
+        def cached(*key):
+            cache = entries()
+            if key in cache:
+                cache.move_to_end(key)
+                return cache[key]
+            value = cache[key] = make(*key)
+            if len(cache) > maxsize:
+                cache.popitem(last=False)
+            return value
+
+        cached.cache_clear = lambda: entries().clear()
+        return cached
+    return decorate
+
+
+@per_thread_cache(maxsize=16)
+def _plan(shape: tuple[int, int], threads: int, single: bool) -> RealFFT2:
+    return RealFFT2(shape, threads, single)
+
+
 def plan(shape: tuple[int, int], threads: int | None = None, single: bool = False) -> RealFFT2:
-    """Cached :class:`RealFFT2` for ``shape`` (plans are reused, buffers are shared);
-    ``single``: the float32 plan of the same shape."""
+    """:class:`RealFFT2` for ``shape``, cached per Python thread (reused plans share their
+    buffers within a thread, never between threads); ``single``: the float32 plan of the
+    same shape. ``threads`` None takes ``ROUGHFLOW_FFT_THREADS`` as it is now, so a plan
+    of the count in force is returned (not the count of the first call)."""
     threads = check_threads(threads)
-    return RealFFT2(tuple(shape), default_threads() if threads is None else threads, single)
+    return _plan((int(shape[0]), int(shape[1])),
+                 default_threads() if threads is None else threads, bool(single))
+
+
+plan.cache_clear = _plan.cache_clear
 
 
 def rfft2(a: np.ndarray, threads: int | None = None) -> np.ndarray:

@@ -19,7 +19,7 @@ import numpy as np
 
 from roughflow.defaults import BACKENDS, DEFAULT_MODEL
 from roughflow.errors import InputError
-from roughflow.fft import PlanPair
+from roughflow.fft import PlanPair, per_thread_cache
 from roughflow.resources import check_memory as _check_memory
 
 if TYPE_CHECKING:
@@ -135,7 +135,12 @@ class CupyRealFFT2(PlanPair):
         return self._real_out
 
 
-@lru_cache(maxsize=4)
+@per_thread_cache(maxsize=4)
+def _plan(shape: tuple[int, int], single: bool) -> CupyRealFFT2:
+    return CupyRealFFT2(shape, single)
+
+
 def plan(shape: tuple[int, int], single: bool = False) -> CupyRealFFT2:
-    """Cached :class:`CupyRealFFT2` for ``shape`` (buffers shared, as ``fft.plan``'s)."""
-    return CupyRealFFT2(tuple(shape), single)
+    """:class:`CupyRealFFT2` for ``shape``, cached per Python thread as ``fft.plan``'s (its
+    buffers are shared within a thread, never between threads)."""
+    return _plan((int(shape[0]), int(shape[1])), bool(single))
