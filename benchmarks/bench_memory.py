@@ -123,6 +123,10 @@ def main() -> None:
                 rows.append({"task": task, "n": n, "points": n * n, "rc": rc,
                              "peak_mb": round(peak, 1)})
                 print(rows[-1], flush=True)
+    if not rows:
+        raise SystemExit(f"nothing measured: tasks {args.tasks} at --sizes {args.sizes} "
+                         f"(commands) and --job-sizes {args.job_sizes} (thresholds, scenes: "
+                         f"{sorted(heavy)})")
     OUT.mkdir(parents=True, exist_ok=True)
     with open(OUT / "memory.csv", "w", newline="") as fh:
         w = csv.DictWriter(fh, fieldnames=list(rows[0]))
