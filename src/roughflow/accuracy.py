@@ -31,7 +31,7 @@ from typing import TYPE_CHECKING
 
 import numpy as np
 
-from roughflow.errors import InputError, require_finite, require_positive
+from roughflow.errors import InputError, require_finite, require_mask, require_positive
 
 if TYPE_CHECKING:
     from collections.abc import Hashable, Iterable
@@ -47,18 +47,9 @@ if TYPE_CHECKING:
 PERIMETER_C = 0.105
 
 
-def _mask(contact) -> np.ndarray:
-    m = np.asarray(contact)
-    if m.ndim != 2:
-        raise InputError(f"contact mask must be 2D, got shape {m.shape}")
-    if m.dtype != np.bool_:
-        raise InputError(f"contact mask must be boolean, got dtype {m.dtype}")
-    return m
-
-
 def contact_faces(contact: ArrayLike) -> tuple[int, int]:
     """Number of contact/non-contact cell faces normal to x and normal to y (periodic)."""
-    m = _mask(contact)
+    m = require_mask("contact mask", contact)
     fx = int(np.count_nonzero(m != np.roll(m, -1, axis=0)))
     fy = int(np.count_nonzero(m != np.roll(m, -1, axis=1)))
     return fx, fy
@@ -69,7 +60,7 @@ def contact_line_length(contact: ArrayLike, lx: float = 1.0, ly: float | None = 
 
     A face between cells ix and ix+1 has length dy; one between iy and iy+1 has length dx.
     """
-    m = _mask(contact)
+    m = require_mask("contact mask", contact)
     lx = require_positive("lx", lx)
     ly = lx if ly is None else require_positive("ly", ly)
     fx, fy = contact_faces(m)
@@ -86,7 +77,7 @@ def perimeter_term(contact: ArrayLike) -> float:
     and rectangular cells alike. On square cells it equals the contact-line length (counted
     along faces) times the spacing over the cell area.
     """
-    m = _mask(contact)
+    m = require_mask("contact mask", contact)
     fx, fy = contact_faces(m)
     return (fx + fy) / m.size
 
@@ -97,7 +88,7 @@ def perimeter_corrected_area(contact: ArrayLike, *, c: float = PERIMETER_C) -> f
     ``contact``: boolean mask ``[ix, iy]`` (any cell aspect ratio); ``c``: the perimeter
     constant (default :data:`PERIMETER_C`, measured); returns a fraction of the cell area.
     """
-    m = _mask(contact)
+    m = require_mask("contact mask", contact)
     c = require_finite("c", c)
     return float(m.mean()) - c * perimeter_term(m)
 

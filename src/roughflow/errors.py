@@ -111,22 +111,45 @@ def check_nu(nu: float) -> float:
     return v
 
 
-def require_field(name: str, array: ArrayLike, *, ndim: int = 2) -> np.ndarray:
-    """Return ``array`` as a float64 numpy array, or raise if it has the wrong rank or
-    non-finite values."""
+def plain_array(name: str, array: ArrayLike) -> np.ndarray:
+    """``array`` as a numpy array, refusing what ``np.asarray`` would misread: masked
+    values (netCDF4 returns masked arrays for variables with a fill value; asarray keeps
+    the fill behind the mask as if it were data) and an xarray DataArray whose dims put y
+    first (roughflow arrays are [x, y])."""
     import numpy as np
 
-    raw = np.asarray(array)
-    if raw.dtype.kind == "c":  # a cast to float64 would drop the imaginary part silently
-        raise InputError(f"{name} must be real, got complex values")
-    try:
-        a = raw.astype(np.float64, copy=False)
-    except (TypeError, ValueError):
-        raise InputError(f"{name} must hold numbers, got {raw.dtype} values") from None
-    if a.ndim != ndim:
-        raise InputError(f"{name} must be a {ndim}D array, got shape {a.shape}")
-    if a.size == 0:
-        raise InputError(f"{name} is empty (shape {a.shape})")
+    if isinstance(array, np.ma.MaskedArray):
+        masked = np.ma.getmaskarray(array)
+        if masked.any():
+            idx = tuple(int(i) for i in np.argwhere(masked)[0])
+            raise InputError(f"{name} has {int(masked.sum())} masked values, first at {idx}: "
+                             "fill or crop them first (roughflow reads the data behind a "
+                             "mask as numbers)")
+        array = array.data
+    dims = getattr(array, "dims", None)
+    if dims is not None and tuple(dims) == ("y", "x"):
+        raise InputError(f"{name} has dims ('y', 'x'); roughflow arrays are [x, y]: pass "
+                         ".transpose('x', 'y')")
+    return np.asarray(array)
+
+
+def require_mask(name: str, mask: ArrayLike) -> np.ndarray:
+    """Return ``mask`` as a 2D numpy bool array, or raise :class:`InputError` naming it (a
+    0/255 or 0/1 integer mask is refused, not cast: its mean is not a fraction)."""
+    m = plain_array(name, mask)
+    if m.dtype.kind != "b":
+        raise InputError(f"{name} must be a boolean array, got dtype {m.dtype}")
+    if m.ndim != 2:
+        raise InputError(f"{name} must be a 2D array, got shape {m.shape}")
+    if m.size == 0:
+        raise InputError(f"{name} is empty (shape {m.shape})")
+    return m
+
+
+def require_finite_values(name: str, a: np.ndarray) -> np.ndarray:
+    """``a`` unchanged (no cast), or :class:`InputError` naming its first nan or inf."""
+    import numpy as np
+
     # one summing pass, without the boolean array: any nan or inf makes the sum non-finite
     # (an overflow of finite values does too, and the exact scan below then finds nothing)
     with np.errstate(over="ignore", invalid="ignore"):
@@ -138,3 +161,22 @@ def require_field(name: str, array: ArrayLike, *, ndim: int = 2) -> np.ndarray:
         idx = tuple(int(i) for i in np.argwhere(bad)[0])
         raise InputError(f"{name} has {int(bad.sum())} non-finite values, first at {idx}: {a[idx]}")
     return a
+
+
+def require_field(name: str, array: ArrayLike, *, ndim: int = 2) -> np.ndarray:
+    """Return ``array`` as a float64 numpy array, or raise if it has the wrong rank or
+    non-finite values (or masked values, or xarray dims in the order (y, x))."""
+    import numpy as np
+
+    raw = plain_array(name, array)
+    if raw.dtype.kind == "c":  # a cast to float64 would drop the imaginary part silently
+        raise InputError(f"{name} must be real, got complex values")
+    try:
+        a = raw.astype(np.float64, copy=False)
+    except (TypeError, ValueError):
+        raise InputError(f"{name} must hold numbers, got {raw.dtype} values") from None
+    if a.ndim != ndim:
+        raise InputError(f"{name} must be a {ndim}D array, got shape {a.shape}")
+    if a.size == 0:
+        raise InputError(f"{name} is empty (shape {a.shape})")
+    return require_finite_values(name, a)

@@ -28,7 +28,14 @@ import numpy as np
 
 from roughflow import defaults, fft
 from roughflow.defaults import ROLLOFF_FORMS
-from roughflow.errors import MAX_SEED, InputError, require_finite, require_int, require_positive
+from roughflow.errors import (
+    MAX_SEED,
+    InputError,
+    require_field,
+    require_finite,
+    require_int,
+    require_positive,
+)
 from roughflow.gpu import array_module
 
 if TYPE_CHECKING:
@@ -218,6 +225,13 @@ class Surface:
     spec: SurfaceSpec | None = None
     scan: ScanInfo | None = None
 
+    def __post_init__(self) -> None:
+        # stored as checked: a list, nan heights or a masked scan failed (or went wrong)
+        # only later, in whichever stage met them first
+        object.__setattr__(self, "heights", require_field("surface heights", self.heights))
+        for name in ("lx", "ly"):
+            object.__setattr__(self, name, require_positive(name, getattr(self, name)))
+
     @property
     def periodic(self) -> bool:
         """False for a non-periodic (measured) scan; True otherwise."""
@@ -278,8 +292,12 @@ def rms_gradient(heights: np.ndarray, lx: float, ly: float, *, periodic: bool = 
     """Rms gradient sqrt(<|grad h|^2>) of a height map: spectral for a periodic map, from
     forward differences inside the map for a non-periodic one (a scan's wrap-around step
     would dominate the spectral value)."""
+    heights = require_field("heights", heights)  # an unsigned dtype wrapped in np.diff
     nx, ny = heights.shape
     if not periodic:
+        if min(nx, ny) < 2:
+            raise InputError(f"a non-periodic rms gradient needs 2 points along each axis, "
+                             f"got a {nx} x {ny} grid")
         gx = np.diff(heights, axis=0) * (nx / lx)
         gy = np.diff(heights, axis=1) * (ny / ly)
         return float(np.sqrt(np.mean(gx * gx) + np.mean(gy * gy)))

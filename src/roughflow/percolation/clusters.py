@@ -13,9 +13,9 @@ from typing import TYPE_CHECKING
 
 import numpy as np
 
-from roughflow.errors import InputError
+from roughflow.errors import InputError, require_mask
 
-from .labels import check_mask, label
+from .labels import label
 from .spanning import spanning_cells
 
 if TYPE_CHECKING:
@@ -93,7 +93,7 @@ class ClusterStats:
 def cluster_stats(contact_mask: ArrayLike, *, patch_connectivity: int = 4) -> ClusterStats:
     """Patches (contact, ``patch_connectivity``-connected, default 4 as in the paper) and
     fluid clusters (4-connected), both periodic, and the share of spanning fluid."""
-    c = check_mask("contact_mask", contact_mask)
+    c = require_mask("contact_mask", contact_mask)
     patches = cluster_sizes(c, connectivity=patch_connectivity)
     fluid = cluster_sizes(~c, connectivity=4)
     return ClusterStats(
@@ -110,7 +110,7 @@ def cluster_stats(contact_mask: ArrayLike, *, patch_connectivity: int = 4) -> Cl
 def percolation_map(contact_mask: ArrayLike, axis: int | str = 0) -> np.ndarray:
     """int8 map: 0 contact, 1 non-percolating fluid, 2 fluid spanning along ``axis``
     (paper Fig. 1 b, c: dark blue = 2, light blue = 1, orange = 0)."""
-    c = check_mask("contact_mask", contact_mask)
+    c = require_mask("contact_mask", contact_mask)
     out = np.full(c.shape, FLUID, dtype=np.int8)
     out[c] = CONTACT
     out[spanning_cells(~c, axis)] = PERCOLATING

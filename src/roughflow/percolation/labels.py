@@ -14,7 +14,7 @@ from scipy import ndimage
 from scipy.sparse import coo_matrix
 from scipy.sparse.csgraph import connected_components
 
-from roughflow.errors import InputError, check_axis  # noqa: F401 (re-exported)
+from roughflow.errors import InputError, check_axis, require_mask  # noqa: F401 (re-exported)
 
 if TYPE_CHECKING:
     from numpy.typing import ArrayLike
@@ -23,18 +23,6 @@ _STRUCTURES = {
     4: ndimage.generate_binary_structure(2, 1),
     8: ndimage.generate_binary_structure(2, 2),
 }
-
-
-def check_mask(name: str, mask: ArrayLike) -> np.ndarray:
-    """Return ``mask`` as a 2D numpy bool array, or raise :class:`InputError` naming it."""
-    m = np.asarray(mask)
-    if m.dtype != np.bool_:
-        raise InputError(f"{name} must be a boolean array, got dtype {m.dtype}")
-    if m.ndim != 2:
-        raise InputError(f"{name} must be a 2D array, got shape {m.shape}")
-    if m.size == 0:
-        raise InputError(f"{name} is empty (shape {m.shape})")
-    return m
 
 
 def check_connectivity(connectivity: int) -> int:
@@ -118,7 +106,7 @@ def label(
     neighbours across a seam included). Returns ``(labels, n)``: int32 labels 1..n on the
     True cells, 0 elsewhere.
     """
-    m = check_mask("mask", mask)
+    m = require_mask("mask", mask)
     conn = check_connectivity(connectivity)
     per = _check_periodic(periodic)
     raw, lut, n = label_raw(m, per, conn)

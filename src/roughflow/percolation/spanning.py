@@ -16,9 +16,9 @@ import numba
 import numpy as np
 from scipy import ndimage
 
-from roughflow.errors import InputError
+from roughflow.errors import InputError, require_mask
 
-from .labels import _STRUCTURES, check_axis, check_connectivity, check_mask, merge_seams
+from .labels import _STRUCTURES, check_axis, check_connectivity, merge_seams
 from .sweep import SweepWork, _find, _link, sweep_work
 
 if TYPE_CHECKING:
@@ -55,7 +55,7 @@ def percolates(open_mask: ArrayLike, axis: int | str, *, connectivity: int = 4,
     walls across it with ``periodic=False``, for non-periodic scans);
     ``connectivity`` 4 (fluid, default) or 8.
     """
-    m = check_mask("open_mask", open_mask)
+    m = require_mask("open_mask", open_mask)
     ax = check_axis(axis)
     conn = check_connectivity(connectivity)
     if not (m.take(0, axis=ax).any() and m.take(-1, axis=ax).any()):
@@ -168,7 +168,7 @@ def percolates_along(open_mask: ArrayLike, axes: Iterable[int | str] = (0, 1), *
     is periodic); ``{axis: spans}``. 4-connected: one union-find pass (:func:`_spans_4`;
     ``work``: a :func:`~roughflow.percolation.sweep_work` of the grid's size, reused instead
     of new arrays); 8-connected: one labelling."""
-    m = check_mask("open_mask", open_mask)
+    m = require_mask("open_mask", open_mask)
     axes = tuple(check_axis(ax) for ax in axes)
     conn = check_connectivity(connectivity)
     if conn == 4:
@@ -199,7 +199,7 @@ def spanning_cells(open_mask: ArrayLike, axis: int | str, *, connectivity: int =
     These are the cells that can carry flow along ``axis`` (the rest are dead ends or
     isolated pools; within a spanning cluster, dead-end branches are included).
     """
-    m = check_mask("open_mask", open_mask)
+    m = require_mask("open_mask", open_mask)
     ax = check_axis(axis)
     conn = check_connectivity(connectivity)
     raw, lut, common = _spanning_labels(m, ax, conn, bool(periodic))
@@ -272,6 +272,6 @@ def contact_percolates(contact_mask: ArrayLike, axis: int | str) -> bool:
     ``contact_percolates(c, 1) == (not percolates(~c, 0))`` and likewise with the axes
     swapped (4/8 duality on the square grid).
     """
-    m = check_mask("contact_mask", contact_mask)
+    m = require_mask("contact_mask", contact_mask)
     ax = check_axis(axis)
     return _wraps(m, ax, 8)

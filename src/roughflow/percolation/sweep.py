@@ -19,7 +19,7 @@ from typing import TYPE_CHECKING, NamedTuple
 import numba
 import numpy as np
 
-from roughflow.errors import InputError
+from roughflow.errors import InputError, require_field
 
 from .labels import check_axis
 
@@ -199,6 +199,14 @@ def critical_open_count_by_key(key: np.ndarray, axis: int | str, *, expect: floa
     key = np.asarray(key)
     if key.dtype not in (np.float32, np.float64):  # float32 (a search's kept q) as it is
         key = key.astype(np.float64)
+    # a nan key compares False everywhere: it opened first in the block and last in a chunk
+    # (+-inf keys are ordered and allowed). One summing pass; nan only if a nan (or +inf and
+    # -inf together) is there
+    with np.errstate(over="ignore", invalid="ignore"):
+        total = float(key.sum())
+    if math.isnan(total) and np.isnan(key).any():
+        idx = tuple(int(i) for i in np.argwhere(np.isnan(key))[0])
+        raise InputError(f"key has {int(np.isnan(key).sum())} nan values, first at {idx}")
     nx, ny = (int(v) for v in key.shape)
     n = nx * ny
     if n >= 2**31:
@@ -362,7 +370,8 @@ def bearing_bracket(heights: np.ndarray, axis: int | str) -> BearingBracket:
     the first cell whose opening makes the fluid span fixes the threshold. Cells of equal
     height open together, so the bracket widens over their tie group.
     """
-    flat = np.asarray(heights, dtype=np.float64).ravel()
+    heights = require_field("heights", heights)  # argsort puts nan last: never opened
+    flat = heights.ravel()
     n = flat.size
     order = np.argsort(flat, kind="stable")
     hs = flat[order]

@@ -54,7 +54,13 @@ from roughflow.defaults import (
     THRESHOLD_TOL,
     THRESHOLD_TOL_MAX,
 )
-from roughflow.errors import ConvergenceError, InputError, require_finite, require_positive
+from roughflow.errors import (
+    ConvergenceError,
+    InputError,
+    require_field,
+    require_finite,
+    require_positive,
+)
 from roughflow.gpu import check_backend
 from roughflow.gpu import check_memory as gpu_check_memory
 from roughflow.percolation import (
@@ -584,8 +590,14 @@ def threshold(
     on_gpu = check_backend(backend, model, opts.method) == "cupy"
     if on_gpu:
         gpu_check_memory(surface.shape, "the contact solves of a threshold search on the GPU")
-    heights = surface.heights
+    # a Surface checks its heights when made, but its array can be changed in place since
+    heights = require_field("surface heights", surface.heights)
     shape = heights.shape
+    if tol * heights.size < 1 and not (model == "bearing" and opts.exact_bearing):
+        # two states' areas differ by whole cells: a bracket narrower than one cannot close
+        raise InputError(f"tol={tol!r} is below the area of one cell of this "
+                         f"{shape[0]} x {shape[1]} grid (1/{heights.size} = "
+                         f"{1 / heights.size:.3g}): give tol >= {1 / heights.size:.3g}")
     # Elastic states seen whole are kept as q = gap - c pressure in float32 (CompactState, 4
     # bytes a cell instead of 17): the search then needs none of a result's arrays once it is
     # sampled, and its gfmd solves share one workspace instead of allocating (fresh memory
@@ -631,8 +643,7 @@ def threshold(
             raise InputError("observe= and periodic=False are for the elastic and adhesive "
                              "models (the bearing model has no solver cell)")
         if opts.exact_bearing:
-            res = _bearing_exact(np.asarray(heights, dtype=np.float64), axes, tol,
-                                 opts.on_unbracketed)
+            res = _bearing_exact(heights, axes, tol, opts.on_unbracketed)
             return res if axis is None else res[axes[0]]
 
         def evaluate_bearing(a: float, init, scout: bool) -> _Sample:

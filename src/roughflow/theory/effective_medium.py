@@ -34,7 +34,15 @@ import numba
 import numpy as np
 from scipy.optimize import brentq
 
-from roughflow.errors import ConvergenceError, InputError, require_finite, require_positive
+from roughflow.errors import (
+    ConvergenceError,
+    InputError,
+    plain_array,
+    require_finite,
+    require_finite_values,
+    require_mask,
+    require_positive,
+)
 
 if TYPE_CHECKING:
     from numpy.typing import ArrayLike
@@ -146,7 +154,7 @@ def local_conductivity(gap: ArrayLike, eta: float = 1.0, *,
     u = _check_nonnegative("gap", gap)
     sigma = u**3 / (12.0 * eta)
     if contact is not None:
-        mask = np.asarray(contact, dtype=bool)
+        mask = require_mask("contact mask", contact)
         if mask.shape != u.shape:
             raise InputError(f"contact mask shape {mask.shape} differs from gap shape {u.shape}")
         sigma = np.where(mask, 0.0, sigma)
@@ -337,15 +345,16 @@ def _check_a_c_star(a_c_star: float) -> float:
 
 
 def _check_nonnegative(name: str, values) -> np.ndarray:
+    raw = plain_array(name, values)
+    if raw.dtype.kind == "c":
+        raise InputError(f"{name} must be real, got complex values")
     try:
-        a = np.asarray(values, dtype=np.float64)
+        a = raw.astype(np.float64, copy=False)
     except (TypeError, ValueError):
         raise InputError(f"{name} must be an array of numbers") from None
     if a.size == 0:
         raise InputError(f"{name} is empty (shape {a.shape})")
-    bad = ~np.isfinite(a)
-    if bad.any():
-        raise InputError(f"{name} has {int(bad.sum())} non-finite values, e.g. {a[bad].flat[0]}")
+    require_finite_values(name, a)
     if (a < 0).any():
         i = int(np.argmin(a))
         raise InputError(

@@ -24,7 +24,7 @@ from typing import TYPE_CHECKING
 import numpy as np
 
 from roughflow.defaults import DEFAULT_MODEL
-from roughflow.errors import require_finite
+from roughflow.errors import plain_array, require_finite, require_mask
 
 from .closed_form import closed_form
 from .effective_medium import (
@@ -86,8 +86,10 @@ def gap_theory(gap: ArrayLike, *, a_c_star: float, contact: ArrayLike | None = N
     """
     from roughflow.resources import check_memory
 
-    gap = np.asarray(gap, dtype=np.float64)
+    gap = plain_array("gap", gap)
     check_memory("theory", gap.size, what="the gap theory")
+    if contact is not None:
+        contact = require_mask("contact mask", contact)
     sig = local_conductivity(gap, eta, contact=contact).ravel()
     # contact cells; an open cell with a gap of exactly 0 (the bearing model's critical cell)
     # also has sigma = 0 but is not contact
