@@ -93,6 +93,24 @@ def test_plain_text_written_by_numpy(tmp_path):
     check_scaled(s, h * 1e-3, 2e-3, 1.5e-3)
 
 
+def test_swapped_axes_draw_a_warning_about_the_pixels(tmp_path, caplog):
+    # np.savetxt of an [x, y] array: the reader takes it as [y, x], and the size given for
+    # (x, y) then makes rectangular pixels; nothing said so, and every wavelength was off
+    h = heights()
+    assert h.shape[0] != h.shape[1]
+    size = f"{h.shape[0]}um,{h.shape[1]}um"  # square pixels of 1 um in the array's order
+    np.savetxt(tmp_path / "xy.txt", h)
+    np.savetxt(tmp_path / "yx.txt", h.T)
+    with caplog.at_level("WARNING", logger="roughflow.scan"):
+        swapped = from_scan(tmp_path / "xy.txt", size=size, unit="um")
+    assert swapped.shape == h.shape[::-1]
+    assert "the pixels are" in caplog.text and "axes are swapped" in caplog.text
+    caplog.clear()
+    with caplog.at_level("WARNING", logger="roughflow.scan"):
+        right = from_scan(tmp_path / "yx.txt", size=size, unit="um")
+    assert right.shape == h.shape and caplog.text == ""
+
+
 def test_repository_scan_imports():
     s = from_scan(DATA / "afm-64.npy", size="500nm", unit="nm")
     assert s.shape == (64, 64) and s.scan.length_scale == pytest.approx(500e-9)
@@ -172,13 +190,13 @@ def test_crop_defined_keeps_the_largest_window_without_missing_points(tmp_path, 
     h[21:, :] = np.nan
     h[10, 12] = np.nan  # and one hole inside
     np.save(tmp_path / "scan.npy", h)
-    opts = {"size": "1um", "unit": "um"}
+    opts = {"size": "1.2um,1um", "unit": "um"}  # square pixels of 0.05 um
     with pytest.raises(InputError, match=r"largest window without missing points is "
                                          r"0:21,3:12 .*crop='defined'"):
         read_scan(tmp_path / "scan.npy", **opts)
     s = read_scan(tmp_path / "scan.npy", crop="defined", detrend_mode="none", **opts)
     assert s.scan.crop == "0:21,3:12" and s.scan.filled == 0 and s.shape == (21, 9)
-    check_scaled(s, h[:21, 3:12] * UM, 21 / 24 * UM, 9 / 20 * UM)
+    check_scaled(s, h[:21, 3:12] * UM, 21 * 0.05 * UM, 9 * 0.05 * UM)
     # the same window given by hand gives the same surface
     by_hand = read_scan(tmp_path / "scan.npy", crop="0:21,3:12", detrend_mode="none", **opts)
     np.testing.assert_array_equal(s.heights, by_hand.heights)

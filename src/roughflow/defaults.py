@@ -151,6 +151,11 @@ SCAN_CROP_DEFINED = "defined"
 #: largest window without missing points): a filled region is smooth (harmonic) or a flat
 #: basin (min), so where it is large it, not the measured surface, shapes the contact.
 SCAN_FILL_WARN_FRACTION = 0.05
+#: Pixels whose sides differ by more than this fraction draw a warning at import: rectangular
+#: pixels exist (fewer lines than points per line), but more often they mean a size given
+#: for swapped axes, e.g. an [x, y] array written with np.savetxt, whose rows SurfaceTopography
+#: reads as lines along x.
+SCAN_PIXEL_ASPECT_WARN = 0.01
 #: How a non-periodic scan meets the periodic solvers (roughflow.boundary): mirror-tiled,
 #: padded by a flat region far below it, an interior window of the scan solved as periodic,
 #: or the scan taken as periodic.

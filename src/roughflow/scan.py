@@ -33,6 +33,7 @@ from roughflow.defaults import (
     SCAN_DETREND,
     SCAN_FILL,
     SCAN_FILL_WARN_FRACTION,
+    SCAN_PIXEL_ASPECT_WARN,
 )
 from roughflow.errors import InputError, check_axis
 from roughflow.surface import ScanInfo, Surface, rms_gradient
@@ -429,6 +430,14 @@ def read_scan(path: str | os.PathLike, *,
         h, missing = h[window], missing[window]
         lx_m *= h.shape[0] / nx0
         ly_m *= h.shape[1] / ny0
+    dx, dy = lx_m / h.shape[0], ly_m / h.shape[1]
+    if abs(dx / dy - 1) > SCAN_PIXEL_ASPECT_WARN:
+        log.warning("%s: the pixels are %.4g m along x and %.4g m along y (%d x %d points, "
+                    "%.4g m x %.4g m). If the instrument's pixels are square, the axes are "
+                    "swapped: roughflow's first index is x; a plain-text matrix is read with "
+                    "each row a line along x (its first index is y), a .npy array as it is "
+                    "(np.savetxt(f, h.T) writes an [x, y] array h for the text reader)",
+                    path, dx, dy, h.shape[0], h.shape[1], lx_m, ly_m)
     n_missing = int(missing.sum())
     if n_missing == missing.size:
         raise InputError(f"{str(path)!r} has no defined point in the window kept")
