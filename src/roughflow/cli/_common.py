@@ -22,6 +22,10 @@ _OUTPUTS = "_outputs"
 _INPUTS = "_inputs"
 
 AXES = {"x": 0, "y": 1, "both": None}
+#: The unit of every dimensionless pressure option: E* with lengths in units of the cell side
+#: L. That is E* gbar only for a generated surface (rms gradient gbar = 1); an imported scan
+#: keeps its gradient (docs/measured.md).
+PRESSURE_UNIT = "E* (E* gbar for a generated surface, rms gradient gbar 1; a scan keeps its gbar)"
 
 #: The sweep's surface options: flag -> (type, default, help). Defaults from
 #: roughflow.defaults; L / lambda_r None means the paper's size.

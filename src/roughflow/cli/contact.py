@@ -15,6 +15,7 @@ from roughflow.defaults import (
 from roughflow.errors import InputError
 
 from ._common import (
+    PRESSURE_UNIT,
     add_backend,
     add_input,
     add_output,
@@ -37,7 +38,7 @@ def register(sub: argparse._SubParsersAction) -> None:
         description=(
             "Press the rigid rough surface of SURFACE.nc (written by 'roughflow surface') onto a "
             "flat elastic half-space (E* = 1, periodic, frictionless) under the mean pressure "
-            "--pressure (units E* gbar), or cut it with a flat plane (--model bearing "
+            f"--pressure (in {PRESSURE_UNIT}), or cut it with a flat plane (--model bearing "
             "--area-fraction A). Writes gap(x, y), contact(x, y) and contact_pressure(x, y) "
             "with every scalar of the result and every surface parameter as attributes."
         ),
@@ -46,7 +47,7 @@ def register(sub: argparse._SubParsersAction) -> None:
     add_input(p, "surface", kinds="surface", what="surface file", metavar="SURFACE.nc",
               help="surface file ('roughflow surface')")
     p.add_argument("--pressure", type=float, default=None,
-                   help="mean applied pressure in units of E* gbar (elastic, adhesive)")
+                   help=f"mean applied pressure (elastic, adhesive) in {PRESSURE_UNIT}")
     p.add_argument("--model", choices=MODELS, default=DEFAULT_MODEL,
                    help="elastic (hard wall), adhesive (short-range adhesion) or bearing "
                         "(overlap model, no elasticity) (elastic)")

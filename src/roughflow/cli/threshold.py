@@ -18,6 +18,7 @@ from roughflow.defaults import (
 )
 
 from ._common import (
+    PRESSURE_UNIT,
     add_backend,
     add_input,
     add_output,
@@ -43,8 +44,8 @@ def register(sub: argparse._SubParsersAction) -> None:
             "4-connected) stops spanning the cell along x or y (open boundaries along the "
             "flow, periodic across; paper Sect. 2.2). Elastic/adhesive: bracket refined with "
             "warm-started contact solves until a_hi - a_lo <= tol; bearing: exact sweep. "
-            "Writes a_c_star, a_c_star_corrected, a_lo, a_hi, p_lo, p_hi (pressure in E* "
-            "gbar) per axis and the list of contact solves."
+            "Writes a_c_star, a_c_star_corrected, a_lo, a_hi, p_lo, p_hi (pressure in "
+            f"{PRESSURE_UNIT}) per axis and the list of contact solves."
         ),
     )
     track_given(p)  # the bearing model refuses the search's options (_search_options)
@@ -63,9 +64,9 @@ def register(sub: argparse._SubParsersAction) -> None:
                    default=THRESHOLD_STRATEGIES[0],
                    help="predict: aimed refinement (default); bisect: plain bisection")
     p.add_argument("--p-min", type=float, default=p_min,
-                   help=f"lowest allowed pressure in E* gbar ({p_min:g})")
+                   help=f"lowest allowed pressure in {PRESSURE_UNIT} ({p_min:g})")
     p.add_argument("--p-max", type=float, default=p_max,
-                   help=f"highest allowed pressure in E* gbar ({p_max:g})")
+                   help=f"highest allowed pressure in {PRESSURE_UNIT} ({p_max:g})")
     p.add_argument("--p-guess", type=float, default=None,
                    help="first pressure, in [--p-min, --p-max] (default: the contact law's "
                         f"load for a_c = {A_C_STAR_PAPER})")
