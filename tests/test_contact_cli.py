@@ -89,6 +89,7 @@ def test_cli_adhesive_defaults_to_the_papers_case(surface_file, tmp_path):
         assert ds.attrs["adhesion_range"] == pytest.approx(0.8 * s.spec.lambda_s, rel=1e-12)
         assert ds.attrs["adhesion_repulsion"] == "hard"
         assert ds.attrs["adhesion_contact_within"] == 0.5
+        assert "B06" in ds.attrs["references"].split()  # FIRE ran: cited
         assert ds.attrs["area_fraction"] == pytest.approx(ref.area_fraction, abs=1e-12)
 
 
@@ -103,6 +104,7 @@ def test_cli_adhesive_harmonic_takes_its_own_calibration(surface_file, tmp_path)
         assert ds.attrs["adhesion_range"] == pytest.approx(0.42 * s.spec.lambda_s, rel=1e-12)
         assert ds.attrs["adhesion_repulsion"] == "harmonic"
         assert ds.attrs["adhesion_contact_within"] == 0.0
+        assert "B06" not in ds.attrs["references"].split()  # the adhesive CG, not FIRE
 
 
 def test_cli_missing_file(tmp_path):

@@ -203,8 +203,10 @@ def test_history_and_references_follow_the_data(files):
         # surface -> contact -> flow, oldest first
         assert len(lines) == 3 and lines[0] == s.attrs["history"]
         assert [ln.split(": ", 1)[1].split()[1] for ln in lines] == ["surface", "contact", "flow"]
-        # GFMD (CM06, ZMM19, FIRE B06) and the flow (DM15, DM16) are cited
-        assert {"CM06", "ZMM19", "B06", "DM15"} <= set(fl.attrs["references"].split())
+        # GFMD (CM06, ZMM19; its hard wall runs constrained CG, PK99) and the flow (DM15,
+        # DM16) are cited; FIRE (B06) only where the hard wall with adhesion ran it
+        refs = set(fl.attrs["references"].split())
+        assert {"CM06", "ZMM19", "PK99", "DM15"} <= refs and "B06" not in refs
         assert not any(k.startswith("contact_history") for k in fl.attrs)
 
 
@@ -289,7 +291,14 @@ def test_every_method_cites_known_references():
     assert all(set(keys) <= set(REFERENCES) for keys in METHODS.values())
     assert references(["gfmd"])[0].key == "CM06"
     assert [r.key for r in roughflow.references(["surface", "gfmd"])] == \
-        ["WM21", "CM06", "ZMM19", "B06"]
+        ["WM21", "CM06", "ZMM19", "PK99"]
+    from roughflow.citation import contact_methods
+
+    # FIRE is cited where it ran: the hard wall with adhesion, not the elastic hard wall (CG)
+    assert contact_methods("elastic") == ("gfmd",)
+    assert contact_methods("adhesive", None, "hard") == ("gfmd", "adhesion", "fire")
+    assert contact_methods("adhesive", None, "harmonic") == ("gfmd", "adhesion")
+    assert contact_methods("bearing", "gfmd") == ("bearing",)
     with pytest.raises(roughflow.InputError, match="unknown methods"):
         references(["magic"])
 
@@ -299,7 +308,8 @@ def test_cite_prints_the_references_a_file_used(files, capsys):
     assert code == 0
     assert out.startswith("[WM21] A. Wang, M. H. Müser, Percolation and Reynolds flow")
     assert "doi:10.1103/PhysRevB.99.144103" in out  # mass-weighted GFMD
-    assert "[PK99]" not in out  # CG was not used
+    assert "[PK99]" in out  # the hard wall's constrained CG
+    assert "[B06]" not in out  # FIRE did not run (only the hard wall with adhesion runs it)
     code, out, _ = run(["cite", "--method", "cg", "--format", "bibtex"], capsys)
     assert code == 0 and out.startswith("@article{PK99,")
 

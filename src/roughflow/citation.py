@@ -145,7 +145,8 @@ REFERENCES = {r.key: r for r in (
 #: The references each method rests on (docs/physics.md says where each is used).
 METHODS = {
     "surface": ("WM21",),                    # random-phase surfaces, Peklenik anisotropy
-    "gfmd": ("CM06", "ZMM19", "B06"),        # GFMD, mass weighting, FIRE
+    "gfmd": ("CM06", "ZMM19", "PK99"),       # GFMD, mass weighting, constrained CG (hard wall)
+    "fire": ("B06",),                        # FIRE: the hard wall with adhesion
     "cg": ("PK99",),                         # constrained conjugate gradients
     "adhesion": ("WM21",),                   # the paper's short-range adhesion
     "bearing": ("WM21",),                    # bearing-area (overlap) model
@@ -157,6 +158,19 @@ METHODS = {
     "persson": ("P01", "YP08", "P20"),       # Persson theory of a_c(p), mean gap
     "scaling": ("WM21",),                    # finite-size scaling of a_c*
 }
+
+
+def contact_methods(model: str, method: str | None = None,
+                    repulsion: str | None = None) -> tuple[str, ...]:
+    """The :data:`METHODS` of a contact solve: the minimizer ``method`` (None: gfmd) of the
+    elastic and adhesive models, or the bearing model; the adhesion; and FIRE, which the
+    hard wall with adhesion (``repulsion="hard"``) runs (docs/physics.md 3.2)."""
+    if model == "bearing":
+        return ("bearing",)
+    out = (method or "gfmd",)
+    if model == "adhesive":
+        out += ("adhesion",) + (("fire",) if repulsion == "hard" else ())
+    return out
 
 
 def references(methods: Collection[str] | None = None) -> list[Reference]:

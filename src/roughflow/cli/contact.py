@@ -6,6 +6,7 @@ import argparse
 import logging
 import time
 
+from roughflow.citation import contact_methods
 from roughflow.defaults import (
     CONTACT_METHODS,
     CONTACT_TOL,
@@ -96,8 +97,8 @@ def run(args: argparse.Namespace) -> None:
              "%.1e, %.2f s)", result.model, result.method, *surface.shape, result.pressure,
              result.area_fraction, result.iterations, result.residual,
              time.perf_counter() - t0)
-    methods = ["bearing"] if result.model == "bearing" else [result.method]
-    methods += ["adhesion"] if result.model == "adhesive" else []
+    methods = contact_methods(result.model, result.method,
+                              None if adhesion is None else adhesion.repulsion)
     write_dataset(contact_dataset(surface, result, adhesion), args.output,
                   provenance=args.provenance.using(*methods))
 

@@ -5,6 +5,7 @@ from __future__ import annotations
 import argparse
 import logging
 
+from roughflow.citation import contact_methods
 from roughflow.defaults import (
     A_C_STAR_PAPER,
     AXIS_NAMES,
@@ -107,8 +108,9 @@ def run(args: argparse.Namespace) -> None:
                  r.a_c_star, r.a_lo, r.a_hi, r.n_solves)
     ds = threshold_dataset(res, surface, adhesion=adhesion)
     ds.attrs["surface_file"] = str(args.surface)
-    methods = ["percolation", "bearing" if args.model == "bearing" else args.method or "gfmd"]
-    methods += {"elastic": ["perimeter"], "adhesive": ["adhesion"]}.get(args.model, [])
+    methods = ["percolation", *contact_methods(
+        args.model, args.method, None if adhesion is None else adhesion.repulsion)]
+    methods += ["perimeter"] if args.model == "elastic" else []
     write_dataset(ds, args.output, provenance=args.provenance.using(*methods))
 
 

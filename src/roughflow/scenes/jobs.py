@@ -20,6 +20,7 @@ from pathlib import Path
 from typing import TYPE_CHECKING, Any
 
 from roughflow import defaults
+from roughflow.citation import contact_methods
 from roughflow.datasets.sweep import param_key, rnd
 from roughflow.defaults import (
     FLOW_STUDIES,
@@ -698,9 +699,8 @@ def job_methods(job: Job) -> tuple[str, ...]:
     """The methods a job uses (names of :data:`roughflow.citation.METHODS`)."""
     if isinstance(job, LeakJob):
         return ("gfmd", "percolation", "reynolds")
-    contact = ("bearing",) if job.model == "bearing" else ("gfmd",)
-    if job.model == "adhesive":
-        contact += ("adhesion",)
+    contact = contact_methods(job.model,
+                              repulsion=job.repulsion if isinstance(job, LadderJob) else None)
     corrected = ("perimeter",) if job.model == "elastic" else ()
     if isinstance(job, ThresholdJob):
         return ("surface", *contact, "percolation", *corrected)
