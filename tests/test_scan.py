@@ -7,6 +7,7 @@ from pathlib import Path
 
 import numpy as np
 import pytest
+import xarray as xr
 
 from roughflow.cli import main
 from roughflow.errors import InputError
@@ -406,6 +407,14 @@ def test_cli_warns_where_a_scan_is_solved_as_a_periodic_cell(tmp_path, capsys):
             err = capsys.readouterr().err
             assert ("non-periodic scan" in err) == warned, (name, command, err)
             assert (f"`roughflow {command}` solves it as a periodic cell" in err) == warned
+    # the scan's length unit reaches the flow file under its own name (it was renamed
+    # contact_ref_length_m, and units.registry of the flow file could not convert lengths)
+    from roughflow.units import registry
+
+    with xr.open_dataset(tmp_path / "f_scan.nc") as fl:
+        assert registry(fl.attrs).Quantity(1.0, "ref_length").to("um").magnitude == \
+            pytest.approx(1.0)
+        assert "contact_ref_length_m" not in fl.attrs
     # the bearing contact is local: nothing wraps
     assert main(["contact", str(tmp_path / "scan.nc"), "--model", "bearing",
                  "--area-fraction", "0.3", "-o", str(tmp_path / "b.nc")]) == 0

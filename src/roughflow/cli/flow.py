@@ -92,9 +92,16 @@ def run(args: argparse.Namespace) -> None:
     out = flow_dataset(results, contact, lx=lx, ly=ly, eta=args.eta, tol=args.tol,
                        sigma_tol=sigma_tol)
     out.attrs["source"] = str(args.input)
+    from roughflow.units import REFERENCE_ATTRS
+
+    # the SI values of the reference units hold for this file's lengths too (a scan's L):
+    # kept under their own names, so that units.registry(ds.attrs) converts the flow file
+    reference = {attr for attr, _ in REFERENCE_ATTRS.values()}
     for k, v in ds_in.attrs.items():
         # the contact's provenance continues in this file's history and references
-        if k not in ("title", "lx", "ly", *PROVENANCE_ATTRS):
+        if k in reference:
+            out.attrs[k] = v
+        elif k not in ("title", "lx", "ly", *PROVENANCE_ATTRS):
             out.attrs[f"contact_{k}"] = v
     writers = [dataset_writer(out, args.output, provenance=args.provenance.using("reynolds"))]
     if args.plot:
