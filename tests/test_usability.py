@@ -303,6 +303,29 @@ def test_every_method_cites_known_references():
         references(["magic"])
 
 
+def test_files_written_from_python_cite_what_the_commands_cite(files, tmp_path):
+    # write_dataset's default provenance recorded no references, so `roughflow cite` of a
+    # file written from Python said it was not a roughflow file
+    from roughflow import contact, datasets, flow
+    from roughflow.citation import keys_for
+    from roughflow.io import read_surface, write_dataset
+
+    surface = read_surface(files["surface"])
+    res = contact.solve(surface, 0.1)
+    flows = {ax: flow.solve(res.gap, ax, lx=surface.lx, ly=surface.ly) for ax in (0, 1)}
+    write_dataset(datasets.contact_dataset(surface, res), tmp_path / "contact.nc")
+    write_dataset(datasets.flow_dataset(flows, res.contact, lx=surface.lx, ly=surface.ly,
+                                        eta=1.0, tol=1e-8), tmp_path / "flow.nc")
+    with xr.open_dataset(tmp_path / "contact.nc") as api, \
+            xr.open_dataset(files["contact"]) as cli:
+        assert api.attrs["references"] == cli.attrs["references"]
+    # a flow dataset knows only its own method; the command also carries its input's
+    with xr.open_dataset(tmp_path / "flow.nc") as api, xr.open_dataset(files["flow"]) as cli:
+        refs = api.attrs["references"].split()
+        assert refs == list(keys_for("reynolds"))
+        assert set(refs) <= set(cli.attrs["references"].split())
+
+
 def test_cite_prints_the_references_a_file_used(files, capsys):
     code, out, _ = run(["cite", files["flow"]], capsys)
     assert code == 0

@@ -185,14 +185,49 @@ def write_together(writers: Sequence[Writer]) -> list[Path]:
     return [p for p, _ in writers]
 
 
+def dataset_methods(ds: xr.Dataset) -> tuple[str, ...]:
+    """The methods (:data:`roughflow.citation.METHODS`) behind a dataset of
+    :mod:`roughflow.datasets`, read from its title and model attributes; () where unknown.
+    The command line names its methods itself; this gives a file written from Python the
+    same ``references``."""
+    from roughflow.citation import contact_methods
+
+    a = ds.attrs
+    title = str(a.get("title", ""))
+    if title == "roughflow surface":
+        return ("surface",)
+    if title == "roughflow flow":
+        return ("reynolds",)
+    if title == "roughflow leak":
+        return ("gfmd", "percolation", "reynolds")
+    if title not in ("roughflow contact", "roughflow percolation threshold"):
+        return ()
+    model = str(a.get("model", ""))
+    if model not in ("elastic", "adhesive", "bearing"):
+        return ()
+    method = a.get("method") or None
+    contact = contact_methods(model, str(method) if method else None,
+                              a.get("adhesion_repulsion"))
+    # a generated surface (its spec_* attributes) is cited as the command's input file is
+    generated = ("surface",) if any(k.startswith("spec_") for k in a) else ()
+    if title == "roughflow contact":
+        return (*generated, *contact)
+    return (*generated, "percolation", *contact,
+            *(("perimeter",) if model == "elastic" else ()))
+
+
 def dataset_writer(ds: xr.Dataset, path: str | os.PathLike, *,
                    provenance: Provenance | None = None) -> Writer:
     """``(path, write)`` for :func:`write_together`: ``ds`` with the attributes of
-    ``provenance`` (default: the Python API's, :class:`~roughflow.provenance.Provenance`) in
-    place of any it carried, attributes netCDF can store, written as netCDF."""
+    ``provenance`` in place of any it carried, attributes netCDF can store, written as
+    netCDF. The default provenance is the Python API's
+    (:class:`~roughflow.provenance.Provenance`), citing the methods of
+    :func:`dataset_methods`."""
     ds = ds.copy()
     attrs = {k: v for k, v in ds.attrs.items() if k not in PROVENANCE_ATTRS}
-    attrs.update((provenance or Provenance()).attrs())
+    if provenance is None:
+        provenance = Provenance().using(*dataset_methods(ds))
+    attrs.update(provenance.attrs())
     ds.attrs = clean_attrs(attrs)
     for name in ds.variables:
         ds[name].attrs = clean_attrs(ds[name].attrs)
