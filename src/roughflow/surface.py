@@ -251,7 +251,11 @@ class Surface:
 
     @classmethod
     def from_array(cls, heights: ArrayLike, lx: float = 1.0, ly: float | None = None) -> Surface:
-        """Wrap a user height map (validated: 2D, finite, at least 4 x 4)."""
+        """Wrap a user height map (validated: 2D, finite, at least 4 x 4) as a periodic
+        cell. Heights, ``lx`` and ``ly`` are in one length unit (the solvers take E* = 1,
+        so pressures come out in E*). A measured map is better read with :func:`from_scan`:
+        it records the physical units, and leak calculations then treat its edges as
+        non-periodic (docs/measured.md)."""
         from roughflow.errors import require_field
 
         h = require_field("heights", heights)

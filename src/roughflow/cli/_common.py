@@ -228,5 +228,7 @@ def adhesion_help(what: str) -> str:
     return (f"adhesive model: {what}; without both adhesion options: the paper's adhesive "
             f"case, gamma_s = {defaults.ADHESION_SURFACE_ENERGY_RATIO} v_ela^full and rho = "
             f"{ranges} lambda_s for the --repulsion (needs a surface file written by "
-            "roughflow surface, which records lambda_s)")
+            "roughflow surface, which records lambda_s). Calibrated on the paper's Fig. 5 "
+            "surface (H 0.8, eps_f 1/16): rho follows lambda_s, not the rms height, so on "
+            "other spectra the same values give other areas (docs/contact.md 'Adhesion')")
 
