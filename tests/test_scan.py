@@ -66,6 +66,23 @@ def test_npy_needs_size_and_unit(tmp_path):
     check_scaled(s, h * UM, 2 * UM, 1.5 * UM)
 
 
+def test_npy_missing_unit_and_size_are_named_together(tmp_path):
+    # they were refused one per run; and a size in units with height_unit= was refused for
+    # lacking unit=, which would have said nothing more
+    h = heights()
+    np.save(tmp_path / "scan.npy", h)
+    with pytest.raises(InputError, match=r"length unit: pass unit=.*, nor its physical size"):
+        read_scan(tmp_path / "scan.npy")
+    by_height_unit = read_scan(tmp_path / "scan.npy", size="2mm,1.5mm", height_unit="um",
+                               detrend_mode="none")
+    by_unit = read_scan(tmp_path / "scan.npy", size="2mm,1.5mm", unit="um",
+                        detrend_mode="none")
+    np.testing.assert_array_equal(by_height_unit.heights, by_unit.heights)
+    assert by_height_unit.scan.length_scale == by_unit.scan.length_scale
+    with pytest.raises(InputError, match="has no unit"):  # bare numbers need unit=
+        read_scan(tmp_path / "scan.npy", size="2,1.5", height_unit="um")
+
+
 def test_truncated_npy_refused_before_reading(tmp_path):
     # a cut .npy was read past its end (a different map on each run, once exit 0 with a
     # complete-looking file); the CLI now exits 2 naming it and writes nothing

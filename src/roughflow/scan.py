@@ -392,13 +392,21 @@ def read_scan(path: str | os.PathLike, *,
     if file_size is not None and size is not None:
         raise InputError(f"{str(path)!r} already gives its size {tuple(file_size)} "
                          f"{file_unit or ''}: drop size={size!r}")
-    if file_unit is None and unit is None:
-        raise InputError(f"{str(path)!r} does not give its length unit: pass unit= "
-                         "(e.g. 'nm'; CLI --unit)")
+    # a size with its units and height_unit say all that unit= would (the size must then
+    # carry units: _sizes refuses bare numbers without unit=)
+    st_unit = unit
+    if file_unit is None and unit is None and height_unit is not None and size is not None:
+        st_unit = height_unit
+    missing = []  # named together, not one per run
+    if file_unit is None and st_unit is None:
+        missing.append("its length unit: pass unit= (e.g. 'nm'; CLI --unit), or with a size "
+                       "in units the heights' height_unit= (CLI --height-unit)")
     if file_size is None and size is None:
-        raise InputError(f"{str(path)!r} does not give its physical size: pass size= "
-                         "(e.g. '500nm' or '0.126mm,0.094mm'; CLI --size)")
-    lateral = _length_factor(file_unit or unit, "unit")
+        missing.append("its physical size: pass size= (e.g. '500nm' or '0.126mm,0.094mm'; "
+                       "CLI --size)")
+    if missing:
+        raise InputError(f"{str(path)!r} does not give " + ", nor ".join(missing))
+    lateral = _length_factor(file_unit or st_unit, "unit")
     if file_size is not None:
         lx_m, ly_m = (float(v) * lateral for v in file_size)
         if not (math.isfinite(lx_m) and math.isfinite(ly_m) and lx_m > 0 and ly_m > 0):
@@ -412,7 +420,7 @@ def read_scan(path: str | os.PathLike, *,
     kw = {} if file_size is not None else {"physical_sizes": tuple(float(v) / lateral for v in
                                                                    (lx_m, ly_m))}
     if file_unit is None:
-        kw["unit"] = unit
+        kw["unit"] = st_unit
     try:
         topo = ch.topography(**kw)
         raw = topo.heights()
