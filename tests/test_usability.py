@@ -370,3 +370,21 @@ def test_channels_figure_colours_follow_the_files_phase_codes():
     new.attrs = {**old.attrs, "flag_meanings": "contact non_percolating_fluid percolating_fluid"}
     assert list(phase_colors(old).colors) == [PHASES["contact"][0], dark, light]
     assert list(phase_colors(new).colors) == [PHASES["contact"][0], light, dark]
+
+
+def test_solving_commands_print_their_result(tmp_path, capsys):
+    # contact, flow, threshold and surface printed nothing: a user had to add -v or open
+    # the file to see a_c or sigma (import, leak and theory print tables)
+    s, c, f, t = (tmp_path / f"{k}.nc" for k in "scft")
+    code, out, _ = run(["surface", *TINY, "-o", s], capsys)
+    assert code == 0 and out.startswith(f"{s}: ") and "rms gradient 1" in out
+    code, out, _ = run(["contact", s, "--pressure", "0.1", "-o", c], capsys)
+    with xr.open_dataset(c) as ds:
+        assert code == 0 and f"a_c = {ds.attrs['area_fraction']:.5f}" in out
+    code, out, _ = run(["flow", c, "-o", f], capsys)
+    with xr.open_dataset(f) as ds:
+        assert code == 0 and f"sigma_x = {ds.attrs['sigma_x']:.6e}" in out
+    code, out, _ = run(["threshold", s, "-o", t], capsys)
+    with xr.open_dataset(t) as ds:
+        a = float(ds["a_c_star"].sel(axis="x"))
+        assert code == 0 and f"x {a:.4f} in [" in out and "contact solves" in out

@@ -101,6 +101,8 @@ def run(args: argparse.Namespace) -> None:
                               None if adhesion is None else adhesion.repulsion)
     write_dataset(contact_dataset(surface, result, adhesion), args.output,
                   provenance=args.provenance.using(*methods))
+    print(f"{args.output}: {result.model} contact, p = {result.pressure:.6g}: a_c = "
+          f"{result.area_fraction:.5f}, mean gap {result.mean_gap:.6g} (lengths in L)")
 
 
 def _check_model_options(args: argparse.Namespace) -> None:

@@ -107,6 +107,9 @@ def run(args: argparse.Namespace) -> None:
     if args.plot:
         writers.append(figure_writer(_plot(results, contact), args.plot, dpi=120))
     write_together(writers)  # the flow file and its plot appear together or not at all
+    print(f"{args.output}: " + ", ".join(f"sigma_{AXIS_NAMES[ax]} = {r.sigma:.6e}"
+                                         for ax, r in results.items())
+          + f" (L^3 / eta, eta = {args.eta:g})")
 
 
 def _plot(results: dict, contact: np.ndarray):

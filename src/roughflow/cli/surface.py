@@ -92,5 +92,9 @@ def run(args: argparse.Namespace) -> None:
     spec = spec_from_args(args)
     log.info("surface: %d x %d grid, gamma=%g H=%g lambda_r=%g lambda_s=%g seed=%d", spec.nx,
              spec.ny, spec.gamma, spec.hurst, spec.lambda_r, spec.lambda_s, spec.seed)
-    write_dataset(surface_to_dataset(generate(spec)), args.output,
+    surface = generate(spec)
+    write_dataset(surface_to_dataset(surface), args.output,
                   provenance=args.provenance.using("surface"))
+    print(f"{args.output}: {spec.nx} x {spec.ny} points, {spec.lx:g} x {spec.ly:g} (L), "
+          f"H {spec.hurst:g}, gamma {spec.gamma:g}, rms height {surface.heights.std():.4g}, "
+          f"rms gradient {spec.rms_slope:g}")

@@ -112,6 +112,11 @@ def run(args: argparse.Namespace) -> None:
         args.model, args.method, None if adhesion is None else adhesion.repulsion)]
     methods += ["perimeter"] if args.model == "elastic" else []
     write_dataset(ds, args.output, provenance=args.provenance.using(*methods))
+    n_solves = max(r.n_solves for r in res.values())
+    print(f"{args.output}: {args.model} a_c* " + ", ".join(
+        f"{AXIS_NAMES[ax]} {r.a_c_star:.4f} in [{r.a_lo:.4f}, {r.a_hi:.4f}]"
+        for ax, r in res.items()) + (f" ({n_solves} contact solves)" if n_solves else
+                                     " (exact sweep)"))
 
 
 #: Options of the contact solves of a search: the bearing model's exact sweep solves none.
