@@ -111,8 +111,10 @@ THRESHOLD_FIELDS = {
     "a_c_star": (DIMENSIONLESS, "percolation threshold a_c* (relative contact area, "
                                 "estimated between a_lo and a_hi; docs/percolation.md)"),
     "a_c_star_corrected": (DIMENSIONLESS, "a_c* with the perimeter correction of the contact "
-                                          "area (first-order grid bias removed; elastic "
-                                          "model; docs/accuracy.md)"),
+                                          "area (first-order grid bias removed, elastic "
+                                          "model; the bearing model's cell count is unbiased: "
+                                          "= a_c*; adhesive: not calibrated, NaN; "
+                                          "docs/accuracy.md)"),
     "a_lo": (DIMENSIONLESS, "largest contact area at which the fluid still percolates"),
     "a_hi": (DIMENSIONLESS, "smallest contact area at which the fluid no longer percolates"),
     "p_lo": (PRESSURE_UNITS, "pressure of a_lo"),
