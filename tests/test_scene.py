@@ -96,6 +96,44 @@ def test_expand_study_keeps_what_applies():
                                                   "fit": {"nu": 1.5}})) == 2
 
 
+def _plan(name: str, block: dict) -> dict[str, list[str]]:
+    return {jid: job.cli_args() for jid, job in expand_study(name, block).items()}
+
+
+def test_config_edits_rerun_only_what_they_change():
+    """A workflow audit: edits that change no result planned new jobs (Snakemake reruns a
+    job whose id or arguments change), some of them hours of work at the paper's sizes."""
+    base = {**_SMALL, "gamma": [1], "seeds": list(range(10)), "seeds_per_job": 5}
+    plan = _plan("threshold_vs_gamma", base)
+    # the config's order of seeds: the same jobs (it gave other arguments, or two jobs with
+    # one id in two studies and a planning error)
+    assert _plan("threshold_vs_gamma", {**base, "seeds": list(range(9, -1, -1))}) == plan
+    # removing seed 0 reruns its own block only (seeds were grouped by position: every
+    # later seed moved to another job, and all 10 searches ran again)
+    fewer = _plan("threshold_vs_gamma", {**base, "seeds": list(range(1, 10))})
+    assert len(set(fewer) - set(plan)) == 1 and len(set(plan) & set(fewer)) == 1
+    # settings the bearing model does not use: contact_tol (exact sweep, no solves) and a
+    # ladder's area_tol (exact cut); the elastic model's jobs do change
+    for model, changed in (("bearing", False), ("elastic", True)):
+        one = {**_SMALL, "model": [model]}
+        a = _plan("threshold_vs_gamma", {**one, "contact_tol": 1e-4})
+        b = _plan("threshold_vs_gamma", {**one, "contact_tol": 5e-5})
+        assert (a != b) == changed, model
+        a = _plan("flow_isotropic", {**_LADDER, "model": [model], "area_tol": 0.002})
+        b = _plan("flow_isotropic", {**_LADDER, "model": [model], "area_tol": 0.004})
+        assert (a != b) == changed, model
+
+
+def test_aggregation_records_the_study_without_fit_options_and_labels():
+    from roughflow.scenes.jobs import aggregated_config
+
+    block = {"gamma": [2], "fit": {"bootstrap": 200},
+             "series": [{"label": "gamma = 2", "l_over_lambda_r": [8, 16]}]}
+    assert aggregated_config(block) == aggregated_config(
+        {**block, "fit": {"bootstrap": 20}, "series": [{"l_over_lambda_r": [8, 16]}]})
+    assert aggregated_config(block) != aggregated_config({**block, "gamma": [4]})
+
+
 @pytest.mark.parametrize("job", [
     LadderJob(surface=SurfaceParams(gamma=2.0, l_over_lambda_r=8.0, eps_f=1 / 32),
               model="adhesive", seeds=(3, 4), area_fractions=(0.1, 0.2), a_c_star=0.41,

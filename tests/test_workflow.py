@@ -201,10 +201,18 @@ def test_outputs_record_their_provenance(test_run):
     with xr.open_dataset(job) as ds:
         assert ds.attrs["job_parameters"].startswith("threshold --gamma")
         assert "-v scene threshold" in ds.attrs["command"]
+    # the study block without what does not change the dataset (fit options, labels: editing
+    # them must not re-aggregate); the fit file records its own options
+    from roughflow.scenes.jobs import aggregated_config
+
+    study = cfg["threshold_vs_size"]
     for name in ("dataset", "fit"):
         with xr.open_dataset(wd / "results" / "threshold_vs_size" / f"{name}.nc") as ds:
-            assert json.loads(ds.attrs["study_config"]) == cfg["threshold_vs_size"]
+            assert ds.attrs["study_config"] == aggregated_config(study)
+            assert "fit" not in json.loads(ds.attrs["study_config"])
             assert ds.attrs["roughflow_version"] and ds.attrs["history"]
+    with xr.open_dataset(wd / "results" / "threshold_vs_size" / "fit.nc") as ds:
+        assert ds.attrs["n_boot"] == study["fit"]["bootstrap"]
 
 
 @pytest.mark.slow

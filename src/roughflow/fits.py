@@ -318,7 +318,7 @@ def fit_dataset(ds: xr.Dataset, *, n_boot: int = FIT_BOOTSTRAP, nu: float = NU_P
     }
     res = xr.Dataset(data, coords=coords,
                      attrs={"title": "finite-size-scaling fits a_c*(eps) = a_c* + A eps^(1/nu)",
-                            "nu_fixed": nu, "n_boot": n_boot,
+                            "nu_fixed": nu, "n_boot": n_boot, "bootstrap_seed": seed,
                             "eps": "eps_t = max(sqrt(gamma), 1/sqrt(gamma)) lambda_r / L"})
     for name in ("n_points", "nu_at_bound", "underdetermined"):
         res[name].encoding = {"dtype": "int32", "_FillValue": np.int32(-1)}

@@ -272,7 +272,8 @@ def read_dataset(path: str | os.PathLike, kinds: str | tuple[str, ...] | None = 
     except Exception as exc:  # netCDF4/HDF5/xarray raise OSError, ValueError, RuntimeError...
         reason = (str(exc).splitlines() or [""])[0][:160]
         raise InputError(f"cannot read {source} as netCDF ({type(exc).__name__}: {reason}); is "
-                         "it a complete file written by roughflow?") from None
+                         "it a complete file written by roughflow? (A damaged output of a "
+                         "workflow step: delete it, and snakemake makes it again.)") from None
     if kinds is not None:
         check_kind(ds, kinds, source)
     return ds

@@ -8,8 +8,9 @@ rule aggregate:
     output:
         f"{RESULTS}/{{study}}/dataset.nc",
     params:
-        # the study's config block, recorded as the dataset's study_config (provenance)
-        config=lambda wc: json.dumps(STUDIES[wc.study], sort_keys=True),
+        # the study's config block, recorded as the dataset's study_config (provenance);
+        # without the fit options and labels, which do not change the dataset
+        config=lambda wc: aggregated_config(STUDIES[wc.study]),
     log:
         f"{RESULTS}/logs/{{study}}/aggregate.log",
     benchmark:

@@ -12,6 +12,7 @@ from __future__ import annotations
 
 import hashlib
 import itertools
+import json
 import math
 import re
 import shlex
@@ -165,6 +166,10 @@ class ThresholdJob(_SeedGroup):
         object.__setattr__(self, "seeds", require_seeds("seeds", self.seeds))
         _check_tol("tol", self.tol, defaults.THRESHOLD_TOL_MAX)
         _check_tol("contact_tol", self.contact_tol, defaults.CONTACT_TOL_MAX)
+        if self.model == "bearing":
+            # the exact bearing sweep solves no contact: contact_tol is unused, and kept at
+            # its default so that a config's value neither reruns these jobs nor splits them
+            object.__setattr__(self, "contact_tol", defaults.THRESHOLD_CONTACT_TOL)
 
     @property
     def job_id(self) -> str:
@@ -229,6 +234,10 @@ class LadderJob(_SeedGroup):
                 raise InputError(f"{name} must lie in (0, 1), got {value!r}")
         if not (math.isfinite(self.area_tol) and 0 < self.area_tol < 1):
             raise InputError(f"area_tol must lie in (0, 1), got {self.area_tol!r}")
+        if self.model == "bearing":
+            # the bearing ladder cuts each area exactly: area_tol is unused, and kept at its
+            # default so that a config's value does not rerun the ladder's flow solves
+            object.__setattr__(self, "area_tol", defaults.LADDER_AREA_TOL)
         if self.repulsion not in defaults.ADHESION_REPULSIONS:
             raise InputError(f"repulsion must be one of {defaults.ADHESION_REPULSIONS}, got "
                              f"{self.repulsion!r}")
@@ -485,9 +494,7 @@ def expand_study(name: str, block: dict) -> dict[str, Job]:
     jobs: dict[str, Job] = {}
     for n, s in enumerate(_series(block)):
         where = f"config studies.{name}" + (f".series[{n}]" if block.get("series") else "")
-        seeds = [int(v) for v in _as_list(s["seeds"])]
-        per = int(s["seeds_per_job"])
-        groups = [tuple(seeds[i:i + per]) for i in range(0, len(seeds), per)]
+        groups = seed_groups([int(v) for v in _as_list(s["seeds"])], int(s["seeds_per_job"]))
         ppl = float(s["points_per_lambda_s"])
         for model, gamma, hurst, size, eps_f in itertools.product(
             _as_list(s["model"]), _as_list(s["gamma"]), _as_list(s["hurst"]),
@@ -505,6 +512,38 @@ def expand_study(name: str, block: dict) -> dict[str, Job]:
     check_collisions(name, jobs.values())
     _check_one_series(name, jobs.values())
     return jobs
+
+
+#: Study keys that do not change the study's dataset: the fit's options (the fit rule's own
+#: params) and a series' label. Left out of what the aggregation records, so that editing
+#: them does not re-aggregate (and with a job file deleted, recompute that job).
+NOT_AGGREGATED = ("fit", "label")
+
+
+def aggregated_config(block: dict) -> str:
+    """The study block an aggregated dataset records (its ``study_config``, JSON), without
+    :data:`NOT_AGGREGATED`: the aggregation's Snakemake params."""
+    def strip(d: dict) -> dict:
+        return {k: ([strip(v) if isinstance(v, dict) else v for v in val]
+                    if k == "series" and isinstance(val, list) else val)
+                for k, val in d.items() if k not in NOT_AGGREGATED}
+
+    return json.dumps(strip(block), sort_keys=True)
+
+
+def seed_groups(seeds: list[int], per: int) -> list[tuple[int, ...]]:
+    """The seeds of one parameter set, grouped into jobs by value: block ``seed // per``.
+
+    By position (the first ``per`` seeds, then the next), removing one seed moved every later
+    seed into another job, so Snakemake recomputed seeds it had (all 80 searches of a study
+    for seed 0), and the config's order of seeds gave other jobs for the same seeds. By value,
+    adding or removing a seed touches its own block's job only; ``[0, ..., 9]`` with ``per`` 5
+    gives the blocks it gave before. Duplicates stay in their block, where the job refuses
+    them."""
+    blocks: dict[int, list[int]] = {}
+    for seed in sorted(seeds):
+        blocks.setdefault(seed // per, []).append(seed)
+    return [tuple(block) for _, block in sorted(blocks.items())]
 
 
 def _add_job(jobs: dict[str, Job], job: Job) -> None:
