@@ -2,9 +2,9 @@
 
 FFT plans carry buffers that every transform writes and reads, and pyFFTW's executes and
 the numba kernels release the GIL. With one plan cache for the process, threads solving
-grids of the same shape overwrote each other's transforms: wrong gaps (off by up to 15 in
-units of the rms height), false ConvergenceErrors, wrong surfaces from ``generate``. The
-plans are now cached per thread (``fft.per_thread_cache``).
+grids of the same shape overwrote each other's transforms: wrong gaps (off by up to 15 L,
+against gaps of order 0.01 L), false ConvergenceErrors, wrong surfaces from ``generate``.
+The plans are now cached per thread (``fft.per_thread_cache``).
 """
 
 from __future__ import annotations
