@@ -173,6 +173,18 @@ def contact_methods(model: str, method: str | None = None,
     return out
 
 
+def threshold_methods(model: str, method: str | None = None,
+                      repulsion: str | None = None) -> tuple[str, ...]:
+    """The :data:`METHODS` of a threshold search: percolation, the contact solve's
+    (:func:`contact_methods`) and, for the elastic model, the perimeter correction."""
+    return ("percolation", *contact_methods(model, method, repulsion),
+            *(("perimeter",) if model == "elastic" else ()))
+
+
+#: The :data:`METHODS` of a leak curve: elastic contact, percolation and Reynolds flow.
+LEAK_METHODS = ("gfmd", "percolation", "reynolds")
+
+
 def references(methods: Collection[str] | None = None) -> list[Reference]:
     """The references of ``methods`` (names of :data:`METHODS`; None: all), the paper first,
     each once."""

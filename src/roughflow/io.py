@@ -190,7 +190,8 @@ def dataset_methods(ds: xr.Dataset) -> tuple[str, ...]:
     :mod:`roughflow.datasets`, read from its title and model attributes; () where unknown.
     The command line names its methods itself; this gives a file written from Python the
     same ``references``."""
-    from roughflow.citation import contact_methods
+    from roughflow.citation import LEAK_METHODS, contact_methods, threshold_methods
+    from roughflow.defaults import MODELS
 
     a = ds.attrs
     title = str(a.get("title", ""))
@@ -199,21 +200,18 @@ def dataset_methods(ds: xr.Dataset) -> tuple[str, ...]:
     if title == "roughflow flow":
         return ("reynolds",)
     if title == "roughflow leak":
-        return ("gfmd", "percolation", "reynolds")
-    if title not in ("roughflow contact", "roughflow percolation threshold"):
-        return ()
+        return LEAK_METHODS
     model = str(a.get("model", ""))
-    if model not in ("elastic", "adhesive", "bearing"):
+    if model not in MODELS:
         return ()
-    method = a.get("method") or None
-    contact = contact_methods(model, str(method) if method else None,
-                              a.get("adhesion_repulsion"))
+    solve = (model, str(a["method"]) if a.get("method") else None, a.get("adhesion_repulsion"))
     # a generated surface (its spec_* attributes) is cited as the command's input file is
     generated = ("surface",) if any(k.startswith("spec_") for k in a) else ()
     if title == "roughflow contact":
-        return (*generated, *contact)
-    return (*generated, "percolation", *contact,
-            *(("perimeter",) if model == "elastic" else ()))
+        return (*generated, *contact_methods(*solve))
+    if title == "roughflow percolation threshold":
+        return (*generated, *threshold_methods(*solve))
+    return ()
 
 
 def dataset_writer(ds: xr.Dataset, path: str | os.PathLike, *,

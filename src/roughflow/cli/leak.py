@@ -69,6 +69,7 @@ def register(sub: argparse._SubParsersAction) -> None:
 
 
 def run(args: argparse.Namespace) -> None:
+    from roughflow.citation import LEAK_METHODS
     from roughflow.datasets import leak_dataset
     from roughflow.io import surface_from_dataset, write_dataset
     from roughflow.leak import check_pressures, leak_curve
@@ -101,7 +102,7 @@ def run(args: argparse.Namespace) -> None:
                       seal_length=length, name=name)
     ds.attrs["surface_file"] = str(args.surface)
     write_dataset(ds, args.output,
-                  provenance=args.provenance.using("gfmd", "percolation", "reynolds"))
+                  provenance=args.provenance.using(*LEAK_METHODS))
     print(format_table(ds))
 
 

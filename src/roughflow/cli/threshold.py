@@ -5,7 +5,7 @@ from __future__ import annotations
 import argparse
 import logging
 
-from roughflow.citation import contact_methods
+from roughflow.citation import threshold_methods
 from roughflow.defaults import (
     A_C_STAR_PAPER,
     AXIS_NAMES,
@@ -108,9 +108,8 @@ def run(args: argparse.Namespace) -> None:
                  r.a_c_star, r.a_lo, r.a_hi, r.n_solves)
     ds = threshold_dataset(res, surface, adhesion=adhesion)
     ds.attrs["surface_file"] = str(args.surface)
-    methods = ["percolation", *contact_methods(
-        args.model, args.method, None if adhesion is None else adhesion.repulsion)]
-    methods += ["perimeter"] if args.model == "elastic" else []
+    methods = threshold_methods(args.model, args.method,
+                                None if adhesion is None else adhesion.repulsion)
     write_dataset(ds, args.output, provenance=args.provenance.using(*methods))
     n_solves = max(r.n_solves for r in res.values())
     print(f"{args.output}: {args.model} a_c* " + ", ".join(

@@ -21,7 +21,7 @@ from pathlib import Path
 from typing import TYPE_CHECKING, Any
 
 from roughflow import defaults
-from roughflow.citation import contact_methods
+from roughflow.citation import LEAK_METHODS, contact_methods, threshold_methods
 from roughflow.datasets.sweep import param_key, rnd
 from roughflow.defaults import (
     FLOW_STUDIES,
@@ -737,12 +737,12 @@ def check_collisions(study: str, jobs: Iterable[Job]) -> None:
 def job_methods(job: Job) -> tuple[str, ...]:
     """The methods a job uses (names of :data:`roughflow.citation.METHODS`)."""
     if isinstance(job, LeakJob):
-        return ("gfmd", "percolation", "reynolds")
+        return LEAK_METHODS
+    if isinstance(job, ThresholdJob):
+        return ("surface", *threshold_methods(job.model))
     contact = contact_methods(job.model,
                               repulsion=job.repulsion if isinstance(job, LadderJob) else None)
     corrected = ("perimeter",) if job.model == "elastic" else ()
-    if isinstance(job, ThresholdJob):
-        return ("surface", *contact, "percolation", *corrected)
     if isinstance(job, LadderJob):
         return ("surface", *contact, "percolation", "reynolds", "bruggeman", "closed_form",
                 *corrected)
