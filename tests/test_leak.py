@@ -109,6 +109,26 @@ def test_bad_pressures_are_refused(pressures, match):
         leak_curve(scan_surface(), pressures)
 
 
+def test_pressures_in_pascals_are_refused_before_any_solve(monkeypatch):
+    """leak_curve takes pressures in E*. 1 MPa passed as 1e6 would come out "sealed" at
+    every pressure (the contact is complete from about 4 E* gbar); anything above
+    LEAK_PRESSURE_MAX E* gbar is refused, naming the value and the unit, while the largest
+    pressure the check lets through still runs."""
+    import roughflow.leak as leak
+    from roughflow.defaults import LEAK_PRESSURE_MAX
+
+    s = scan_surface()
+    gbar = s.scan.rms_gradient
+    monkeypatch.setattr(leak, "solve", lambda *a, **k: pytest.fail("a contact solve ran"))
+    with pytest.raises(InputError, match=r"pressure 1e\+06 .*units of E\*"):
+        leak_curve(s, [1e5, 1e6])
+    with pytest.raises(InputError, match="E\\* gbar"):
+        leak_curve(s, [1.01 * LEAK_PRESSURE_MAX * gbar])
+    monkeypatch.undo()
+    c = leak_curve(s, [LEAK_PRESSURE_MAX * gbar], sealing=False)
+    assert c.area_fraction[0] == 1.0
+
+
 def test_a_bad_flow_sigma_tol_is_refused_before_any_solve(monkeypatch):
     import roughflow.leak as leak
 

@@ -81,6 +81,11 @@ THRESHOLD_TOL_MAX = 0.1
 THRESHOLD_CONTACT_TOL = 1e-4
 #: Pressures (E* gbar) a threshold search may try.
 THRESHOLD_PRESSURE_RANGE = (1e-4, 4.0)
+#: The largest nominal pressure (E* gbar) a leak curve accepts: 25 times the search's top,
+#: where the elastic contact is already complete (a_c = 1 from 4 E* gbar on, and Persson's
+#: erf(sqrt(2) p / (E* gbar)) is 1 - 1e-15 there). A larger value is a pressure in pascals
+#: or MPa passed where the library takes units of E*.
+LEAK_PRESSURE_MAX = 100.0
 #: Cap on the contact solves of one threshold search.
 THRESHOLD_MAX_SOLVES = 40
 #: Threshold search strategies: aimed refinement (default) and plain bisection (reference).

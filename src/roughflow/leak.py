@@ -29,6 +29,7 @@ from roughflow.defaults import (
     CONTACT_TOL,
     FLOW_SIGMA_TOL,
     FLOW_TOL,
+    LEAK_PRESSURE_MAX,
     THRESHOLD_CONTACT_TOL,
     THRESHOLD_PRESSURE_RANGE,
     THRESHOLD_TOL,
@@ -97,6 +98,19 @@ def check_pressures(pressures: ArrayLike) -> np.ndarray:
     return p
 
 
+def check_pressure_scale(pressures: np.ndarray, gbar: float) -> None:
+    """:class:`InputError` where a nominal pressure (E*) exceeds
+    :data:`~roughflow.defaults.LEAK_PRESSURE_MAX` E* gbar: the contact is complete long before,
+    so such a value is a pressure in physical units, which would come out "sealed"."""
+    top = float(np.max(pressures))
+    if top > LEAK_PRESSURE_MAX * gbar:
+        raise InputError(
+            f"pressure {top:g} is {top / gbar:.3g} E* gbar (rms gradient gbar = {gbar:.3g}); the "
+            f"contact is complete from about 4 E* gbar, and this check stops at "
+            f"{LEAK_PRESSURE_MAX:g}. Pressures here are in units of E* (from Python, convert "
+            f"pascals with roughflow.units.Scales.pressure_from_si)")
+
+
 def default_boundary(surface: Surface) -> str:
     """:data:`~roughflow.defaults.BOUNDARY` for a non-periodic scan, ``"periodic"`` else."""
     return "periodic" if surface.periodic else BOUNDARY
@@ -149,6 +163,7 @@ def leak_curve(surface: Surface, pressures: ArrayLike, *, boundary: str | None =
     check_memory("ladder", emb.surface.heights.shape, what="a leak curve")
     gbar = (surface.scan.rms_gradient if surface.scan is not None else
             rms_gradient(surface.heights, surface.lx, surface.ly, periodic=surface.periodic))
+    check_pressure_scale(p, gbar)
     curve = pressure_curve(emb, p, contact_tol=contact_tol, flow_tol=flow_tol,
                            flow_sigma_tol=flow_sigma_tol, threads=threads)
     thresholds = (sealing_search(emb, gbar=gbar, tol=threshold_tol,
