@@ -228,6 +228,46 @@ def test_python_api_writes_provenance_too(tmp_path):
         assert ds.attrs["command"].startswith("python ")
 
 
+def test_files_record_the_commit_of_the_source_that_ran(tmp_path):
+    """``roughflow_commit`` tells results computed before a change of the numerics from
+    those computed after it, which the static version number cannot: the commit a package
+    directory is tracked in, ``-dirty`` once its tracked files change, and nothing for a
+    package that git does not track (an installed wheel, a virtualenv inside some other
+    repository)."""
+    import shutil
+
+    from roughflow.provenance import PACKAGE_DIR, source_commit
+
+    def git(*args, cwd):
+        return subprocess.run(["git", *args], cwd=cwd, check=True, capture_output=True,
+                              text=True).stdout.strip()
+
+    if shutil.which("git") is None:
+        pytest.skip("git is not installed")
+    repo = tmp_path / "repo"
+    pkg = repo / "src" / "pkg"
+    pkg.mkdir(parents=True)
+    (pkg / "__init__.py").write_text("x = 1\n")
+    git("init", "-q", cwd=repo)
+    git("add", ".", cwd=repo)
+    git("-c", "user.name=t", "-c", "user.email=t@t", "commit", "-qm", "c", cwd=repo)
+    head = git("rev-parse", "HEAD", cwd=repo)
+    assert source_commit.__wrapped__(pkg) == head
+    (repo / "notes.txt").write_text("an untracked file elsewhere\n")
+    assert source_commit.__wrapped__(pkg) == head
+    (pkg / "__init__.py").write_text("x = 2\n")
+    assert source_commit.__wrapped__(pkg) == head + "-dirty"
+    untracked = repo / "venv" / "site-packages" / "pkg"
+    shutil.copytree(pkg, untracked)
+    assert source_commit.__wrapped__(untracked) == ""
+    assert source_commit.__wrapped__(tmp_path / "nowhere") == ""
+    # this checkout's own files record it
+    commit = source_commit(PACKAGE_DIR)
+    from roughflow.provenance import Provenance
+
+    assert Provenance().attrs().get("roughflow_commit", "") == commit
+
+
 def test_version_option(capsys):
     with pytest.raises(SystemExit) as exc:
         main(["--version"])
