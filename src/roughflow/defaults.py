@@ -81,10 +81,11 @@ THRESHOLD_TOL_MAX = 0.1
 THRESHOLD_CONTACT_TOL = 1e-4
 #: Pressures (E* gbar) a threshold search may try.
 THRESHOLD_PRESSURE_RANGE = (1e-4, 4.0)
-#: The largest nominal pressure (E* gbar) a leak curve accepts: 25 times the search's top,
-#: where the elastic contact is already complete (a_c = 1 from 4 E* gbar on, and Persson's
-#: erf(sqrt(2) p / (E* gbar)) is 1 - 1e-15 there). A larger value is a pressure in pascals
-#: or MPa passed where the library takes units of E*.
+#: The largest nominal pressure (E*) a leak curve accepts: a hundred times the contact
+#: modulus is no linear-elastic contact (every gap of a surface with gbar up to 25 is closed
+#: from 4 E* gbar on), but a pressure in pascals passed where the library takes units of E*.
+#: Not a bound in E* gbar: one study's pressures serve smooth and rough scans alike, and on
+#: a smooth one a_c = 1 and Q = 0 is the answer, not an error.
 LEAK_PRESSURE_MAX = 100.0
 #: Cap on the contact solves of one threshold search.
 THRESHOLD_MAX_SOLVES = 40

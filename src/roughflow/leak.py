@@ -98,17 +98,16 @@ def check_pressures(pressures: ArrayLike) -> np.ndarray:
     return p
 
 
-def check_pressure_scale(pressures: np.ndarray, gbar: float) -> None:
-    """:class:`InputError` where a nominal pressure (E*) exceeds
-    :data:`~roughflow.defaults.LEAK_PRESSURE_MAX` E* gbar: the contact is complete long before,
-    so such a value is a pressure in physical units, which would come out "sealed"."""
+def check_pressure_scale(pressures: np.ndarray) -> None:
+    """:class:`InputError` where a nominal pressure exceeds
+    :data:`~roughflow.defaults.LEAK_PRESSURE_MAX` E*: a pressure in physical units passed as
+    one in units of E*, which would come out "sealed" at every pressure."""
     top = float(np.max(pressures))
-    if top > LEAK_PRESSURE_MAX * gbar:
+    if top > LEAK_PRESSURE_MAX:
         raise InputError(
-            f"pressure {top:g} is {top / gbar:.3g} E* gbar (rms gradient gbar = {gbar:.3g}); the "
-            f"contact is complete from about 4 E* gbar, and this check stops at "
-            f"{LEAK_PRESSURE_MAX:g}. Pressures here are in units of E* (from Python, convert "
-            f"pascals with roughflow.units.Scales.pressure_from_si)")
+            f"pressure {top:g} E* is above {LEAK_PRESSURE_MAX:g} E*, beyond any linear-elastic "
+            f"contact: pressures here are in units of the contact modulus E* (from Python, "
+            f"convert pascals with roughflow.units.Scales.pressure_from_si)")
 
 
 def default_boundary(surface: Surface) -> str:
@@ -150,6 +149,7 @@ def leak_curve(surface: Surface, pressures: ArrayLike, *, boundary: str | None =
     contact or flow solve that misses its tolerance raises ``ConvergenceError``.
     """
     p = check_pressures(pressures)
+    check_pressure_scale(p)
     if not isinstance(surface, Surface):
         raise InputError(f"surface must be a roughflow Surface, got {type(surface).__name__}")
     for name, v in (("contact_tol", contact_tol), ("flow_tol", flow_tol),
@@ -163,7 +163,6 @@ def leak_curve(surface: Surface, pressures: ArrayLike, *, boundary: str | None =
     check_memory("ladder", emb.surface.heights.shape, what="a leak curve")
     gbar = (surface.scan.rms_gradient if surface.scan is not None else
             rms_gradient(surface.heights, surface.lx, surface.ly, periodic=surface.periodic))
-    check_pressure_scale(p, gbar)
     curve = pressure_curve(emb, p, contact_tol=contact_tol, flow_tol=flow_tol,
                            flow_sigma_tol=flow_sigma_tol, threads=threads)
     thresholds = (sealing_search(emb, gbar=gbar, tol=threshold_tol,
