@@ -28,12 +28,17 @@ logging.basicConfig(level=logging.WARNING, stream=sys.stdout, format="%(message)
 from roughflow import fft, wisdom
 with wisdom.shared(fft.effort()):
     pass  # the file's wisdom, as the plan below reads it
-had = pyfftw.export_wisdom()
+had = wisdom.entries(pyfftw.export_wisdom())
 p = fft.plan({SHAPE})
 a = np.random.default_rng(1).random({SHAPE})
 print("exact", bool(np.allclose(p.inverse(p.forward(a).copy()), a, atol=1e-12)))
-print("timed" if pyfftw.export_wisdom() != had else "read")
+print("timed" if wisdom.entries(pyfftw.export_wisdom()) != had else "read")
 """
+
+
+def measure_file(d):
+    """The FFTW_MEASURE wisdom file of this machine in directory ``d``."""
+    return d / wisdom.path("FFTW_MEASURE").name
 
 
 def run_plan(env_extra: dict, timeout: float = 120) -> str:
@@ -53,7 +58,7 @@ def test_a_shape_is_timed_once_then_read_from_the_file(tmp_path):
     first = run_plan(env)
     assert "exact True" in first and "timed" in first
     (name,) = file_in(tmp_path)
-    assert name == f"wisdom-{wisdom.machine_key()}.json"
+    assert name == measure_file(tmp_path).name
     saved = json.loads((tmp_path / name).read_text())
     assert set(saved) == {"double", "single", "long_double"}
     mtime = (tmp_path / name).stat().st_mtime_ns
@@ -80,11 +85,11 @@ def test_default_directory_is_the_user_cache(tmp_path, monkeypatch):
     monkeypatch.delenv(wisdom.ENV, raising=False)
     monkeypatch.setenv("XDG_CACHE_HOME", str(tmp_path))
     assert wisdom.directory() == tmp_path / "roughflow" / "fftw"
-    assert wisdom.path().parent == tmp_path / "roughflow" / "fftw"
+    assert wisdom.path("FFTW_MEASURE").parent == tmp_path / "roughflow" / "fftw"
 
 
 def test_an_unreadable_file_is_reported_once_and_replaced(tmp_path):
-    name = f"wisdom-{wisdom.machine_key()}.json"
+    name = measure_file(tmp_path).name
     (tmp_path / name).write_text("(not json")
     out = run_plan({wisdom.ENV: str(tmp_path), "ROUGHFLOW_FFTW_EFFORT": "FFTW_MEASURE"})
     assert "exact True" in out
@@ -95,7 +100,7 @@ def test_an_unreadable_file_is_reported_once_and_replaced(tmp_path):
 def test_a_file_with_a_non_ascii_byte_is_replaced_too(tmp_path):
     # json.loads never saw it: the ascii read raised UnicodeDecodeError, and every later
     # FFT command of the machine stopped on it (exit 1) until the file was deleted by hand
-    name = f"wisdom-{wisdom.machine_key()}.json"
+    name = measure_file(tmp_path).name
     (tmp_path / name).write_bytes(b'{"double": "\xff"}')
     out = run_plan({wisdom.ENV: str(tmp_path), "ROUGHFLOW_FFTW_EFFORT": "FFTW_MEASURE"})
     assert "exact True" in out
@@ -117,7 +122,7 @@ def test_a_second_process_waits_for_the_first_to_finish_timing(tmp_path):
     cannot plan, so it reads what the first saved instead of timing the shape itself and the
     two compute with the same algorithms. (What is read is checked by the test above.)"""
     env = {wisdom.ENV: str(tmp_path), "ROUGHFLOW_FFTW_EFFORT": "FFTW_MEASURE"}
-    file = tmp_path / f"wisdom-{wisdom.machine_key()}.json"
+    file = measure_file(tmp_path)
     with wisdom._locked(file) as usable:
         assert usable
         proc = subprocess.Popen([sys.executable, "-c", PLAN], env={**os.environ, **env},
@@ -168,3 +173,140 @@ def test_the_command_line_refuses_bad_fft_settings_before_any_work(var, value, t
     assert exc.value.code == 2
     assert var in capsys.readouterr().err
     assert not out.exists()
+
+
+# --- efforts, sharing between users, damaged files ------------------------------------------
+
+EFFORTS = """
+import sys
+import pyfftw
+from roughflow import fft, wisdom
+import os
+plans = []
+for effort in sys.argv[1:]:
+    os.environ["ROUGHFLOW_FFTW_EFFORT"] = effort
+    plans.append(fft.plan((36, 30)))
+print(" ".join(p.effort for p in plans), len({id(p) for p in plans}))
+"""
+
+
+def test_each_planner_effort_plans_and_keeps_its_own_wisdom(tmp_path):
+    """A change of ``ROUGHFLOW_FFTW_EFFORT`` in a process gets a plan of the new effort (the
+    cache used to return the first effort's plan while files recorded the new one), and
+    FFTW plans at each effort from that effort's wisdom only: it takes wisdom of a higher
+    effort in place of planning, so one FFTW_PATIENT run used to decide the algorithms of
+    every later FFTW_MEASURE run. Entries record their planner flags, so no entry of the
+    PATIENT file may turn up in the MEASURE file, and ESTIMATE saves nothing."""
+    env = {**os.environ, wisdom.ENV: str(tmp_path)}
+    out = subprocess.run([sys.executable, "-c", EFFORTS, "FFTW_ESTIMATE", "FFTW_PATIENT",
+                          "FFTW_MEASURE"], env=env, capture_output=True, text=True, timeout=300)
+    assert out.returncode == 0, out.stderr[-2000:]
+    assert out.stdout.split() == ["FFTW_ESTIMATE", "FFTW_PATIENT", "FFTW_MEASURE", "3"]
+    key = wisdom.machine_key()
+    assert file_in(tmp_path) == [f"wisdom-{key}-measure.json", f"wisdom-{key}-patient.json"]
+
+    def planned(effort):
+        data = json.loads((tmp_path / f"wisdom-{key}-{effort}.json").read_text())
+        return {ln for w in data.values() for ln in w.splitlines()[1:-1]}
+
+    assert planned("measure") and planned("patient")
+    assert not planned("measure") & planned("patient")
+
+
+def test_files_can_be_shared_by_a_group(tmp_path):
+    """The wisdom file was 0600 (``mkstemp``), so another user of a shared directory could
+    not read it, timed every shape again and replaced the file with its own 0600 copy."""
+    env = {wisdom.ENV: str(tmp_path), "ROUGHFLOW_FFTW_EFFORT": "FFTW_MEASURE"}
+    old = os.umask(0o002)
+    try:
+        assert "timed" in run_plan(env)
+    finally:
+        os.umask(old)
+    file = measure_file(tmp_path)
+    assert file.stat().st_mode & 0o777 == 0o664
+    assert (tmp_path / (file.name + ".lock")).stat().st_mode & 0o777 == 0o664
+
+
+def test_a_file_with_a_field_out_of_range_is_replaced_not_fatal(tmp_path):
+    """An entry whose flag field does not fit FFTW's 20 bits made FFTW abort the process on
+    an assertion (exit 134) in every later run on the machine. Such a file is refused before
+    FFTW reads it, reported and replaced like any unreadable file."""
+    env = {wisdom.ENV: str(tmp_path), "ROUGHFLOW_FFTW_EFFORT": "FFTW_MEASURE"}
+    run_plan(env)
+    file = measure_file(tmp_path)
+    data = json.loads(file.read_text())
+    lines = data["double"].splitlines()
+    fields = lines[1].split()
+    fields[3] = "#x7ffffff"  # the upper flags, 27 bits
+    lines[1] = " ".join(["", *fields]).replace(" ", "  ", 1)
+    data["double"] = "\n".join(lines) + "\n"
+    assert not wisdom._valid(data["double"])
+    file.write_text(json.dumps(data))
+    fresh = tmp_path / "fresh"
+    fresh.mkdir()
+    file.rename(measure_file(fresh))
+    out = run_plan({**env, wisdom.ENV: str(fresh)})
+    assert "exact True" in out and "has a field out of range" in out
+    assert all(wisdom._valid(w) for w in json.loads(measure_file(fresh).read_text()).values())
+
+
+def test_without_a_home_directory_the_wisdom_stays_in_the_process(monkeypatch, caplog):
+    """HOME unset and a user id unknown to the password database (containers): ``~`` stays
+    ``~``, and the file went to a directory named ``~`` inside the working directory."""
+    monkeypatch.delenv(wisdom.ENV, raising=False)
+    monkeypatch.delenv("XDG_CACHE_HOME", raising=False)
+    monkeypatch.setattr(wisdom.os.path, "expanduser", lambda p: p)
+    monkeypatch.setattr(wisdom, "_reported", set())
+    with caplog.at_level("WARNING", logger="roughflow.wisdom"):
+        assert wisdom.directory() is None
+    assert "no home directory" in caplog.text
+    monkeypatch.setenv(wisdom.ENV, "~/fftw")
+    with pytest.raises(InputError, match="'~/fftw'.*without ~"):
+        wisdom.directory()
+
+
+def test_an_unknown_user_in_the_directory_is_an_input_error(monkeypatch):
+    monkeypatch.setenv(wisdom.ENV, "~no_such_user_of_roughflow/fftw")
+    with pytest.raises(InputError, match="no_such_user_of_roughflow"):
+        wisdom.directory()
+
+
+def test_what_others_saved_meanwhile_is_merged_not_overwritten(tmp_path, monkeypatch):
+    """On a file system without working locks two processes can plan at once; the one that
+    saves last used to overwrite the other's shapes. A save merges the file first."""
+    a, b = tmp_path / "a", tmp_path / "b"
+    a.mkdir()
+    b.mkdir()
+    run_plan({wisdom.ENV: str(a), "ROUGHFLOW_FFTW_EFFORT": "FFTW_MEASURE"})  # SHAPE, in a
+    other = json.loads(measure_file(a).read_text())
+    script = f"""
+import json, os
+from pathlib import Path
+from roughflow import fft, wisdom
+file = wisdom.path("FFTW_MEASURE")
+with wisdom.shared("FFTW_MEASURE"):
+    pass
+real = wisdom.shared
+def racing(effort):
+    ctx = real(effort)
+    class Race:
+        def __enter__(self):
+            ctx.__enter__()
+            # another process (no lock) saves its shape while this one plans
+            file.write_text({json.dumps(json.dumps(other))})
+        def __exit__(self, *exc):
+            return ctx.__exit__(*exc)
+    return Race()
+fft.wisdom.shared = racing
+fft.plan((30, 28))
+print(len(json.loads(file.read_text())["double"].splitlines()))
+"""
+    env = {**os.environ, wisdom.ENV: str(b), "ROUGHFLOW_FFTW_EFFORT": "FFTW_MEASURE"}
+    out = subprocess.run([sys.executable, "-c", script], env=env, capture_output=True,
+                         text=True, timeout=120)
+    assert out.returncode == 0, out.stderr[-2000:]
+    merged = json.loads(measure_file(b).read_text())
+    for p in ("double",):
+        theirs = set(other[p].splitlines())
+        mine = set(merged[p].splitlines())
+        assert theirs <= mine and len(mine) > len(theirs)

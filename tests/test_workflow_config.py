@@ -141,3 +141,17 @@ def test_duplicate_keys_named_with_their_lines(tmp_path):
     with pytest.raises(InputError, match=r"'studies.b.series\[0\].gamma' is given twice "
                                          r"\(lines 5 and 5\)"):
         check_config_file(tmp_path / "c.yaml")
+
+
+@pytest.mark.parametrize(("var", "value"), [("ROUGHFLOW_FFTW_EFFORT", "FFTW_Measure"),
+                                            ("ROUGHFLOW_FFTW_WISDOM", " ")])
+def test_a_bad_fft_setting_stops_the_plan(tmp_path, monkeypatch, var, value):
+    """Every job reads the FFT settings from the environment; a typo let the plan through
+    and failed each job (twice on SLURM, with the profile's retry). It stops the plan."""
+    wd = copy_workflow(tmp_path)
+    write_case(wd)
+    monkeypatch.setenv(var, value)
+    res = dry_run(wd)
+    out = res.stdout + res.stderr
+    assert res.returncode != 0
+    assert "invalid environment" in out and var in out and repr(value) in out, out[-2000:]

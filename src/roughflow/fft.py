@@ -131,14 +131,16 @@ class RealFFT2(PlanPair):
     double pair here), for iterations whose transforms need only relative accuracy.
     """
 
-    def __init__(self, shape: tuple[int, int], threads: int, single: bool = False):
+    def __init__(self, shape: tuple[int, int], threads: int, single: bool = False,
+                 planner: str | None = None):
         import pyfftw  # here, not at import: it loads scipy.fft (1 s in python -X importtime)
 
         nx, ny = shape
         self.shape = (int(nx), int(ny))
         self.spectral_shape = (int(nx), int(ny) // 2 + 1)
         self.threads = threads
-        planner = effort()
+        planner = effort() if planner is None else planner
+        self.effort = planner
         real, cplx = (np.float32, np.complex64) if single else (np.float64, np.complex128)
         # planning with FFTW_MEASURE overwrites the buffers: they are filled only after it
         self._real = pyfftw.empty_aligned(self.shape, dtype=real)
@@ -202,18 +204,19 @@ def per_thread_cache(maxsize: int) -> Callable[[Callable[..., T]], Callable[...,
 
 
 @per_thread_cache(maxsize=16)
-def _plan(shape: tuple[int, int], threads: int, single: bool) -> RealFFT2:
-    return RealFFT2(shape, threads, single)
+def _plan(shape: tuple[int, int], threads: int, single: bool, planner: str) -> RealFFT2:
+    return RealFFT2(shape, threads, single, planner)
 
 
 def plan(shape: tuple[int, int], threads: int | None = None, single: bool = False) -> RealFFT2:
     """:class:`RealFFT2` for ``shape``, cached per Python thread (reused plans share their
     buffers within a thread, never between threads); ``single``: the float32 plan of the
-    same shape. ``threads`` None takes ``ROUGHFLOW_FFT_THREADS`` as it is now, so a plan
-    of the count in force is returned (not the count of the first call)."""
+    same shape. ``threads`` None takes ``ROUGHFLOW_FFT_THREADS`` as it is now, and the
+    planner effort is ``ROUGHFLOW_FFTW_EFFORT`` as it is now, so a plan of the settings in
+    force is returned (not those of the first call), as the files' provenance records."""
     threads = check_threads(threads)
     return _plan((int(shape[0]), int(shape[1])),
-                 default_threads() if threads is None else threads, bool(single))
+                 default_threads() if threads is None else threads, bool(single), effort())
 
 
 plan.cache_clear = _plan.cache_clear

@@ -26,6 +26,7 @@ import xarray as xr
 from roughflow.datasets.results import spec_attrs
 from roughflow.datasets.units import LENGTH_UNITS, grid_coords
 from roughflow.errors import InputError, OutputError, require_field, require_positive
+from roughflow.files import publish
 from roughflow.provenance import PROVENANCE_ATTRS, Provenance
 from roughflow.surface import ScanInfo, Surface, SurfaceSpec
 
@@ -48,20 +49,6 @@ def clean_attrs(attrs: dict) -> dict:
 
 #: First bytes of netCDF files: classic, 64-bit offset, CDF-5, and netCDF-4 (HDF5).
 NETCDF_MAGIC = (b"CDF\x01", b"CDF\x02", b"CDF\x05", b"\x89HDF\r\n\x1a\n")
-
-
-def _umask() -> int:
-    mask = os.umask(0)
-    os.umask(mask)
-    return mask
-
-
-def publish(tmp: str | os.PathLike, path: str | os.PathLike) -> None:
-    """Give the finished temporary file ``tmp`` the permissions of a newly created file
-    (0666 less the umask; ``mkstemp`` makes it 0600, unreadable to a group that shares the
-    results) and rename it to ``path`` (atomic on one file system)."""
-    os.chmod(tmp, 0o666 & ~_umask())
-    os.replace(tmp, path)
 
 
 def check_output(path: str | os.PathLike, *, option: str = "--output",

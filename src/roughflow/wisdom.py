@@ -11,11 +11,15 @@ instead of timing. Runs on one machine are then bit-identical, as they are with
 ``FFTW_ESTIMATE``.
 
 Where: the directory ``ROUGHFLOW_FFTW_WISDOM`` (default ``$XDG_CACHE_HOME/roughflow/fftw``,
-that is ``~/.cache/roughflow/fftw``), one JSON file per CPU model and pyFFTW version, because
-wisdom holds only for the machine that measured it; ``ROUGHFLOW_FFTW_WISDOM=off`` keeps it
-in the process. The file can only ever cost speed: one that cannot be read is replaced, and
-a directory that cannot be written is reported once: the wisdom it holds is still read, but
-what a run plans is not saved there.
+that is ``~/.cache/roughflow/fftw``), one JSON file per machine (:func:`machine_key`: CPU,
+FFTW build) and planner effort, because wisdom holds only for the machine that measured it,
+and FFTW takes wisdom of a higher effort in place of planning at a lower one (one
+``FFTW_PATIENT`` run would otherwise change the algorithms of every later ``FFTW_MEASURE``
+run). Within a process, each effort plans from its own wisdom too. ``ROUGHFLOW_FFTW_WISDOM=off``
+keeps it in the process. The files are readable, and the lock files usable, by whoever may
+read the directory, so a group can share one. The file can only ever cost speed: one that
+cannot be read is replaced, and a directory that cannot be written is reported once: the
+wisdom it holds is still read, but what a run plans is not saved there.
 """
 
 from __future__ import annotations
@@ -26,12 +30,15 @@ import json
 import logging
 import os
 import platform
+import re
 import tempfile
+import threading
 from collections.abc import Iterator
 from functools import lru_cache
 from pathlib import Path
 
 from roughflow.errors import InputError
+from roughflow.files import publish
 
 log = logging.getLogger(__name__)
 
@@ -43,52 +50,121 @@ _PRECISIONS = ("double", "single", "long_double")
 
 _reported: set[str] = set()  # problems already logged, so a sweep's log says each once
 
+# FFTW's planner and its wisdom are one per process: threads plan in turn
+_PROCESS_LOCK = threading.Lock()
+# the wisdom this process holds per planner effort (shared() swaps it into FFTW)
+_held: dict[str, tuple[bytes, ...]] = {}
+
+# pyFFTW's export: a header line, one line per entry, ")". An entry's two flag fields are
+# 20-bit and its time limit 9-bit: a wider value makes FFTW abort the process on an
+# assertion while it plans (FFTW issue 214), so such a file is refused before FFTW sees it.
+_HEADER = re.compile(r"\(fftw-\S+ fftw[fl]?_wisdom( #x[0-9a-f]{1,8}){4}")
+_ENTRY = re.compile(r"  \([A-Za-z0-9_]+ \d+ #x[0-9a-f]{1,5} #x[0-9a-f]{1,5} #x([0-9a-f]{1,3})"
+                    r"( #x[0-9a-f]{1,8}){4}\)")
+
+
+def _home() -> Path | None:
+    """The user's home directory; None where there is none (HOME unset and a user id that
+    the password database does not know, as in some containers: ``~`` stays ``~``)."""
+    home = os.path.expanduser("~")
+    return Path(home) if os.path.isabs(home) else None
+
 
 def directory() -> Path | None:
-    """The wisdom directory from :data:`ENV` (None: ``off``)."""
+    """The wisdom directory from :data:`ENV` (None: ``off``, or no directory to default to)."""
     raw = os.environ.get(ENV)
     if raw is None:
-        base = os.environ.get("XDG_CACHE_HOME") or os.path.join(os.path.expanduser("~"), ".cache")
-        return Path(base) / "roughflow" / "fftw"
+        base = os.environ.get("XDG_CACHE_HOME")
+        if base:
+            return Path(base) / "roughflow" / "fftw"
+        home = _home()
+        if home is None:
+            _report("no home directory to keep the file in", "HOME is not set",
+                    f"the wisdom stays in the process (set {ENV} to share it)")
+            return None
+        return home / ".cache" / "roughflow" / "fftw"
     if raw.strip().lower() == "off":
         return None
     if not raw.strip():
         raise InputError(f"{ENV} must be a directory or 'off', got {raw!r}")
-    return Path(raw).expanduser()
+    try:
+        d = Path(raw).expanduser()
+    except RuntimeError as err:  # ~user of no user, or ~ without a home directory
+        raise InputError(f"{ENV}={raw!r}: {str(err).rstrip('.')}; give the directory "
+                         f"without ~") from None
+    if str(d).startswith("~"):
+        raise InputError(f"{ENV}={raw!r}: there is no home directory to expand ~ to; give the "
+                         f"directory without ~")
+    return d
 
 
-def _cpu_model() -> str:
+def _cpu_description() -> str:
+    """What names the CPU in /proc/cpuinfo (its first processor): the model name on x86,
+    implementer and part on ARM, the ``cpu`` line on POWER, and the feature flags, which
+    tell apart CPUs that a virtual machine names alike."""
+    keys = ("model name", "cpu", "CPU implementer", "CPU architecture", "CPU variant",
+            "CPU part", "flags", "Features")
+    found: dict[str, str] = {}
     try:
         with open("/proc/cpuinfo", encoding="utf-8", errors="replace") as f:
             for line in f:
-                if line.startswith("model name"):
-                    return line.split(":", 1)[1].strip()
+                if not line.strip():
+                    if found:
+                        break
+                    continue
+                key, _, value = line.partition(":")
+                if key.strip() in keys:
+                    found.setdefault(key.strip(), value.strip())
     except OSError:
         pass
-    return platform.processor() or "unknown"
+    if not found:
+        return platform.processor() or "unknown"
+    return "|".join(f"{k}={found[k]}" for k in keys if k in found)
 
 
 @lru_cache(maxsize=1)
 def machine_key() -> str:
-    """A short hash of what FFTW's timings depend on: OS, architecture, CPU model, pyFFTW
-    (which ships its FFTW)."""
+    """A short hash of what FFTW's timings and its wisdom depend on: OS, architecture, CPU
+    (:func:`_cpu_description`), pyFFTW and the build of the FFTW it runs (the header of
+    each precision's wisdom: another build rejects the file, and would overwrite it)."""
     import pyfftw
 
-    text = "|".join((platform.system(), platform.machine(), _cpu_model(), pyfftw.__version__))
+    headers = [w.decode("ascii", "replace").split("\n", 1)[0] for w in pyfftw.export_wisdom()]
+    text = "|".join((platform.system(), platform.machine(), _cpu_description(),
+                     pyfftw.__version__, *headers))
     return hashlib.sha256(text.encode()).hexdigest()[:16]
 
 
-def path() -> Path | None:
-    """This machine's wisdom file (None: :data:`ENV` is ``off``)."""
+def path(effort: str) -> Path | None:
+    """This machine's wisdom file for planner ``effort`` (None: :data:`ENV` is ``off``)."""
     d = directory()
-    return None if d is None else d / f"wisdom-{machine_key()}.json"
+    name = effort.removeprefix("FFTW_").lower()
+    return None if d is None else d / f"wisdom-{machine_key()}-{name}.json"
 
 
-def _report(problem: str, err: Exception, consequence: str = "planning goes on without the "
-            "file") -> None:
+def _report(problem: str, err: Exception | str, consequence: str = "planning goes on "
+            "without the file") -> None:
     if problem not in _reported:
         _reported.add(problem)
         log.warning("FFTW wisdom: %s (%s); %s", problem, err, consequence)
+
+
+def entries(wisdom: tuple[bytes, ...]) -> tuple[frozenset[bytes], ...]:
+    """Each precision's wisdom as a set of lines: FFTW exports what it holds in an order
+    that depends on how it came by it (read, imported again, planned)."""
+    return tuple(frozenset(w.splitlines()) for w in wisdom)
+
+
+def _valid(text: str) -> bool:
+    """Whether ``text`` is one precision's wisdom as FFTW exports it, every field in range."""
+    lines = text.splitlines()
+    if len(lines) < 2 or not _HEADER.fullmatch(lines[0]) or lines[-1] != ")":
+        return False
+    for line in lines[1:-1]:
+        m = _ENTRY.fullmatch(line)
+        if m is None or int(m[1], 16) >= 1 << 9:
+            return False
+    return True
 
 
 def _load(file: Path) -> None:
@@ -101,6 +177,10 @@ def _load(file: Path) -> None:
     try:  # UnicodeDecodeError (a stray non-ASCII byte) is a ValueError too
         data = json.loads(raw.decode("ascii"))
         wisdom = tuple(data[k].encode("ascii") for k in _PRECISIONS)
+        bad = [k for k in _PRECISIONS if not _valid(data[k])]
+        if bad:
+            raise ValueError(f"its {bad[0]} wisdom is not FFTW's format or has a field out "
+                             f"of range")
     except (ValueError, KeyError, TypeError, AttributeError) as err:
         _report(f"{file} is not a wisdom file and will be replaced", err)
         return
@@ -114,65 +194,101 @@ def _save(file: Path, wisdom: tuple[bytes, ...]) -> None:
     try:
         with os.fdopen(fd, "w", encoding="ascii") as f:
             json.dump(data, f, indent=0)
-        os.replace(tmp, file)
+        publish(tmp, file)  # readable by those who may read the directory
     except BaseException:
         with contextlib.suppress(OSError):
             os.unlink(tmp)
         raise
 
 
-@contextlib.contextmanager
-def _locked(file: Path) -> Iterator[bool]:
-    """Hold an exclusive lock on ``file``'s lock file; yields False where none can be had."""
+def _open_lock(file: Path) -> int | None:
+    """A descriptor of ``file``'s lock file, made readable and writable by those the umask
+    allows. Another user's lock file opens read-only: flock needs no write permission."""
+    lock = file.with_name(file.name + ".lock")
     try:
         file.parent.mkdir(parents=True, exist_ok=True)
-        handle = open(file.with_name(file.name + ".lock"), "a")  # noqa: SIM115 - closed below
     except OSError as err:
         # a folder that cannot be written may still hold wisdom, which shared() reads
         _report(f"cannot write to {file.parent}", err,
                 "its wisdom is read if there is any, but what this run plans is not saved")
-        handle = None
-    if handle is None:
+        return None
+    try:
+        return os.open(lock, os.O_RDWR | os.O_CREAT, 0o666)
+    except PermissionError:
+        pass
+    except OSError as err:
+        _report(f"cannot open the lock file {lock}", err,
+                "its wisdom is read if there is any, but what this run plans is not saved")
+        return None
+    try:
+        return os.open(lock, os.O_RDONLY)
+    except OSError as err:
+        _report(f"cannot open the lock file {lock}", err,
+                "its wisdom is read if there is any, but what this run plans is not saved")
+        return None
+
+
+@contextlib.contextmanager
+def _locked(file: Path) -> Iterator[bool]:
+    """Hold an exclusive lock on ``file``'s lock file; yields False where there is no lock
+    file (nothing is saved then)."""
+    fd = _open_lock(file)
+    if fd is None:
         yield False
         return
     try:
         import fcntl
     except ImportError:  # not POSIX: no lock, so two processes may time the same shape
         fcntl = None
-    with handle:
+    try:
         try:
             if fcntl is not None:
-                fcntl.flock(handle, fcntl.LOCK_EX)
-        except OSError as err:  # some network file systems: go on unlocked
-            _report(f"cannot lock {handle.name}", err)
-        yield True  # closing the handle releases the lock
+                fcntl.flock(fd, fcntl.LOCK_EX)
+        except OSError as err:  # some network file systems (Lustre without flock)
+            _report(f"cannot lock {file.name}.lock", err,
+                    "planning goes on unlocked: jobs may time the same shape, and each "
+                    "merges what the others saved before it saves")
+        yield True
+    finally:
+        os.close(fd)  # releases the lock
 
 
 @contextlib.contextmanager
 def shared(effort: str) -> Iterator[None]:
-    """Around the making of FFTW plans with planner ``effort``: the machine's wisdom is read
-    first and what the planning added is saved after, all under the file's lock, so a shape
-    is timed by one process only. ``FFTW_ESTIMATE`` plans neither read nor write it (they
-    would take measured algorithms from read wisdom)."""
-    file = None if effort == "FFTW_ESTIMATE" else path()
-    if file is None:
-        yield
-        return
+    """Around the making of FFTW plans with planner ``effort``: FFTW holds the wisdom this
+    process gathered under ``effort`` and nothing else, the machine's file for ``effort`` is
+    read first, and what the planning added is merged into the file after, all under the
+    file's lock, so a shape is timed by one process only. ``FFTW_ESTIMATE`` plans from no
+    wisdom at all (they would take measured algorithms from it) and keep none."""
     import pyfftw
 
-    with _locked(file) as usable:
-        try:  # a directory this process cannot write may still hold wisdom to read
-            _load(file)
-        except OSError as err:
-            _report(f"cannot read {file}", err)
-        if not usable:
-            yield
-            return
-        before = pyfftw.export_wisdom()
-        yield
-        after = pyfftw.export_wisdom()
-        if after != before:
+    with _PROCESS_LOCK:
+        pyfftw.forget_wisdom()
+        file = None
+        if effort != "FFTW_ESTIMATE":
+            if effort in _held:
+                pyfftw.import_wisdom(_held[effort])
+            file = path(effort)
+        if file is None:
             try:
-                _save(file, after)
+                yield
+            finally:
+                if effort != "FFTW_ESTIMATE":
+                    _held[effort] = pyfftw.export_wisdom()
+            return
+        with _locked(file) as usable:
+            try:  # a directory this process cannot write may still hold wisdom to read
+                _load(file)
             except OSError as err:
-                _report(f"cannot write {file}", err)
+                _report(f"cannot read {file}", err)
+            before = entries(pyfftw.export_wisdom())
+            try:
+                yield
+            finally:
+                _held[effort] = pyfftw.export_wisdom()
+            if usable and entries(_held[effort]) != before:
+                try:
+                    _load(file)  # what others saved meanwhile (a file system without locks)
+                    _save(file, pyfftw.export_wisdom())
+                except OSError as err:
+                    _report(f"cannot write {file}", err)

@@ -44,6 +44,7 @@ def _results_dir(results):
 
 
 from roughflow.errors import InputError  # noqa: E402
+from roughflow.fft import check_environment  # noqa: E402
 from roughflow.scenes.config_file import check_config_file  # noqa: E402
 
 try:
@@ -52,6 +53,10 @@ try:
 except InputError as exc:
     raise WorkflowError(f"invalid config: {exc}") from None
 _validate_config(config)
+try:  # every job reads them: a typo would fail each one (twice on SLURM), not the plan
+    check_environment()
+except InputError as exc:
+    raise WorkflowError(f"invalid environment: {exc}") from None
 
 from roughflow.defaults import FLOW_STUDIES, MEASURED_STUDY, THRESHOLD_STUDIES  # noqa: E402
 from roughflow.figures import caption as figure_caption  # noqa: E402
