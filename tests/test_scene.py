@@ -455,3 +455,24 @@ def test_measured_scan_units_are_checked_at_planning(tmp_path, monkeypatch, key)
              "scans": [{"file": "scan.npy", "size": "500nm", "unit": "nm", key: "banana"}]}
     with pytest.raises(InputError, match=f"scan 'scan'.*{key}.*banana"):
         expand_study("measured", block)
+
+
+def test_a_study_records_how_its_jobs_computed(tmp_path, monkeypatch):
+    """A study dataset computes nothing: it recorded the FFT settings of the aggregating
+    process (threads 2, MEASURE) while its jobs ran with others (1, ESTIMATE). It records
+    the jobs' values, and says "mixed" where they differ."""
+    monkeypatch.setenv("ROUGHFLOW_FFTW_EFFORT", "FFTW_ESTIMATE")
+    monkeypatch.setenv("ROUGHFLOW_FFT_THREADS", "1")
+    a = _tiny_threshold_file(tmp_path, 1.0, (0,))
+    monkeypatch.setenv("ROUGHFLOW_FFT_THREADS", "2")
+    monkeypatch.setenv("ROUGHFLOW_FFTW_EFFORT", "FFTW_MEASURE")
+    aggregate([a], tmp_path / "one.nc", study="test")
+    with xr.open_dataset(tmp_path / "one.nc") as ds, xr.open_dataset(a) as job:
+        assert ds.attrs["fftw_effort"] == "FFTW_ESTIMATE" and int(ds.attrs["fft_threads"]) == 1
+        assert ds.attrs["backend"] == "cpu"
+        assert ds.attrs.get("jobs_roughflow_commit") == job.attrs.get("roughflow_commit")
+    b = _tiny_threshold_file(tmp_path, 2.0, (0,))
+    aggregate([a, b], tmp_path / "two.nc", study="test")
+    with xr.open_dataset(tmp_path / "two.nc") as ds:
+        assert ds.attrs["fftw_effort"] == "mixed: FFTW_ESTIMATE, FFTW_MEASURE"
+        assert ds.attrs["fft_threads"] == "mixed: 1, 2"

@@ -23,6 +23,7 @@ from __future__ import annotations
 import logging
 import os
 from collections.abc import Sequence
+from dataclasses import replace
 
 import numpy as np
 import xarray as xr
@@ -32,8 +33,8 @@ from roughflow.datasets.leak import with_scan_variables
 from roughflow.datasets.sweep import INT_FILL, PARAM_DIMS
 from roughflow.defaults import JOB_KINDS
 from roughflow.errors import InputError
-from roughflow.io import read_dataset, write_dataset
-from roughflow.provenance import Provenance
+from roughflow.io import dataset_methods, read_dataset, write_dataset
+from roughflow.provenance import Provenance, settings_of_inputs
 
 log = logging.getLogger(__name__)
 
@@ -179,7 +180,10 @@ def aggregate(inputs: Sequence[str | os.PathLike | xr.Dataset], output: str | os
     if study is not None:
         out.attrs["study"] = study
     out.attrs["title"] = f"roughflow study {study or ''}".strip()
-    write_dataset(out, output, provenance=provenance)
+    if provenance is None:
+        provenance = Provenance().using(*dataset_methods(out))
+    write_dataset(out, output, provenance=replace(
+        provenance, from_inputs=settings_of_inputs(*datasets)))
     log.info("aggregated %d datasets into %s (%s)", len(datasets), output,
              dict(out.sizes))
     return out

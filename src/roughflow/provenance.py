@@ -18,6 +18,9 @@
   (``roughflow cite FILE.nc`` prints them);
 - ``study_config`` (workflow study datasets): the study's config block as JSON; the job
   files record their own parameters in ``job_parameters`` (``roughflow.scenes.run``).
+  A study dataset computes nothing itself: its ``backend``, ``fft_threads`` and
+  ``fftw_effort`` are those of its jobs (:func:`settings_of_inputs`; "mixed: a, b" where
+  they differ), and ``jobs_roughflow_commit`` the commits the jobs ran.
 
 :data:`PROVENANCE_ATTRS` are the attributes that differ between two runs of the same
 computation; comparisons of datasets ignore them (and ``wall_time``).
@@ -38,7 +41,9 @@ from pathlib import Path
 #: Attributes written by :meth:`Provenance.attrs` (never copied from one file into another).
 PROVENANCE_ATTRS = ("roughflow_version", "roughflow_commit", "python_version", "backend",
                     "fft_threads", "fftw_effort", "command", "created", "wall_time_s", "history",
-                    "references", "study_config")
+                    "references", "study_config", "jobs_roughflow_commit")
+#: How a file's numbers were computed; a file that only combines others records theirs.
+COMPUTE_ATTRS = ("backend", "fft_threads", "fftw_effort")
 
 
 #: the package directory whose source :func:`source_commit` describes
@@ -72,7 +77,9 @@ class Provenance:
     (None: no wall time); ``threads``: FFT threads (None: ``ROUGHFLOW_FFT_THREADS`` or
     1); ``history``: the CF history of the inputs; ``references``: keys of
     :data:`roughflow.citation.REFERENCES`; ``study_config``: JSON of a study block;
-    ``backend``: where the solves ran (``roughflow.gpu.describe``)."""
+    ``backend``: where the solves ran (``roughflow.gpu.describe``); ``from_inputs``:
+    attributes that describe how the inputs were computed, for a dataset that computes
+    nothing (:func:`settings_of_inputs`), in place of this process's."""
 
     command: str = field(default_factory=lambda: "python " + shlex.join(sys.argv))
     started: float | None = None
@@ -81,6 +88,7 @@ class Provenance:
     references: tuple[str, ...] = ()
     study_config: str = ""
     backend: str = "cpu"
+    from_inputs: tuple[tuple[str, str | int], ...] = ()
 
     @classmethod
     def for_command(cls, argv: list[str]) -> Provenance:
@@ -120,7 +128,27 @@ class Provenance:
             out["references"] = " ".join(self.references)
         if self.study_config:
             out["study_config"] = self.study_config
+        if self.from_inputs:
+            for key in COMPUTE_ATTRS:  # not this process's: it computed nothing
+                out.pop(key, None)
+            out.update(self.from_inputs)
         return out
+
+
+def settings_of_inputs(*datasets) -> tuple[tuple[str, str | int], ...]:
+    """What the input datasets record of how they were computed (:data:`COMPUTE_ATTRS`, and
+    their ``roughflow_commit`` as ``jobs_roughflow_commit``): each value where all agree,
+    "mixed: a, b" where they differ (a study whose jobs ran with other settings)."""
+    out: list[tuple[str, str | int]] = []
+    for key, name in (*((k, k) for k in COMPUTE_ATTRS),
+                      ("roughflow_commit", "jobs_roughflow_commit")):
+        values = {str(v): v for ds in datasets
+                  if (v := getattr(ds, "attrs", {}).get(key)) is not None}
+        if len(values) == 1:
+            out.append((name, next(iter(values.values()))))
+        elif values:
+            out.append((name, "mixed: " + ", ".join(sorted(values))))
+    return tuple(out)
 
 
 def input_history(*datasets) -> str:
