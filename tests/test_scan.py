@@ -3,6 +3,7 @@ with writers the reader supports, units, detrending, missing points and refusals
 
 from __future__ import annotations
 
+import re
 from pathlib import Path
 
 import numpy as np
@@ -111,6 +112,45 @@ def test_plain_text_written_by_numpy(tmp_path):
     check_scaled(s, h * 1e-3, 2e-3, 1.5e-3)
 
 
+@pytest.mark.parametrize("token", ["-", "NA", "***", "1.0.0"])
+def test_a_text_line_the_reader_would_drop_is_refused(tmp_path, token):
+    """SurfaceTopography's text reader skipped a line holding a token it cannot read (a
+    common export's mark of a missing point) and imported 127 of 128 lines, every later line
+    moved by one: it is refused, naming the line and the token. A nan is a missing point."""
+    h = heights()
+    lines = [" ".join(f"{v:.6g}" for v in row) for row in h.T]  # a line along x per row
+    row = lines[4].split()
+    row[2] = token
+    lines[4] = " ".join(row)
+    (tmp_path / "gap.txt").write_text("\n".join(lines) + "\n")
+    expected = (f"kept {h.shape[1] - 1} of the {h.shape[1]} lines.*"
+                + re.escape(f"line 5 holds {token!r}"))
+    with pytest.raises(InputError, match=expected):
+        from_scan(tmp_path / "gap.txt", size="2mm,1.5mm", unit="mm", fill="harmonic")
+    row[2] = "nan"
+    lines[4] = " ".join(row)
+    (tmp_path / "nan.txt").write_text("\n".join(lines) + "\n")
+    s = from_scan(tmp_path / "nan.txt", size="2mm,1.5mm", unit="mm", fill="harmonic")
+    assert s.shape == h.shape and s.scan.filled == 1
+
+
+def test_heights_in_the_wrong_unit_draw_a_warning(tmp_path, caplog):
+    """Heights in nm imported as um ran through with an rms gradient of 884 and a leak rate
+    1e9 times too large; an rms gradient outside SCAN_GRADIENT_WARN names the units."""
+    h = 0.01 * heights()  # rms gradient 0.15 on mm pixels
+    np.save(tmp_path / "h.npy", h)
+    with caplog.at_level("WARNING", logger="roughflow.scan"):
+        right = from_scan(tmp_path / "h.npy", size="2mm,1.5mm", unit="mm")
+    assert caplog.text == ""
+    for height_unit, factor in (("m", 1e3), ("nm", 1e-6)):
+        caplog.clear()
+        with caplog.at_level("WARNING", logger="roughflow.scan"):
+            wrong = from_scan(tmp_path / "h.npy", size="2mm,1.5mm", unit="mm",
+                              height_unit=height_unit)
+        assert wrong.scan.rms_gradient == pytest.approx(factor * right.scan.rms_gradient)
+        assert "rms gradient is" in caplog.text and f"read in {height_unit}" in caplog.text
+
+
 def test_swapped_axes_draw_a_warning_about_the_pixels(tmp_path, caplog):
     # np.savetxt of an [x, y] array: the reader takes it as [y, x], and the size given for
     # (x, y) then makes rectangular pixels; nothing said so, and every wavelength was off
@@ -203,7 +243,7 @@ def test_largest_defined_window_of_edge_cases():
 
 
 def test_crop_defined_keeps_the_largest_window_without_missing_points(tmp_path, caplog):
-    h = heights(24, 20)
+    h = 0.01 * heights(24, 20)  # rms gradient 0.4: no warning about the units
     h[:, :3] = np.nan  # a border, as around a sample smaller than the field of view
     h[21:, :] = np.nan
     h[10, 12] = np.nan  # and one hole inside

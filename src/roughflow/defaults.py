@@ -162,6 +162,12 @@ SCAN_FILL_WARN_FRACTION = 0.05
 #: for swapped axes, e.g. an [x, y] array written with np.savetxt, whose rows SurfaceTopography
 #: reads as lines along x.
 SCAN_PIXEL_ASPECT_WARN = 0.01
+#: An imported scan's rms gradient outside this range draws a warning naming the units:
+#: measured surfaces lie between about 1e-3 (polished, optical profiler) and 1-2 (AFM at
+#: nm pixels); heights in nm read as um give 1000 times the slope (884 instead of 0.88,
+#: measured), in um read as nm a thousandth. The small-slope contact model needs gbar < 1
+#: anyway; the range only catches unit mix-ups.
+SCAN_GRADIENT_WARN = (1e-5, 10.0)
 #: How a non-periodic scan meets the periodic solvers (roughflow.boundary): mirror-tiled,
 #: padded by a flat region far below it, an interior window of the scan solved as periodic,
 #: or the scan taken as periodic.

@@ -33,6 +33,7 @@ from roughflow.defaults import (
     SCAN_DETREND,
     SCAN_FILL,
     SCAN_FILL_WARN_FRACTION,
+    SCAN_GRADIENT_WARN,
     SCAN_PIXEL_ASPECT_WARN,
 )
 from roughflow.errors import InputError, check_axis
@@ -295,6 +296,42 @@ def _check_npy_complete(path: Path) -> None:
                          f"{dtype} array ({need} bytes with the header), the file has {have}")
 
 
+def _is_number(token: str) -> bool:
+    try:
+        float(token)
+    except ValueError:
+        return False
+    return True
+
+
+def _check_text_complete(path: Path, shape: tuple[int, int]) -> None:
+    """Refuse a plain-text matrix whose reader dropped lines: SurfaceTopography's text
+    reader skips a line with a token it cannot read as a number (a "-", "NA" or "***" that
+    marks a missing point) and reads the rest as a scan with one line fewer, every later
+    line moved by one and the size spread over fewer pixels (measured: 128 x 127 points
+    from 128 lines, no warning). A line of the matrix is one with as many values as the
+    scan's lines have (``shape[0]``); the reader kept ``shape[1]`` of them."""
+    nx, ny = shape
+    rows, dropped = 0, []
+    with path.open(encoding="utf-8", errors="replace") as fh:
+        for number, line in enumerate(fh, 1):
+            if line.lstrip().startswith("#"):
+                continue
+            tokens = re.split(r"[\s,;]+", line.strip())
+            if len(tokens) != nx:
+                continue
+            rows += 1
+            bad = [t for t in tokens if not _is_number(t)]
+            if bad and len(dropped) < 3:
+                dropped.append(f"line {number} holds {bad[0]!r}")
+    if rows > ny:
+        raise InputError(
+            f"{str(path)!r}: the text reader kept {ny} of the {rows} lines of {nx} values "
+            f"({'; '.join(dropped) or 'lines it could not read'}): a dropped line would move "
+            f"every later one. Mark missing points as nan (and choose a fill), or save the "
+            f"scan as .npy")
+
+
 def _open(path: Path):
     if path.suffix.lower() == ".npy":
         _check_npy_complete(path)
@@ -375,6 +412,8 @@ def read_scan(path: str | os.PathLike, *,
         raise InputError(f"{str(path)!r} channel {ch.name!r} is a {ch.dim}D "
                          f"{'uniform' if ch.is_uniform else 'non-uniform'} topography; "
                          "roughflow needs a 2D map on a uniform grid")
+    if type(reader).__name__ == "AscReader":
+        _check_text_complete(path, tuple(ch.nb_grid_pts))
     file_unit, file_size = ch.unit, ch.physical_sizes
     if isinstance(file_unit, tuple):  # (lateral, data) units: the data are not heights
         lateral_unit, data_unit = (file_unit + (None, None))[:2]
@@ -477,5 +516,13 @@ def read_scan(path: str | os.PathLike, *,
         detrend=detrend_mode, fill=fill, filled=n_missing,
         crop="none" if window is None else _window_text(window, (nx0, ny0)),
         periodic=bool(periodic))
+    lo, hi = SCAN_GRADIENT_WARN
+    if not lo <= info.rms_gradient <= hi:
+        log.warning("%s: the rms gradient is %.3g (rms height %.4g m over %.4g m x %.4g m): "
+                    "measured surfaces have about 1e-3 to 2. Check the units: the heights "
+                    "were read in %s and the lateral sizes in %s (heights in nm read as um "
+                    "are 1000 times too steep)", path, info.rms_gradient,
+                    float(np.std(h)) * length, lx_m, ly_m,
+                    height_unit or file_unit or st_unit, file_unit or st_unit)
     surface = Surface.from_array(h, lx=lx, ly=ly)
     return Surface(heights=surface.heights, lx=surface.lx, ly=surface.ly, scan=info)
