@@ -477,6 +477,10 @@ def read_scan(path: str | os.PathLike, *,
         h, missing = h[window], missing[window]
         lx_m *= h.shape[0] / nx0
         ly_m *= h.shape[1] / ny0
+    # the same size in other units, or cropped from a larger one, to the same float
+    from roughflow.units import canonical
+
+    lx_m, ly_m = canonical(lx_m), canonical(ly_m)
     dx, dy = lx_m / h.shape[0], ly_m / h.shape[1]
     if abs(dx / dy - 1) > SCAN_PIXEL_ASPECT_WARN:
         log.warning("%s: the pixels are %.4g m along x and %.4g m along y (%d x %d points, "

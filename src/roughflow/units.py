@@ -115,10 +115,22 @@ def registry(source: Mapping | None = None) -> pint.UnitRegistry:
     return _registry(tuple(scales))
 
 
+#: Significant digits kept of a quantity converted to SI: one length or pressure written in
+#: other units ("0.125um", "125nm"; "4.1GPa", "4100MPa") converts to floats an ulp apart,
+#: which split a study's aggregation (a length scale that "differs", a pressure axis with
+#: two 4.1 GPa). Twelve digits are far beyond any measured quantity.
+SI_DIGITS = 12
+
+
+def canonical(value: float) -> float:
+    """``value`` rounded to :data:`SI_DIGITS` significant digits."""
+    return float(f"{value:.{SI_DIGITS}g}")
+
+
 def parse_quantity(text: str | float, kind: str, name: str) -> float:
     """SI value of ``text`` ("200GPa", "1 mPa s", "2mm", or a number already in SI units),
-    which must be a positive quantity of ``kind`` (:data:`DIMENSIONS`); ``name`` is the
-    option or key reported in the error."""
+    which must be a positive quantity of ``kind`` (:data:`DIMENSIONS`), to
+    :data:`SI_DIGITS` digits; ``name`` is the option or key reported in the error."""
     dim, si = DIMENSIONS[kind]
     if isinstance(text, (int, float, np.integer, np.floating)) and not isinstance(text, bool):
         value = float(text)
@@ -141,7 +153,7 @@ def parse_quantity(text: str | float, kind: str, name: str) -> float:
         value = float(q.to(si).magnitude)
     if not (math.isfinite(value) and value > 0):
         raise InputError(f"{name} must be a positive {kind}, got {text!r}")
-    return value
+    return canonical(value)
 
 
 _EXAMPLES = {"length": "2mm", "pressure": "1MPa", "viscosity": "1mPa.s"}
@@ -162,7 +174,7 @@ def parse_range(text: str, kind: str, name: str) -> np.ndarray:
         if not lo < hi:
             raise InputError(f"{name}: the range {text!r} is in the wrong order (low end "
                              f"{lo:g} {DIMENSIONS[kind][1]} >= high end {hi:g})")
-        return np.geomspace(lo, hi, int(parts[2]))
+        return np.array([canonical(v) for v in np.geomspace(lo, hi, int(parts[2]))])
     values = np.array([parse_quantity(p, kind, name) for p in s.split(",") if p.strip()])
     if values.size == 0:
         raise InputError(f"{name}: no values in {text!r}")
