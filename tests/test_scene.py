@@ -476,3 +476,33 @@ def test_a_study_records_how_its_jobs_computed(tmp_path, monkeypatch):
     with xr.open_dataset(tmp_path / "two.nc") as ds:
         assert ds.attrs["fftw_effort"] == "mixed: FFTW_ESTIMATE, FFTW_MEASURE"
         assert ds.attrs["fft_threads"] == "mixed: 1, 2"
+
+
+def test_measured_jobs_are_the_same_whatever_the_units_they_are_written_in(tmp_path,
+                                                                          monkeypatch):
+    """A config edit of units alone ("200GPa" -> "200000 MPa", "2mm" -> "2000um", sizes in
+    nm instead of um, "um" -> "micrometer") changed the job's arguments, so Snakemake reran
+    every import, contact solve and sealing search of the study. The arguments now spell
+    one meaning one way; a changed value still changes them."""
+    np.save(tmp_path / "scan.npy", np.zeros((8, 8)))
+    monkeypatch.chdir(tmp_path)
+    question = {"modulus": "200GPa", "pressures": "100MPa:20GPa:5", "fluid_pressure": "1MPa",
+                "viscosity": "1mPa.s", "seal_width": "2mm", "seal_length": "60mm"}
+    same = {"modulus": "200000 MPa", "pressures": "0.1GPa:20000MPa:5",
+            "fluid_pressure": "10 bar", "viscosity": "1 cP", "seal_width": "2000um",
+            "seal_length": "0.06 m"}
+    scans = [{"file": "scan.npy", "size": "0.125", "unit": "um"},
+             {"file": "scan.npy", "size": "125nm,125nm", "unit": "micrometer"},
+             {"file": "scan.npy", "size": "125nm", "height_unit": "µm"}]
+    def job(block):
+        (only,) = expand_study("measured", block).values()
+        return only
+
+    jobs = [job({**q, "scans": [scan]}) for q in (question, same) for scan in scans]
+    assert len({tuple(j.import_args()) for j in jobs}) == 1
+    assert len({tuple(j.cli_args()) for j in jobs}) == 1
+    other = job({**question, "modulus": "201GPa", "scans": scans[:1]})
+    assert other.cli_args() != jobs[0].cli_args()
+    # numbers without a unit stay as given: the file's own unit applies to them
+    bare = job({**question, "scans": [{"file": "scan.npy", "size": "125"}]})
+    assert bare.import_args()[bare.import_args().index("--size") + 1] == "125"

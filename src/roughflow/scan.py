@@ -253,7 +253,7 @@ def _length_factor(unit, name: str) -> float:
     return parse_quantity(f"1 {unit}", "length", name)
 
 
-def _sizes(size, unit: str | None) -> tuple[float, float]:
+def scan_size(size, unit: str | None) -> tuple[float, float]:
     """Physical size (metres) from ``size``: a length or a pair (quantities with units, or
     numbers in ``unit``)."""
     from roughflow.units import parse_quantity
@@ -296,7 +296,8 @@ def _check_npy_complete(path: Path) -> None:
                          f"{dtype} array ({need} bytes with the header), the file has {have}")
 
 
-def _is_number(token: str) -> bool:
+def is_number(token: str) -> bool:
+    """Whether ``token`` reads as a float."""
     try:
         float(token)
     except ValueError:
@@ -321,7 +322,7 @@ def _check_text_complete(path: Path, shape: tuple[int, int]) -> None:
             if len(tokens) != nx:
                 continue
             rows += 1
-            bad = [t for t in tokens if not _is_number(t)]
+            bad = [t for t in tokens if not is_number(t)]
             if bad and len(dropped) < 3:
                 dropped.append(f"line {number} holds {bad[0]!r}")
     if rows > ny:
@@ -451,7 +452,8 @@ def read_scan(path: str | os.PathLike, *,
         if not (math.isfinite(lx_m) and math.isfinite(ly_m) and lx_m > 0 and ly_m > 0):
             raise InputError(f"{str(path)!r} gives the size {tuple(file_size)}: not positive")
     else:
-        lx_m, ly_m = _sizes(size, unit)
+        # bare numbers are in unit=, else in the file's own unit
+        lx_m, ly_m = scan_size(size, unit if unit is not None else file_unit)
     vertical = lateral if height_unit is None else _length_factor(height_unit, "height_unit")
     auto_crop = crop is not None and str(crop).strip() == SCAN_CROP_DEFINED
     window = parse_crop(crop, tuple(ch.nb_grid_pts))

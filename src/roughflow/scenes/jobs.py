@@ -379,11 +379,7 @@ class LeakJob:
             if getattr(self, key) is not None:
                 parse_quantity(f"1 {getattr(self, key)}", "length", key)
         if self.size is not None:
-            for part in str(self.size).split(","):
-                try:
-                    float(part)
-                except ValueError:
-                    parse_quantity(part, "length", "size")
+            self.size_m()  # a bad length is refused here, not in its job
         check_crop(self.crop)
         for key, choices in (("detrend", defaults.DETREND_MODES),
                              ("fill", defaults.FILL_METHODS),
@@ -395,22 +391,61 @@ class LeakJob:
     def job_id(self) -> str:
         return self.name
 
+    def size_m(self) -> tuple[float, float] | None:
+        """The scan's size (lx, ly) in metres as ``roughflow import`` reads ``size``; None
+        for numbers without ``unit`` (in the file's own unit, known once it is read)."""
+        from roughflow.scan import is_number, scan_size
+
+        if self.unit is None and any(is_number(p) for p in str(self.size).split(",")):
+            return None
+        return scan_size(self.size, self.unit)
+
     def import_args(self) -> list[str]:
-        """``roughflow import`` options (after the scan file)."""
+        """``roughflow import`` options (after the scan file), in one spelling for one
+        meaning (sizes in metres, units by their usual names), so that an edit of the
+        config's units alone reruns nothing."""
         args = ["--detrend", self.detrend, "--fill", self.fill]
-        for key in ("size", "unit", "height_unit", "crop", "channel"):
+        heights = self.height_unit or self.unit
+        if self.size is not None:
+            size = self.size_m()
+            args += ["--size", shlex.quote(str(self.size)) if size is None else
+                     f"{size[0]!r}m,{size[1]!r}m"]
+            if heights is not None:
+                args += ["--height-unit", shlex.quote(_unit_name(heights))]
+        else:
+            for key in ("unit", "height_unit"):
+                if getattr(self, key) is not None:
+                    args += [f"--{key.replace('_', '-')}",
+                             shlex.quote(_unit_name(getattr(self, key)))]
+        for key in ("crop", "channel"):
             value = getattr(self, key)
             if value is not None:
-                args += [f"--{key.replace('_', '-')}", shlex.quote(str(value))]
+                args += [f"--{key}", shlex.quote(str(value))]
         return args
 
     def cli_args(self) -> list[str]:
-        """``roughflow leak`` options (after the surface file)."""
-        args = ["--pressures", shlex.quote(str(self.pressures)), "--boundary", self.boundary,
-                "--name", self.name]
-        for key in LEAK_QUANTITIES:
-            args += [f"--{key.replace('_', '-')}", shlex.quote(str(getattr(self, key)))]
+        """``roughflow leak`` options (after the surface file), every quantity in SI units
+        (as for :meth:`import_args`: "200GPa" and "200000MPa" are one job)."""
+        from roughflow.units import DIMENSIONS, parse_quantity, parse_range
+
+        pressures = ",".join(f"{float(v)!r}Pa" for v in parse_range(self.pressures, "pressure",
+                                                              "pressures"))
+        args = ["--pressures", pressures, "--boundary", self.boundary, "--name", self.name]
+        for key, kind in LEAK_QUANTITIES.items():
+            value = parse_quantity(getattr(self, key), kind, key)
+            args += [f"--{key.replace('_', '-')}", shlex.quote(f"{value!r}{DIMENSIONS[kind][1]}")]
         return args
+
+
+#: Usual names of the length units a scan's heights come in (by metres per unit).
+_UNIT_NAMES = {1.0: "m", 1e-3: "mm", 1e-6: "um", 1e-9: "nm"}
+
+
+def _unit_name(unit: str) -> str:
+    """``unit``'s usual name ("micrometer", "µm" and "micron" are "um"); others as given."""
+    from roughflow.units import parse_quantity
+
+    return _UNIT_NAMES.get(parse_quantity(f"1 {unit}", "length", "unit"), str(unit))
 
 
 _NAME = re.compile(r"[A-Za-z0-9_.\-]+")
