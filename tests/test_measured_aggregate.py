@@ -150,6 +150,20 @@ def test_boundary_and_scan_provenance_are_kept_per_scan(tmp_path):
     assert "'boundary' variable" in measured.CAPTION
 
 
+def test_an_attribute_some_scans_lack_is_not_the_study_s(tmp_path):
+    """A leak file of a generated surface has no scan provenance; aggregated with a scan's,
+    the study kept the scan's source, crop and reader as global attributes, false for the
+    other: xarray's drop_conflicts keeps what only some datasets carry. They are variables
+    over scan only."""
+    scan = leak_file("s", [1e8, 1e9], source="one.opd")
+    generated = leak_file("g", [1e8, 1e9])
+    generated.attrs = {k: v for k, v in generated.attrs.items() if not k.startswith("scan_")}
+    assert "scan_source" in scan.attrs
+    ds = _study(tmp_path, {"S": scan, "G": generated})
+    assert not [k for k in ds.attrs if k.startswith("scan_")]
+    assert ds["scan_source"].sel(scan="s").item() == "one.opd"
+
+
 def test_a_single_scan_study_has_the_same_per_scan_variables(tmp_path):
     ds = _study(tmp_path, {"A": leak_file("a", [1e8, 1e9], boundary="mirror")})
     assert ds["boundary"].dims == ("scan",) and ds["boundary"].values.tolist() == ["mirror"]

@@ -115,6 +115,9 @@ def _concat_scans(datasets: Sequence[xr.Dataset]) -> xr.Dataset:
                     combine_attrs="drop_conflicts")
     if not out.indexes["pressure"].is_monotonic_increasing:
         out = out.sortby("pressure")
+    # drop_conflicts keeps an attribute that only some scans have (a scan's source file on
+    # a study with a generated surface): it survives only where every scan has it alike
+    out.attrs = {k: v for k, v in out.attrs.items() if all(k in ds.attrs for ds in datasets)}
     return out
 
 
