@@ -167,6 +167,21 @@ def test_cli_leak_prints_and_writes_the_curve(imported, tmp_path, capsys):
         assert f"{q[0]:10.3e}" in text and f"{q[1]:10.3e}" in text
 
 
+def test_cli_leak_warns_where_the_fluid_pressure_is_not_small(imported, tmp_path, capsys):
+    """The Reynolds flow leaves the fluid's load on the surfaces out (dp << p): a fluid
+    pressure of 100 GPa against contact pressures from 1 MPa ran without a word."""
+    argv = list(LEAK)
+    argv[argv.index("--pressures") + 1] = "10MPa:100MPa:2"
+    capsys.readouterr()
+    assert main(["leak", str(imported), *argv, "-o", str(tmp_path / "a.nc")]) == 0
+    assert "fluid pressure" not in capsys.readouterr().err
+    argv[argv.index("--fluid-pressure") + 1] = "20MPa"
+    assert main(["leak", str(imported), *argv, "-o", str(tmp_path / "b.nc")]) == 0
+    err = capsys.readouterr().err
+    assert "the fluid pressure 2e+07 Pa is not small against the lowest contact pressure" \
+        in err
+
+
 @pytest.mark.parametrize("change, match", [
     ({"--modulus": "200 GPx"}, "--modulus: cannot parse '200 GPx'"),
     ({"--pressures": "100MPa:1MPa:5"}, "wrong order"),
