@@ -85,11 +85,13 @@ CAPTIONS: dict[str, str] = {
     ),
     "measured": (
         "Leak rate Q of a seal versus the nominal contact pressure for each measured scan "
-        "(roughflow import + roughflow leak; docs/measured.md): flow along x (solid) and y "
+        "(roughflow import + roughflow leak; docs/measured.md), one colour and marker per "
+        "scan: flow along x (solid) and y "
         "(dashed) for the seal width, length, fluid pressure drop and viscosity of the config. "
-        "Q = 0 once the fluid no longer percolates; the shaded bands mark each scan's sealing "
-        "pressure along x and y (between the highest pressure found leaking and the lowest found "
-        "sealed). Right: the relative contact area a_c. Each scan's non-periodic treatment is "
+        "Q = 0 once the fluid no longer percolates; the shaded bands in the scan's colour mark "
+        "its sealing pressure along x (plain) and y (hatched), between the highest pressure "
+        "found leaking and the lowest found sealed (a line where it is sealed). Right: the "
+        "relative contact area a_c. Each scan's non-periodic treatment is "
         "in the dataset's per-scan 'boundary' variable (the title names it where all scans "
         "share it, the legend per scan where they differ); the seal, fluid and scan provenance "
         "are per-scan variables too. Scans with different pressure grids are each drawn at "

@@ -5,8 +5,9 @@ from __future__ import annotations
 import matplotlib.pyplot as plt
 import numpy as np
 import xarray as xr
+from matplotlib.lines import Line2D
+from matplotlib.patches import Patch
 
-from ._style import AXIS_COLOR
 from .captions import CAPTIONS
 
 CAPTION = CAPTIONS["measured"]
@@ -32,28 +33,43 @@ def boundaries(ds: xr.Dataset) -> list[str]:
 
 
 def draw(ds: xr.Dataset, fit: xr.Dataset | None = None) -> plt.Figure:
-    fig, (ax_q, ax_a) = plt.subplots(1, 2, figsize=(10, 4.2), constrained_layout=True)
+    """Left: leak rate per scan (a colour and marker each; flow along x solid, y dashed) and
+    the sealing brackets (shaded, hatched for y; a line where it is sealed). Right: a_c. The
+    legend sits below the panels, one entry per scan, so that ten scans stay readable."""
+    scans = ds["scan"].values
     p = ds["pressure"].values
     bounds = boundaries(ds)
     shared = len(set(bounds)) == 1
-    for k, scan in enumerate(ds["scan"].values):
+    ncol = min(4, max(2, len(scans)))
+    rows = -(-(len(scans) + 3) // ncol)  # the scans, two line styles and the band
+    fig, (ax_q, ax_a) = plt.subplots(1, 2, figsize=(10, 4.2 + 0.22 * rows),
+                                     layout="constrained")
+    colors = plt.rcParams["axes.prop_cycle"].by_key()["color"]
+    handles = []
+    for k, scan in enumerate(scans):
         d = ds.sel(scan=scan)
-        marker = MARKERS[k % len(MARKERS)]
+        marker, color = MARKERS[k % len(MARKERS)], colors[k % len(colors)]
         label = str(scan) if shared else f"{scan} ({bounds[k]})"
-        for axis, style in (("x", "-"), ("y", "--")):
+        for axis, style, hatch in (("x", "-", None), ("y", "--", "//")):
             q = d["leak_rate"].sel(axis=axis).values
             leaking = q > 0
-            ax_q.plot(p[leaking], q[leaking], style, marker=marker, ms=4,
-                      color=AXIS_COLOR[axis], label=f"{label}, flow along {axis}")
+            ax_q.plot(p[leaking], q[leaking], style, marker=marker, ms=4, color=color,
+                      label=f"{label}, flow along {axis}")
             lo = _per_scan(d.sel(axis=axis), "sealing_pressure_lo")
             hi = _per_scan(d.sel(axis=axis), "sealing_pressure")
             if np.isfinite(lo) and np.isfinite(hi):
-                ax_q.axvspan(lo, hi, color=AXIS_COLOR[axis], alpha=0.25)
-                ax_q.axvline(hi, color=AXIS_COLOR[axis], ls=style, lw=0.8,
+                ax_q.axvspan(lo, hi, facecolor=color, alpha=0.18, hatch=hatch,
+                             edgecolor=color, lw=0)
+                ax_q.axvline(hi, color=color, ls=style, lw=0.8,
                              label=f"{scan}: sealed along {axis} from {hi:.3g} Pa")
         a = d["area_fraction"].values
         known = np.isfinite(a)
-        ax_a.plot(p[known], a[known], "-", marker=marker, ms=4, color="k", label=label)
+        ax_a.plot(p[known], a[known], "-", marker=marker, ms=4, color=color, label=label)
+        handles.append(Line2D([], [], color=color, marker=marker, ms=4, label=label))
+    handles += [Line2D([], [], color="k", ls="-", label="flow along x"),
+                Line2D([], [], color="k", ls="--", label="flow along y"),
+                Patch(facecolor="0.7", edgecolor="0.4", hatch="//",
+                      label="sealing bracket (hatched: y)")]
     ax_q.set_xscale("log")
     ax_q.set_yscale("log")
     ax_q.set_xlabel("nominal contact pressure [Pa]")
@@ -61,11 +77,11 @@ def draw(ds: xr.Dataset, fit: xr.Dataset | None = None) -> plt.Figure:
     ax_q.set_title(f"boundary: {bounds[0]}" if shared else
                    "boundary: differs between scans (in the legend)", fontsize=9)
     ax_q.grid(alpha=0.3, which="both")
-    ax_q.legend(fontsize=7)
     ax_a.set_xscale("log")
     ax_a.set_ylim(0, 1)
     ax_a.set_xlabel("nominal contact pressure [Pa]")
     ax_a.set_ylabel("relative contact area a_c")
     ax_a.grid(alpha=0.3, which="both")
-    ax_a.legend(fontsize=7)
+    fig.legend(handles=handles, loc="outside lower center", ncol=ncol, fontsize=8,
+               frameon=False)
     return fig
