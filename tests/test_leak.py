@@ -224,3 +224,20 @@ def test_cli_defaults_are_the_library_defaults():
     params = inspect.signature(read_scan).parameters
     assert got["detrend"] == params["detrend_mode"].default
     assert got["fill"] == params["fill"].default
+
+
+def test_a_seal_closing_only_near_full_contact_gets_a_note(imported, tmp_path, capsys):
+    """An AFM scan sealed along x only at a_c* = 0.99 (one scan line 4 nm below the
+    others); the table says what such a value usually means and which import to compare."""
+    from roughflow.cli.leak import format_table
+
+    out = tmp_path / "leak.nc"
+    assert main(["leak", str(imported), *LEAK, "-o", str(out)]) == 0
+    with xr.open_dataset(out) as ds:
+        ds = ds.load()
+    ds["a_c_star"][0, :] = 0.5  # this 64^2 AFM window seals along x at 0.81 (0.73 levelled)
+    assert "lines-x" not in format_table(ds)
+    ds["a_c_star"][0, 0] = 0.95
+    text = format_table(ds)
+    assert "note: along x the seal closes only at a_c* = 0.950" in text and "lines-x" in text
+    assert "along y the seal closes only" not in text

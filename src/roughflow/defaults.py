@@ -168,6 +168,11 @@ SCAN_PIXEL_ASPECT_WARN = 0.01
 #: measured), in um read as nm a thousandth. The small-slope contact model needs gbar < 1
 #: anyway; the range only catches unit mix-ups.
 SCAN_GRADIENT_WARN = (1e-5, 10.0)
+#: A scan that seals only above this contact area draws a note in the leak table: random
+#: surfaces seal at a_c* of about 0.4 (0.3-0.7 anisotropic, the paper's Fig. 2), and one
+#: AFM scan sealed at 0.99 along x because one scan line lay 4 nm below its neighbours
+#: (0.50 with its lines levelled).
+SEALING_AREA_NOTE = 0.8
 #: How a non-periodic scan meets the periodic solvers (roughflow.boundary): mirror-tiled,
 #: padded by a flat region far below it, an interior window of the scan solved as periodic,
 #: or the scan taken as periodic.

@@ -253,7 +253,7 @@ def _length_factor(unit, name: str) -> float:
     return parse_quantity(f"1 {unit}", "length", name)
 
 
-def scan_size(size, unit: str | None) -> tuple[float, float]:
+def scan_size(size: str | float | Sequence[str | float], unit: str | None) -> tuple[float, float]:
     """Physical size (metres) from ``size``: a length or a pair (quantities with units, or
     numbers in ``unit``)."""
     from roughflow.units import parse_quantity

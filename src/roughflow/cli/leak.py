@@ -11,6 +11,7 @@ from roughflow.defaults import (
     BOUNDARY,
     BOUNDARY_METHODS,
     CONTACT_TOL,
+    SEALING_AREA_NOTE,
     THRESHOLD_CONTACT_TOL,
     THRESHOLD_TOL,
 )
@@ -137,6 +138,13 @@ def format_table(ds: xr.Dataset) -> str:
         star = float(d["a_c_star"].values[k])
         lines.append(f"sealing pressure along {a}: between {lo:.4g} Pa and {hi:.4g} Pa "
                      f"(a_c* = {star:.4f})")
+    for k, a in enumerate(("x", "y")):
+        star = float(d["a_c_star"].values[k])
+        if star > SEALING_AREA_NOTE:
+            lines.append(f"note: along {a} the seal closes only at a_c* = {star:.3f} (random "
+                         f"surfaces: about 0.4): a channel the contact hardly closes, such as "
+                         f"one scan line offset from the others; compare an import with "
+                         f"--detrend lines-x or lines-y")
     msg = ds.attrs.get("sealing_messages", "none")
     if msg != "none":
         lines.append(f"note: {msg}")
