@@ -241,3 +241,28 @@ def test_a_seal_closing_only_near_full_contact_gets_a_note(imported, tmp_path, c
     text = format_table(ds)
     assert "note: along x the seal closes only at a_c* = 0.950" in text and "lines-x" in text
     assert "along y the seal closes only" not in text
+
+
+def test_the_import_s_warnings_reach_the_leak_table(tmp_path, capsys):
+    """In the workflow the import's warnings (rectangular pixels, a large fill, an rms
+    gradient that suggests a unit mix-up) went to its log only; the surface file keeps them
+    (scan_warnings) and the leak table repeats them."""
+    h = np.load(DATA / "afm-64.npy")
+    np.save(tmp_path / "rect.npy", h[:, :48])
+    surf = tmp_path / "rect.nc"
+    assert main(["import", str(tmp_path / "rect.npy"), "--size", "500nm", "--unit", "nm",
+                 "-o", str(surf)]) == 0
+    with xr.open_dataset(surf) as ds:
+        assert "the pixels are" in ds.attrs["scan_warnings"]
+        old = ds.load()
+    # a surface file written before scan_warnings existed still reads (no warnings)
+    del old.attrs["scan_warnings"]
+    old.to_netcdf(tmp_path / "old.nc")
+    from roughflow.io import read_surface
+
+    assert read_surface(tmp_path / "old.nc").scan.warnings == ""
+    capsys.readouterr()
+    assert main(["leak", str(surf), *LEAK, "-o", str(tmp_path / "l.nc")]) == 0
+    assert "note: the import warned: the pixels are" in capsys.readouterr().out
+    with xr.open_dataset(tmp_path / "l.nc") as ds:
+        assert "the pixels are" in ds.attrs["scan_warnings"]

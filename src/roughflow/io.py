@@ -16,7 +16,7 @@ import shutil
 import signal
 import tempfile
 from collections.abc import Callable, Sequence
-from dataclasses import fields
+from dataclasses import MISSING, fields
 from pathlib import Path
 from typing import TYPE_CHECKING
 
@@ -318,7 +318,9 @@ def surface_from_dataset(ds: xr.Dataset) -> Surface:
     scan = None
     if "scan_source" in ds.attrs:
         try:
-            kw = {f.name: ds.attrs[f"scan_{f.name}"] for f in fields(ScanInfo)}
+            # a field with a default may be missing (files written before it existed)
+            kw = {f.name: ds.attrs[f"scan_{f.name}"] if f.default is MISSING else
+                  ds.attrs.get(f"scan_{f.name}", f.default) for f in fields(ScanInfo)}
             for k in ("length_scale", "rms_gradient"):
                 kw[k] = float(kw[k])
             kw["filled"] = int(kw["filled"])

@@ -14,6 +14,7 @@ The array helpers (:func:`detrend`, :func:`level_lines`, :func:`fill_missing`,
 
 from __future__ import annotations
 
+import dataclasses
 import logging
 import math
 import os
@@ -483,14 +484,20 @@ def read_scan(path: str | os.PathLike, *,
     from roughflow.units import canonical
 
     lx_m, ly_m = canonical(lx_m), canonical(ly_m)
+    notes: list[str] = []  # logged, and kept with the surface (ScanInfo.warnings)
+
+    def warn(message: str) -> None:
+        log.warning("%s: %s", path, message)
+        notes.append(message)
+
     dx, dy = lx_m / h.shape[0], ly_m / h.shape[1]
     if abs(dx / dy - 1) > SCAN_PIXEL_ASPECT_WARN:
-        log.warning("%s: the pixels are %.4g m along x and %.4g m along y (%d x %d points, "
-                    "%.4g m x %.4g m). If the instrument's pixels are square, the axes are "
-                    "swapped: roughflow's first index is x; a plain-text matrix is read with "
-                    "each row a line along x (its first index is y), a .npy array as it is "
-                    "(np.savetxt(f, h.T) writes an [x, y] array h for the text reader)",
-                    path, dx, dy, h.shape[0], h.shape[1], lx_m, ly_m)
+        warn(f"the pixels are {dx:.4g} m along x and {dy:.4g} m along y ({h.shape[0]} x "
+             f"{h.shape[1]} points, {lx_m:.4g} m x {ly_m:.4g} m). If the instrument's pixels "
+             "are square, the axes are swapped: roughflow's first index is x; a plain-text "
+             "matrix is read with each row a line along x (its first index is y), a .npy "
+             "array as it is (np.savetxt(f, h.T) writes an [x, y] array h for the text "
+             "reader)")
     n_missing = int(missing.sum())
     if n_missing == missing.size:
         raise InputError(f"{str(path)!r} has no defined point in the window kept")
@@ -501,11 +508,10 @@ def read_scan(path: str | os.PathLike, *,
                          "or crop them away; "
                          + _defined_window_hint(missing, window, (nx0, ny0)))
     if n_missing > SCAN_FILL_WARN_FRACTION * missing.size:
-        log.warning("%s: %.3g %% of the points are missing and filled (%s): a filled region "
-                    "is smooth (harmonic) or a flat basin (min), and where it is large it, "
-                    "not the measured surface, shapes the contact; %s", path,
-                    100 * n_missing / missing.size, fill,
-                    _defined_window_hint(missing, window, (nx0, ny0)))
+        warn(f"{100 * n_missing / missing.size:.3g} % of the points are missing and filled "
+             f"({fill}): a filled region is smooth (harmonic) or a flat basin (min), and where "
+             "it is large it, not the measured surface, shapes the contact; "
+             + _defined_window_hint(missing, window, (nx0, ny0)))
     h[missing] = 0.0
     h = detrend(h, lx_m, ly_m, detrend_mode, defined=~missing)
     if n_missing:
@@ -524,11 +530,12 @@ def read_scan(path: str | os.PathLike, *,
         periodic=bool(periodic))
     lo, hi = SCAN_GRADIENT_WARN
     if not lo <= info.rms_gradient <= hi:
-        log.warning("%s: the rms gradient is %.3g (rms height %.4g m over %.4g m x %.4g m): "
-                    "measured surfaces have about 1e-3 to 2. Check the units: the heights "
-                    "were read in %s and the lateral sizes in %s (heights in nm read as um "
-                    "are 1000 times too steep)", path, info.rms_gradient,
-                    float(np.std(h)) * length, lx_m, ly_m,
-                    height_unit or file_unit or st_unit, file_unit or st_unit)
+        warn(f"the rms gradient is {info.rms_gradient:.3g} (rms height "
+             f"{float(np.std(h)) * length:.4g} m over {lx_m:.4g} m x {ly_m:.4g} m): measured "
+             "surfaces have about 1e-3 to 2. Check the units: the heights were read in "
+             f"{height_unit or file_unit or st_unit} and the lateral sizes in "
+             f"{file_unit or st_unit} (heights in nm read as um are 1000 times too steep)")
+    if notes:
+        info = dataclasses.replace(info, warnings="; ".join(notes))
     surface = Surface.from_array(h, lx=lx, ly=ly)
     return Surface(heights=surface.heights, lx=surface.lx, ly=surface.ly, scan=info)

@@ -195,7 +195,9 @@ class ScanInfo:
     E* gbar. ``detrend``, ``fill``: the choices of :func:`from_scan`; ``filled``: the
     number of missing points filled; ``crop``: the grid window kept ("none" or
     "i0:i1,j0:j1"); ``periodic``: whether the surface is periodic (a scan is not; the
-    contact and flow stages then use :mod:`roughflow.boundary`).
+    contact and flow stages then use :mod:`roughflow.boundary`); ``warnings``: what the
+    import warned about ("; "-joined, "" for nothing), kept so that a workflow's results
+    say it and not only the import's log.
     """
 
     source: str
@@ -208,6 +210,7 @@ class ScanInfo:
     filled: int
     crop: str = "none"
     periodic: bool = False
+    warnings: str = ""
 
     def as_attrs(self) -> dict:
         """Fields as a flat dict (for netCDF attributes, prefixed ``scan_``)."""

@@ -145,6 +145,9 @@ def format_table(ds: xr.Dataset) -> str:
                          f"surfaces: about 0.4): a channel the contact hardly closes, such as "
                          f"one scan line offset from the others; compare an import with "
                          f"--detrend lines-x or lines-y")
+    warned = str(ds.attrs.get("scan_warnings", ""))
+    if warned:  # said in the import's log, which a workflow's user may never read
+        lines.append(f"note: the import warned: {warned}")
     msg = ds.attrs.get("sealing_messages", "none")
     if msg != "none":
         lines.append(f"note: {msg}")
