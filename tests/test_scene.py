@@ -478,6 +478,17 @@ def test_a_study_records_how_its_jobs_computed(tmp_path, monkeypatch):
         assert ds.attrs["fft_threads"] == "mixed: 1, 2"
 
 
+def test_a_bad_study_level_quantity_is_named_as_the_study_s(tmp_path, monkeypatch):
+    """A modulus without unit given for the whole study was reported as the first scan's."""
+    np.save(tmp_path / "scan.npy", np.zeros((8, 8)))
+    monkeypatch.chdir(tmp_path)
+    block = {"modulus": "2e11", "pressures": "1MPa:10MPa:3", "fluid_pressure": "1MPa",
+             "viscosity": "1mPa.s", "seal_width": "2mm", "seal_length": "60mm",
+             "scans": [{"file": "scan.npy", "size": "500nm", "unit": "nm"}]}
+    with pytest.raises(InputError, match=r"^config studies.measured: modulus: '2e11' has no"):
+        expand_study("measured", block)
+
+
 def test_measured_jobs_are_the_same_whatever_the_units_they_are_written_in(tmp_path,
                                                                           monkeypatch):
     """A config edit of units alone ("200GPa" -> "200000 MPa", "2mm" -> "2000um", sizes in

@@ -681,6 +681,16 @@ def _expand_measured(block: dict) -> dict[str, Job]:
     """One :class:`LeakJob` per scan; a scan entry's keys override the study's."""
     study = defaults.MEASURED_STUDY
     shared = {k: v for k, v in block.items() if k != "scans"}
+    from roughflow.units import parse_quantity, parse_range
+
+    try:  # a bad study-level value is the study's, not its first scan's
+        for key, kind in LEAK_QUANTITIES.items():
+            if shared.get(key) is not None:
+                parse_quantity(shared[key], kind, key)
+        if shared.get("pressures") is not None:
+            parse_range(shared["pressures"], "pressure", "pressures")
+    except InputError as exc:
+        raise InputError(f"config studies.{study}: {exc}") from None
     jobs: dict[str, Job] = {}
     for entry in block["scans"]:
         args = {**shared, **entry}
