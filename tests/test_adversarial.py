@@ -515,22 +515,28 @@ def test_a_full_disk_exits_5_naming_the_output(files, capsys, monkeypatch, tmp_p
     assert list(tmp_path.iterdir()) == []
 
 
-def test_sigterm_removes_the_temporary_files_like_ctrl_c(files, capsys, monkeypatch, tmp_path):
+@pytest.mark.parametrize("name", ["SIGTERM", "SIGUSR1", "SIGUSR2", "SIGHUP"])
+def test_sigterm_removes_the_temporary_files_like_ctrl_c(files, capsys, monkeypatch, tmp_path,
+                                                         name):
     # SIGTERM (kill, scancel, a time limit) ended the process where it stood and left
-    # tmpXXXX.png.part files; it now unwinds like Ctrl-C and exits 143
+    # tmpXXXX.png.part files; it now unwinds like Ctrl-C and exits 128 + the signal. So do
+    # SIGUSR1/2 (SLURM's --signal ahead of a time limit) and SIGHUP, which left .part files
+    # without a word
     import os
     import signal
 
     from matplotlib.figure import Figure
 
+    sig = getattr(signal, name)
+
     def killed_while_rendering(self, fname, *a, **k):
         open(fname, "wb").write(b"half a figure")
-        os.kill(os.getpid(), signal.SIGTERM)
+        os.kill(os.getpid(), sig)
 
-    before = signal.getsignal(signal.SIGTERM)
+    before = signal.getsignal(sig)
     monkeypatch.setattr(Figure, "savefig", killed_while_rendering)
     code, err = run(["figure", "threshold_vs_gamma", files["study"], "-o",
                      tmp_path / "fig.png"], capsys)
-    assert code == 143 and "terminated" in err, err
+    assert code == 128 + int(sig) and f"terminated ({name})" in err, err
     assert list(tmp_path.iterdir()) == []
-    assert signal.getsignal(signal.SIGTERM) is before  # main() restores the handler
+    assert signal.getsignal(sig) is before  # main() restores the handler

@@ -457,7 +457,7 @@ def test_measured_scan_units_are_checked_at_planning(tmp_path, monkeypatch, key)
         expand_study("measured", block)
 
 
-def test_a_study_records_how_its_jobs_computed(tmp_path, monkeypatch):
+def test_a_study_records_how_its_jobs_computed(tmp_path, monkeypatch, caplog):
     """A study dataset computes nothing: it recorded the FFT settings of the aggregating
     process (threads 2, MEASURE) while its jobs ran with others (1, ESTIMATE). It records
     the jobs' values, and says "mixed" where they differ."""
@@ -472,7 +472,9 @@ def test_a_study_records_how_its_jobs_computed(tmp_path, monkeypatch):
         assert ds.attrs["backend"] == "cpu"
         assert ds.attrs.get("jobs_roughflow_commit") == job.attrs.get("roughflow_commit")
     b = _tiny_threshold_file(tmp_path, 2.0, (0,))
-    aggregate([a, b], tmp_path / "two.nc", study="test")
+    with caplog.at_level("WARNING", logger="roughflow.aggregate"):
+        aggregate([a, b], tmp_path / "two.nc", study="test")
+    assert "differ in fftw_effort" in caplog.text
     with xr.open_dataset(tmp_path / "two.nc") as ds:
         assert ds.attrs["fftw_effort"] == "mixed: FFTW_ESTIMATE, FFTW_MEASURE"
         assert ds.attrs["fft_threads"] == "mixed: 1, 2"

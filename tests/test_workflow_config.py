@@ -155,3 +155,30 @@ def test_a_bad_fft_setting_stops_the_plan(tmp_path, monkeypatch, var, value):
     out = res.stdout + res.stderr
     assert res.returncode != 0
     assert "invalid environment" in out and var in out and repr(value) in out, out[-2000:]
+
+
+def test_a_failed_attempt_keeps_its_log(tmp_path):
+    """Snakemake removes a job's log before each attempt, so the retry's log replaced the
+    failed attempt's and the cause of the failure was lost. The rules' commands end in
+    KEEP_FAILED_LOG: a failed attempt leaves a copy, and the exit status is the command's."""
+    from roughflow.scenes.jobs import KEEP_FAILED_LOG
+
+    (tmp_path / "Snakefile").write_text(
+        "rule a:\n"
+        "    output: 'out.txt'\n"
+        "    log: 'a.log'\n"
+        "    shell: \"(if [ -e marker ]; then echo second; else touch marker; echo first; "
+        f"exit 7; fi) > {{log}}\" + {KEEP_FAILED_LOG!r} + \" ; touch {{output}}\"\n")
+    res = subprocess.run([str(SNAKEMAKE), "--cores", "1", "--retries", "1"], cwd=tmp_path,
+                         capture_output=True, text=True, timeout=120)
+    assert res.returncode == 0, res.stderr[-2000:]
+    assert (tmp_path / "a.log").read_text() == "second\n"
+    (kept,) = tmp_path.glob("a.log.failed-*")
+    assert kept.read_text() == "first\n"
+    # the status gets through: without a retry the run fails
+    for p in (tmp_path / "marker", tmp_path / "out.txt", kept):
+        p.unlink()
+    res = subprocess.run([str(SNAKEMAKE), "--cores", "1", "--retries", "0"], cwd=tmp_path,
+                         capture_output=True, text=True, timeout=120)
+    assert res.returncode != 0 and not (tmp_path / "out.txt").exists()
+    assert "exit status 7" in res.stderr + res.stdout

@@ -185,8 +185,12 @@ def aggregate(inputs: Sequence[str | os.PathLike | xr.Dataset], output: str | os
     out.attrs["title"] = f"roughflow study {study or ''}".strip()
     if provenance is None:
         provenance = Provenance().using(*dataset_methods(out))
-    write_dataset(out, output, provenance=replace(
-        provenance, from_inputs=settings_of_inputs(*datasets)))
+    inherited = settings_of_inputs(*datasets)
+    for key, value in inherited:
+        if str(value).startswith("mixed"):  # e.g. jobs run before and after a code change
+            log.warning("the jobs of %s differ in %s (%s): rerun the older ones for one "
+                        "consistent study (snakemake --forcerun)", output, key, value)
+    write_dataset(out, output, provenance=replace(provenance, from_inputs=inherited))
     log.info("aggregated %d datasets into %s (%s)", len(datasets), output,
              dict(out.sizes))
     return out

@@ -1,4 +1,5 @@
-"""Files published whole and with the permissions of a newly created file.
+"""Files published whole and with the permissions of a newly created file, and the signals
+that end a command (held back while a set of files is published).
 
 A file is written under a temporary name beside its destination and renamed over it (atomic
 on one file system), so a reader never sees half of it. ``tempfile.mkstemp`` makes the
@@ -9,6 +10,14 @@ read: :func:`publish` gives it 0666 less the umask first, as ``open`` would have
 from __future__ import annotations
 
 import os
+import signal
+
+#: Signals that end a command, whose default action would stop it where it stands: SIGTERM
+#: (kill, scancel, a time limit), SIGHUP (a closed terminal), SIGUSR1 and SIGUSR2 (what
+#: SLURM's --signal sends ahead of a time limit). The command line turns them into an
+#: exception, so that temporary files are removed on the way out.
+TERMINATING_SIGNALS = tuple(getattr(signal, name) for name in
+                            ("SIGTERM", "SIGHUP", "SIGUSR1", "SIGUSR2") if hasattr(signal, name))
 
 
 def new_file_mode() -> int:

@@ -26,7 +26,7 @@ import xarray as xr
 from roughflow.datasets.results import spec_attrs
 from roughflow.datasets.units import LENGTH_UNITS, grid_coords
 from roughflow.errors import InputError, OutputError, require_field, require_positive
-from roughflow.files import publish
+from roughflow.files import TERMINATING_SIGNALS, publish
 from roughflow.provenance import PROVENANCE_ATTRS, Provenance
 from roughflow.surface import ScanInfo, Surface, SurfaceSpec
 
@@ -120,13 +120,13 @@ def _write_failure(path: Path, exc: BaseException) -> OutputError | None:
 
 
 @contextlib.contextmanager
-def _sigterm_held():
-    """Hold SIGTERM back (POSIX, this thread) for the few renames that publish a set of
-    outputs; a signal that arrives meanwhile is delivered after them."""
+def _signals_held():
+    """Hold :data:`TERMINATING_SIGNALS` back (POSIX, this thread) for the few renames that
+    publish a set of outputs; a signal that arrives meanwhile is delivered after them."""
     if not hasattr(signal, "pthread_sigmask"):
         yield
         return
-    old = signal.pthread_sigmask(signal.SIG_BLOCK, {signal.SIGTERM})
+    old = signal.pthread_sigmask(signal.SIG_BLOCK, set(TERMINATING_SIGNALS))
     try:
         yield
     finally:
@@ -149,7 +149,7 @@ def write_together(writers: Sequence[Writer]) -> list[Path]:
             os.close(fd)
             tmps.append(tmp)
             write(tmp)
-        with _sigterm_held():  # a SIGTERM waits until every output is in place
+        with _signals_held():  # a SIGTERM waits until every output is in place
             for tmp, (path, _) in zip(tmps, writers, strict=True):
                 publish(tmp, path)
                 published.append(path)

@@ -63,6 +63,7 @@ from roughflow.figures import caption as figure_caption  # noqa: E402
 from roughflow.resources import total_bytes  # noqa: E402
 from roughflow.scenes import expand_study, study_defaults  # noqa: E402
 from roughflow.scenes.jobs import (  # noqa: E402
+    KEEP_FAILED_LOG,
     aggregated_config,
     check_plan_memory,
     requested_mem_mb,

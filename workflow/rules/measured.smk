@@ -45,7 +45,7 @@ rule import_scan:
     shell:
         # the scan is a user-given path (spaces, shell characters): quoted, as are the
         # import options (MeasuredJob.import_args)
-        "{RF} -v import {input:q} {params.args} -o {output} > {log} 2>&1"
+        "{RF} -v import {input:q} {params.args} -o {output} > {log} 2>&1" + KEEP_FAILED_LOG
 
 
 rule leak:
@@ -66,5 +66,7 @@ rule leak:
         mem_mb=leak_mem_mb,
         runtime=120,
     shell:
+        # the table is written whole or not at all, as the dataset is
         "ROUGHFLOW_FFT_THREADS={threads} {RF} -v leak {input} {params.args} "
-        "--threads {threads} -o {output.data} > {output.table} 2> {log}"
+        "--threads {threads} -o {output.data} > {output.table}.part 2> {log} "
+        "&& mv {output.table}.part {output.table}" + KEEP_FAILED_LOG

@@ -20,7 +20,7 @@ rule scene:
         runtime=runtime_min,
     shell:
         "ROUGHFLOW_FFT_THREADS={threads} {RF} -v scene {params.args} "
-        "--threads {threads} -o {output} 2> {log}"
+        "--threads {threads} -o {output} 2> {log}" + KEEP_FAILED_LOG
 
 
 rule channels:
@@ -39,4 +39,4 @@ rule channels:
         runtime=10,
     shell:
         "ROUGHFLOW_FFT_THREADS={threads} {RF} -v scene {params.args} "
-        "--threads {threads} -o {output} 2> {log}"
+        "--threads {threads} -o {output} 2> {log}" + KEEP_FAILED_LOG

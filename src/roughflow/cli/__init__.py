@@ -28,6 +28,7 @@ from pathlib import Path
 
 from roughflow import __version__
 from roughflow.errors import ConvergenceError, InputError, OutputError
+from roughflow.files import TERMINATING_SIGNALS
 from roughflow.progress import log_progress
 
 from ._common import check_outputs, read_inputs
@@ -40,16 +41,24 @@ EXIT_STATUS = {0: "success", 1: "unexpected error (a bug: please report the trac
                4: "out of memory although the estimate fitted (roughflow.resources)",
                5: "an output could not be written (disk or quota full, folder unwritable); "
                   "none of the command's outputs was left",
-               130: "interrupted", 143: "terminated (SIGTERM: kill, scancel, a time limit)"}
+               130: "interrupted",
+               **{128 + int(s): f"terminated by {signal.Signals(s).name}"
+                  + (" (kill, scancel, a time limit)" if s == signal.SIGTERM else "")
+                  for s in TERMINATING_SIGNALS}}
 
 
 class _Terminated(BaseException):
-    """SIGTERM, turned into an exception so that temporary files are removed on the way
-    out, as they are for Ctrl-C (the default action ends the process where it stands)."""
+    """A terminating signal (:data:`~roughflow.io.TERMINATING_SIGNALS`), turned into an
+    exception so that temporary files are removed on the way out, as they are for Ctrl-C
+    (the default action ends the process where it stands)."""
+
+    def __init__(self, signum: int):
+        super().__init__(signum)
+        self.signum = signum
 
 
-def _on_sigterm(signum, frame) -> None:
-    raise _Terminated
+def _on_signal(signum, frame) -> None:
+    raise _Terminated(signum)
 
 
 def build_parser() -> argparse.ArgumentParser:
@@ -140,10 +149,10 @@ def main(argv: list[str] | None = None) -> int:
     args = parser.parse_args(argv)
     log_progress(_level(args))
     name = f"roughflow {args.command}"
-    # in the main thread only (signal's rule), and not where a launcher set SIGTERM ignored
-    in_main_thread = (threading.current_thread() is threading.main_thread()
-                      and signal.getsignal(signal.SIGTERM) is not signal.SIG_IGN)
-    previous = signal.signal(signal.SIGTERM, _on_sigterm) if in_main_thread else None
+    # in the main thread only (signal's rule), and not for a signal a launcher set ignored
+    handled = ([s for s in TERMINATING_SIGNALS if signal.getsignal(s) is not signal.SIG_IGN]
+               if threading.current_thread() is threading.main_thread() else [])
+    previous = {s: signal.signal(s, _on_signal) for s in handled}
     try:
         check_environment()  # FFT settings from the environment, before any work
         check_outputs(args)
@@ -170,11 +179,12 @@ def main(argv: list[str] | None = None) -> int:
         parser.exit(5, f"{name}: error: {exc}\n")
     except KeyboardInterrupt:
         parser.exit(130, f"{name}: interrupted\n")
-    except _Terminated:
-        parser.exit(143, f"{name}: terminated\n")
+    except _Terminated as exc:
+        parser.exit(128 + int(exc.signum),
+                    f"{name}: terminated ({signal.Signals(exc.signum).name})\n")
     finally:
-        if in_main_thread:
-            signal.signal(signal.SIGTERM, previous)
+        for s, handler in previous.items():
+            signal.signal(s, handler)
     return 0
 
 
