@@ -310,3 +310,41 @@ print(len(json.loads(file.read_text())["double"].splitlines()))
         theirs = set(other[p].splitlines())
         mine = set(merged[p].splitlines())
         assert theirs <= mine and len(mine) > len(theirs)
+
+
+def test_timings_a_failed_save_lost_reach_the_file_later(tmp_path):
+    """A save that failed (an interrupt, a full disk) lost the shape's timing for good: the
+    process held it, so planning the shape again found nothing new to save, and other
+    processes timed the shape again and rounded differently. A plan now saves what the
+    process holds and the file lacks."""
+    script = """
+import json
+from roughflow import fft, wisdom
+real = wisdom._save
+def failing(file, w):
+    raise OSError(28, "No space left on device")
+wisdom._save = failing
+fft.plan((30, 26))
+wisdom._save = real
+assert not wisdom.path("FFTW_MEASURE").exists()
+fft.plan.cache_clear()
+fft.plan((30, 26))  # planned again, from the process's wisdom: nothing new to time
+print(len(json.loads(wisdom.path("FFTW_MEASURE").read_text())["double"].splitlines()))
+"""
+    env = {**os.environ, wisdom.ENV: str(tmp_path), "ROUGHFLOW_FFTW_EFFORT": "FFTW_MEASURE"}
+    out = subprocess.run([sys.executable, "-c", script], env=env, capture_output=True,
+                         text=True, timeout=120)
+    assert out.returncode == 0, out.stderr[-2000:]
+    # a fresh process that plans (30, 26) reads its timing instead of timing it again
+    check = """
+import pyfftw
+from roughflow import fft, wisdom
+with wisdom.shared("FFTW_MEASURE"):
+    pass
+had = wisdom.entries(pyfftw.export_wisdom())
+fft.plan((30, 26))
+print("timed" if wisdom.entries(pyfftw.export_wisdom()) != had else "read")
+"""
+    out = subprocess.run([sys.executable, "-c", check], env=env, capture_output=True,
+                         text=True, timeout=120)
+    assert out.returncode == 0 and out.stdout.strip() == "read", out.stdout + out.stderr

@@ -231,7 +231,10 @@ class Surface:
     def __post_init__(self) -> None:
         # stored as checked: a list, nan heights or a masked scan failed (or went wrong)
         # only later, in whichever stage met them first
-        object.__setattr__(self, "heights", require_field("surface heights", self.heights))
+        # C order: sums over the heights (the mean level of the solvers) run in memory
+        # order, so a Fortran-ordered or transposed array gave other last bits
+        object.__setattr__(self, "heights", np.ascontiguousarray(
+            require_field("surface heights", self.heights)))
         for name in ("lx", "ly"):
             object.__setattr__(self, name, require_positive(name, getattr(self, name)))
 

@@ -167,13 +167,14 @@ def _valid(text: str) -> bool:
     return True
 
 
-def _load(file: Path) -> None:
+def _load(file: Path) -> tuple[bytes, ...] | None:
+    """Import ``file``'s wisdom; returns it (None: no usable file)."""
     import pyfftw
 
     try:
         raw = file.read_bytes()
     except (FileNotFoundError, NotADirectoryError):  # nothing saved (yet)
-        return
+        return None
     try:  # UnicodeDecodeError (a stray non-ASCII byte) is a ValueError too
         data = json.loads(raw.decode("ascii"))
         wisdom = tuple(data[k].encode("ascii") for k in _PRECISIONS)
@@ -183,8 +184,9 @@ def _load(file: Path) -> None:
                              f"of range")
     except (ValueError, KeyError, TypeError, AttributeError) as err:
         _report(f"{file} is not a wisdom file and will be replaced", err)
-        return
+        return None
     pyfftw.import_wisdom(wisdom)  # a part FFTW rejects (another FFTW build) is left out
+    return wisdom
 
 
 def _save(file: Path, wisdom: tuple[bytes, ...]) -> None:
@@ -277,16 +279,21 @@ def shared(effort: str) -> Iterator[None]:
                     _held[effort] = pyfftw.export_wisdom()
             return
         with _locked(file) as usable:
+            saved = None
             try:  # a directory this process cannot write may still hold wisdom to read
-                _load(file)
+                saved = _load(file)
             except OSError as err:
                 _report(f"cannot read {file}", err)
-            before = entries(pyfftw.export_wisdom())
+            in_file = entries(saved) if saved is not None else ((),) * len(_PRECISIONS)
             try:
                 yield
             finally:
                 _held[effort] = pyfftw.export_wisdom()
-            if usable and entries(_held[effort]) != before:
+            # what this process holds and the file lacks: planned now, or earlier when a
+            # save was interrupted or failed (it would never reach the file otherwise)
+            missing = any(set(h) - set(f) for h, f in zip(entries(_held[effort]), in_file,
+                                                          strict=True))
+            if usable and missing:
                 try:
                     _load(file)  # what others saved meanwhile (a file system without locks)
                     _save(file, pyfftw.export_wisdom())
