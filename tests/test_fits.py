@@ -214,3 +214,36 @@ def test_threshold_values_take_the_corrected_a_c_star_only_where_it_is_calibrate
     # without the resolution it cannot tell: the raw values
     no_ppl = ds.drop_vars("points_per_lambda_s")
     np.testing.assert_array_equal(threshold_values(no_ppl).values, [0.44, 0.43, 0.425])
+
+
+def test_fit_dataset_refuses_duplicated_seeds():
+    """A seed twice in the dataset counted twice in every mean (the joint a_c* moved from
+    0.413 to 0.377 without a word)."""
+    ds = _threshold_dataset()
+    dup = xr.concat([ds, ds.isel(seed=[1])], dim="seed")
+    with pytest.raises(InputError, match=r"seed\(s\) \[1\] more than once"):
+        fit_dataset(dup, n_boot=0)
+
+
+def test_fit_dataset_flags_an_a_star_outside_0_1_and_records_resamples(caplog):
+    """One outlier seed (0.95 among 0.4s) extrapolated a_c* to 1.014, reported as any other;
+    the fit file now flags it, and records how many resamples the error rests on."""
+    ds = _threshold_dataset(noise=0.0)
+    # one broken seed at the largest size, far enough out to push the mean of 8 past 1
+    ds["a_c_star"].loc[{"gamma": 2.0, "seed": 0}] = xr.where(
+        ds["eps_t"] == 0.0625, 9.0, ds["a_c_star"].sel(gamma=2.0, seed=0))
+    with caplog.at_level("WARNING", logger="roughflow.fits"):
+        res = fit_dataset(ds, n_boot=20)
+    easy = res.sel(group="anisotropic", fit="easy", nu_mode="fixed")
+    assert float(easy["a_star"]) > 1 and int(easy["a_star_out_of_range"]) == 1
+    assert "lies outside [0, 1]" in caplog.text
+    iso = res.sel(group="isotropic", fit="joint", nu_mode="fixed")
+    assert int(iso["a_star_out_of_range"]) == 0 and int(iso["n_boot_used"]) == 20
+
+
+def test_one_seed_says_why_there_is_no_bootstrap_error(caplog):
+    ds = _threshold_dataset().isel(seed=[0])
+    with caplog.at_level("WARNING", logger="roughflow.fits"):
+        res = fit_dataset(ds, n_boot=20)
+    assert "one seed (nothing to resample)" in caplog.text
+    assert np.isnan(res["a_star_err"]).all() and (res["n_boot_used"] == 0).all()

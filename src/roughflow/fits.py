@@ -145,7 +145,10 @@ def bootstrap_fit(eps: dict[str, np.ndarray], a_seed: dict[str, np.ndarray], *,
                     for d in names}
 
     best = fit_scaling(means(np.arange(ns)), nu=nu)
-    if n_boot <= 0 or ns < 2:
+    if n_boot <= 0:
+        return best
+    if ns < 2:
+        log.warning("no bootstrap error: the dataset has one seed (nothing to resample)")
         return best
     # a point with one seed has no scatter to resample: every resample that keeps it is the
     # same fit, and the error would be 0 (or blind to that point's spread); none is given
@@ -246,9 +249,15 @@ def fit_dataset(ds: xr.Dataset, *, n_boot: int = FIT_BOOTSTRAP, nu: float = NU_P
                                                "amp_easy_err", "amp_hard", "amp_hard_err",
                                                "nu", "nu_err", "rms_residual")}
     out["n_points"] = np.zeros(shape, dtype=np.int32)
+    out["n_boot_used"] = np.zeros(shape, dtype=np.int32)
     out["nu_at_bound"] = np.zeros(shape, dtype=np.int32)
+    out["a_star_out_of_range"] = np.zeros(shape, dtype=np.int32)
     out["underdetermined"] = np.zeros(shape, dtype=np.int32)
     single_setting(threshold_values(ds))  # a dataset of several settings is refused whole
+    seeds = ds.indexes["seed"] if "seed" in ds.indexes else None
+    if seeds is not None and seeds.has_duplicates:  # each would count twice in every mean
+        twice = sorted({int(s) for s in seeds[seeds.duplicated()]})
+        raise InputError(f"the dataset holds seed(s) {twice} more than once")
     points = {}
     for group in groups:
         try:
@@ -284,7 +293,13 @@ def fit_dataset(ds: xr.Dataset, *, n_boot: int = FIT_BOOTSTRAP, nu: float = NU_P
                 out["nu_err"][gi, fi, mi] = f.nu_err
                 out["rms_residual"][gi, fi, mi] = f.rms_residual
                 out["n_points"][gi, fi, mi] = f.n_points
+                out["n_boot_used"][gi, fi, mi] = f.n_boot
                 out["nu_at_bound"][gi, fi, mi] = int(f.nu_at_bound)
+                if not 0.0 <= f.a_star <= 1.0:  # an outlier seed or too short a lever
+                    out["a_star_out_of_range"][gi, fi, mi] = 1
+                    log.warning("%s %s nu %s: a_c* = %.3f lies outside [0, 1]: the data do "
+                                "not support this extrapolation (an outlier seed, or sizes "
+                                "too close together)", group, which, mode, f.a_star)
                 for d in ("easy", "hard"):
                     key = d if d in f.amplitude else ("both" if "both" in f.amplitude else None)
                     if key is not None:
@@ -303,7 +318,9 @@ def fit_dataset(ds: xr.Dataset, *, n_boot: int = FIT_BOOTSTRAP, nu: float = NU_P
         "nu": "correlation-length exponent nu", "nu_err": "bootstrap standard deviation of nu",
         "rms_residual": "rms residual of the fit to the seed means",
         "n_points": "points in the fit",
+        "n_boot_used": "bootstrap resamples that could be fitted (0: no error given)",
         "nu_at_bound": "1 where a free nu stopped at its bound (nu not determined by the data)",
+        "a_star_out_of_range": "1 where the extrapolated a_c* lies outside [0, 1]",
         "underdetermined": "1 where the data cannot determine the fit (too few system "
                            "sizes): values NaN",
     }
@@ -320,6 +337,10 @@ def fit_dataset(ds: xr.Dataset, *, n_boot: int = FIT_BOOTSTRAP, nu: float = NU_P
                      attrs={"title": "finite-size-scaling fits a_c*(eps) = a_c* + A eps^(1/nu)",
                             "nu_fixed": nu, "n_boot": n_boot, "bootstrap_seed": seed,
                             "eps": "eps_t = max(sqrt(gamma), 1/sqrt(gamma)) lambda_r / L"})
-    for name in ("n_points", "nu_at_bound", "underdetermined"):
+    if not np.isfinite(out["a_star"]).any():
+        log.warning("no fit could be determined: every fit needs at least two system sizes "
+                    "per direction (and three for a free nu)")
+    for name in ("n_points", "n_boot_used", "nu_at_bound", "a_star_out_of_range",
+                 "underdetermined"):
         res[name].encoding = {"dtype": "int32", "_FillValue": np.int32(-1)}
     return res

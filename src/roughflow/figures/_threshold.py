@@ -7,8 +7,9 @@ import xarray as xr
 
 from roughflow.defaults import A_C_STAR_PAPER
 from roughflow.errors import InputError
+from roughflow.fits import direction_names
 
-from ._style import AXIS_COLOR, seed_stats
+from ._style import EASY, HARD, seed_stats
 
 
 def one_size(a: xr.DataArray) -> xr.DataArray:
@@ -32,25 +33,45 @@ def one_size(a: xr.DataArray) -> xr.DataArray:
 
 def plot_vs_gamma(ax, a: xr.DataArray, *, marker: str = "o", filled: bool = True,
                   label: str = "", offset: float = 1.0) -> None:
-    """a_c*(gamma) along x (blue) and y (red): seed mean +- standard error.
+    """a_c*(gamma) in the easy (blue) and hard (red) directions: seed mean +- standard
+    error. The easy direction is x for gamma > 1 and y for gamma < 1
+    (:func:`roughflow.fits.direction_names`, as the fits take it): a curve per axis joined
+    the hard and the easy value across gamma = 1 under one colour and name.
 
     ``a`` has dims (gamma, seed, axis); gammas without data are skipped.
     """
     mean, sem, n = seed_stats(a)
-    for axis in ("x", "y"):
-        m = mean.sel(axis=axis)
-        ok = np.isfinite(m.values)
+    gammas = a["gamma"].values
+    below = bool((gammas < 1).any())
+    for direction, color in (("easy", EASY), ("hard", HARD)):
+        axes = ["x" if direction_names(float(g))["x"] == direction else "y" for g in gammas]
+        m = np.array([float(mean.sel(gamma=g, axis=x)) for g, x in zip(gammas, axes,
+                                                                       strict=True)])
+        s = np.array([float(sem.sel(gamma=g, axis=x)) for g, x in zip(gammas, axes,
+                                                                      strict=True)])
+        ok = np.isfinite(m)
         if not ok.any():
             continue
-        g = a["gamma"].values[ok] * (offset if axis == "x" else 1 / offset)
-        color = AXIS_COLOR[axis]
-        ax.errorbar(g, m.values[ok], yerr=sem.sel(axis=axis).values[ok], marker=marker,
-                    ls="-", lw=0.8, color=color, mfc=color if filled else "white", ms=6,
-                    capsize=2, label=f"{label} {axis} ({'easy' if axis == 'x' else 'hard'})")
+        g = gammas[ok] * (offset if direction == "easy" else 1 / offset)
+        which = (f"{direction} (x for gamma > 1, y below)" if direction == "easy" and below
+                 else f"{direction} (y for gamma > 1, x below)" if below
+                 else f"{'x' if direction == 'easy' else 'y'} ({direction})")
+        ax.errorbar(g, m[ok], yerr=s[ok], marker=marker, ls="-", lw=0.8, color=color,
+                    mfc=color if filled else "white", ms=6, capsize=2,
+                    label=f"{label} {which}".strip())
+
+
+def no_data(ax, what: str = "no finite a_c* in the data") -> None:
+    """Say on an empty panel that it is empty (an empty axis read as a drawing error)."""
+    ax.text(0.5, 0.5, what, transform=ax.transAxes, ha="center", va="center", fontsize=9,
+            color="gray")
 
 
 def format_gamma_axis(ax, gammas) -> None:
     ax.set_xscale("log")
+    # a fixed margin: with one gamma, autoscaling spread the few-percent nudges that keep
+    # the series apart over the whole panel, as if they were other gammas
+    ax.set_xlim(min(gammas) / 1.3, max(gammas) * 1.3)
     ax.set_xticks(list(gammas))
     ax.set_xticklabels([f"{g:g}" for g in gammas])
     ax.minorticks_off()

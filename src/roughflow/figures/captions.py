@@ -24,20 +24,25 @@ CAPTIONS: dict[str, str] = {
     ),
     "threshold_vs_gamma": (
         _CORRECTED
-        + "Critical contact areas a_c* in the stretching (x, blue) and contraction (y, red) "
-        "directions versus the Peklenik number gamma (paper Fig. 2): seed means with standard "
-        "errors. (a) Elastic contact for the ratios eps_f = lambda_s/lambda_r of the config "
-        "(circles: the largest eps_f, squares: smaller ones); (b) bearing-area contact. H = 0.8 "
-        "and L/lambda_r = 4 max(sqrt(gamma), 1/sqrt(gamma)). The dotted line marks the paper's "
+        + "Critical contact areas a_c* in the stretching (easy, blue) and contraction (hard, "
+        "red) directions, x and y for gamma > 1 and y and x below, versus the Peklenik number "
+        "gamma (paper Fig. 2): seed means with standard errors (none for a point of one "
+        "seed). (a) Elastic contact for the ratios eps_f = lambda_s/lambda_r of the config "
+        "(circles: the largest eps_f, then squares, triangles, diamonds); (b) bearing-area "
+        "contact. The paper's H = 0.8 and L/lambda_r = 4 max(sqrt(gamma), 1/sqrt(gamma)); the "
+        "panel titles give the data's model and H. The dotted line marks the paper's "
         f"large-system threshold {A_C_STAR_PAPER}."
     ),
     "threshold_vs_size": (
         _CORRECTED
-        + "Size dependence of a_c* in the stretching (x, blue) and contraction (y, red) "
-        "directions, H = 0.8 (paper Fig. 3), versus eps_t = max(sqrt(gamma), 1/sqrt(gamma)) "
+        + "Size dependence of a_c* in the stretching (easy, blue) and contraction (hard, red) "
+        "directions (x and y for gamma > 1, y and x below), the paper's H = 0.8 (the title "
+        "gives the data's model, H and eps_f; paper Fig. 3), versus "
+        "eps_t = max(sqrt(gamma), 1/sqrt(gamma)) "
         "lambda_r / L. Circles: the anisotropic gamma with the most system sizes, varying "
         "L/lambda_r; triangles: fixed L/lambda_r with other gamma (labelled); black crosses: "
-        "isotropic surfaces. Seed means with standard errors. Lines: joint fit "
+        "isotropic surfaces. Seed means with standard errors (none for a point of one seed). "
+        "Lines: joint fit "
         "a_c*(eps) = a_c* + A eps^(1/nu) with a fixed nu (2D percolation's 4/3 unless the fit "
         "was run with another, as the legend says) and a shared a_c* (solid) and with nu "
         "free (dashed); grey band: a_c* of the fixed-nu fit +- its bootstrap error over seeds. "
@@ -55,10 +60,12 @@ CAPTIONS: dict[str, str] = {
     ),
     "threshold_vs_hurst": (
         _CORRECTED
-        + "Critical contact areas a_c* along x (stretching, blue) and y (contraction, red) versus "
-        "the Peklenik number gamma for the Hurst exponents of the config (paper Fig. 4: "
-        "H = 0.3 full triangles, H = 0.8 open circles), elastic contact, eps_f = 1/16, "
-        "L/lambda_r = 4 max(sqrt(gamma), 1/sqrt(gamma)); seed means with standard errors."
+        + "Critical contact areas a_c* in the stretching (easy, blue) and contraction (hard, "
+        "red) directions (x and y for gamma > 1, y and x below) versus the Peklenik number "
+        "gamma for the Hurst exponents of the config (paper Fig. 4: "
+        "H = 0.3 full triangles, H = 0.8 open circles), the paper's elastic contact with "
+        "eps_f = 1/16 (the title gives the data's), L/lambda_r = 4 max(sqrt(gamma), "
+        "1/sqrt(gamma)); seed means with standard errors (none for a point of one seed)."
     ),
     "flow_isotropic": (
         "Fluid-flow conductance sigma versus relative contact area a_c (paper Fig. 5), "

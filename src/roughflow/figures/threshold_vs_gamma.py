@@ -9,7 +9,8 @@ from matplotlib.figure import Figure
 from roughflow.datasets.sweep import single_setting, threshold_values
 from roughflow.defaults import STUDY_ONE_VALUE
 
-from ._threshold import format_gamma_axis, one_size, plot_vs_gamma
+from ._style import setting_text
+from ._threshold import format_gamma_axis, no_data, one_size, plot_vs_gamma
 from .captions import CAPTIONS
 
 CAPTION = CAPTIONS["threshold_vs_gamma"]
@@ -30,7 +31,9 @@ def draw(ds: xr.Dataset, fit: xr.Dataset | None = None) -> Figure:
             plot_vs_gamma(ax, am.sel(eps_f=e), marker=MARKERS[i % len(MARKERS)],
                           filled=i == 0, label=f"eps_f = 1/{1 / e:.3g}",
                           offset=1.0 + 0.02 * i)
+        if not eps_list:
+            no_data(ax)
         format_gamma_axis(ax, ds["gamma"].values)
-        ax.set_title(f"({tag}) {model} contact", fontsize=10)
+        ax.set_title(f"({tag}) {setting_text(am)}", fontsize=10)  # eps_f: in the legend
         ax.legend(fontsize=7)
     return fig

@@ -9,7 +9,8 @@ from matplotlib.figure import Figure
 from roughflow.datasets.sweep import single_setting, threshold_values
 from roughflow.defaults import STUDY_ONE_VALUE
 
-from ._threshold import format_gamma_axis, one_size, plot_vs_gamma
+from ._style import setting_text
+from ._threshold import format_gamma_axis, no_data, one_size, plot_vs_gamma
 from .captions import CAPTIONS
 
 CAPTION = CAPTIONS["threshold_vs_hurst"]
@@ -21,6 +22,8 @@ def draw(ds: xr.Dataset, fit: xr.Dataset | None = None) -> Figure:
     a = single_setting(threshold_values(ds), STUDY_ONE_VALUE["threshold_vs_hurst"])
     a = one_size(a)
     hursts = sorted(a["hurst"].values)
+    if not np.isfinite(a.values).any():
+        no_data(ax)
     for h in hursts:
         sub = a.sel(hurst=h)
         if not np.isfinite(sub.values).any():
@@ -29,5 +32,6 @@ def draw(ds: xr.Dataset, fit: xr.Dataset | None = None) -> Figure:
         plot_vs_gamma(ax, sub, marker="^" if low else "o", filled=low, label=f"H = {h:g}",
                       offset=1.02 if low else 1.0)
     format_gamma_axis(ax, a["gamma"].values)
+    ax.set_title(setting_text(a), fontsize=9)
     ax.legend(fontsize=7)
     return fig

@@ -8,9 +8,10 @@ from matplotlib.figure import Figure
 
 from roughflow.datasets.sweep import single_setting, threshold_values
 from roughflow.defaults import NU_PERCOLATION
-from roughflow.fits import scaling
+from roughflow.fits import direction_names, scaling
 
-from ._style import EASY, HARD, seed_stats
+from ._style import EASY, HARD, seed_stats, setting_text
+from ._threshold import no_data
 from .captions import CAPTIONS
 
 CAPTION = CAPTIONS["threshold_vs_size"]
@@ -41,7 +42,9 @@ def draw(ds: xr.Dataset, fit: xr.Dataset | None = None) -> Figure:
     main = max(counts, key=counts.get) if counts else None
     eps_max = 0.0
     for g in gammas:
-        for axis, color in (("x", EASY), ("y", HARD)):
+        names = direction_names(g)  # x is easy for gamma > 1, y below (as the fits take it)
+        for axis in ("x", "y"):
+            color = EASY if names[axis] == "easy" else HARD
             m = mean.sel(gamma=g, axis=axis)
             ok = np.isfinite(m.values)
             if not ok.any():
@@ -54,8 +57,9 @@ def draw(ds: xr.Dataset, fit: xr.Dataset | None = None) -> Figure:
                             capsize=2, label="isotropic" if axis == "x" else None)
             else:
                 marker = "o" if g == main else "^"
-                lab = (f"gamma = {g:g}, {axis}" if g == main
-                       else (f"other gamma, {axis}" if g == min(set(aniso) - {main}) else None))
+                lab = (f"gamma = {g:g}, {axis} ({names[axis]})" if g == main
+                       else (f"other gamma, {axis} ({names[axis]})"
+                             if g == min(set(aniso) - {main}) else None))
                 ax.errorbar(e, m.values[ok], yerr=s, marker=marker, color=color, ls="none",
                             mfc="white" if marker == "o" else color, capsize=2, label=lab)
                 if g != main:
@@ -90,12 +94,18 @@ def draw(ds: xr.Dataset, fit: xr.Dataset | None = None) -> Figure:
                 lw=0.8, ls=":")
         err = f" +- {iso['a_star_err']:.3f}" if np.isfinite(iso["a_star_err"]) else ""
         lines.append(f"isotropic, nu {_nu_text(iso['nu'])}: a_c* = {iso['a_star']:.3f}{err}")
+    if fit is not None and not lines:
+        lines.append("fit not determined (too few sizes or seeds: see the fit's log)")
     if lines:
         ax.text(0.02, 0.02, "\n".join(lines), transform=ax.transAxes, fontsize=6.5,
                 va="bottom", bbox={"facecolor": "white", "alpha": 0.8, "lw": 0})
+    if eps_max == 0.0:
+        no_data(ax)
+    ax.set_title(setting_text(a), fontsize=9)
     ax.set_xlim(0, eps[-1])
     ax.set_xlabel("eps_t = max(sqrt(gamma), 1/sqrt(gamma)) lambda_r / L")
     ax.set_ylabel("critical contact area a_c*")
     ax.grid(alpha=0.3)
-    ax.legend(fontsize=7, loc="upper left")
+    if ax.get_legend_handles_labels()[0]:
+        ax.legend(fontsize=7, loc="upper left")
     return fig
