@@ -247,3 +247,23 @@ def test_one_seed_says_why_there_is_no_bootstrap_error(caplog):
         res = fit_dataset(ds, n_boot=20)
     assert "one seed (nothing to resample)" in caplog.text
     assert np.isnan(res["a_star_err"]).all() and (res["n_boot_used"] == 0).all()
+
+
+def test_a_fit_records_its_series_and_a_figure_refuses_another_s(tmp_path):
+    """A fit file said nothing of the series it fitted, and the figure drew an H = 0.8 fit
+    through H = 0.5 data without a word."""
+    import matplotlib
+
+    matplotlib.use("Agg")
+    from roughflow.figures import threshold_vs_size
+    from roughflow.io import read_dataset, write_dataset
+
+    ds = _threshold_dataset()
+    write_dataset(fit_dataset(ds, n_boot=0), tmp_path / "fit.nc")
+    fit = read_dataset(tmp_path / "fit.nc")
+    assert fit.attrs["fitted_model"] == "elastic" and fit.attrs["fitted_hurst"] == 0.8
+    assert fit.attrs["fitted_eps_f"] == 0.0625 and fit.attrs["a_c_star_used"] == "raw"
+    threshold_vs_size.draw(ds, fit)
+    other = ds.assign_coords(hurst=[0.5])
+    with pytest.raises(InputError, match="hurst 0.8 \\(fit\\) against 0.5 \\(data\\)"):
+        threshold_vs_size.draw(other, fit)

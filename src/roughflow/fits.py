@@ -22,7 +22,7 @@ from scipy.optimize import least_squares
 
 from roughflow.datasets.sweep import single_setting, threshold_values
 from roughflow.datasets.units import DIMENSIONLESS
-from roughflow.defaults import FIT_BOOTSTRAP, NU_BOUNDS, NU_PERCOLATION
+from roughflow.defaults import CORRECTION_MIN_POINTS, FIT_BOOTSTRAP, NU_BOUNDS, NU_PERCOLATION
 from roughflow.errors import InputError, check_nu, require_int
 
 if TYPE_CHECKING:
@@ -200,6 +200,28 @@ def direction_names(gamma: float) -> dict[str, str]:
     return {"x": "easy", "y": "hard"} if gamma >= 1 else {"x": "hard", "y": "easy"}
 
 
+#: What a fit file records of the series it fitted (``fitted_<dim>`` attributes), so that a
+#: figure can refuse a fit of another series.
+FITTED_DIMS = ("model", "hurst", "eps_f")
+
+
+def fitted_setting(a: xr.DataArray) -> dict:
+    """``fitted_model``, ``fitted_hurst``, ``fitted_eps_f``: the series' single values."""
+    return {f"fitted_{d}": (str(a[d].item()) if d == "model" else float(a[d]))
+            for d in FITTED_DIMS if d in a.coords and a[d].ndim == 0}
+
+
+def corrected_text(ds: xr.Dataset) -> str:
+    """Which a_c* :func:`~roughflow.datasets.sweep.threshold_values` gave the fit."""
+    if "a_c_star_corrected" not in ds or "points_per_lambda_s" not in ds:
+        return "raw"
+    ppl = np.asarray(ds["points_per_lambda_s"], dtype=float)
+    fine = ppl[np.isfinite(ppl)] >= CORRECTION_MIN_POINTS  # NaN: a cell without a job
+    return ("perimeter-corrected" if fine.all() else "raw" if not fine.any() else
+            f"perimeter-corrected on grids of >= {CORRECTION_MIN_POINTS:g} points per "
+            "lambda_s, raw on coarser ones")
+
+
 def threshold_points(ds: xr.Dataset, group: str) -> tuple[dict, dict]:
     """(eps, a_seed) per direction from a threshold study dataset.
 
@@ -253,7 +275,8 @@ def fit_dataset(ds: xr.Dataset, *, n_boot: int = FIT_BOOTSTRAP, nu: float = NU_P
     out["nu_at_bound"] = np.zeros(shape, dtype=np.int32)
     out["a_star_out_of_range"] = np.zeros(shape, dtype=np.int32)
     out["underdetermined"] = np.zeros(shape, dtype=np.int32)
-    single_setting(threshold_values(ds))  # a dataset of several settings is refused whole
+    # a dataset of several settings is refused whole; the one setting is recorded
+    setting = fitted_setting(single_setting(threshold_values(ds)))
     seeds = ds.indexes["seed"] if "seed" in ds.indexes else None
     if seeds is not None and seeds.has_duplicates:  # each would count twice in every mean
         twice = sorted({int(s) for s in seeds[seeds.duplicated()]})
@@ -336,6 +359,7 @@ def fit_dataset(ds: xr.Dataset, *, n_boot: int = FIT_BOOTSTRAP, nu: float = NU_P
     res = xr.Dataset(data, coords=coords,
                      attrs={"title": "finite-size-scaling fits a_c*(eps) = a_c* + A eps^(1/nu)",
                             "nu_fixed": nu, "n_boot": n_boot, "bootstrap_seed": seed,
+                            **setting, "a_c_star_used": corrected_text(ds),
                             "eps": "eps_t = max(sqrt(gamma), 1/sqrt(gamma)) lambda_r / L"})
     if not np.isfinite(out["a_star"]).any():
         log.warning("no fit could be determined: every fit needs at least two system sizes "

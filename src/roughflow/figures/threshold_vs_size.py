@@ -8,7 +8,8 @@ from matplotlib.figure import Figure
 
 from roughflow.datasets.sweep import single_setting, threshold_values
 from roughflow.defaults import NU_PERCOLATION
-from roughflow.fits import direction_names, scaling
+from roughflow.errors import InputError
+from roughflow.fits import direction_names, fitted_setting, scaling
 
 from ._style import EASY, HARD, seed_stats, setting_text
 from ._threshold import no_data
@@ -35,6 +36,13 @@ def draw(ds: xr.Dataset, fit: xr.Dataset | None = None) -> Figure:
     fig = Figure(figsize=(6.4, 4.8), layout="constrained")
     ax = fig.subplots()
     a = single_setting(threshold_values(ds))  # the fits' check: one model, hurst, eps_f
+    if fit is not None:  # a fit of another series drew its lines through these points
+        mine = fitted_setting(a)
+        other = {k: v for k, v in fit.attrs.items() if k.startswith("fitted_")}
+        differ = [f"{k[7:]} {other[k]} (fit) against {mine[k]} (data)" for k in other
+                  if k in mine and other[k] != mine[k]]
+        if differ:
+            raise InputError("the fit file fitted another series: " + ", ".join(differ))
     mean, sem, _ = seed_stats(a)
     gammas = [float(g) for g in a["gamma"].values]
     aniso = [g for g in gammas if not np.isclose(g, 1.0)]
