@@ -81,3 +81,16 @@ def test_an_empty_panel_says_so():
     assert "no finite a_c*" in " ".join(t.get_text() for t in fig.axes[0].texts)
     fig = threshold_vs_gamma.draw(ds)
     assert "no finite a_c*" in " ".join(t.get_text() for t in fig.axes[0].texts)
+
+
+def test_a_free_nu_at_its_bound_is_said_in_the_figure():
+    """A joint fit whose free nu stopped at its bound was drawn as any other."""
+    from roughflow.fits import fit_dataset
+
+    ds = study([2.0], n_seeds=3, eps_t=(0.125, 0.25, 0.5))
+    fit = fit_dataset(ds, n_boot=0)
+    fit["nu_at_bound"].loc[{"group": "anisotropic", "fit": "joint", "nu_mode": "free"}] = 1
+    fit["a_star"].loc[{"group": "anisotropic", "fit": "joint", "nu_mode": "free"}] = 0.4
+    fig = threshold_vs_size.draw(ds, fit)
+    text = " ".join(t.get_text() for t in fig.axes[0].texts)
+    assert "nu free" in text and "at its bound: not determined" in text

@@ -85,8 +85,9 @@ def draw(ds: xr.Dataset, fit: xr.Dataset | None = None) -> Figure:
                     ls=ls, lw=1)
             err = f" +- {row['a_star_err']:.3f}" if np.isfinite(row["a_star_err"]) else ""
             nu_err = f" +- {row['nu_err']:.2f}" if np.isfinite(row["nu_err"]) else ""
+            bound = " (at its bound: not determined)" if row.get("nu_at_bound") else ""
             lines.append(f"joint, nu {mode}: a_c* = {row['a_star']:.3f}{err}, "
-                         f"nu = {row['nu']:.2f}{nu_err if mode == 'free' else ''}")
+                         f"nu = {row['nu']:.2f}{nu_err if mode == 'free' else ''}{bound}")
             if mode == "fixed" and np.isfinite(row["a_star_err"]):
                 ax.axhspan(row["a_star"] - row["a_star_err"], row["a_star"] + row["a_star_err"],
                            color="gray", alpha=0.2, lw=0)
