@@ -266,3 +266,21 @@ def test_the_import_s_warnings_reach_the_leak_table(tmp_path, capsys):
     assert "note: the import warned: the pixels are" in capsys.readouterr().out
     with xr.open_dataset(tmp_path / "l.nc") as ds:
         assert "the pixels are" in ds.attrs["scan_warnings"]
+
+
+@pytest.mark.parametrize(("boundary", "cells"), [("mirror", 256), ("window", 144)])
+def test_a_sealing_tolerance_below_one_window_cell_is_refused_first(monkeypatch, boundary,
+                                                                    cells):
+    """The threshold's tolerance was checked against the solver cell (4 times the scan for
+    mirror), so a 16 x 16 scan ran its pressure curve and 40 sealing solves and then failed
+    with a ConvergenceError (exit 3). It is checked against the analysed window (12 x 12
+    for window), before any solve."""
+    import roughflow.leak as leak
+
+    s = scan_surface()
+    h = s.heights[:16, :16]
+    small = Surface(heights=h, lx=s.lx * 16 / s.shape[0], ly=s.ly * 16 / s.shape[1],
+                    scan=s.scan)
+    monkeypatch.setattr(leak, "solve", lambda *a, **k: pytest.fail("a contact solve ran"))
+    with pytest.raises(InputError, match=f"1/{cells} "):
+        leak_curve(small, [0.05], boundary=boundary)

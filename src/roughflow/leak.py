@@ -39,6 +39,7 @@ from roughflow.flow import check_sigma_tol
 from roughflow.percolation import percolates
 from roughflow.resources import check_memory
 from roughflow.search import SearchOptions, Threshold, first_pressure, threshold
+from roughflow.search.critical import check_area_tol
 from roughflow.surface import Surface, rms_gradient
 
 if TYPE_CHECKING:
@@ -126,7 +127,8 @@ def sealing_search(emb: Embedding, *, gbar: float, tol: float = THRESHOLD_TOL,
     opts = SearchOptions(
         pressure_range=tuple(scale * p for p in THRESHOLD_PRESSURE_RANGE),
         first_pressure=scale * first_pressure("elastic"), contact_tol=contact_tol,
-        on_unbracketed="nan", observe=emb.observe, periodic=emb.periodic)
+        on_unbracketed="nan", observe=emb.observe, observed_shape=emb.shape,
+        periodic=emb.periodic)
     res = threshold(emb.surface, None, tol=tol, options=opts, threads=threads)
     return {ax: dataclasses.replace(t, p_lo=emb.nominal_pressure(t.p_lo),
                                     p_hi=emb.nominal_pressure(t.p_hi))
@@ -159,6 +161,8 @@ def leak_curve(surface: Surface, pressures: ArrayLike, *, boundary: str | None =
     check_sigma_tol(flow_sigma_tol)
     method = default_boundary(surface) if boundary is None else boundary
     emb = embed(surface, method)
+    if sealing:  # the sealing search's check, before the curve's solves
+        check_area_tol(threshold_tol, emb.shape)
     # a leak curve holds what a pressure ladder holds, on the embedded grid
     check_memory("ladder", emb.surface.heights.shape, what="a leak curve")
     gbar = (surface.scan.rms_gradient if surface.scan is not None else

@@ -173,6 +173,9 @@ class SearchOptions:
         (e.g. the window of a non-periodic scan inside its solver cell,
         :meth:`roughflow.boundary.Embedding.observe`); default the solved state itself.
         Warm starts keep using the solved states. Elastic and adhesive models only.
+    observed_shape: the grid of the states ``observe`` returns: ``tol`` must cover one of
+        its cells, not one of the solver cell's, which can be 4 times as many (None: the
+        surface's grid).
     periodic: the observed state is periodic across the flow (default), or closed by
         walls there (False: a non-periodic scan); see :func:`roughflow.percolation.percolates`.
     """
@@ -187,6 +190,7 @@ class SearchOptions:
     exact_bearing: bool = True
     on_unbracketed: str = "raise"
     observe: Callable[[ContactResult], ContactResult] | None = None
+    observed_shape: tuple[int, int] | None = None
     periodic: bool = True
 
     def __post_init__(self) -> None:
@@ -550,6 +554,17 @@ def _bearing_exact(heights: np.ndarray, axes, tol: float, on_unbracketed: str):
     return out
 
 
+def check_area_tol(tol: float, shape: tuple[int, int]) -> None:
+    """:class:`InputError` where ``tol`` (in a_c) is below the area of one cell of the grid
+    whose contact area counts: two states' areas differ by whole cells, so a bracket
+    narrower than one cannot close (the search ran its solves and then stalled)."""
+    cells = int(shape[0]) * int(shape[1])
+    if tol * cells < 1:
+        raise InputError(f"tol={tol!r} is below the area of one cell of the "
+                         f"{shape[0]} x {shape[1]} grid whose area counts (1/{cells} = "
+                         f"{1 / cells:.3g}): give tol >= {1 / cells:.3g}")
+
+
 def threshold(
     surface: Surface,
     axis: int | None = None,
@@ -593,11 +608,8 @@ def threshold(
     # a Surface checks its heights when made, but its array can be changed in place since
     heights = require_field("surface heights", surface.heights)
     shape = heights.shape
-    if tol * heights.size < 1 and not (model == "bearing" and opts.exact_bearing):
-        # two states' areas differ by whole cells: a bracket narrower than one cannot close
-        raise InputError(f"tol={tol!r} is below the area of one cell of this "
-                         f"{shape[0]} x {shape[1]} grid (1/{heights.size} = "
-                         f"{1 / heights.size:.3g}): give tol >= {1 / heights.size:.3g}")
+    if not (model == "bearing" and opts.exact_bearing):
+        check_area_tol(tol, shape if opts.observed_shape is None else opts.observed_shape)
     # Elastic states seen whole are kept as q = gap - c pressure in float32 (CompactState, 4
     # bytes a cell instead of 17): the search then needs none of a result's arrays once it is
     # sampled, and its gfmd solves share one workspace instead of allocating (fresh memory
