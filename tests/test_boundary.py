@@ -97,6 +97,24 @@ def test_pad_keeps_the_load_on_the_scan():
     assert seen.pressure == pytest.approx(0.2)
 
 
+def test_pad_refuses_a_state_whose_padding_touches():
+    """At high load the sag of the whole cell brought the padding into contact: on a 128^2
+    scan at 0.6 E* gbar it carried 15-20 % of the load, and a_c, gap and sigma of the scan
+    came out wrong without a word (documented as never in contact)."""
+    spec = SurfaceSpec.from_sweep(l_over_lambda_r=8, eps_f=0.125, points_per_lambda_s=2,
+                                  seed=0)
+    s = Surface(heights=generate(spec).heights[:, :120], lx=1.0, ly=120 / 128)
+    emb = embed(s, "pad")
+    low = emb.observe(contact.solve(emb.surface, emb.cell_pressure(0.1)))
+    assert low.area_fraction > 0.2
+    high = contact.solve(emb.surface, emb.cell_pressure(0.8))
+    outside = high.contact.copy()
+    outside[emb.window] = False
+    assert outside.any()  # the case: the padding is in contact
+    with pytest.raises(InputError, match="padding of boundary 'pad' touches"):
+        emb.observe(high)
+
+
 def test_window_and_periodic():
     s = scan()
     emb = embed(s, "window", margin=0.125)
