@@ -143,8 +143,9 @@ def format_table(ds: xr.Dataset) -> str:
         if star > SEALING_AREA_NOTE:
             lines.append(f"note: along {a} the seal closes only at a_c* = {star:.3f} (random "
                          f"surfaces: about 0.4): a channel the contact hardly closes, such as "
-                         f"one scan line offset from the others; compare an import with "
-                         f"--detrend lines-x or lines-y")
+                         f"one scan line offset from the others (compare an import with "
+                         f"--detrend lines-x or lines-y) or a large region filled with "
+                         f"--fill min (a flat basin)")
     warned = str(ds.attrs.get("scan_warnings", ""))
     if warned:  # said in the import's log, which a workflow's user may never read
         lines.append(f"note: the import warned: {warned}")
