@@ -321,3 +321,35 @@ def test_gap_theory_moves_the_thresholds_by_the_grid_bias_of_the_area():
     assert t.sigma_isotropic == pytest.approx(bruggeman(m, a_c_star=0.43).sigma, rel=1e-12)
     assert plain.sigma_isotropic == pytest.approx(bruggeman(m, a_c_star=0.4).sigma, rel=1e-12)
     assert t.sigma_isotropic > plain.sigma_isotropic  # a later threshold: more conductance
+
+
+def test_huge_histogram_weights_are_normalised_without_overflow():
+    """Weights whose sum overflows (1e308 each) were divided by inf: every cell dropped and
+    sigma came out 0 instead of the value for weights [1, 1]."""
+    s = np.array([1.0, 2.0])
+    ref = bruggeman(s, weights=[1.0, 1.0], a_c_star=0.415).sigma
+    assert bruggeman(s, weights=[1e308, 1e308], a_c_star=0.415).sigma == pytest.approx(ref,
+                                                                                       rel=1e-14)
+
+
+@pytest.mark.parametrize("gamma", [64.0, 1 / 64, 8.0])
+@pytest.mark.parametrize("delta", [1e-4, 1e-6, 2e-7])
+def test_anisotropic_bruggeman_converges_just_below_the_threshold(gamma, delta):
+    """Within 1e-6 of a_c* (gamma 64) the self-consistency residual could not fall below
+    xtol times f's slope, which grows as 1/(a_c* - a_c): a ConvergenceError for valid input
+    aborted gap_theory and the CLI file. Measured on rho (the log of sigma_x/sigma_y), the
+    solution is converged there, and sigma_x/sigma_y tends to gamma^2 (Eq. 9's limit);
+    within 1e-7 of a_c* both directions are closed."""
+    from roughflow.theory import bruggeman_anisotropic
+
+    a_star = 0.415
+    z = a_star * (1 - delta)
+    r = bruggeman_anisotropic(np.array([0.0, 1 / 12]), weights=[z, 1 - z], a_c_star=a_star,
+                              gamma=gamma)
+    # the ratio approaches gamma^2 linearly in delta; 1e-3 covers delta = 1e-4 at gamma 64
+    assert r.sigma_x / r.sigma_y == pytest.approx(gamma**2, rel=1e-3)
+    assert r.residual < 1e-6
+    near = a_star * (1 - 1e-8)  # closer than the directions' digits resolve: closed
+    closed = bruggeman_anisotropic(np.array([0.0, 1 / 12]), weights=[near, 1 - near],
+                                   a_c_star=a_star, gamma=gamma)
+    assert (closed.sigma_x, closed.sigma_y) == (0.0, 0.0)

@@ -67,6 +67,12 @@ _BIG = 1e3
 # Closed-fraction weights within this (relative) distance of the threshold count as at
 # the threshold: normalising weights leaves round-off of ~1e-16 in a_c.
 _AT_THRESHOLD = 1e-12
+# The anisotropic equations close both directions this much nearer: there the two
+# directions' solutions keep too few digits to set sigma_x/sigma_y (measured at gamma = 64:
+# the ratio 0.35 % off gamma^2 at 3e-9 of a_c* from the threshold, 52 % off at 1e-9; gamma
+# 8 and 16 exact to 3e-10), while sigma itself is below 1e-7 of the open medium's. Scaled
+# by (gamma / 64)^4 beyond gamma = 64 (or below 1/64).
+_AT_THRESHOLD_ANISOTROPIC = 1e-7
 
 
 @dataclass(frozen=True)
@@ -239,7 +245,8 @@ def bruggeman_anisotropic(
             a_c=z, a_c_star=a_c_star, dimension=d,
         )
 
-    if m.s.size == 0 or z >= a_c_star * (1.0 - _AT_THRESHOLD):
+    near = _AT_THRESHOLD_ANISOTROPIC * max(1.0, (max(gamma, 1.0 / gamma) / 64.0) ** 4)
+    if m.s.size == 0 or z >= a_c_star * (1.0 - near):
         # Both directions closed: the x and y thresholds coincide only at gamma~ = 1.
         return result(0.0, 0.0, 1.0, 0.0)
 
@@ -253,6 +260,7 @@ def bruggeman_anisotropic(
 
     rho0 = 2.0 * math.log(gamma)  # gamma~ = 1: both equations coincide, f = -rho0 (corrected)
     f0 = f(rho0)
+    iterations = 0
     if f0 == 0.0:
         rho = rho0
     else:
@@ -276,16 +284,27 @@ def bruggeman_anisotropic(
             rho = hi
         else:
             a, b = sorted((lo, hi))
-            rho = brentq(f, a, b, xtol=_XTOL, rtol=4 * np.finfo(float).eps, maxiter=_MAXITER)
+            rho, info = brentq(f, a, b, xtol=_XTOL, rtol=4 * np.finfo(float).eps,
+                               maxiter=_MAXITER, full_output=True, disp=False)
+            iterations = info.iterations
     g = gamma * math.exp(-0.5 * rho)
     (sx, rx), (sy, ry) = both(g)
-    # residual of the self-consistency gamma~ = gamma sqrt(sigma_y/sigma_x) as well
+    # residual of the self-consistency gamma~ = gamma sqrt(sigma_y/sigma_x) as well: it is
+    # exp(f/2) - 1, and near a_c* f's slope grows as 1/(a_c* - a_c), so f cannot get below
+    # xtol times it even where rho (the log of sigma_x/sigma_y) is exact to xtol. There the
+    # error of rho, |f| over f's slope, is what measures the solution (it failed at 1e-6 of
+    # a_c* from the threshold for gamma = 64, 1e-10 for gamma = 8).
     rg = abs(g / (gamma * math.sqrt(sy / sx)) - 1.0) if sx > 0 and sy > 0 else math.inf
+    if math.isfinite(rg) and rg >= 1e-6:
+        h = 1e-7 * max(1.0, abs(rho))
+        slope = (f(rho - h) - f(rho + h)) / (2.0 * h)
+        if slope > 0 and math.isfinite(slope):
+            rg = abs(math.log1p(rg)) * 2.0 / slope  # |f| / |f'|: the error of rho
     res = max(rx, ry, rg)
     if not res < 1e-6:
         raise ConvergenceError(
             f"anisotropic Bruggeman did not converge (gamma={gamma}, form={form})",
-            residual=res, iterations=_MAXITER,
+            residual=res, iterations=iterations,
         )
     return result(sx, sy, g, res)
 
@@ -373,7 +392,11 @@ def _distribution(sigma_values, weights) -> tuple[np.ndarray, np.ndarray, float]
         w = _check_nonnegative("weights", weights).ravel()
         if w.size != s.size:
             raise InputError(f"weights has {w.size} entries but sigma_values has {s.size}")
-        total = w.sum()
+        with np.errstate(over="ignore"):
+            total = w.sum()
+        if np.isinf(total):  # weights near the float maximum: the sum overflowed to inf
+            w = w / w.max()
+            total = w.sum()
         if not total > 0:
             raise InputError("weights sum to zero: the histogram is empty")
         w = w / total
