@@ -261,3 +261,15 @@ def test_default_energy_factor_is_the_papers():
     assert DEFAULT_ENERGY_FACTOR == 0.42
     default = inspect.signature(predict_conductance).parameters["energy_factor"].default
     assert default == DEFAULT_ENERGY_FACTOR
+
+
+def test_mean_gap_follows_the_log_law_where_t0_squared_underflows():
+    """Below p ~ 1e-165 t0^2 underflowed to 0 and E1(0) made the mean gap inf (and the
+    conductance prediction refused it); u(p) = -u0 ln p + const holds on."""
+    from roughflow.theory import persson_mean_gap
+
+    spec = SurfaceSpec.from_sweep(points_per_lambda_s=2, seed=0)
+    u = [persson_mean_gap(p, spec) for p in (1e-100, 1e-160, 1e-220, 1e-280)]
+    assert np.isfinite(u).all()
+    steps = np.diff(u)  # equal steps of 60 decades: the slope u0 ln 10 per decade
+    np.testing.assert_allclose(steps, steps[0], rtol=1e-6)
