@@ -353,3 +353,14 @@ def test_anisotropic_bruggeman_converges_just_below_the_threshold(gamma, delta):
     closed = bruggeman_anisotropic(np.array([0.0, 1 / 12]), weights=[near, 1 - near],
                                    a_c_star=a_star, gamma=gamma)
     assert (closed.sigma_x, closed.sigma_y) == (0.0, 0.0)
+
+
+@pytest.mark.parametrize("gamma", [1e3, 1e4, 1e-4])
+def test_very_large_gamma_is_not_closed_far_from_the_threshold(gamma):
+    """The margin within which both directions count as closed grew as gamma^4 beyond 64
+    without a bound: from gamma about 3600 every contact area gave sigma = 0."""
+    from roughflow.theory import bruggeman_anisotropic
+
+    r = bruggeman_anisotropic(np.array([0.0, 1 / 12]), weights=[0.3, 0.7], a_c_star=0.415,
+                              gamma=gamma)
+    assert max(r.sigma_x, r.sigma_y) > 0.01 and r.residual < 1e-6

@@ -101,7 +101,6 @@ class Embedding:
             area_fraction=float(contact.mean()), mean_gap=float(gap.mean()),
             pressure=self.nominal_pressure(result.pressure))
 
-
     def _check_padding_free(self, result: ContactResult) -> None:
         """InputError where the padding of ``"pad"`` is in contact: at high load the elastic
         sag of the whole cell (of order p L / E*) exceeds the padding's depth, the padding
@@ -117,7 +116,8 @@ class Embedding:
                 f"at the nominal pressure {self.nominal_pressure(result.pressure):.4g} E* the "
                 f"padding of boundary 'pad' touches ({touching} cells outside the scan, "
                 f"{share:.0%} of the load): the scan's results would be wrong. Use boundary "
-                f"'mirror' or 'window', or lower pressures")
+                f"'mirror' or 'window' (the sealing search tries pressures up to 4 E* gbar), "
+                f"or lower pressures")
 
 
 def cell_points(shape: tuple[int, int], method: str) -> int:

@@ -212,13 +212,16 @@ def fitted_setting(a: xr.DataArray) -> dict:
 
 
 def corrected_text(ds: xr.Dataset) -> str:
-    """Which a_c* :func:`~roughflow.datasets.sweep.threshold_values` gave the fit."""
-    if "a_c_star_corrected" not in ds or "points_per_lambda_s" not in ds:
+    """Which a_c* :func:`~roughflow.datasets.sweep.threshold_values` gave the fit (read from
+    what it returned, so that the two cannot disagree)."""
+    used, raw = threshold_values(ds), ds["a_c_star"]
+    finite = np.isfinite(np.asarray(used, dtype=float))
+    same = (np.asarray(used, dtype=float) == np.asarray(raw, dtype=float))[finite]
+    if same.all():
         return "raw"
-    ppl = np.asarray(ds["points_per_lambda_s"], dtype=float)
-    fine = ppl[np.isfinite(ppl)] >= CORRECTION_MIN_POINTS  # NaN: a cell without a job
-    return ("perimeter-corrected" if fine.all() else "raw" if not fine.any() else
-            f"perimeter-corrected on grids of >= {CORRECTION_MIN_POINTS:g} points per "
+    if not same.any():
+        return "perimeter-corrected"
+    return (f"perimeter-corrected on grids of >= {CORRECTION_MIN_POINTS:g} points per "
             "lambda_s, raw on coarser ones")
 
 

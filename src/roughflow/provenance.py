@@ -58,7 +58,10 @@ def source_commit(package_dir: Path = PACKAGE_DIR) -> str:
     number alone cannot tell a result computed before a change of the numerics from one
     computed after it; once per process (two git calls, about 10 ms)."""
     def git(*args: str) -> str:
-        return subprocess.run(["git", "-C", str(package_dir), *args], capture_output=True,
+        # --no-optional-locks: status would refresh the index under .git/index.lock, which
+        # a user's own git command running meanwhile then finds taken
+        return subprocess.run(["git", "--no-optional-locks", "-C", str(package_dir), *args],
+                              capture_output=True,
                               text=True, timeout=30, check=True).stdout.strip()
 
     try:

@@ -69,4 +69,5 @@ rule leak:
         # the table is written whole or not at all, as the dataset is
         "ROUGHFLOW_FFT_THREADS={threads} {RF} -v leak {input} {params.args} "
         "--threads {threads} -o {output.data} > {output.table}.part 2> {log} "
-        "&& mv {output.table}.part {output.table}" + KEEP_FAILED_LOG
+        "&& mv {output.table}.part {output.table} || {{ rc=$?; rm -f {output.table}.part; "
+        "exit $rc; }}" + KEEP_FAILED_LOG

@@ -48,7 +48,7 @@ EXIT_STATUS = {0: "success", 1: "unexpected error (a bug: please report the trac
 
 
 class _Terminated(BaseException):
-    """A terminating signal (:data:`~roughflow.io.TERMINATING_SIGNALS`), turned into an
+    """A terminating signal (:data:`~roughflow.files.TERMINATING_SIGNALS`), turned into an
     exception so that temporary files are removed on the way out, as they are for Ctrl-C
     (the default action ends the process where it stands)."""
 

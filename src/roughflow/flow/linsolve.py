@@ -35,6 +35,7 @@ or end early once its own test certifies the iterate (a proven bound on sigma's 
 from __future__ import annotations
 
 import logging
+import threading
 from collections.abc import Callable, Iterator
 from contextlib import contextmanager
 from dataclasses import dataclass, replace
@@ -134,6 +135,7 @@ def check_method(method: str | None) -> str:
 
 #: the seed of the random start vector of pyamg's spectral-radius estimate (``"sa"``)
 SA_RNG_SEED = 0
+_SA_BUILD_LOCK = threading.Lock()
 
 
 @contextmanager
@@ -157,7 +159,9 @@ def _amg_preconditioner(a: sp.csr_matrix, method: str) -> spla.LinearOperator:
         return amg.rs_vcycle(amg.rs_hierarchy(a))
     import pyamg
 
-    with _fixed_global_rng(SA_RNG_SEED):
+    # one build at a time: the global stream is one per process, and two threads seeding
+    # and restoring it at once disturbed each other's builds and the caller's stream
+    with _SA_BUILD_LOCK, _fixed_global_rng(SA_RNG_SEED):
         ml = pyamg.smoothed_aggregation_solver(a, max_coarse=amg.MAX_COARSE,
                                                coarse_solver="splu")
     return ml.aspreconditioner(cycle="V")

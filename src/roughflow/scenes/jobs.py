@@ -802,8 +802,8 @@ MEMORY_TASKS = {"threshold": "threshold", "ladder": "ladder", "channels": "chann
 #: a retry erased the failed attempt's log (the cause of the failure with it). A failed
 #: attempt leaves a copy beside the log, named by when it failed; the exit status is kept.
 #: (For a rule's ``shell:``: Snakemake fills in ``{log}`` and reads ``{{`` as ``{``.)
-KEEP_FAILED_LOG = (' || {{ rc=$?; cp {log} "{log}.failed-$(date -u +%Y%m%dT%H%M%SZ)"; '
-                   'exit $rc; }}')
+KEEP_FAILED_LOG = (' || {{ rc=$?; cp {log} "{log}.failed-$(date -u +%Y%m%dT%H%M%SZ)" '
+                   '|| true; exit $rc; }}')
 
 #: Memory of the Snakemake process that runs a job inside its cluster allocation (it shares
 #: the job's memory cgroup: 375 MB peak measured for a whole config/test.yaml job under

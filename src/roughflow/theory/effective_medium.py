@@ -73,6 +73,9 @@ _AT_THRESHOLD = 1e-12
 # 8 and 16 exact to 3e-10), while sigma itself is below 1e-7 of the open medium's. Scaled
 # by (gamma / 64)^4 beyond gamma = 64 (or below 1/64).
 _AT_THRESHOLD_ANISOTROPIC = 1e-7
+# ... and at most this near: unbounded, the scaling closed every contact area from gamma
+# about 3600 on
+_AT_THRESHOLD_ANISOTROPIC_MAX = 1e-3
 
 
 @dataclass(frozen=True)
@@ -245,7 +248,8 @@ def bruggeman_anisotropic(
             a_c=z, a_c_star=a_c_star, dimension=d,
         )
 
-    near = _AT_THRESHOLD_ANISOTROPIC * max(1.0, (max(gamma, 1.0 / gamma) / 64.0) ** 4)
+    near = min(_AT_THRESHOLD_ANISOTROPIC * max(1.0, (max(gamma, 1.0 / gamma) / 64.0) ** 4),
+               _AT_THRESHOLD_ANISOTROPIC_MAX)
     if m.s.size == 0 or z >= a_c_star * (1.0 - near):
         # Both directions closed: the x and y thresholds coincide only at gamma~ = 1.
         return result(0.0, 0.0, 1.0, 0.0)

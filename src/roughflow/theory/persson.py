@@ -184,11 +184,10 @@ def _j(t0: np.ndarray, energy_factor: float) -> np.ndarray:
     if small.any():
         # below the table J = gamma_P E1(t0^2)/2 + K(0); K varies by O(t0^2) there
         k0 = j[0] - energy_factor * 0.5 * exp1(math.exp(2 * s[0]))
-        # E1(x) = -gamma_E - ln x + x - ... : from ln t0 where t0^2 would underflow (E1(0)
-        # is inf: the mean gap came out inf below p ~ 1e-165)
-        tiny = t0 < 1e-8
-        e1 = np.where(tiny, -np.euler_gamma - 2.0 * np.log(t0) + t0 * t0,
-                      exp1(np.where(tiny, 1.0, t0 * t0)))
+        # E1(x) = -gamma_E - ln x + x + O(x^2), exact to round-off below the table's start
+        # (t0 < 1e-9), from ln t0: E1(t0^2) underflowed to E1(0) = inf, and the mean gap
+        # came out inf below p ~ 1e-165
+        e1 = -np.euler_gamma - 2.0 * np.log(t0) + t0 * t0
         out = np.where(small, energy_factor * 0.5 * e1 + k0, out)
     return np.where(t0 > math.exp(s[-1]), 0.0, out)
 
