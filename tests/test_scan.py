@@ -134,6 +134,15 @@ def test_a_text_line_the_reader_would_drop_is_refused(tmp_path, token):
     assert s.shape == h.shape and s.scan.filled == 1
 
 
+def test_a_header_line_of_as_many_words_is_not_a_dropped_line(tmp_path):
+    """The dropped-line check counts lines of nx values; a header of nx words is not one."""
+    h = 0.01 * heights(4, 6)  # 4 values a line: a header "w x y z" has as many words
+    lines = [" ".join(f"{v:.6g}" for v in row) for row in h.T]
+    (tmp_path / "head.txt").write_text("w x y z\n" + "\n".join(lines) + "\n")
+    s = from_scan(tmp_path / "head.txt", size="4mm,6mm", unit="mm", detrend_mode="none")
+    assert s.shape == (4, 6)
+
+
 def test_heights_in_the_wrong_unit_draw_a_warning(tmp_path, caplog):
     """Heights in nm imported as um ran through with an rms gradient of 884 and a leak rate
     1e9 times too large; an rms gradient outside SCAN_GRADIENT_WARN names the units."""

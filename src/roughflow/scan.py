@@ -322,8 +322,10 @@ def _check_text_complete(path: Path, shape: tuple[int, int]) -> None:
             tokens = re.split(r"[\s,;]+", line.strip())
             if len(tokens) != nx:
                 continue
-            rows += 1
             bad = [t for t in tokens if not is_number(t)]
+            if 2 * len(bad) > nx:  # a header line of nx words, not a line of the matrix
+                continue
+            rows += 1
             if bad and len(dropped) < 3:
                 dropped.append(f"line {number} holds {bad[0]!r}")
     if rows > ny:

@@ -65,8 +65,10 @@ def draw(ds: xr.Dataset, fit: xr.Dataset | None = None) -> Figure:
                             capsize=2, label="isotropic" if axis == "x" else None)
             else:
                 marker = "o" if g == main else "^"
+                # the other gammas may lie on both sides of 1: their entry names the
+                # direction, whose colour they share, not an axis
                 lab = (f"gamma = {g:g}, {axis} ({names[axis]})" if g == main
-                       else (f"other gamma, {axis} ({names[axis]})"
+                       else (f"other gamma, {names[axis]}"
                              if g == min(set(aniso) - {main}) else None))
                 ax.errorbar(e, m.values[ok], yerr=s, marker=marker, color=color, ls="none",
                             mfc="white" if marker == "o" else color, capsize=2, label=lab)
