@@ -33,7 +33,7 @@ from roughflow.datasets.leak import with_scan_variables
 from roughflow.datasets.sweep import INT_FILL, PARAM_DIMS
 from roughflow.defaults import JOB_KINDS
 from roughflow.errors import InputError
-from roughflow.io import dataset_methods, read_dataset, write_dataset
+from roughflow.io import default_provenance, read_dataset, write_dataset
 from roughflow.provenance import Provenance, settings_of_inputs
 
 log = logging.getLogger(__name__)
@@ -184,7 +184,7 @@ def aggregate(inputs: Sequence[str | os.PathLike | xr.Dataset], output: str | os
         out.attrs["study"] = study
     out.attrs["title"] = f"roughflow study {study or ''}".strip()
     if provenance is None:
-        provenance = Provenance().using(*dataset_methods(out))
+        provenance = default_provenance(out)
     inherited = settings_of_inputs(*datasets)
     for key, value in inherited:
         if str(value).startswith("mixed"):  # e.g. jobs run before and after a code change

@@ -201,6 +201,11 @@ def dataset_methods(ds: xr.Dataset) -> tuple[str, ...]:
     return ()
 
 
+def default_provenance(ds: xr.Dataset) -> Provenance:
+    """The Python API's provenance of ``ds``, citing the methods of :func:`dataset_methods`."""
+    return Provenance().using(*dataset_methods(ds))
+
+
 def dataset_writer(ds: xr.Dataset, path: str | os.PathLike, *,
                    provenance: Provenance | None = None) -> Writer:
     """``(path, write)`` for :func:`write_together`: ``ds`` with the attributes of
@@ -211,7 +216,7 @@ def dataset_writer(ds: xr.Dataset, path: str | os.PathLike, *,
     ds = ds.copy()
     attrs = {k: v for k, v in ds.attrs.items() if k not in PROVENANCE_ATTRS}
     if provenance is None:
-        provenance = Provenance().using(*dataset_methods(ds))
+        provenance = default_provenance(ds)
     attrs.update(provenance.attrs())
     ds.attrs = clean_attrs(attrs)
     for name in ds.variables:

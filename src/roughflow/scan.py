@@ -247,7 +247,7 @@ def _check_window(window: tuple[slice, slice], shape: tuple[int, int], what: str
                          f"{shape[1]} scan; at least 4 x 4 are needed")
 
 
-def _length_factor(unit, name: str) -> float:
+def length_factor(unit: str, name: str) -> float:
     """Metres per ``unit`` (a pint-readable length unit such as "nm", "um", "mm")."""
     from roughflow.units import parse_quantity
 
@@ -449,7 +449,7 @@ def read_scan(path: str | os.PathLike, *,
                        "CLI --size)")
     if missing:
         raise InputError(f"{str(path)!r} does not give " + ", nor ".join(missing))
-    lateral = _length_factor(file_unit or st_unit, "unit")
+    lateral = length_factor(file_unit or st_unit, "unit")
     if file_size is not None:
         lx_m, ly_m = (float(v) * lateral for v in file_size)
         if not (math.isfinite(lx_m) and math.isfinite(ly_m) and lx_m > 0 and ly_m > 0):
@@ -457,7 +457,7 @@ def read_scan(path: str | os.PathLike, *,
     else:
         # bare numbers are in unit=, else in the file's own unit
         lx_m, ly_m = scan_size(size, unit if unit is not None else file_unit)
-    vertical = lateral if height_unit is None else _length_factor(height_unit, "height_unit")
+    vertical = lateral if height_unit is None else length_factor(height_unit, "height_unit")
     auto_crop = crop is not None and str(crop).strip() == SCAN_CROP_DEFINED
     window = parse_crop(crop, tuple(ch.nb_grid_pts))
 

@@ -210,26 +210,20 @@ def _open_lock(file: Path) -> int | None:
     """A descriptor of ``file``'s lock file, made readable and writable by those the umask
     allows. Another user's lock file opens read-only: flock needs no write permission."""
     lock = file.with_name(file.name + ".lock")
+    not_saved = "its wisdom is read if there is any, but what this run plans is not saved"
     try:
         file.parent.mkdir(parents=True, exist_ok=True)
     except OSError as err:
         # a folder that cannot be written may still hold wisdom, which shared() reads
-        _report(f"cannot write to {file.parent}", err,
-                "its wisdom is read if there is any, but what this run plans is not saved")
+        _report(f"cannot write to {file.parent}", err, not_saved)
         return None
     try:
-        return os.open(lock, os.O_RDWR | os.O_CREAT, 0o666)
-    except PermissionError:
-        pass
+        try:
+            return os.open(lock, os.O_RDWR | os.O_CREAT, 0o666)
+        except PermissionError:
+            return os.open(lock, os.O_RDONLY)
     except OSError as err:
-        _report(f"cannot open the lock file {lock}", err,
-                "its wisdom is read if there is any, but what this run plans is not saved")
-        return None
-    try:
-        return os.open(lock, os.O_RDONLY)
-    except OSError as err:
-        _report(f"cannot open the lock file {lock}", err,
-                "its wisdom is read if there is any, but what this run plans is not saved")
+        _report(f"cannot open the lock file {lock}", err, not_saved)
         return None
 
 
@@ -269,36 +263,33 @@ def shared(effort: str) -> Iterator[None]:
 
     with _PROCESS_LOCK:
         pyfftw.forget_wisdom()
-        file = None
-        if effort != "FFTW_ESTIMATE":
-            if effort in _held:
-                pyfftw.import_wisdom(_held[effort])
-            file = path(effort)
-        if file is None:
-            try:
-                yield
-            finally:
-                if effort != "FFTW_ESTIMATE":
-                    _held[effort] = pyfftw.export_wisdom()
+        if effort == "FFTW_ESTIMATE":
+            yield
             return
-        with _locked(file) as usable:
+        if effort in _held:
+            pyfftw.import_wisdom(_held[effort])
+        file = path(effort)
+        with contextlib.nullcontext(False) if file is None else _locked(file) as usable:
             saved = None
             try:  # a directory this process cannot write may still hold wisdom to read
-                saved = _load(file)
+                saved = None if file is None else _load(file)
             except OSError as err:
                 _report(f"cannot read {file}", err)
-            in_file = entries(saved) if saved is not None else ((),) * len(_PRECISIONS)
             try:
                 yield
             finally:
                 _held[effort] = pyfftw.export_wisdom()
             # what this process holds and the file lacks: planned now, or earlier when a
             # save was interrupted or failed (it would never reach the file otherwise)
-            missing = any(set(h) - set(f) for h, f in zip(entries(_held[effort]), in_file,
-                                                          strict=True))
-            if usable and missing:
+            if usable and _lacks(saved, _held[effort]):
                 try:
                     _load(file)  # what others saved meanwhile (a file system without locks)
                     _save(file, pyfftw.export_wisdom())
                 except OSError as err:
                     _report(f"cannot write {file}", err)
+
+
+def _lacks(saved: tuple[bytes, ...] | None, held: tuple[bytes, ...]) -> bool:
+    """Whether ``held`` has entries the file's wisdom ``saved`` (None: none) lacks."""
+    in_file = entries(saved) if saved is not None else (frozenset(),) * len(held)
+    return any(h - f for h, f in zip(entries(held), in_file, strict=True))

@@ -366,18 +366,15 @@ class LeakJob:
     kind: str = field(default="leak", init=False)
 
     def __post_init__(self) -> None:
-        from roughflow.scan import check_crop
-        from roughflow.units import parse_quantity, parse_range
+        from roughflow.scan import check_crop, length_factor
 
         if not _NAME.fullmatch(str(self.name)):
             raise InputError(f"scan name must be letters, digits, '.', '_' or '-', got "
                              f"{self.name!r}")
-        for key, kind in LEAK_QUANTITIES.items():
-            parse_quantity(getattr(self, key), kind, key)
-        parse_range(self.pressures, "pressure", "pressures")
+        question_si(self.question())
         for key in ("unit", "height_unit"):  # as roughflow import reads them
             if getattr(self, key) is not None:
-                parse_quantity(f"1 {getattr(self, key)}", "length", key)
+                length_factor(getattr(self, key), key)
         if self.size is not None:
             self.size_m()  # a bad length is refused here, not in its job
         check_crop(self.crop)
@@ -426,15 +423,32 @@ class LeakJob:
     def cli_args(self) -> list[str]:
         """``roughflow leak`` options (after the surface file), every quantity in SI units
         (as for :meth:`import_args`: "200GPa" and "200000MPa" are one job)."""
-        from roughflow.units import DIMENSIONS, parse_quantity, parse_range
+        from roughflow.units import DIMENSIONS
 
-        pressures = ",".join(f"{float(v)!r}Pa" for v in parse_range(self.pressures, "pressure",
-                                                              "pressures"))
+        si = question_si(self.question())
+        pressures = ",".join(f"{float(v)!r}Pa" for v in si["pressures"])
         args = ["--pressures", pressures, "--boundary", self.boundary, "--name", self.name]
         for key, kind in LEAK_QUANTITIES.items():
-            value = parse_quantity(getattr(self, key), kind, key)
-            args += [f"--{key.replace('_', '-')}", shlex.quote(f"{value!r}{DIMENSIONS[kind][1]}")]
+            args += [f"--{key.replace('_', '-')}",
+                     shlex.quote(f"{si[key]!r}{DIMENSIONS[kind][1]}")]
         return args
+
+    def question(self) -> dict[str, str]:
+        """The leak question as the config gives it (:func:`question_si` reads it)."""
+        return {key: getattr(self, key) for key in (*LEAK_QUANTITIES, "pressures")}
+
+
+def question_si(values: dict) -> dict:
+    """The leak question's quantities in SI units (``pressures`` an array), those of
+    :data:`LEAK_QUANTITIES` and ``pressures`` that ``values`` gives; InputError naming the
+    key otherwise."""
+    from roughflow.units import parse_quantity, parse_range
+
+    out = {key: parse_quantity(values[key], kind, key) for key, kind in LEAK_QUANTITIES.items()
+           if values.get(key) is not None}
+    if values.get("pressures") is not None:
+        out["pressures"] = parse_range(values["pressures"], "pressure", "pressures")
+    return out
 
 
 #: Usual names of the length units a scan's heights come in (by metres per unit).
@@ -443,9 +457,9 @@ _UNIT_NAMES = {1.0: "m", 1e-3: "mm", 1e-6: "um", 1e-9: "nm"}
 
 def _unit_name(unit: str) -> str:
     """``unit``'s usual name ("micrometer", "µm" and "micron" are "um"); others as given."""
-    from roughflow.units import parse_quantity
+    from roughflow.scan import length_factor
 
-    return _UNIT_NAMES.get(parse_quantity(f"1 {unit}", "length", "unit"), str(unit))
+    return _UNIT_NAMES.get(length_factor(unit, "unit"), str(unit))
 
 
 _NAME = re.compile(r"[A-Za-z0-9_.\-]+")
@@ -681,14 +695,8 @@ def _expand_measured(block: dict) -> dict[str, Job]:
     """One :class:`LeakJob` per scan; a scan entry's keys override the study's."""
     study = defaults.MEASURED_STUDY
     shared = {k: v for k, v in block.items() if k != "scans"}
-    from roughflow.units import parse_quantity, parse_range
-
     try:  # a bad study-level value is the study's, not its first scan's
-        for key, kind in LEAK_QUANTITIES.items():
-            if shared.get(key) is not None:
-                parse_quantity(shared[key], kind, key)
-        if shared.get("pressures") is not None:
-            parse_range(shared["pressures"], "pressure", "pressures")
+        question_si(shared)
     except InputError as exc:
         raise InputError(f"config studies.{study}: {exc}") from None
     jobs: dict[str, Job] = {}
