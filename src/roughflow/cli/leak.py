@@ -3,7 +3,6 @@
 from __future__ import annotations
 
 import argparse
-import logging
 from pathlib import Path
 from typing import TYPE_CHECKING
 
@@ -97,14 +96,6 @@ def run(args: argparse.Namespace) -> None:
     scales = Scales(length=surface.scan.length_scale if given is None else given,
                     modulus=modulus, viscosity=eta)
     p = check_pressures(scales.pressure_from_si(pressures))
-    if fluid >= pressures[0]:
-        # the Reynolds flow leaves the fluid's own load on the surfaces out, which holds
-        # where it is small against the contact pressure
-        logging.getLogger(__name__).warning(
-            "the fluid pressure %.4g Pa is not small against the lowest contact pressure "
-            "%.4g Pa: the model leaves the fluid's load on the surfaces out (it holds for "
-            "dp << p); read the leak rates below %.4g Pa with care", fluid, pressures[0],
-            fluid)
     curve = leak_curve(surface, p, boundary=args.boundary, contact_tol=args.contact_tol,
                        threshold_tol=args.threshold_tol, threads=args.threads)
     name = args.name or Path(args.surface).stem
@@ -149,6 +140,9 @@ def format_table(ds: xr.Dataset) -> str:
     warned = str(ds.attrs.get("scan_warnings", ""))
     if warned:  # said in the import's log, which a workflow's user may never read
         lines.append(f"note: the import warned: {warned}")
+    fluid_note = str(ds.attrs.get("fluid_pressure_note", ""))
+    if fluid_note:
+        lines.append(f"note: {fluid_note} (pressures in Pa)")
     msg = ds.attrs.get("sealing_messages", "none")
     if msg != "none":
         lines.append(f"note: {msg}")

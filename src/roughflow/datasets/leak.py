@@ -16,6 +16,7 @@ scans agree.
 
 from __future__ import annotations
 
+import logging
 from collections.abc import Sequence
 from typing import TYPE_CHECKING
 
@@ -50,6 +51,8 @@ from .units import (
     SIGMA_UNITS,
 )
 
+log = logging.getLogger(__name__)
+
 if TYPE_CHECKING:
     from roughflow.leak import LeakCurve
     from roughflow.surface import Surface
@@ -71,8 +74,13 @@ def leak_dataset(curve: LeakCurve, surface: Surface, *, scales: Scales, fluid_pr
     across the seal; ``seal_width`` (m, along the flow) and ``seal_length`` (m, across it);
     ``name``: the scan's label (the ``scan`` coordinate).
     """
+    from roughflow.leak import fluid_pressure_note
     from roughflow.units import leak_rate
 
+    pressures_si = scales.pressure_to_si(curve.pressure)
+    fluid_note = fluid_pressure_note(fluid_pressure, pressures_si)
+    if fluid_note:
+        log.warning("%s: %s (pressures in Pa)", name, fluid_note)
     conductance = scales.conductance_to_si(curve.sigma)
     rate = leak_rate(conductance, fluid_pressure=fluid_pressure, seal_width=seal_width,
                      seal_length=seal_length)
@@ -135,7 +143,7 @@ def leak_dataset(curve: LeakCurve, surface: Surface, *, scales: Scales, fluid_pr
     }
     coords = {
         "scan": ("scan", [name], {"long_name": "scan"}),
-        "pressure": ("pressure", scales.pressure_to_si(curve.pressure), {
+        "pressure": ("pressure", pressures_si, {
             "units": PASCAL, "long_name": "nominal contact pressure"}),
         "axis": ("axis", list(AXIS_NAMES[:2]), AXIS_COORD[2]),
     }
@@ -147,7 +155,7 @@ def leak_dataset(curve: LeakCurve, surface: Surface, *, scales: Scales, fluid_pr
         "boundary_description": BOUNDARY_TEXT.get(curve.boundary, curve.boundary),
         **scales.attrs(),
         "fluid_pressure_Pa": float(fluid_pressure), "seal_width_m": float(seal_width),
-        "seal_length_m": float(seal_length),
+        "seal_length_m": float(seal_length), "fluid_pressure_note": fluid_note,
         "pressure_reference": "dimensionless pressures are in units of E*; the surface keeps "
                               f"its rms gradient gbar = {curve.rms_gradient:.6g}",
         "window_nx": int(curve.window_shape[0]), "window_ny": int(curve.window_shape[1]),
