@@ -525,7 +525,7 @@ def test_a_channel_that_is_not_a_height_map_is_named(monkeypatch, tmp_path):
     with pytest.raises(InputError, match="channel 'Phase' is not a height map.*0: Height"):
         read_scan(path, channel="Phase")
     # the file's size is quoted as plain numbers, not numpy's repr
-    with pytest.raises(InputError, match=r"already gives its size \(500.0, 500.0\) nm"):
+    with pytest.raises(InputError, match=r"already gives its size 500 x 500 nm"):
         read_scan(path, size="1um")
 
 
@@ -539,3 +539,164 @@ def test_channel_label_says_which_of_two_same_named_channels():
     reader = SimpleNamespace(channels=[trace, retrace, phase])
     assert _channel_label(reader, retrace) == "Height (channel 1)"
     assert _channel_label(reader, phase) == "Phase"
+
+
+# --- files researchers export from their own tools (a helper's audit of formats) ---
+
+
+def test_a_text_header_gives_the_size_unit_which_is_kept(tmp_path):
+    """A header "Width: 20 um" without a unit for the values: SurfaceTopography keeps the
+    number and drops its unit, and --unit nm read the scan as 20 nm wide (1000x off)."""
+    h = heights()
+    np.savetxt(tmp_path / "p.txt", h.T, header="Width: 16 um\nHeight: 12 um")
+    s = from_scan(tmp_path / "p.txt", height_unit="nm", detrend_mode="none")
+    check_scaled(s, h * 1e-9, 16 * UM, 12 * UM)
+    with pytest.raises(InputError, match=r"gives its size in um \(16 x 12\); unit='nm'"):
+        from_scan(tmp_path / "p.txt", unit="nm")
+    with pytest.raises(InputError, match="not the unit of its heights"):
+        from_scan(tmp_path / "p.txt")
+    # a unit= equal to the header's reads both in it
+    s = from_scan(tmp_path / "p.txt", unit="um", detrend_mode="none")
+    check_scaled(s, h * UM, 16 * UM, 12 * UM)
+
+
+def _netcdf3(path: Path, h: np.ndarray, dims: tuple[str, str]) -> None:
+    import netCDF4
+
+    nx, ny = h.shape
+    with netCDF4.Dataset(str(path), "w", format="NETCDF3_64BIT_OFFSET") as nc:
+        for name, n, length in (("x", nx, 6.0), ("y", ny, 4.5)):
+            nc.createDimension(name, n)
+            v = nc.createVariable(name, "f8", (name,))
+            v.length, v.unit = length, "um"
+        v = nc.createVariable("heights", "f8", dims)
+        v[:] = h if dims == ("x", "y") else h.T
+        v.unit = "um"
+
+
+@pytest.mark.parametrize("shape", [(16, 12), (12, 12)])
+def test_netcdf_heights_over_y_x_are_transposed(tmp_path, shape):
+    """heights(y, x), the order of xarray and CF files, was read as (x, y): a square scan
+    transposed without a word (sigma_x and sigma_y swapped)."""
+    h = heights(*shape)
+    _netcdf3(tmp_path / "xy.nc", h, ("x", "y"))
+    _netcdf3(tmp_path / "yx.nc", h, ("y", "x"))
+    a = from_scan(tmp_path / "xy.nc", detrend_mode="none")
+    b = from_scan(tmp_path / "yx.nc", detrend_mode="none", crop="1:,:")
+    assert a.shape == shape and b.shape == (shape[0] - 1, shape[1])
+    check_scaled(a, h * UM, 6 * UM, 4.5 * UM)
+    check_scaled(b, h[1:] * UM, 6 * UM * (shape[0] - 1) / shape[0],
+                 4.5 * UM)
+    # a netCDF-4 file (xarray's default) over (y, x), read as HDF5, with the size given
+    xr.Dataset({"heights": (("y", "x"), h.T)}).to_netcdf(tmp_path / "nc4.nc")
+    c = from_scan(tmp_path / "nc4.nc", size="6um,4.5um", unit="um", detrend_mode="none")
+    check_scaled(c, h * UM, 6 * UM, 4.5 * UM)
+    # without the size, the error says why its attributes were not read
+    with pytest.raises(InputError, match="netCDF-4 file, read as plain HDF5"):
+        from_scan(tmp_path / "nc4.nc")
+
+
+@pytest.mark.parametrize("suffix", [".npz", ".mat", ".h5"])
+def test_a_file_of_several_arrays_needs_the_height_array_named(tmp_path, suffix):
+    """The readers of .npz, HDF5 and MATLAB files took the first array: "phase" before
+    "height", MATLAB's X coordinate plane of X, Y, Z; all ran through (exit 0)."""
+    import scipy.io
+
+    h = heights()
+    other = heights(seed=1)
+    x = np.broadcast_to(np.arange(16.0)[:, None], h.shape).copy()
+
+    def write(path, arrays):
+        if suffix == ".npz":
+            np.savez(path, **arrays)
+        elif suffix == ".mat":
+            scipy.io.savemat(path, arrays)
+        else:
+            import h5py
+
+            with h5py.File(path, "w") as f:
+                for k, v in arrays.items():
+                    f[k] = v
+
+    write(tmp_path / f"named{suffix}", {"phase": other, "X": x, "Z": h})
+    s = from_scan(tmp_path / f"named{suffix}", size="16um,12um", unit="nm",
+                  detrend_mode="none")
+    assert s.scan.channel == "Z"
+    check_scaled(s, h * 1e-9, 16 * UM, 12 * UM)
+    write(tmp_path / f"unnamed{suffix}", {"a": other, "b": h})
+    with pytest.raises(InputError, match=r"several arrays \(0: a, 1: b\).*channel="):
+        from_scan(tmp_path / f"unnamed{suffix}", size="16um,12um", unit="nm")
+    s = from_scan(tmp_path / f"unnamed{suffix}", size="16um,12um", unit="nm", channel="b",
+                  detrend_mode="none")
+    check_scaled(s, h * 1e-9, 16 * UM, 12 * UM)
+
+
+def test_a_flat_scan_is_refused_despite_round_off(tmp_path):
+    """A constant map came out 1.5e-24 m rough after the plane fit and ran a whole leak
+    study ("sealing pressure 6.7e-08 Pa"); so does a tilted plane."""
+    np.save(tmp_path / "c.npy", np.full((16, 12), 3.0))
+    x, y = np.meshgrid(np.arange(16.0), np.arange(12.0), indexing="ij")
+    np.save(tmp_path / "plane.npy", 1e3 + 0.3 * x - 0.7 * y)
+    for name in ("c.npy", "plane.npy"):
+        with pytest.raises(InputError, match="flat after detrending"):
+            from_scan(tmp_path / name, size="1um", unit="nm")
+    # heights a millionth of their level still count (1e-9 of it is the bound)
+    np.save(tmp_path / "tiny.npy", 1.0 + 1e-6 * heights())
+    assert from_scan(tmp_path / "tiny.npy", size="1um", unit="nm").shape == (16, 12)
+
+
+def test_a_coordinate_list_the_grid_reader_refused_is_not_read_as_a_matrix(tmp_path):
+    """x y z (intensity) lines that are not a complete grid went to the matrix reader: a
+    4 x 768 "scan" of the columns (exit 0), or a refusal about 4 x 4 points."""
+    x, y = np.meshgrid(np.arange(32) * 0.1, np.arange(24) * 0.1, indexing="ij")
+    z = heights(32, 24)
+    np.savetxt(tmp_path / "xyzi.txt", np.c_[x.ravel(), y.ravel(), z.ravel(), z.ravel()])
+    np.savetxt(tmp_path / "gap.txt", np.c_[x.ravel(), y.ravel(), z.ravel()][1:])
+    for name, lines in (("xyzi.txt", "768 lines of 4 values"), ("gap.txt", "767 lines of 3")):
+        with pytest.raises(InputError, match=f"looks like a list of points \\({lines}"):
+            from_scan(tmp_path / name, size="1um", unit="nm")
+
+
+def test_a_placeholder_that_overflows_is_refused(tmp_path):
+    h = heights()
+    h[3, 3] = 1e300  # an instrument's "no data", in nm
+    np.save(tmp_path / "big.npy", h)
+    with pytest.raises(InputError, match="overflow the statistics: a placeholder"):
+        from_scan(tmp_path / "big.npy", size="1um", unit="nm")
+
+
+@pytest.mark.parametrize("write, match", [
+    (lambda p: np.savetxt(p / "c.csv", heights(), delimiter=","),
+     r"c.csv' cannot be read: XYZReader: .*whitespace-separated"),
+    (lambda p: (p / "e.txt").write_bytes(b""), "e.txt' is empty"),
+    (lambda p: np.save(p / "z.npy", np.zeros((2, 8, 8))), "NPYReader: .*3-dimensional"),
+    (lambda p: np.save(p / "line.npy", np.zeros((1, 24)) + np.arange(24)),
+     r"1 x 24 points; at least 4 x 4"),
+])
+def test_unreadable_files_get_the_reason_of_their_own_reader(tmp_path, write, match):
+    """Every reader failure was one 50-line message of 17 readers' complaints, with raw
+    bytes of the file; a file's own reader (by its ending) now says why."""
+    write(tmp_path)
+    path = next(tmp_path.iterdir())
+    with pytest.raises(InputError, match=match) as exc:
+        from_scan(path, size="1um", unit="nm")
+    assert "tried" not in str(exc.value) and len(str(exc.value)) < 600
+    assert str(exc.value).isprintable()
+
+
+def test_pixels_the_file_states_draw_no_swapped_axes_warning(tmp_path, caplog):
+    # a file that gives its own size (netCDF, x3p, ...) states rectangular pixels; the
+    # warning about swapped axes is for sizes given to arrays and text matrices
+    _netcdf3(tmp_path / "r.nc", heights(12, 12), ("x", "y"))
+    with caplog.at_level("WARNING", logger="roughflow.scan"):
+        s = from_scan(tmp_path / "r.nc")
+    assert s.lx / s.ly == pytest.approx(6 / 4.5) and "axes are swapped" not in caplog.text
+
+
+def test_cli_import_refuses_to_overwrite_its_scan(tmp_path, capsys):
+    _netcdf3(tmp_path / "scan.nc", heights(), ("x", "y"))
+    before = (tmp_path / "scan.nc").read_bytes()
+    with pytest.raises(SystemExit) as exc:
+        main(["import", str(tmp_path / "scan.nc"), "-o", str(tmp_path / "." / "scan.nc")])
+    assert exc.value.code == 2 and "is also an input" in capsys.readouterr().err
+    assert (tmp_path / "scan.nc").read_bytes() == before

@@ -162,6 +162,10 @@ SCAN_FILL_WARN_FRACTION = 0.05
 #: for swapped axes, e.g. an [x, y] array written with np.savetxt, whose rows SurfaceTopography
 #: reads as lines along x.
 SCAN_PIXEL_ASPECT_WARN = 0.01
+#: A scan whose heights vary by less than this fraction of their largest magnitude after
+#: detrending is flat (refused): detrending a constant or a plane leaves round-off of
+#: about 1e-16 of the heights, a measured surface varies by far more than 1e-9 of them.
+SCAN_FLAT_RELATIVE = 1e-9
 #: An imported scan's rms gradient outside this range draws a warning naming the units:
 #: measured surfaces lie between about 1e-3 (polished, optical profiler) and 1-2 (AFM at
 #: nm pixels); heights in nm read as um give 1000 times the slope (884 instead of 0.88,

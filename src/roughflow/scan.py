@@ -34,6 +34,7 @@ from roughflow.defaults import (
     SCAN_DETREND,
     SCAN_FILL,
     SCAN_FILL_WARN_FRACTION,
+    SCAN_FLAT_RELATIVE,
     SCAN_GRADIENT_WARN,
     SCAN_PIXEL_ASPECT_WARN,
 )
@@ -336,7 +337,56 @@ def _check_text_complete(path: Path, shape: tuple[int, int]) -> None:
             f"scan as .npy")
 
 
+#: The file endings of plain-text matrices and coordinate lists (read by SurfaceTopography's
+#: text readers, which have no ending of their own).
+TEXT_SUFFIXES = (".txt", ".asc", ".dat", ".xyz", ".csv")
+#: Channel names that mark the heights in a file of several unnamed arrays (NPZ, HDF5, MAT).
+HEIGHT_CHANNEL_NAMES = ("height", "heights", "topography", "z")
+#: Readers of files that hold several arrays with nothing to say which are heights.
+_ARRAY_CONTAINER_READERS = ("NPZReader", "H5Reader", "MatReader")
+
+
+def _printable(text: str, limit: int = 300) -> str:
+    """``text`` on one line without control characters (a reader's message may quote the
+    file's raw bytes), shortened to ``limit`` characters."""
+    text = " ".join("".join(c if c.isprintable() else " " for c in text).split())
+    return text if len(text) <= limit else text[:limit - 3] + "..."
+
+
+def _reader_messages(exc: Exception) -> dict[str, str]:
+    """SurfaceTopography's "tried XReader: message" blocks of a failed format detection."""
+    found = re.findall(r"tried (\w+):\s*(.*?)(?=\n\s*tried \w+:|\Z)", str(exc), re.S)
+    return {name: msg for name, msg in found}
+
+
+def _open_error(path: Path, exc: Exception) -> InputError:
+    """A short error for a file SurfaceTopography cannot read: what the reader of its file
+    ending said (not the 17 readers' messages with the file's raw bytes)."""
+    from SurfaceTopography.IO import readers
+
+    suffix = path.suffix.lower()
+    tried = _reader_messages(exc)
+    own = [r.__name__ for r in readers if f".{r.format()}" == suffix]
+    if suffix in TEXT_SUFFIXES:
+        own = ["XYZReader", "AscReader"]
+    said = [f"{name}: {_printable(tried[name])}" for name in own if name in tried]
+    hint = ""
+    if suffix in TEXT_SUFFIXES:
+        hint = ("; a text scan is a matrix of whitespace-separated numbers with a decimal "
+                "point (no commas or semicolons between values), or a list of x y z lines")
+    if said:
+        return InputError(f"{str(path)!r} cannot be read: " + "; ".join(said) + hint)
+    if not tried:
+        return InputError(f"{str(path)!r} is not a topography that SurfaceTopography can read "
+                          f"({type(exc).__name__}: {_printable(str(exc))})")
+    return InputError(f"{str(path)!r} is not a topography that SurfaceTopography can read "
+                      f"(no reader takes files ending in {suffix or 'nothing'!r} and none of "
+                      f"the {len(tried)} it tried read it{hint})")
+
+
 def _open(path: Path):
+    if path.stat().st_size == 0:
+        raise InputError(f"{str(path)!r} is empty")
     if path.suffix.lower() == ".npy":
         _check_npy_complete(path)
     try:
@@ -347,26 +397,102 @@ def _open(path: Path):
     try:
         reader = open_topography(str(path))
     except Exception as exc:  # the readers raise many types for files they cannot read
-        raise InputError(f"{str(path)!r} is not a topography that SurfaceTopography can read "
-                         f"({type(exc).__name__}: {exc})") from None
+        raise _open_error(path, exc) from None
     # the NASA SRTM reader has no header to check: it takes any file of 2 n^2 bytes (a
     # 32-byte text file reads as a 4 x 4 map), so it is trusted only for .hgt files
     if type(reader).__name__ == "HGTReader" and path.suffix.lower() != ".hgt":
+        own = _own_reader_error(path)
         raise InputError(f"{str(path)!r} is not a topography that SurfaceTopography can read "
-                         "(only the header-less NASA SRTM reader took it; rename it to .hgt "
-                         "if it is one)")
+                         + (f"({own})" if own else "(only the header-less NASA SRTM reader "
+                            "took it; rename it to .hgt if it is one)"))
     return reader
 
 
-def _channel(reader, channel):
+def _own_reader_error(path: Path) -> str:
+    """What the reader of ``path``'s file ending says about it ("" where it reads it or no
+    reader has that ending)."""
+    from SurfaceTopography.IO import readers
+
+    for r in readers:
+        if f".{r.format()}" == path.suffix.lower():
+            try:
+                r(str(path))
+            except Exception as exc:
+                return f"{r.__name__}: {_printable(str(exc))}"
+    return ""
+
+
+def _header_size_unit(ch, path: Path) -> str | None:
+    """The unit of the size a text scan's header gives ("Width: 20 um"), where the reader
+    kept the size but not its unit (the heights' unit is not given); None elsewhere."""
+    meta = (getattr(ch, "info", None) or {}).get("raw_metadata") or {}
+    units = {meta.get("xunit"), meta.get("yunit")} - {None}
+    if not units:
+        return None
+    if len(units) > 1:
+        raise InputError(f"{str(path)!r} gives its size in two units ({', '.join(units)}): "
+                         "give size= in one (CLI --size) after removing the header's")
+    return units.pop()
+
+
+def _netcdf_y_first(path: Path) -> bool:
+    """Whether ``path`` is a netCDF file whose ``heights`` are stored over (y, x): the
+    order of xarray and CF-style files, which SurfaceTopography reads as (x, y) (measured:
+    a square scan transposed without a word, sigma_x and sigma_y swapped)."""
+    if path.suffix.lower() != ".nc":
+        return False
+    import netCDF4
+
+    try:
+        with netCDF4.Dataset(str(path)) as nc:
+            var = nc.variables.get("heights")
+            return var is not None and tuple(var.dimensions) == ("y", "x")
+    except OSError:
+        return False
+
+
+def _close(reader) -> None:
+    """Close ``reader``'s file once the heights are copied. The netCDF reader maps its file
+    and warns on stderr when it is closed (or collected) while the reader's own masked
+    arrays still refer to the map ("Cannot close a netcdf_file opened with mmap=True"),
+    which they do after every read of a masked scan: closed here, without that warning
+    (the map stays valid while anything refers to it)."""
+    import warnings
+
+    close = getattr(reader, "close", None)
+    if close is None:
+        return
+    with warnings.catch_warnings():
+        warnings.filterwarnings("ignore", message="Cannot close a netcdf_file",
+                                category=RuntimeWarning)
+        close()
+
+
+def _channel_list(reader) -> str:
+    return ", ".join(f"{c.index}: {c.name}" for c in reader.channels)
+
+
+def _channel(reader, channel, path: Path):
     channels = reader.channels
     if channel is None:
-        return reader.default_channel
+        if type(reader).__name__ not in _ARRAY_CONTAINER_READERS or len(channels) == 1:
+            return reader.default_channel
+        # a container of arrays (an .npz, HDF5 or MATLAB file) says nothing about which
+        # array is the heights; its reader takes the first (measured: "phase" before
+        # "height", MATLAB's X of X, Y, Z)
+        named = [c for c in channels if str(c.name).lower() in HEIGHT_CHANNEL_NAMES]
+        if len(named) == 1:
+            log.info("%s: read the array %r of %s (its name marks heights)", path,
+                     named[0].name, _channel_list(reader))
+            return named[0]
+        raise InputError(f"{str(path)!r} holds several arrays ({_channel_list(reader)}) and "
+                         "none named as heights (height, heights, topography or z): choose "
+                         "one with channel= (CLI --channel)")
     for c in channels:
         if str(channel) in (c.name, str(c.index)):
             return c
-    names = ", ".join(f"{c.index}: {c.name}" for c in channels)
-    raise InputError(f"channel {channel!r} not in the scan (channels: {names})")
+    raise InputError(f"channel {channel!r} not in the scan (channels: "
+                     f"{_channel_list(reader)})")
 
 
 def _channel_label(reader, ch) -> str:
@@ -411,21 +537,31 @@ def read_scan(path: str | os.PathLike, *,
     if fill not in FILL_METHODS:
         raise InputError(f"fill must be one of {FILL_METHODS}, got {fill!r}")
     reader = _open(path)
-    ch = _channel(reader, channel)
+    ch = _channel(reader, channel, path)
     if ch.dim != 2 or not ch.is_uniform:
         raise InputError(f"{str(path)!r} channel {ch.name!r} is a {ch.dim}D "
                          f"{'uniform' if ch.is_uniform else 'non-uniform'} topography; "
                          "roughflow needs a 2D map on a uniform grid")
-    if type(reader).__name__ == "AscReader":
+    reader_name = type(reader).__name__
+    if reader_name == "AscReader":
+        nx, ny = ch.nb_grid_pts
+        if nx <= 4 < ny and ny > 4 * nx:
+            # the coordinate-list reader refused it (a point missing from the grid, a
+            # fourth column) and the matrix reader took its columns for the scan's lines
+            raise InputError(f"{str(path)!r} looks like a list of points ({ny} lines of "
+                             f"{nx} values), not a matrix: SurfaceTopography reads a list "
+                             "of x y z lines (three columns) only where it covers every "
+                             "point of a uniform grid; drop other columns and write missing "
+                             "points with a height of nan")
         _check_text_complete(path, tuple(ch.nb_grid_pts))
     file_unit, file_size = ch.unit, ch.physical_sizes
     if isinstance(file_unit, tuple):  # (lateral, data) units: the data are not heights
         lateral_unit, data_unit = (file_unit + (None, None))[:2]
         if data_unit is None or data_unit != lateral_unit:
-            names = ", ".join(f"{c.index}: {c.name}" for c in reader.channels)
             raise InputError(f"{str(path)!r} channel {ch.name!r} is not a height map (its "
                              f"data unit is {data_unit!r}, its lateral unit "
-                             f"{lateral_unit!r}); pick a height channel (channels: {names})")
+                             f"{lateral_unit!r}); pick a height channel (channels: "
+                             f"{_channel_list(reader)})")
         file_unit = lateral_unit
     if file_size is not None:  # plain floats in messages, not numpy's repr
         file_size = tuple(float(v) for v in file_size)
@@ -433,8 +569,26 @@ def read_scan(path: str | os.PathLike, *,
         raise InputError(f"{str(path)!r} already gives its unit ({file_unit}): drop "
                          f"unit={unit!r} / height_unit={height_unit!r}")
     if file_size is not None and size is not None:
-        raise InputError(f"{str(path)!r} already gives its size {tuple(file_size)} "
-                         f"{file_unit or ''}: drop size={size!r}")
+        given_in = file_unit or _header_size_unit(ch, path)
+        raise InputError(f"{str(path)!r} already gives its size {file_size[0]:g} x "
+                         f"{file_size[1]:g}{' ' + given_in if given_in else ''}: drop "
+                         f"size={size!r}")
+    header_unit = _header_size_unit(ch, path) if file_unit is None and file_size else None
+    if header_unit is not None:
+        # a text header that gives the size with its unit ("Width: 20 um") but not the
+        # heights' unit: SurfaceTopography keeps the numbers and drops the unit, so the
+        # size was read in unit= (measured: 20 um read as 20 nm with --unit nm)
+        if unit is not None and length_factor(unit, "unit") != length_factor(header_unit,
+                                                                              "unit"):
+            raise InputError(f"{str(path)!r} gives its size in {header_unit} "
+                             f"({file_size[0]:g} x {file_size[1]:g}); unit={unit!r} would "
+                             f"read it in {unit}: give the heights' unit with height_unit= "
+                             "(CLI --height-unit) and drop unit=")
+        if unit is None and height_unit is None:
+            raise InputError(f"{str(path)!r} gives its size in {header_unit} but not the unit "
+                             "of its heights: pass height_unit= (CLI --height-unit), or unit= "
+                             f"where they are in {header_unit} too")
+        height_unit, unit, file_unit = height_unit or unit, None, header_unit
     # a size with its units and height_unit say all that unit= would (the size must then
     # carry units: _sizes refuses bare numbers without unit=)
     st_unit = unit
@@ -448,7 +602,12 @@ def read_scan(path: str | os.PathLike, *,
         missing.append("its physical size: pass size= (e.g. '500nm' or '0.126mm,0.094mm'; "
                        "CLI --size)")
     if missing:
-        raise InputError(f"{str(path)!r} does not give " + ", nor ".join(missing))
+        hint = ""
+        if reader_name == "H5Reader" and path.suffix.lower() == ".nc":
+            hint = (" (a netCDF-4 file, read as plain HDF5 without its attributes: "
+                    "SurfaceTopography reads the length and unit attributes of netCDF-3 "
+                    "files, e.g. xarray's to_netcdf(path, format='NETCDF3_64BIT'))")
+        raise InputError(f"{str(path)!r} does not give " + ", nor ".join(missing) + hint)
     lateral = length_factor(file_unit or st_unit, "unit")
     if file_size is not None:
         lx_m, ly_m = (float(v) * lateral for v in file_size)
@@ -459,20 +618,33 @@ def read_scan(path: str | os.PathLike, *,
         lx_m, ly_m = scan_size(size, unit if unit is not None else file_unit)
     vertical = lateral if height_unit is None else length_factor(height_unit, "height_unit")
     auto_crop = crop is not None and str(crop).strip() == SCAN_CROP_DEFINED
-    window = parse_crop(crop, tuple(ch.nb_grid_pts))
+    y_first = _netcdf_y_first(path)
+    # the netCDF reader takes the grid from the x and y dimensions, the HDF5 one (netCDF-4
+    # files) from the array as stored
+    grid = tuple(ch.nb_grid_pts)[::-1] if y_first and reader_name != "NCReader" else \
+        tuple(ch.nb_grid_pts)
+    window = parse_crop(crop, grid)
 
     kw = {} if file_size is not None else {"physical_sizes": tuple(float(v) / lateral for v in
                                                                    (lx_m, ly_m))}
-    if file_unit is None:
-        kw["unit"] = st_unit
+    if ch.unit is None:
+        kw["unit"] = file_unit or st_unit
     try:
         topo = ch.topography(**kw)
         raw = topo.heights()
     except Exception as exc:
         raise InputError(f"cannot read the heights of {str(path)!r} "
                          f"({type(exc).__name__}: {exc})") from None
+    if y_first:
+        log.info("%s: heights stored over (y, x), transposed to roughflow's (x, y)", path)
+        raw = raw.T
+    if raw.shape != grid:
+        raise InputError(f"{str(path)!r}: the reader gave {raw.shape[0]} x {raw.shape[1]} "
+                         f"heights for a {grid[0]} x {grid[1]} grid")
     missing = np.ma.getmaskarray(raw) | ~np.isfinite(np.ma.getdata(raw))
     h = np.array(np.ma.getdata(raw), dtype=np.float64) * vertical
+    del raw, topo
+    _close(reader)
     nx0, ny0 = h.shape
     if auto_crop:
         window = largest_defined_window(missing)
@@ -492,8 +664,15 @@ def read_scan(path: str | os.PathLike, *,
         log.warning("%s: %s", path, message)
         notes.append(message)
 
+    if min(h.shape) < 4:
+        raise InputError(f"{str(path)!r} has {h.shape[0]} x {h.shape[1]} points; at least "
+                         "4 x 4 are needed (line scans are not read)")
     dx, dy = lx_m / h.shape[0], ly_m / h.shape[1]
-    if abs(dx / dy - 1) > SCAN_PIXEL_ASPECT_WARN:
+    if file_size is not None and reader_name != "AscReader":
+        if abs(dx / dy - 1) > SCAN_PIXEL_ASPECT_WARN:  # stated by the file itself
+            log.info("%s: pixels of %.4g m along x and %.4g m along y, as the file states",
+                     path, dx, dy)
+    elif abs(dx / dy - 1) > SCAN_PIXEL_ASPECT_WARN:
         warn(f"the pixels are {dx:.4g} m along x and {dy:.4g} m along y ({h.shape[0]} x "
              f"{h.shape[1]} points, {lx_m:.4g} m x {ly_m:.4g} m). If the instrument's pixels "
              "are square, the axes are swapped: roughflow's first index is x; a plain-text "
@@ -515,12 +694,22 @@ def read_scan(path: str | os.PathLike, *,
              "it is large it, not the measured surface, shapes the contact; "
              + _defined_window_hint(missing, window, (nx0, ny0)))
     h[missing] = 0.0
+    level = float(np.max(np.abs(h)))  # the heights' magnitude before detrending
     h = detrend(h, lx_m, ly_m, detrend_mode, defined=~missing)
     if n_missing:
         h = fill_missing(h, missing, fill)
-    if np.ptp(h) == 0:
-        raise InputError(f"{str(path)!r} is flat after detrending ({detrend_mode}): "
-                         "no roughness to analyse")
+    with np.errstate(over="ignore"):
+        overflow = not np.isfinite(h).all() or not np.isfinite(np.std(h))
+    if overflow:
+        raise InputError(f"{str(path)!r}: heights up to {level:.4g} m overflow the "
+                         "statistics: a placeholder that marks missing points (such as 1e38 "
+                         "or -999999)? Write missing points as nan and choose a fill")
+    if np.ptp(h) <= SCAN_FLAT_RELATIVE * level:
+        # round-off of the detrending leaves ~1e-16 of the heights (a constant map of 3.0
+        # came out 1.5e-24 m rough and ran through a whole leak study)
+        raise InputError(f"{str(path)!r} is flat after detrending ({detrend_mode}): its "
+                         f"heights vary by {float(np.ptp(h)):.3g} m against levels up to "
+                         f"{level:.3g} m, no roughness to analyse")
     length = math.sqrt(lx_m * ly_m)
     lx, ly = lx_m / length, ly_m / length
     h /= length
@@ -536,7 +725,9 @@ def read_scan(path: str | os.PathLike, *,
              f"{float(np.std(h)) * length:.4g} m over {lx_m:.4g} m x {ly_m:.4g} m): measured "
              "surfaces have about 1e-3 to 2. Check the units: the heights were read in "
              f"{height_unit or file_unit or st_unit} and the lateral sizes in "
-             f"{file_unit or st_unit} (heights in nm read as um are 1000 times too steep)")
+             f"{file_unit or st_unit} (heights in nm read as um are 1000 times too steep), "
+             "and look for a placeholder value that marks missing points (such as -999999): "
+             "write those as nan")
     if notes:
         info = dataclasses.replace(info, warnings="; ".join(notes))
     surface = Surface.from_array(h, lx=lx, ly=ly)

@@ -13,6 +13,7 @@ from __future__ import annotations
 
 import argparse
 import logging
+from pathlib import Path
 
 from roughflow import defaults
 from roughflow.errors import InputError
@@ -20,6 +21,7 @@ from roughflow.errors import InputError
 #: Namespace attributes where the helpers record what to check (set with set_defaults).
 _OUTPUTS = "_outputs"
 _INPUTS = "_inputs"
+_SOURCES = "_sources"
 
 AXES = {"x": 0, "y": 1, "both": None}
 #: The unit of every dimensionless pressure option: E* with lengths in units of the cell side
@@ -106,14 +108,36 @@ def refuse_given(args: argparse.Namespace, flags: tuple[str, ...], why: str) -> 
                          f"apply {why}")
 
 
+def add_source(parser: argparse.ArgumentParser, dest: str) -> None:
+    """Declare the argument ``dest`` a file the subcommand reads itself (not a dataset read
+    by :func:`read_inputs`), so that no output may replace it."""
+    _record(parser, _SOURCES, dest)
+
+
+def _paths(value) -> list[str]:
+    return [] if value is None else [str(v) for v in value] if isinstance(value, list) \
+        else [str(value)]
+
+
 def check_outputs(args: argparse.Namespace) -> None:
     """:func:`roughflow.io.check_output` for every output the subcommand declared (given
-    ones only)."""
+    ones only), and none may be one of the command's input files (``roughflow import
+    scan.nc -o scan.nc`` replaced the measurement with its import)."""
     from roughflow.io import check_output
 
+    sources = [*(e[0] for e in getattr(args, _INPUTS, None) or []),
+               *(getattr(args, _SOURCES, None) or [])]
+    inputs = [Path(v) for dest in sources for v in _paths(getattr(args, dest, None))]
     for dest, option, suffixes in getattr(args, _OUTPUTS, None) or []:
-        if getattr(args, dest, None) is not None:
-            check_output(getattr(args, dest), option=option, suffixes=suffixes)
+        out = getattr(args, dest, None)
+        if out is None:
+            continue
+        check_output(out, option=option, suffixes=suffixes)
+        for source in inputs:
+            if Path(out).absolute() == source.absolute() or (
+                    Path(out).exists() and source.exists() and Path(out).samefile(source)):
+                raise InputError(f"{option} {str(out)!r} is also an input of the command: "
+                                 "writing it would replace that file; give another name")
 
 
 def read_inputs(args: argparse.Namespace) -> None:

@@ -12,7 +12,7 @@ from roughflow.defaults import (
     SCAN_FILL,
 )
 
-from ._common import add_output
+from ._common import add_output, add_source
 
 
 def register(sub: argparse._SubParsersAction) -> None:
@@ -55,6 +55,7 @@ def register(sub: argparse._SubParsersAction) -> None:
                    help="data channel by name or index (default: the file's height channel)")
     p.add_argument("--periodic", action="store_true",
                    help="the scan is periodic (e.g. simulated): no boundary treatment later")
+    add_source(p, "scan")
     add_output(p)
     p.set_defaults(func=run)
 
