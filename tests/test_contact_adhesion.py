@@ -229,3 +229,33 @@ def test_curvature_radius_of_a_sinusoid():
     ad = Adhesion(surface_energy=1e-3, range=0.01)
     mu = (math.sqrt(8) / (amp * q**2) * 1e-6 / 1e-6) ** (1 / 3)
     assert tabor_parameter(h, lx, ly, ad) == pytest.approx(mu, rel=1e-12)
+
+
+@pytest.mark.parametrize("repulsion", ["hard", "harmonic"])
+def test_a_restart_from_a_converged_adhesive_state_stays_on_it(repulsion):
+    """A result closes its contact cells (gap 0), and a warm start from those gaps lost their
+    tension: at zero load, where the detached body is an equilibrium too, a restart of a
+    converged gamma = 16 state (a_c 0.59) floated off to a_c = 0 and reported convergence
+    (a flow sweep then halved its load towards 0 and failed after 50000 iterations). The
+    contact cells' gaps now come back from their pressures: the restart is the state."""
+    from roughflow.contact import solve
+
+    spec = SurfaceSpec.from_sweep(gamma=16, l_over_lambda_r=16, eps_f=1 / 8,
+                                  points_per_lambda_s=2, seed=0)  # 64 x 1024, 0.5 s a solve
+    s = generate(spec)
+    rho = {"hard": 0.8, "harmonic": 0.42}[repulsion] * spec.lambda_s  # the calibrated ranges
+    ad = adhesion_for(s.heights, s.lx, s.ly, gamma_over_v_full=0.1, range=rho,
+                      repulsion=repulsion)
+    first = solve(s, 0.0, model="adhesive", adhesion=ad)
+    assert first.area_fraction > 0.3
+    again = solve(s, 0.0, model="adhesive", adhesion=ad, init=first)
+    # the state itself, not one found again: no step taken (45-60 before, 15 harmonic)
+    assert again.iterations == 0
+    np.testing.assert_array_equal(again.contact, first.contact)
+    np.testing.assert_allclose(again.gap, first.gap, rtol=0, atol=1e-15)
+    # the inverse is exact: the physical gaps give back the contact pressures
+    g = ad.physical_gap(first.gap, first.contact, first.contact_pressure)
+    c = first.contact & (first.contact_pressure < 0)
+    np.testing.assert_allclose(ad.pressure(g[c]), first.contact_pressure[c], rtol=1e-9)
+    assert np.all(g[first.contact] < ad.contact_gap + 1e-15 if repulsion == "hard" else
+                  g[first.contact] <= 0)

@@ -102,6 +102,26 @@ class Adhesion:
         t = -0.5 * gs * np.pi / rho * np.sin(np.pi * x / rho)
         return np.where(g < 0, -self.kappa * g, t)
 
+    def physical_gap(self, gap: np.ndarray, contact: np.ndarray,
+                     pressure: np.ndarray) -> np.ndarray:
+        """The gaps of an adhesive result before its contact cells were closed (set to 0):
+        each contact cell's gap from its contact pressure, inverting :meth:`pressure` on the
+        branch of contact (tension rising from the wall to rho/2; the overlap -p/kappa on
+        the harmonic wall; 0 for a hard-wall cell pressed on the wall). A warm start from
+        the closed gaps loses the contact cells' tension: at zero load a restart from a
+        converged state floated off to the detached state (a_c 0.59 -> 0), which is also
+        an equilibrium there. Exact for ``contact_within`` <= 1/2; beyond, cells past the
+        peak tension come back on the near side of it."""
+        out = np.array(gap, dtype=np.float64)
+        c = np.asarray(contact, bool)
+        p = np.asarray(pressure, np.float64)[c]
+        tension = np.clip(-p / self.max_tension, 0.0, 1.0)
+        g = self.range / math.pi * np.arcsin(tension)
+        if self.repulsion == "harmonic":
+            g = np.where(p > 0, -p / self.kappa, g)
+        out[c] = g
+        return out
+
     def curvature(self, g: np.ndarray) -> np.ndarray:
         """d^2 v / dg^2 (negative in the attractive neck beyond rho/2)."""
         gs, rho = self.surface_energy, self.range

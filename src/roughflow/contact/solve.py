@@ -187,7 +187,7 @@ def solve(
         from .gfmd import gfmd
 
         # elastic surface height = heights + gap (exact for the hard wall; an adhesive
-        # result's contact cells, gap set to zero, start on the wall or the surface)
+        # result's contact cells, whose gaps were set to zero, from their pressures)
         if init is None and model == "adhesive":
             # start from the repulsive contact (at least a small load) so that the attraction
             # acts from the first step; a flat start floats at zero load
@@ -195,7 +195,10 @@ def solve(
                          tol=_ADHESIVE_START_TOL, threads=threads)
         u0 = None
         if init is not None:
-            u0 = np.add(heights, init.gap, out=work.u0 if work is not None else None)
+            gap0 = init.gap
+            if model == "adhesive" and init.model == "adhesive":
+                gap0 = adhesion.physical_gap(init.gap, init.contact, init.contact_pressure)
+            u0 = np.add(heights, gap0, out=work.u0 if work is not None else None)
         out = gfmd(
             heights, lx, ly, load, tol=tol, max_iter=int(max_iter), u0=u0,
             adhesion=adhesion if model == "adhesive" else None, threads=threads, setup=setup,
