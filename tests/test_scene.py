@@ -92,7 +92,7 @@ def test_expand_study_keeps_what_applies():
                                                "adhesion": {"repulsion": repulsion}})
         (job,) = jobs.values()
         assert (job.repulsion, job.range_over_lambda_s) == (repulsion, rho)
-    assert len(expand_study("threshold_vs_size", {**_SMALL, "l_over_lambda_r": [2, 4],
+    assert len(expand_study("threshold_vs_size", {**_SMALL, "l_over_lambda_r": [4, 8],
                                                   "fit": {"nu": 1.5}})) == 2
 
 
@@ -519,3 +519,15 @@ def test_measured_jobs_are_the_same_whatever_the_units_they_are_written_in(tmp_p
     # numbers without a unit stay as given: the file's own unit applies to them
     bare = job({**question, "scans": [{"file": "scan.npy", "size": "125"}]})
     assert bare.import_args()[bare.import_args().index("--size") + 1] == "125"
+
+
+def test_a_threshold_tol_below_one_cell_is_refused_when_the_job_is_made():
+    # checked by the search after the other jobs of a run (a config with eps_f 1/4 at
+    # L/lambda_r = 1 and 2 points per lambda_s: an 8 x 8 grid, tol 0.01 < 1/64); the
+    # workflow makes every job while it plans, so the run now stops before any job
+    small = SurfaceParams(l_over_lambda_r=1.0, eps_f=0.25, points_per_lambda_s=2.0)
+    assert (small.spec(0).nx, small.spec(0).ny) == (8, 8)
+    with pytest.raises(InputError, match=r"tol=0.01 is below the area of one cell of the "
+                                         r"8 x 8 grid"):
+        ThresholdJob(surface=small, tol=0.01)
+    assert ThresholdJob(surface=small, tol=1 / 64).tol == 1 / 64

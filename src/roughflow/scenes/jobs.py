@@ -166,6 +166,12 @@ class ThresholdJob(_SeedGroup):
         object.__setattr__(self, "seeds", require_seeds("seeds", self.seeds))
         _check_tol("tol", self.tol, defaults.THRESHOLD_TOL_MAX)
         _check_tol("contact_tol", self.contact_tol, defaults.CONTACT_TOL_MAX)
+        # the search's own check, at planning: a tol below one cell of the grid failed in
+        # the job, after the other jobs of the run
+        from roughflow.search.critical import check_area_tol
+
+        spec = self.surface.spec(0)
+        check_area_tol(self.tol, (spec.nx, spec.ny))
         if self.model == "bearing":
             # the exact bearing sweep solves no contact: contact_tol is unused, and kept at
             # its default so that a config's value neither reruns these jobs nor splits them
