@@ -259,3 +259,50 @@ def test_a_restart_from_a_converged_adhesive_state_stays_on_it(repulsion):
     np.testing.assert_allclose(ad.pressure(g[c]), first.contact_pressure[c], rtol=1e-9)
     assert np.all(g[first.contact] < ad.contact_gap + 1e-15 if repulsion == "hard" else
                   g[first.contact] <= 0)
+
+
+def test_a_warm_start_to_zero_load_does_not_fly_off_to_the_detached_state():
+    """A start whose contact cells had lost their tension (the ladder kept adhesive states as
+    q = gap - c max(p, 0)) flew off at zero load: the q = 0 mode overshot the attraction's
+    range and the solve ended at the detached state (a_c = 0), an equilibrium at zero load
+    only; the ladder then halved its load towards 0 until it failed. A warm solve at zero
+    load that ends out of the attraction's range is solved again from the cold start."""
+    import dataclasses
+
+    from roughflow.contact import solve
+
+    spec = SurfaceSpec.from_sweep(gamma=16, l_over_lambda_r=16, eps_f=1 / 8,
+                                  points_per_lambda_s=2, seed=0)
+    s = generate(spec)
+    ad = adhesion_for(s.heights, s.lx, s.ly, gamma_over_v_full=0.1, range=0.8 * spec.lambda_s)
+    loaded = solve(s, 3.127e-3, model="adhesive", adhesion=ad)
+    stripped = dataclasses.replace(loaded,
+                                   contact_pressure=np.maximum(loaded.contact_pressure, 0))
+    cold = solve(s, 0.0, model="adhesive", adhesion=ad)
+    warm = solve(s, 0.0, model="adhesive", adhesion=ad, init=stripped)
+    assert cold.area_fraction > 0.5
+    # the same state: the contact mask exactly, the gaps to the solver's tolerance (1e-6
+    # of the rms height of about 0.02)
+    np.testing.assert_array_equal(warm.contact, cold.contact)
+    np.testing.assert_allclose(warm.gap, cold.gap, rtol=0, atol=1e-7)
+    assert warm.iterations > cold.iterations  # the wasted warm attempt is counted
+
+
+def test_the_adhesive_ladder_keeps_its_states_whole():
+    """The gamma = 16 adhesive ladder of a flow sweep (targets below a_c(p = 0) = 0.59) ran
+    50000 iterations at a load of 1e-8 and failed (exit 3); it now reports the targets as
+    missed at the zero-load state, and a compact-state search refuses the adhesive model."""
+    from roughflow.contact import ContactLaw
+    from roughflow.scenes.jobs import LadderJob, SurfaceParams
+    from roughflow.scenes.ladder import run_ladder
+    from roughflow.search.load import LoadSearch
+
+    with pytest.raises(InputError, match="compliance=None for the adhesive model"):
+        LoadSearch(lambda p, init: None, ContactLaw("adhesive"), compliance=1.0)
+    job = LadderJob(surface=SurfaceParams(gamma=16, l_over_lambda_r=16, eps_f=0.125,
+                                          points_per_lambda_s=2),
+                    model="adhesive", area_fractions=(0.05, 0.7))
+    ds = run_ladder(job)
+    a = ds["area_fraction"].values.ravel()
+    assert a[0] == pytest.approx(0.5936, abs=1e-3) and a[1] == pytest.approx(0.7, abs=0.005)
+    assert int(ds["contact_iterations"].sum()) < 500

@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import dataclasses
+import logging
 from typing import TYPE_CHECKING
 
 import numpy as np
@@ -36,6 +37,7 @@ if TYPE_CHECKING:  # gfmd (numba) is imported on first use: the CLI starts faste
 METHODS = CONTACT_METHODS
 # The repulsive state an adhesive solve starts from: a small load (so that the attraction
 # acts from the first step) and a loose tolerance (it is only a starting point).
+log = logging.getLogger(__name__)
 _ADHESIVE_START_LOAD = 1e-2
 _ADHESIVE_START_TOL = 1e-4
 _DEFAULT_MAX_ITER = {"cg": 20000, "gfmd": 50000}
@@ -188,6 +190,7 @@ def solve(
 
         # elastic surface height = heights + gap (exact for the hard wall; an adhesive
         # result's contact cells, whose gaps were set to zero, from their pressures)
+        warm = init is not None
         if init is None and model == "adhesive":
             # start from the repulsive contact (at least a small load) so that the attraction
             # acts from the first step; a flat start floats at zero load
@@ -204,6 +207,19 @@ def solve(
             adhesion=adhesion if model == "adhesive" else None, threads=threads, setup=setup,
             work=work, backend=backend,
         )
+        if (model == "adhesive" and load == 0 and warm and out.converged
+                and float(out.gap.min()) >= adhesion.range):
+            # at zero load a body out of the attraction's range is an equilibrium too, and
+            # a warm start from a higher load flew off to it (released, its q = 0 mode
+            # overshoots the range: a_c 0.67 at p = 3e-3, then 0 at p = 0, gamma = 16);
+            # the attached state, which the cold start reaches from repulsive contact, has
+            # the lower energy
+            log.info("adhesive solve at zero load left the attraction's range from its "
+                     "warm start; solving again from the cold start")
+            again = solve(surface, 0.0, model=model, adhesion=adhesion, method=method,
+                          tol=tol, max_iter=max_iter, threads=threads, setup=setup,
+                          work=work, backend=backend)
+            return dataclasses.replace(again, iterations=again.iterations + int(out.iterations))
     if not out.converged:
         raise ConvergenceError(
             f"contact solve ({model}, {method}) did not reach tol={tol:g} within "
