@@ -306,3 +306,16 @@ def test_the_adhesive_ladder_keeps_its_states_whole():
     a = ds["area_fraction"].values.ravel()
     assert a[0] == pytest.approx(0.5936, abs=1e-3) and a[1] == pytest.approx(0.7, abs=0.005)
     assert int(ds["contact_iterations"].sum()) < 500
+
+
+def test_a_load_beyond_pull_off_is_named_in_the_error():
+    # no equilibrium: the body moves off for all max_iter steps (85 s at 256^2), and the
+    # error said only that the tolerance was not reached
+    from roughflow.contact import solve
+    from roughflow.errors import ConvergenceError
+
+    spec = SurfaceSpec.from_sweep(l_over_lambda_r=4, eps_f=1 / 8, points_per_lambda_s=2)
+    s = generate(spec)  # 64 x 64
+    ad = adhesion_for(s.heights, s.lx, s.ly, gamma_over_v_full=0.1, range=0.8 * spec.lambda_s)
+    with pytest.raises(ConvergenceError, match="-0.01 may lie beyond the pull-off force"):
+        solve(s, -0.01, model="adhesive", adhesion=ad, max_iter=2000)

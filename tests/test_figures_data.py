@@ -72,6 +72,10 @@ def test_one_gamma_keeps_its_axis_around_it():
     ax = threshold_vs_gamma.draw(study([1.0])).axes[0]
     lo, hi = ax.get_xlim()
     assert lo < 0.8 and hi > 1.25
+    # isotropic surfaces alone have no easy and hard direction: "x (easy)" was said of them
+    labels = [t.get_text() for t in ax.get_legend().get_texts()]
+    assert labels and not any("easy" in t or "hard" in t for t in labels)
+    assert any(t.endswith(" x") for t in labels) and any(t.endswith(" y") for t in labels)
 
 
 def test_an_empty_panel_says_so():

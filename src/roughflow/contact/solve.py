@@ -221,9 +221,17 @@ def solve(
                           work=work, backend=backend)
             return dataclasses.replace(again, iterations=again.iterations + int(out.iterations))
     if not out.converged:
+        why = ""
+        if model == "adhesive" and load < 0:
+            # a tensile load beyond the pull-off force has no equilibrium: the body keeps
+            # moving off (a helper waited 85 s for 50000 steps at 256^2 to be told less)
+            why = (f"; the tensile load {load:g} may lie beyond the pull-off force (no "
+                   f"equilibrium: the surfaces separate), the largest gap is "
+                   f"{float(out.gap.max()):.3g} against the range {adhesion.range:.3g}")
         raise ConvergenceError(
             f"contact solve ({model}, {method}) did not reach tol={tol:g} within "
-            f"max_iter={max_iter}", residual=float(out.residual), iterations=int(out.iterations),
+            f"max_iter={max_iter}{why}", residual=float(out.residual),
+            iterations=int(out.iterations),
         )
     return ContactResult(
         gap=out.gap,

@@ -55,6 +55,8 @@ def plot_vs_gamma(ax, a: xr.DataArray, *, marker: str = "o", filled: bool = True
         g = gammas[ok] * (offset if direction == "easy" else 1 / offset)
         which = (f"{direction} (x for gamma > 1, y below)" if direction == "easy" and below
                  else f"{direction} (y for gamma > 1, x below)" if below
+                 # isotropic surfaces alone have no easy and hard direction
+                 else ("x" if direction == "easy" else "y") if np.allclose(gammas, 1.0)
                  else f"{'x' if direction == 'easy' else 'y'} ({direction})")
         ax.errorbar(g, m[ok], yerr=s[ok], marker=marker, ls="-", lw=0.8, color=color,
                     mfc=color if filled else "white", ms=6, capsize=2,
