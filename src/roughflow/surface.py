@@ -330,7 +330,9 @@ def _phase_box(spec: SurfaceSpec) -> tuple[np.ndarray, int, int]:
 
     The box depends only on the cell, gamma, lambda_s and the seed, not on the grid, so one
     seed gives the same physical surface at every resolution (a band-limited function
-    sampled on finer grids): resolution studies compare like with like.
+    sampled on finer grids): resolution studies compare like with like. Its extents change
+    with gamma, and every phase with them: one seed at two gammas, or at gamma and 1/gamma,
+    is two unrelated surfaces (docs/physics.md, "What a seed fixes").
     """
     qs = 2 * np.pi / spec.lambda_s
     kx_max = int(np.floor(qs / math.sqrt(spec.gamma) * spec.lx / (2 * np.pi) + 1e-9))
