@@ -700,3 +700,32 @@ def test_cli_import_refuses_to_overwrite_its_scan(tmp_path, capsys):
         main(["import", str(tmp_path / "scan.nc"), "-o", str(tmp_path / "." / "scan.nc")])
     assert exc.value.code == 2 and "is also an input" in capsys.readouterr().err
     assert (tmp_path / "scan.nc").read_bytes() == before
+
+
+def test_a_placeholder_for_missing_points_can_be_named(tmp_path, capsys):
+    """Instrument exports mark missing points with a number (-999999, 1e38 in float32);
+    it ran through as a height (a warning about units at most). missing_value= names it."""
+    h = heights()
+    h[2, 3] = h[7, 1] = -999999.0
+    np.save(tmp_path / "p.npy", h)
+    f32 = heights().astype(np.float32)
+    f32[5, 5] = np.float32(1e38)  # 9.99999968e37 as float32
+    np.save(tmp_path / "f32.npy", f32)
+    with pytest.raises(InputError, match="2 missing points"):
+        from_scan(tmp_path / "p.npy", size="16um,12um", unit="nm", missing_value=-999999)
+    s = from_scan(tmp_path / "p.npy", size="16um,12um", unit="nm", missing_value=-999999,
+                  fill="harmonic")
+    assert s.scan.filled == 2 and s.scan.missing_value == "-999999.0"
+    assert np.abs(s.heights * s.scan.length_scale).max() < 1e-8  # no -1e-3 m left
+    s = from_scan(tmp_path / "f32.npy", size="16um,12um", unit="nm", missing_value=1e38,
+                  fill="min")
+    assert s.scan.filled == 1
+    with pytest.raises(InputError, match="missing_value must be finite"):
+        from_scan(tmp_path / "p.npy", size="16um,12um", unit="nm", missing_value=float("nan"))
+    # the command line, and the record in the surface file
+    out = tmp_path / "p.nc"
+    assert main(["import", str(tmp_path / "p.npy"), "--size", "16um,12um", "--unit", "nm",
+                 "--missing-value=-999999", "--fill", "min", "-o", str(out)]) == 0
+    assert "2 points filled" in capsys.readouterr().out
+    back = read_surface(out)
+    assert back.scan.missing_value == "-999999.0" and back.scan.filled == 2

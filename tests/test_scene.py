@@ -519,6 +519,14 @@ def test_measured_jobs_are_the_same_whatever_the_units_they_are_written_in(tmp_p
     # numbers without a unit stay as given: the file's own unit applies to them
     bare = job({**question, "scans": [{"file": "scan.npy", "size": "125"}]})
     assert bare.import_args()[bare.import_args().index("--size") + 1] == "125"
+    # an instrument's placeholder for missing points, in one spelling that argparse reads
+    marked = job({**question, "missing_value": -999999, "scans": scans[:1]})
+    args = marked.import_args()
+    assert "--missing-value=-999999.0" in args
+    assert build_parser().parse_args(["import", "s.npy", *args, "-o", "s.nc"]).missing_value \
+        == -999999.0
+    with pytest.raises(InputError, match="missing_value must be a finite number"):
+        job({**question, "missing_value": "n/a", "scans": scans[:1]})
 
 
 def test_a_threshold_tol_below_one_cell_is_refused_when_the_job_is_made():

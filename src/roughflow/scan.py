@@ -342,6 +342,9 @@ def _check_text_complete(path: Path, shape: tuple[int, int]) -> None:
 TEXT_SUFFIXES = (".txt", ".asc", ".dat", ".xyz", ".csv")
 #: Channel names that mark the heights in a file of several unnamed arrays (NPZ, HDF5, MAT).
 HEIGHT_CHANNEL_NAMES = ("height", "heights", "topography", "z")
+#: Relative tolerance of ``missing_value``: a float32 file holds a placeholder to about
+#: 6e-8 of it, and no measured height lies within 1e-6 of an instrument's placeholder.
+MISSING_VALUE_RTOL = 1e-6
 #: Readers of files that hold several arrays with nothing to say which are heights.
 _ARRAY_CONTAINER_READERS = ("NPZReader", "H5Reader", "MatReader")
 
@@ -507,7 +510,7 @@ def read_scan(path: str | os.PathLike, *,
               height_unit: str | None = None, detrend_mode: str = SCAN_DETREND,
               fill: str = SCAN_FILL, crop: str | None = None,
               channel: str | int | None = None,
-              periodic: bool = False) -> Surface:
+              periodic: bool = False, missing_value: float | None = None) -> Surface:
     """Read a measured topography into a dimensionless :class:`Surface` with
     :class:`~roughflow.surface.ScanInfo`.
 
@@ -525,6 +528,9 @@ def read_scan(path: str | os.PathLike, *,
         (:func:`largest_defined_window`).
     channel: name or index of the data channel (default: the file's height channel).
     periodic: the scan is periodic (e.g. a simulated one): no boundary treatment later.
+    missing_value: the number that marks missing points in the file (an instrument's
+        placeholder such as -999999 or 1e38), in the file's own numbers; matched to a
+        relative 1e-6 (a float32 file holds 1e38 as 9.99999968e37). NaN always counts.
 
     Every check happens before the heights are processed; bad input raises
     :class:`InputError` naming the value.
@@ -536,6 +542,14 @@ def read_scan(path: str | os.PathLike, *,
         raise InputError(f"detrend must be one of {DETREND_MODES}, got {detrend_mode!r}")
     if fill not in FILL_METHODS:
         raise InputError(f"fill must be one of {FILL_METHODS}, got {fill!r}")
+    if missing_value is not None:
+        try:
+            missing_value = float(missing_value)
+        except (TypeError, ValueError):
+            raise InputError(f"missing_value must be a number, got {missing_value!r}") from None
+        if not math.isfinite(missing_value):
+            raise InputError(f"missing_value must be finite (nan always counts as missing), "
+                             f"got {missing_value!r}")
     reader = _open(path)
     ch = _channel(reader, channel, path)
     if ch.dim != 2 or not ch.is_uniform:
@@ -642,6 +656,9 @@ def read_scan(path: str | os.PathLike, *,
         raise InputError(f"{str(path)!r}: the reader gave {raw.shape[0]} x {raw.shape[1]} "
                          f"heights for a {grid[0]} x {grid[1]} grid")
     missing = np.ma.getmaskarray(raw) | ~np.isfinite(np.ma.getdata(raw))
+    if missing_value is not None:
+        missing |= np.isclose(np.ma.getdata(raw), missing_value, rtol=MISSING_VALUE_RTOL,
+                              atol=0.0)
     h = np.array(np.ma.getdata(raw), dtype=np.float64) * vertical
     del raw, topo
     _close(reader)
@@ -718,7 +735,8 @@ def read_scan(path: str | os.PathLike, *,
         length_scale=length, rms_gradient=rms_gradient(h, lx, ly, periodic=periodic),
         detrend=detrend_mode, fill=fill, filled=n_missing,
         crop="none" if window is None else _window_text(window, (nx0, ny0)),
-        periodic=bool(periodic))
+        periodic=bool(periodic),
+        missing_value="none" if missing_value is None else repr(missing_value))
     lo, hi = SCAN_GRADIENT_WARN
     if not lo <= info.rms_gradient <= hi:
         warn(f"the rms gradient is {info.rms_gradient:.3g} (rms height "

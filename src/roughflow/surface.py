@@ -197,7 +197,8 @@ class ScanInfo:
     "i0:i1,j0:j1"); ``periodic``: whether the surface is periodic (a scan is not; the
     contact and flow stages then use :mod:`roughflow.boundary`); ``warnings``: what the
     import warned about ("; "-joined, "" for nothing), kept so that a workflow's results
-    say it and not only the import's log.
+    say it and not only the import's log. ``missing_value``: the value that marked
+    missing points in the file ("none", or the number as given).
     """
 
     source: str
@@ -211,6 +212,7 @@ class ScanInfo:
     crop: str = "none"
     periodic: bool = False
     warnings: str = ""
+    missing_value: str = "none"
 
     def as_attrs(self) -> dict:
         """Fields as a flat dict (for netCDF attributes, prefixed ``scan_``)."""

@@ -53,6 +53,9 @@ def register(sub: argparse._SubParsersAction) -> None:
                         "without missing points")
     p.add_argument("--channel", default=None,
                    help="data channel by name or index (default: the file's height channel)")
+    p.add_argument("--missing-value", type=float, default=None, metavar="V",
+                   help="the number that marks missing points in the file (an instrument's "
+                        "placeholder such as -999999 or 1e38; nan always counts)")
     p.add_argument("--periodic", action="store_true",
                    help="the scan is periodic (e.g. simulated): no boundary treatment later")
     add_source(p, "scan")
@@ -67,7 +70,7 @@ def run(args: argparse.Namespace) -> None:
     surface = from_scan(args.scan, size=args.size, unit=args.unit,
                         height_unit=args.height_unit, detrend_mode=args.detrend,
                         fill=args.fill, crop=args.crop, channel=args.channel,
-                        periodic=args.periodic)
+                        periodic=args.periodic, missing_value=args.missing_value)
     write_dataset(surface_to_dataset(surface), args.output, provenance=args.provenance)
     s = surface.scan
     nx, ny = surface.shape

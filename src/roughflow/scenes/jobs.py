@@ -339,7 +339,8 @@ class ChannelsJob:
 LEAK_QUANTITIES = {"modulus": "pressure", "fluid_pressure": "pressure",
                    "viscosity": "viscosity", "seal_width": "length", "seal_length": "length"}
 #: Import options of one scan in the measured study (``roughflow import`` options).
-SCAN_KEYS = ("size", "unit", "height_unit", "detrend", "fill", "crop", "channel")
+SCAN_KEYS = ("size", "unit", "height_unit", "detrend", "fill", "crop", "channel",
+             "missing_value")
 
 
 @dataclass(frozen=True)
@@ -368,6 +369,7 @@ class LeakJob:
     fill: str = defaults.SCAN_FILL
     crop: str | None = None
     channel: str | None = None
+    missing_value: float | None = None
     boundary: str = defaults.BOUNDARY
     kind: str = field(default="leak", init=False)
 
@@ -384,6 +386,12 @@ class LeakJob:
         if self.size is not None:
             self.size_m()  # a bad length is refused here, not in its job
         check_crop(self.crop)
+        if self.missing_value is not None and not (
+                isinstance(self.missing_value, (int, float))
+                and not isinstance(self.missing_value, bool)
+                and math.isfinite(self.missing_value)):
+            raise InputError(f"missing_value must be a finite number, got "
+                             f"{self.missing_value!r}")
         for key, choices in (("detrend", defaults.DETREND_MODES),
                              ("fill", defaults.FILL_METHODS),
                              ("boundary", defaults.BOUNDARY_METHODS)):
@@ -424,6 +432,8 @@ class LeakJob:
             value = getattr(self, key)
             if value is not None:
                 args += [f"--{key}", shlex.quote(str(value))]
+        if self.missing_value is not None:  # "=": argparse takes "-999999" for an option
+            args += [f"--missing-value={float(self.missing_value)!r}"]
         return args
 
     def cli_args(self) -> list[str]:
