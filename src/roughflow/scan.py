@@ -720,7 +720,8 @@ def read_scan(path: str | os.PathLike, *,
     if overflow:
         raise InputError(f"{str(path)!r}: heights up to {level:.4g} m overflow the "
                          "statistics: a placeholder that marks missing points (such as 1e38 "
-                         "or -999999)? Write missing points as nan and choose a fill")
+                         "or -999999)? Name it with missing_value= (CLI --missing-value) and "
+                         "choose a fill")
     if np.ptp(h) <= SCAN_FLAT_RELATIVE * level:
         # round-off of the detrending leaves ~1e-16 of the heights (a constant map of 3.0
         # came out 1.5e-24 m rough and ran through a whole leak study)
@@ -745,7 +746,7 @@ def read_scan(path: str | os.PathLike, *,
              f"{height_unit or file_unit or st_unit} and the lateral sizes in "
              f"{file_unit or st_unit} (heights in nm read as um are 1000 times too steep), "
              "and look for a placeholder value that marks missing points (such as -999999): "
-             "write those as nan")
+             "name it with missing_value= (CLI --missing-value)")
     if notes:
         info = dataclasses.replace(info, warnings="; ".join(notes))
     surface = Surface.from_array(h, lx=lx, ly=ly)
