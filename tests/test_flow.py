@@ -314,6 +314,40 @@ def test_gaps_below_float64_resolution_are_closed(monkeypatch, caplog, method):
     assert open_row.sigma == pytest.approx(series, rel=1e-6)
 
 
+@pytest.mark.parametrize("method", [None, "rs", "sa", "direct", "cg"])
+def test_narrow_inlets_meet_the_attainable_residual(method):
+    """Rows of gap 1e-3 at the inlet and outlet against 1 inside: the right-hand side (the
+    inlet's transmissibilities) is 1e-9 of the matrix's scale, so a relative residual of
+    1e-8 lies below float64's round-off of the residual (6.7e-7 at best), and every method
+    raised ConvergenceError on a well-conditioned gap. The exact sigma is the series mean
+    of the rows; 1e-12 allows the round-off of a 1e9 contrast in conductivity."""
+    n = 64
+    g = np.ones((n, n))
+    g[0, :] = g[-1, :] = 1e-3
+    exact = n / np.sum(1 / sigma_of(g[:, 0]))
+    r = solve(g, 0, method=method)
+    assert r.sigma == pytest.approx(exact, rel=1e-12)
+    assert r.sigma_error < 1e-10  # and the bound says so
+
+
+def test_one_deep_cell_does_not_close_the_rest():
+    """A cell counts as closed below 1e-16 of the largest conductance that carries flow;
+    with the largest cell as the scale, one pit 3e5 times deeper than the gap around it
+    closed every other cell (sigma = 0, not percolating). The scale is now the largest
+    face, the harmonic mean of two cells, which the pit's neighbours bound. sigma changes
+    by the pit's own few faces only: pits 1e4 and 1e10 deep give the same sigma to 1e-12."""
+    sig = []
+    for pit in (1e4, 3e5, 1e10):
+        g = np.ones((64, 64))
+        g[20, 20] = pit
+        r = solve(g, 0)
+        assert r.percolating
+        sig.append(r.sigma)
+    assert sig[1] == pytest.approx(sig[0], rel=1e-12) and sig[2] == pytest.approx(sig[0],
+                                                                                   rel=1e-12)
+    assert sig[0] > sigma_of(1.0)  # a pit only adds conductance
+
+
 def test_isolated_pools_do_not_change_sigma(heights):
     g = bearing_gap(heights, 0.2)
     rng = np.random.default_rng(1)

@@ -94,3 +94,26 @@ def test_plot_flux_draws_the_domain_in_lengths_not_cells():
     ax = plot_flux(r)
     assert np.allclose(ax.get_images()[0].get_extent(), (0, 1, 0, 1))
     assert ax.get_xlabel() == "x / L"
+
+
+def test_cells_marked_as_contact_are_closed(tmp_path, capsys):
+    """A user's file with a gap of 1e-3 on a row marked contact: the flow solved that row
+    open (sigma_x 1.3e-9 through it) while the output's contact map drew it closed, and
+    `roughflow theory` closed it. It is closed now, with a warning."""
+    g = np.full((16, 12), 0.2)
+    g[5, :] = 1e-3
+    contact = np.zeros(g.shape, bool)
+    contact[5, :] = True
+    src, out = tmp_path / "c.nc", tmp_path / "f.nc"
+    nx, ny = g.shape
+    ds = xr.Dataset({"gap": (("x", "y"), g, {"units": "L"}),
+                     "contact": (("x", "y"), contact.astype(np.int8), {"units": "1"})},
+                    coords=grid_coords(nx, ny, 1.0, 1.0),
+                    attrs={"lx": 1.0, "ly": 1.0, "title": "test contact", "area_fraction": 1 / 16})
+    write_dataset(ds, src)
+    assert main(["flow", str(src), "--axis", "both", "-o", str(out)]) == 0
+    assert "12 cells marked as contact have a gap > 0" in capsys.readouterr().err
+    with xr.open_dataset(out) as res:
+        assert float(res["sigma_x"]) == 0.0 and res.attrs["percolating_x"] == 0
+        # along y the contact row carries nothing: 15 of 16 rows (exact for this grid)
+        assert float(res["sigma_y"]) == pytest.approx(15 / 16 * 0.2**3 / 12, rel=1e-12)

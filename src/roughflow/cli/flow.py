@@ -67,6 +67,14 @@ def _read_gap(ds):
 
     gap = ds["gap"].values.astype(np.float64)
     contact = ds["contact"].values.astype(bool) if "contact" in ds else gap <= 0
+    open_contact = contact & (gap > 0)
+    if open_contact.any():
+        # a contact cell is closed (roughflow's own files give it gap 0; `roughflow theory`
+        # closes it too): a user's file with a gap there solved it open, while the output's
+        # contact map drew it closed
+        log.warning("%d cells marked as contact have a gap > 0 (up to %.3g): closed, as "
+                    "contact", int(open_contact.sum()), float(gap[open_contact].max()))
+        gap = np.where(contact, 0.0, gap)
     return gap, contact, lx, ly
 
 

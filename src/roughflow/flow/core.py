@@ -44,6 +44,7 @@ from .assembly import Faces, assemble, face_transmissibilities
 from .bound import WidestTree, dissipation_bounds, widest_tree
 from .ldl import LDLFactor
 from .linsolve import (
+    RESIDUAL_ROUNDOFF,
     LinearSolution,
     OrderHint,
     check_direct_max_flowing_fraction,
@@ -52,6 +53,7 @@ from .linsolve import (
     solve_prepared,
     solve_spd,
 )
+from .linsolve import residual_scale as _residual_scale
 
 if TYPE_CHECKING:
     from numpy.typing import ArrayLike
@@ -291,13 +293,6 @@ def _flux_balance(faces: Faces, act: np.ndarray, cells: np.ndarray, x: np.ndarra
 ROUNDOFF_MARGIN = 10
 
 
-def _residual_scale(matrix, rhs, x: np.ndarray) -> np.ndarray:
-    """(|A| |x| + |b|)_i: what the round-off of the float64 residual b - A x is relative to."""
-    size = np.abs(x)
-    # |A| = 2 diag(A) - A: the Reynolds matrix has no positive off-diagonal entry
-    return 2.0 * matrix.diagonal() * size - matrix @ size + np.abs(rhs)
-
-
 def _imbalance_floor(scale: np.ndarray, dissipation: float) -> float:
     """The |Q_in - Q_out| / Q that round-off alone leaves a solution x whose residual scale
     (:func:`_residual_scale`) is ``scale``.
@@ -308,15 +303,6 @@ def _imbalance_floor(scale: np.ndarray, dissipation: float) -> float:
     RS iterate that met its residual with sigma 2.5 times too large (2048 x 4096, a_c 0.414,
     y) was about 2000 times above it (docs/flow.md "Flux check")."""
     return float(np.finfo(np.float64).eps * np.linalg.norm(scale) / dissipation)
-
-
-#: the round-off of the float64 residual b - A x, relative to (|A| |x| + |b|)_i: a row has at
-#: most 5 entries, so forming it rounds by at most gamma_6 = 6u / (1 - 6u) of that (u = eps / 2,
-#: the standard bound for a sum of products), and the diagonal, a sum of at most 4 face
-#: conductances, differs from theirs by at most gamma_3 (the off-diagonal entries and b are the
-#: faces' values exactly): 4.5 eps in all, taken as 8 eps for the factorisation's own error in
-#: A^-1 (|A| |x| + |b|)
-RESIDUAL_ROUNDOFF = 8.0 * np.finfo(np.float64).eps
 
 
 def _sigma_error(matrix, rhs, x: np.ndarray, scale: np.ndarray, solve_a,
@@ -564,6 +550,23 @@ def _balanced_solution(matrix, rhs, cells, act, faces: Faces, *, tol: float,
         residual=sol.residual, iterations=sol.iterations)
 
 
+def _largest_face(sigma: np.ndarray, axis: int, periodic: bool) -> float:
+    """The largest harmonic mean 2 s1 s2 / (s1 + s2) over the faces between two cells of
+    ``sigma`` > 0 (the faces across the seam where the cell is periodic across ``axis``;
+    the reservoirs' ends along it are no faces)."""
+    best = 0.0
+    with np.errstate(divide="ignore"):
+        inverse = np.where(sigma > 0, 1.0 / sigma, np.inf)
+    for along in (0, 1):
+        wrap = along != axis and periodic
+        a = inverse if wrap else np.take(inverse, range(inverse.shape[along] - 1), axis=along)
+        b = np.roll(inverse, -1, axis=along) if wrap else \
+            np.take(inverse, range(1, inverse.shape[along]), axis=along)
+        if a.size:
+            best = max(best, float(np.max(2.0 / (a + b))))
+    return best
+
+
 def flowing_cells(sigma_local: np.ndarray, axis: int, *, periodic: bool = True) -> np.ndarray:
     """The cells that carry flow along ``axis`` (0 or 1): open (u^3 > 0), above
     ``FLOW_CLOSED_BELOW`` of the largest conductivity among the cells that connect the two
@@ -571,9 +574,13 @@ def flowing_cells(sigma_local: np.ndarray, axis: int, *, periodic: bool = True) 
     # a gap so small that u^3 underflows is closed
     active = spanning_cells(sigma_local > 0, axis, periodic=periodic)
     if active.any():
-        # so is one below float64's resolution of the largest conductivity that carries
-        # flow (pools that carry none must not move the floor)
-        unresolved = active & (sigma_local <= FLOW_CLOSED_BELOW * sigma_local[active].max())
+        # so is one below float64's resolution of the largest conductance that carries
+        # flow (pools that carry none must not move the floor): that of a face, the
+        # harmonic mean of its two cells, since a single deep cell (a pit, a scan's
+        # dropout) conducts no more than its neighbours let it (one pit 3e5 times the gap
+        # around it closed every other cell and gave sigma = 0 for an open channel)
+        top = _largest_face(np.where(active, sigma_local, 0.0), axis, periodic)
+        unresolved = active & (sigma_local <= FLOW_CLOSED_BELOW * top)
         if unresolved.any():
             active = spanning_cells(active & ~unresolved, axis, periodic=periodic)
             if not active.any():  # say so: the open cells do percolate
