@@ -64,8 +64,12 @@ def test_bound_is_exact_on_a_single_channel():
 
 @pytest.fixture(scope="module")
 def heights():
-    """128 x 128 random-phase surface, H = 0.8, L / lambda_r = 4 (as in test_flow)."""
-    return generate(SurfaceSpec.from_sweep(points_per_lambda_s=2, seed=3)).heights
+    """128 x 128 random-phase surface, H = 0.8, L / lambda_r = 4 (as in test_flow), rounded
+    to 1e-12: the tests below compare round-off-sized quantities, which moved with the last
+    bits of the heights, i.e. with the transform FFTW's timed planning picked (one run in
+    four failed `short >= 1`)."""
+    return np.round(generate(SurfaceSpec.from_sweep(points_per_lambda_s=2, seed=3)).heights,
+                    12)
 
 
 def test_bound_holds_and_is_tight_on_rs_iterates(heights):
@@ -188,7 +192,7 @@ def test_direct_error_allows_for_the_residuals_round_off(heights):
     from the residual stays under 1e-10 (5.4e-11 at a floor of 1.2e-5), so ordinary solves
     report small errors without the bound."""
     short = 0
-    for below in (1e-6, 1e-5, 1e-4, 1e-3):
+    for below in (3e-7, 1e-6, 1e-5, 1e-4, 1e-3):
         gap = _last_flowing_gap(heights, 0, below)
         estimate, from_residual, _, _, d = _residual_terms(gap)
         rs = solve(gap, 0, method="rs")
@@ -198,7 +202,10 @@ def test_direct_error_allows_for_the_residuals_round_off(heights):
         short += distance > estimate + flow_core.BOUND_ROUNDOFF
         if d.imbalance_floor < 1e-4:
             assert from_residual < 1e-10
-    assert short >= 1  # the estimate alone falls short of the distance at least once
+    # the estimate alone falls short of the distance at least once (3e-7 below the step
+    # of the rounded heights: 1.1e-8 against 1.7e-10; which steps fall short is round-off,
+    # hence the fixed heights)
+    assert short >= 1
 
 
 def test_direct_solve_sharpens_its_error_only_beyond_sigma_tol(heights, monkeypatch):

@@ -35,7 +35,7 @@ import subprocess
 import sys
 import time
 from dataclasses import dataclass, field, replace
-from datetime import datetime, timezone
+from datetime import UTC, datetime
 from pathlib import Path
 
 #: Attributes written by :meth:`Provenance.attrs` (never copied from one file into another).
@@ -111,7 +111,7 @@ class Provenance:
         from roughflow import __version__
         from roughflow.fft import default_threads, effort
 
-        now = datetime.now(timezone.utc)
+        now = datetime.now(UTC)
         created = now.isoformat(timespec="seconds")
         line = f"{created}: {self.command} (roughflow {__version__})"
         out = {
