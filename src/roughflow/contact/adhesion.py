@@ -144,7 +144,9 @@ def curvature_radius(heights: np.ndarray, lx: float, ly: float) -> float:
 
 def tabor_parameter(heights: np.ndarray, lx: float, ly: float, adhesion: Adhesion,
                     e_star: float = 1.0) -> float:
-    """mu_T = (R_c gamma_s^2 / (E*^2 rho^3))^(1/3) with R_c from :func:`curvature_radius`."""
+    """mu_T = (R_c gamma_s^2 / (E*^2 rho^3))^(1/3) with R_c from :func:`curvature_radius`
+    (the rms curvature's radius: on a single sinusoid 2 sqrt(2) times its peak radius, so
+    mu_T is 1.41 times the value with the peak radius)."""
     rc = curvature_radius(heights, lx, ly)
     return (rc * adhesion.surface_energy**2 / (e_star**2 * adhesion.range**3)) ** (1 / 3)
 

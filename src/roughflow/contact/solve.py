@@ -62,7 +62,9 @@ def solve(
     """Contact of the rigid rough ``surface`` with a flat elastic half-space (E* = 1).
 
     Periodic, frictionless, load controlled: the mean contact pressure equals
-    ``pressure`` (units E* gbar). Heights, gap and lengths are in units of L.
+    ``pressure`` (units E*, which is E* gbar for generated surfaces: their rms gradient gbar
+    is 1; a surface of one's own, e.g. ``Surface.from_array``, keeps its gbar). Heights, gap
+    and lengths are in units of L.
 
     model:
       ``"elastic"`` (hard-wall repulsion), ``"adhesive"`` (``adhesion=Adhesion(...)``,
