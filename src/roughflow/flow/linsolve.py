@@ -233,14 +233,14 @@ def prepare(a: sp.spmatrix, method: str = "auto",
 RESIDUAL_ROUNDOFF = 8.0 * np.finfo(np.float64).eps
 
 
-def residual_scale(matrix, rhs, x: np.ndarray) -> np.ndarray:
+def residual_scale(matrix: sp.csr_matrix, rhs: np.ndarray, x: np.ndarray) -> np.ndarray:
     """(|A| |x| + |b|)_i: what the round-off of the float64 residual b - A x is relative to."""
     size = np.abs(x)
     # |A| = 2 diag(A) - A: the Reynolds matrix has no positive off-diagonal entry
     return 2.0 * matrix.diagonal() * size - matrix @ size + np.abs(rhs)
 
 
-def attainable_residual(matrix, rhs, x: np.ndarray) -> float:
+def attainable_residual(matrix: sp.csr_matrix, rhs: np.ndarray, x: np.ndarray) -> float:
     """The smallest ||b - A x|| that float64 can certify for ``x``: the round-off of the
     residual itself (:data:`RESIDUAL_ROUNDOFF` of :func:`residual_scale`). A relative
     residual tol ||b|| below it cannot be met where the inlet's transmissibilities (b) are
