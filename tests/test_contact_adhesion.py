@@ -299,6 +299,19 @@ def test_the_adhesive_ladder_keeps_its_states_whole():
 
     with pytest.raises(InputError, match="compliance=None for the adhesive model"):
         LoadSearch(lambda p, init: None, ContactLaw("adhesive"), compliance=1.0)
+    from roughflow.search import threshold
+    from roughflow.search.load import warm_start_compliance
+
+    spec = SurfaceSpec.from_sweep(gamma=16, l_over_lambda_r=16, eps_f=1 / 8,
+                                  points_per_lambda_s=2, seed=0)
+    s = generate(spec)
+    assert warm_start_compliance(s, "adhesive") is None and warm_start_compliance(s) > 0
+    # the threshold search warm-started from compact states too: 1790 iterations (1575 in
+    # one solve at p = 1e-4) where whole states take about 210, the same a_c*
+    ad = adhesion_for(s.heights, s.lx, s.ly, gamma_over_v_full=0.1, range=0.8 * spec.lambda_s)
+    found = threshold(s, 0, model="adhesive", adhesion=ad, tol=0.005)
+    assert found.a_c_star == pytest.approx(0.629, abs=0.005)
+    assert sum(x.iterations for x in found.solves) < 500
     job = LadderJob(surface=SurfaceParams(gamma=16, l_over_lambda_r=16, eps_f=0.125,
                                           points_per_lambda_s=2),
                     model="adhesive", area_fractions=(0.05, 0.7))

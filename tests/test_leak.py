@@ -55,7 +55,8 @@ def test_uniform_gap_leak_rate_equals_the_hand_calculation(caplog):
     np.testing.assert_allclose(ds["conductance"].values, h**3 / (12 * eta), rtol=1e-12)
     # dp = 1 MPa equals the contact pressure 1e-3 E* = 1 MPa: the library itself says that
     # the fluid's load, left out of the model, is not small (not only the command line)
-    said = "the fluid pressure 1e+06 is not small against the lowest contact pressure 1e+06"
+    said = ("the fluid pressure 1e+06 Pa is not small against the lowest contact pressure "
+            "1e+06 Pa")
     assert ds.attrs["fluid_pressure_note"].startswith(said)
     assert f"uniform: {said}" in caplog.text
 
@@ -183,7 +184,8 @@ def test_cli_leak_warns_where_the_fluid_pressure_is_not_small(imported, tmp_path
     argv[argv.index("--fluid-pressure") + 1] = "20MPa"
     assert main(["leak", str(imported), *argv, "-o", str(tmp_path / "b.nc")]) == 0
     out, err = capsys.readouterr()
-    said = "the fluid pressure 2e+07 is not small against the lowest contact pressure 1e+07"
+    said = ("the fluid pressure 2e+07 Pa is not small against the lowest contact pressure "
+            "1e+07 Pa")
     assert said in err
     # the table (the workflow's result; its log may go unread) and the dataset say it too
     assert f"note: {said}" in out

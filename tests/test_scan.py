@@ -655,6 +655,9 @@ def test_a_coordinate_list_the_grid_reader_refused_is_not_read_as_a_matrix(tmp_p
     for name, lines in (("xyzi.txt", "768 lines of 4 values"), ("gap.txt", "767 lines of 3")):
         with pytest.raises(InputError, match=f"looks like a list of points \\({lines}"):
             from_scan(tmp_path / name, size="1um", unit="nm")
+    # a genuine matrix 4 values wide and 40 lines long is read (the first cut refused it)
+    np.savetxt(tmp_path / "narrow.txt", heights(4, 40).T)
+    assert from_scan(tmp_path / "narrow.txt", size="4um,40um", unit="nm").shape == (4, 40)
 
 
 def test_a_placeholder_that_overflows_is_refused(tmp_path):

@@ -527,6 +527,9 @@ def test_measured_jobs_are_the_same_whatever_the_units_they_are_written_in(tmp_p
         == -999999.0
     with pytest.raises(InputError, match="missing_value must be a finite number"):
         job({**question, "missing_value": "n/a", "scans": scans[:1]})
+    # YAML reads 1e38 as a string
+    assert "--missing-value=1e+38" in job({**question, "missing_value": "1e38",
+                                            "scans": scans[:1]}).import_args()
 
 
 def test_a_threshold_tol_below_one_cell_is_refused_when_the_job_is_made():
@@ -539,3 +542,5 @@ def test_a_threshold_tol_below_one_cell_is_refused_when_the_job_is_made():
                                          r"8 x 8 grid"):
         ThresholdJob(surface=small, tol=0.01)
     assert ThresholdJob(surface=small, tol=1 / 64).tol == 1 / 64
+    # the exact bearing sweep finds a_c* to the cell and takes any tol, as the search does
+    assert ThresholdJob(surface=small, model="bearing", tol=0.01).tol == 0.01

@@ -111,18 +111,20 @@ def check_pressure_scale(pressures: np.ndarray) -> None:
             f"convert pascals with roughflow.units.Scales.pressure_from_si)")
 
 
-def fluid_pressure_note(fluid_pressure: float, pressures: ArrayLike) -> str:
+def fluid_pressure_note(fluid_pressure: float, pressures: ArrayLike, unit: str = "") -> str:
     """A note where the fluid's pressure drop ``fluid_pressure`` is not small against the
-    lowest nominal contact pressure of ``pressures`` (both in the same unit), else "".
+    lowest nominal contact pressure of ``pressures`` (both in ``unit``), else "".
 
     The Reynolds flow here leaves the fluid's own load on the surfaces out, which holds for
     dp << p; at the pressures where it does not, the leak rates overstate the contact."""
     lowest = float(np.min(pressures))
     if fluid_pressure < lowest:
         return ""
-    return (f"the fluid pressure {fluid_pressure:.4g} is not small against the lowest contact "
-            f"pressure {lowest:.4g}: the model leaves the fluid's load on the surfaces out "
-            f"(it holds for dp << p); read the leak rates below {fluid_pressure:.4g} with care")
+    u = f" {unit}" if unit else ""
+    return (f"the fluid pressure {fluid_pressure:.4g}{u} is not small against the lowest "
+            f"contact pressure {lowest:.4g}{u}: the model leaves the fluid's load on the "
+            f"surfaces out (it holds for dp << p); read the leak rates below "
+            f"{fluid_pressure:.4g}{u} with care")
 
 
 def default_boundary(surface: Surface) -> str:

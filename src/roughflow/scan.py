@@ -438,6 +438,23 @@ def _header_size_unit(ch, path: Path) -> str | None:
     return units.pop()
 
 
+def _is_point_list(path: Path) -> bool:
+    """Whether a text file of a few columns holds x y z (...) lines of a grid: its first two
+    columns repeat few values whose pairs cover the lines (a matrix 4 values wide has
+    heights there, all different)."""
+    import warnings
+
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")
+        rows = np.genfromtxt(path, comments="#", invalid_raise=False, ndmin=2)
+    rows = rows[np.isfinite(rows[:, :2]).all(axis=1)] if rows.ndim == 2 and rows.shape[1] > 1 \
+        else np.empty((0, 2))
+    if len(rows) < 2:
+        return False
+    u0, u1 = (len(np.unique(rows[:, k])) for k in (0, 1))
+    return u0 < len(rows) and u1 < len(rows) and u0 * u1 >= len(rows)
+
+
 def _netcdf_y_first(path: Path) -> bool:
     """Whether ``path`` is a netCDF file whose ``heights`` are stored over (y, x): the
     order of xarray and CF-style files, which SurfaceTopography reads as (x, y) (measured:
@@ -559,7 +576,7 @@ def read_scan(path: str | os.PathLike, *,
     reader_name = type(reader).__name__
     if reader_name == "AscReader":
         nx, ny = ch.nb_grid_pts
-        if nx <= 4 < ny and ny > 4 * nx:
+        if nx <= 4 < ny and ny > 4 * nx and _is_point_list(path):
             # the coordinate-list reader refused it (a point missing from the grid, a
             # fourth column) and the matrix reader took its columns for the scan's lines
             raise InputError(f"{str(path)!r} looks like a list of points ({ny} lines of "

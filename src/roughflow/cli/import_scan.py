@@ -55,7 +55,8 @@ def register(sub: argparse._SubParsersAction) -> None:
                    help="data channel by name or index (default: the file's height channel)")
     p.add_argument("--missing-value", type=float, default=None, metavar="V",
                    help="the number that marks missing points in the file (an instrument's "
-                        "placeholder such as -999999 or 1e38; nan always counts)")
+                        "placeholder such as -999999 or 1e38; nan always counts); write a "
+                        "negative one with '=': --missing-value=-1e38")
     p.add_argument("--periodic", action="store_true",
                    help="the scan is periodic (e.g. simulated): no boundary treatment later")
     add_source(p, "scan")

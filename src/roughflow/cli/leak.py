@@ -142,7 +142,7 @@ def format_table(ds: xr.Dataset) -> str:
         lines.append(f"note: the import warned: {warned}")
     fluid_note = str(ds.attrs.get("fluid_pressure_note", ""))
     if fluid_note:
-        lines.append(f"note: {fluid_note} (pressures in Pa)")
+        lines.append(f"note: {fluid_note}")
     msg = ds.attrs.get("sealing_messages", "none")
     if msg != "none":
         lines.append(f"note: {msg}")

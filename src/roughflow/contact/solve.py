@@ -34,10 +34,11 @@ from .bearing import solve_bearing
 if TYPE_CHECKING:  # gfmd (numba) is imported on first use: the CLI starts faster
     from .gfmd import HardWallSetup, HardWallWork
 
+log = logging.getLogger(__name__)
+
 METHODS = CONTACT_METHODS
 # The repulsive state an adhesive solve starts from: a small load (so that the attraction
 # acts from the first step) and a loose tolerance (it is only a starting point).
-log = logging.getLogger(__name__)
 _ADHESIVE_START_LOAD = 1e-2
 _ADHESIVE_START_TOL = 1e-4
 _DEFAULT_MAX_ITER = {"cg": 20000, "gfmd": 50000}

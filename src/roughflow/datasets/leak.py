@@ -78,9 +78,9 @@ def leak_dataset(curve: LeakCurve, surface: Surface, *, scales: Scales, fluid_pr
     from roughflow.units import leak_rate
 
     pressures_si = scales.pressure_to_si(curve.pressure)
-    fluid_note = fluid_pressure_note(fluid_pressure, pressures_si)
+    fluid_note = fluid_pressure_note(fluid_pressure, pressures_si, unit="Pa")
     if fluid_note:
-        log.warning("%s: %s (pressures in Pa)", name, fluid_note)
+        log.warning("%s: %s", name, fluid_note)
     conductance = scales.conductance_to_si(curve.sigma)
     rate = leak_rate(conductance, fluid_pressure=fluid_pressure, seal_width=seal_width,
                      seal_length=seal_length)

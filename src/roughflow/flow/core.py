@@ -71,7 +71,8 @@ class FlowResult:
     flux_x, flux_y: (nx, ny) cell-centred flux density -sigma grad p (volume flow
         per unit width per unit dp), the mean of the two face values in each direction.
     residual: relative residual ||b - A p|| / ||b|| of the linear system (<= ``tol``, unless
-        ``sigma_tol`` ended the solve first).
+        ``sigma_tol`` ended the solve first or ``tol`` lies below float64's round-off of
+        the residual, :func:`~roughflow.flow.linsolve.attainable_residual`).
     flux_imbalance: |Q_in - Q_out| / Q, a check of the solve (0 without a solve); above
         ``FLOW_IMBALANCE_MAX`` sigma was checked, or a warning says it could not be.
     imbalance_floor: the |Q_in - Q_out| / Q that float64 round-off alone leaves this
@@ -555,10 +556,11 @@ def _largest_face(sigma: np.ndarray, axis: int, periodic: bool) -> float:
     ``sigma`` > 0 (the faces across the seam where the cell is periodic across ``axis``;
     the reservoirs' ends along it are no faces)."""
     best = 0.0
-    with np.errstate(divide="ignore"):
+    with np.errstate(divide="ignore", over="ignore"):
         inverse = np.where(sigma > 0, 1.0 / sigma, np.inf)
     for along in (0, 1):
-        wrap = along != axis and periodic
+        # one cell across a periodic axis has no face to itself (face_transmissibilities)
+        wrap = along != axis and periodic and sigma.shape[along] > 1
         a = inverse if wrap else np.take(inverse, range(inverse.shape[along] - 1), axis=along)
         b = np.roll(inverse, -1, axis=along) if wrap else \
             np.take(inverse, range(1, inverse.shape[along]), axis=along)
@@ -569,8 +571,8 @@ def _largest_face(sigma: np.ndarray, axis: int, periodic: bool) -> float:
 
 def flowing_cells(sigma_local: np.ndarray, axis: int, *, periodic: bool = True) -> np.ndarray:
     """The cells that carry flow along ``axis`` (0 or 1): open (u^3 > 0), above
-    ``FLOW_CLOSED_BELOW`` of the largest conductivity among the cells that connect the two
-    reservoirs, and still connecting them."""
+    ``FLOW_CLOSED_BELOW`` of the largest face conductance among the cells that connect the
+    two reservoirs (:func:`_largest_face`), and still connecting them."""
     # a gap so small that u^3 underflows is closed
     active = spanning_cells(sigma_local > 0, axis, periodic=periodic)
     if active.any():

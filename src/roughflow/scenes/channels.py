@@ -45,7 +45,7 @@ def contact_at_area(surface: Surface, target: float, model: str, *, tol: float =
         return contact.solve(surface, p, model=model, init=init, threads=threads, setup=setup)
 
     found = LoadSearch(solve, contact.ContactLaw(model),
-                       compliance=warm_start_compliance(surface)).solve_for(target, tol)
+                       compliance=warm_start_compliance(surface, model)).solve_for(target, tol)
     if not found.met:
         log.warning("target a_c %.4g missed: closest %.5g after %d solves", target,
                     found.area, found.solves)

@@ -168,10 +168,10 @@ class ThresholdJob(_SeedGroup):
         _check_tol("contact_tol", self.contact_tol, defaults.CONTACT_TOL_MAX)
         # the search's own check, at planning: a tol below one cell of the grid failed in
         # the job, after the other jobs of the run
-        from roughflow.search.critical import check_area_tol
+        from roughflow.search.critical import check_threshold_tol
 
         spec = self.surface.spec(0)
-        check_area_tol(self.tol, (spec.nx, spec.ny))
+        check_threshold_tol(self.tol, (spec.nx, spec.ny), self.model)
         if self.model == "bearing":
             # the exact bearing sweep solves no contact: contact_tol is unused, and kept at
             # its default so that a config's value neither reruns these jobs nor splits them
@@ -386,12 +386,17 @@ class LeakJob:
         if self.size is not None:
             self.size_m()  # a bad length is refused here, not in its job
         check_crop(self.crop)
-        if self.missing_value is not None and not (
-                isinstance(self.missing_value, (int, float))
-                and not isinstance(self.missing_value, bool)
-                and math.isfinite(self.missing_value)):
-            raise InputError(f"missing_value must be a finite number, got "
-                             f"{self.missing_value!r}")
+        if self.missing_value is not None:
+            # YAML reads 1e38 (no sign in the exponent, no point) as a string
+            try:
+                value = None if isinstance(self.missing_value, bool) else \
+                    float(self.missing_value)
+            except (TypeError, ValueError):
+                value = None
+            if value is None or not math.isfinite(value):
+                raise InputError(f"missing_value must be a finite number, got "
+                                 f"{self.missing_value!r}")
+            object.__setattr__(self, "missing_value", value)
         for key, choices in (("detrend", defaults.DETREND_MODES),
                              ("fill", defaults.FILL_METHODS),
                              ("boundary", defaults.BOUNDARY_METHODS)):

@@ -97,10 +97,8 @@ def contact_ladder(surface: Surface, job: LadderJob, threads: int | None,
         a = _corrected_area(r, job.model)
         return float(r.area_fraction) if math.isnan(a) else a
 
-    # adhesive states stay whole: their contact cells in tension do not fit q = gap - c p
     search = LoadSearch(solve, contact.ContactLaw(job.model), measure=measure,
-                        compliance=None if job.model == "adhesive"
-                        else warm_start_compliance(surface))
+                        compliance=warm_start_compliance(surface, job.model))
     for a in job.area_fractions:
         found = search.solve_for(a, job.area_tol)
         if not found.met:

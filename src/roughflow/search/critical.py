@@ -565,6 +565,16 @@ def check_area_tol(tol: float, shape: tuple[int, int]) -> None:
                          f"{1 / cells:.3g}): give tol >= {1 / cells:.3g}")
 
 
+def check_threshold_tol(tol: float, shape: tuple[int, int], model: str,
+                        options: SearchOptions | None = None) -> None:
+    """:func:`check_area_tol` where the search's areas come from contact solves; the exact
+    bearing sweep (``options.exact_bearing``, the default) finds a_c* to the cell and takes
+    any tol."""
+    opts = options or SearchOptions()
+    if not (model == "bearing" and opts.exact_bearing):
+        check_area_tol(tol, shape)
+
+
 def threshold(
     surface: Surface,
     axis: int | None = None,
@@ -608,8 +618,8 @@ def threshold(
     # a Surface checks its heights when made, but its array can be changed in place since
     heights = require_field("surface heights", surface.heights)
     shape = heights.shape
-    if not (model == "bearing" and opts.exact_bearing):
-        check_area_tol(tol, shape if opts.observed_shape is None else opts.observed_shape)
+    check_threshold_tol(tol, shape if opts.observed_shape is None else opts.observed_shape,
+                        model, opts)
     # Elastic states seen whole are kept as q = gap - c pressure in float32 (CompactState, 4
     # bytes a cell instead of 17): the search then needs none of a result's arrays once it is
     # sampled, and its gfmd solves share one workspace instead of allocating (fresh memory
@@ -619,7 +629,7 @@ def threshold(
     check_memory("threshold" if lean or model == "bearing" else "threshold_adhesive", shape,
                  what=f"{'a' if model == 'bearing' else 'an'} {model} threshold search")
     law = ContactLaw(model)
-    compliance = warm_start_compliance(surface)
+    compliance = warm_start_compliance(surface, model)  # None: adhesive states stay whole
     sweeps = sweep_work(heights.size) if lean else None  # predictions and spanning tests
 
     def sample(r: ContactResult, load: float, open_first: np.ndarray | None,

@@ -46,6 +46,7 @@ import numpy as np
 
 from roughflow.contact import ContactResult, cell_compliance
 from roughflow.contact.law import ContactLaw
+from roughflow.defaults import DEFAULT_MODEL
 from roughflow.errors import InputError, require_positive
 from roughflow.surface import Surface
 
@@ -63,9 +64,14 @@ WARM_START_CELLS = 2.0
 EXTRAPOLATE_SPACINGS = {False: 1.0, True: 4.0}
 
 
-def warm_start_compliance(surface: Surface) -> float:
+def warm_start_compliance(surface: Surface, model: str = DEFAULT_MODEL) -> float | None:
     """The ``compliance`` of :func:`warm_start` for ``surface``: :data:`WARM_START_CELLS`
-    single-cell compliances (units L / E*)."""
+    single-cell compliances (units L / E*); None for the adhesive model, whose states stay
+    whole: q = gap - c max(p, 0) has no room for a contact cell in tension, and warm starts
+    without it cost 1845-16680 iterations where 35-60 do (a ladder), or 1575 where 50 do (a
+    threshold search), and at zero load flew off to the detached state."""
+    if model == "adhesive":
+        return None
     return WARM_START_CELLS * cell_compliance(surface.shape, surface.lx, surface.ly)
 
 
@@ -293,10 +299,9 @@ class LoadSearch:
     ``solve(load, init)`` runs one contact solve; ``measure(result)`` gives the area the
     targets refer to (default the cell count ``area_fraction``; the ladder uses the
     perimeter-corrected area). ``bounds`` default to the law's :attr:`ContactLaw.bounds`.
-    ``compliance``: passed to :func:`warm_start` (:func:`warm_start_compliance`); the
-    search then keeps its states as :class:`CompactState`. Not for the adhesive model: q =
-    gap - c max(pressure, 0) has no room for a contact cell in tension, and warm starts
-    without the tension took up to 16680 iterations where whole results take 35-60.
+    ``compliance``: passed to :func:`warm_start` (:func:`warm_start_compliance`, which
+    gives None for the adhesive model); the search then keeps its states as
+    :class:`CompactState`, refused for the adhesive model.
     """
 
     def __init__(self, solve: Callable[[float, ContactResult | None], ContactResult],
