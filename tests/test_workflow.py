@@ -252,6 +252,12 @@ def test_report_shows_every_figure(test_run):
         for part in (caption[:60], caption[-60:]):
             assert html.escape(part.strip(), quote=False) in text, (study, part)
 
+    # each caption says which config and study block computed the figure (a report of the
+    # test config looked like one of the paper's)
+    for study in STUDIES:
+        assert f"config config/test.yaml; studies.{study}: {{" in text.replace("&quot;", '"'), \
+            study
+
     html = (wd / "report.html").read_text()
     for study in STUDIES:
         start = CAPTIONS[study].split(". ")[0][:60].replace("*", "\\*")

@@ -1,6 +1,7 @@
 # Config validation and job planning (runs before any job starts).
 
 import json
+import os
 import posixpath
 import shlex
 import sys
@@ -75,6 +76,13 @@ RESULTS = config["results"] = _results_dir(config.get("results", "results"))
 PYTHON = shlex.quote(sys.executable)
 RF = f"{PYTHON} -m roughflow"
 STUDIES = config["studies"]
+
+
+def study_config_text(study):
+    """The config files and the study's block, for the figure's caption in the report (a
+    report of the test config looked like one of the paper's)."""
+    files = ", ".join(os.path.relpath(f) for f in workflow.configfiles) or "config/config.yaml"
+    return f"config {files}; studies.{study}: {json.dumps(STUDIES[study], sort_keys=True)}"
 # The memory a job may need: the config's max_mem_mb (the nodes of a cluster), else the
 # memory of this machine. A job above it is refused at planning, before any job runs.
 if config.get("max_mem_mb") is not None:

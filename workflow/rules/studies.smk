@@ -67,6 +67,7 @@ rule figure:
         # for the report (report/figure.rst): the library's caption, the one `figure
         # --caption` prints
         caption=lambda wc: figure_caption(wc.study),
+        settings=lambda wc: study_config_text(wc.study),
     log:
         f"{RESULTS}/logs/{{study}}/figure.log",
     benchmark:

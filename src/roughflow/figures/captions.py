@@ -4,7 +4,7 @@ no plotting library, so the workflow can fill the report's captions while it pla
 
 from __future__ import annotations
 
-from roughflow.defaults import A_C_STAR_PAPER, CORRECTION_MIN_POINTS
+from roughflow.defaults import A_C_STAR_PAPER, A_C_STAR_THEORY, CORRECTION_MIN_POINTS
 
 _CORRECTED = (
     "a_c* is perimeter-corrected (first-order grid bias of the contact area removed, "
@@ -45,9 +45,12 @@ CAPTIONS: dict[str, str] = {
         "Lines: joint fit "
         "a_c*(eps) = a_c* + A eps^(1/nu) with a fixed nu (2D percolation's 4/3 unless the fit "
         "was run with another, as the legend says) and a shared a_c* (solid) and with nu "
-        "free (dashed); grey band: a_c* of the fixed-nu fit +- its bootstrap error over seeds. "
-        "What the fits show (docs/accuracy.md section 4, 20-40 seeds, gamma = 2 up to "
-        "L/lambda_r = 22.6): easy and hard extrapolate to the same a_c* within their errors, "
+        "free (dashed, where the data determine it: at least three sizes); black dotted: the "
+        "fit of the isotropic series; grey band: a_c* of the fixed-nu fit +- its bootstrap "
+        "error over seeds; the box gives this figure's fitted values. "
+        "What larger runs than the default show (docs/accuracy.md section 4, 20-40 seeds, "
+        "gamma = 2 up to L/lambda_r = 22.6; not this figure's data): easy and hard "
+        "extrapolate to the same a_c* within their errors, "
         "but the anisotropic (gamma = 2) extrapolation lies 0.016 +- 0.006 below the isotropic "
         "one (0.394 against 0.410), and the easy-hard midpoint at the largest size is already "
         "0.009 +- 0.003 below the isotropic a_c* at the same eps_t. Perimeter correction, "
@@ -71,10 +74,13 @@ CAPTIONS: dict[str, str] = {
         "Fluid-flow conductance sigma versus relative contact area a_c (paper Fig. 5), "
         "normalised by sigma_ref, the full Reynolds conductance at a_c -> 0+: full Reynolds "
         "(circles, every seed, mean of x and y), full Bruggeman effective-medium theory (solid "
-        "lines) and the closed forms of Eq. 16 (dashed lines) for (a) elastic, non-adhesive "
-        "contact, (b) short-range adhesive contact, (c) the bearing-area model, as far as the "
-        "config contains them. In (a) a dotted line shows the full Bruggeman treatment with "
-        "a_c* = 0.5; the other lines use the a_c* of the config (paper: 0.4 for (a), (b)). "
+        "lines) and the closed forms of Eq. 16 (dashed lines), one panel per model the config "
+        "contains, lettered in the order elastic (non-adhesive), short-range adhesive and "
+        "bearing-area contact (the paper's (a), (b), (c)). In the elastic panel a dotted line "
+        "shows the full Bruggeman treatment with a_c* = 0.5; the other lines use the study's "
+        "a_c_star (default "
+        + ", ".join(f"{v:g} {k}" for k, v in A_C_STAR_THEORY.items())
+        + "; the paper's 0.4 for elastic and adhesive contact). "
         "Elastic a_c is perimeter-corrected (first-order grid bias of the contact area "
         "removed, docs/accuracy.md); bearing and adhesive a_c are cell counts."
     ),
@@ -83,7 +89,9 @@ CAPTIONS: dict[str, str] = {
         "directions for an anisotropic surface (paper Fig. 6: elastic, Fig. 7: bearing-area "
         "contact), normalised by sigma_ref (mean full Reynolds conductance at a_c -> 0+). "
         "Symbols: full Reynolds (every seed); solid lines: the corrected anisotropic Bruggeman "
-        "theory (Eq. 9); dashed: Persson's form (Eq. 7-8); grey dotted: isotropic Bruggeman. "
+        "theory (Eq. 9); dashed: Persson's form (Eq. 7), which coincides with Eq. 9 where "
+        "a_c* = 0.5 (the bearing model's default), hidden under it there; grey dotted: "
+        "isotropic Bruggeman. "
         "Right panel: the ratio chi = sigma_x / sigma_y of full Reynolds (symbols) and the "
         "corrected theory (lines) with the height value gamma^2 (grey); the paper reports "
         "chi ~ 8 near a_c* for the elastic contact at gamma = 2 versus 4 from the theory. "
