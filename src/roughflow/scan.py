@@ -365,11 +365,9 @@ def _reader_messages(exc: Exception) -> dict[str, str]:
 def _open_error(path: Path, exc: Exception) -> InputError:
     """A short error for a file SurfaceTopography cannot read: what the reader of its file
     ending said (not the 17 readers' messages with the file's raw bytes)."""
-    from SurfaceTopography.IO import readers
-
     suffix = path.suffix.lower()
     tried = _reader_messages(exc)
-    own = [r.__name__ for r in readers if f".{r.format()}" == suffix]
+    own = [r.__name__ for r in _readers_of(path)]
     if suffix in TEXT_SUFFIXES:
         own = ["XYZReader", "AscReader"]
     said = [f"{name}: {_printable(tried[name])}" for name in own if name in tried]
@@ -411,17 +409,21 @@ def _open(path: Path):
     return reader
 
 
+def _readers_of(path: Path) -> list:
+    """SurfaceTopography's reader classes whose format is ``path``'s file ending."""
+    from SurfaceTopography.IO import readers
+
+    return [r for r in readers if f".{r.format()}" == path.suffix.lower()]
+
+
 def _own_reader_error(path: Path) -> str:
     """What the reader of ``path``'s file ending says about it ("" where it reads it or no
     reader has that ending)."""
-    from SurfaceTopography.IO import readers
-
-    for r in readers:
-        if f".{r.format()}" == path.suffix.lower():
-            try:
-                r(str(path))
-            except Exception as exc:
-                return f"{r.__name__}: {_printable(str(exc))}"
+    for r in _readers_of(path):
+        try:
+            r(str(path))
+        except Exception as exc:
+            return f"{r.__name__}: {_printable(str(exc))}"
     return ""
 
 

@@ -552,21 +552,12 @@ def _balanced_solution(matrix, rhs, cells, act, faces: Faces, *, tol: float,
 
 
 def _largest_face(sigma: np.ndarray, axis: int, periodic: bool) -> float:
-    """The largest harmonic mean 2 s1 s2 / (s1 + s2) over the faces between two cells of
-    ``sigma`` > 0 (the faces across the seam where the cell is periodic across ``axis``;
-    the reservoirs' ends along it are no faces)."""
-    best = 0.0
-    with np.errstate(divide="ignore", over="ignore"):
-        inverse = np.where(sigma > 0, 1.0 / sigma, np.inf)
-    for along in (0, 1):
-        # one cell across a periodic axis has no face to itself (face_transmissibilities)
-        wrap = along != axis and periodic and sigma.shape[along] > 1
-        a = inverse if wrap else np.take(inverse, range(inverse.shape[along] - 1), axis=along)
-        b = np.roll(inverse, -1, axis=along) if wrap else \
-            np.take(inverse, range(1, inverse.shape[along]), axis=along)
-        if a.size:
-            best = max(best, float(np.max(2.0 / (a + b))))
-    return best
+    """The largest harmonic mean 2 s1 s2 / (s1 + s2) of ``sigma`` over the faces that
+    :func:`~roughflow.flow.assembly.face_transmissibilities` makes for flow along ``axis``
+    (unit cell lengths: the conductances without their geometry)."""
+    faces = face_transmissibilities(sigma if axis == 0 else sigma.T, 1.0, 1.0,
+                                    periodic=periodic)
+    return float(max(faces.t_along.max(initial=0.0), faces.t_across.max(initial=0.0)))
 
 
 def flowing_cells(sigma_local: np.ndarray, axis: int, *, periodic: bool = True) -> np.ndarray:
