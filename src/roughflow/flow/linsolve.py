@@ -35,6 +35,7 @@ or end early once its own test certifies the iterate (a proven bound on sigma's 
 from __future__ import annotations
 
 import logging
+import math
 import threading
 from collections.abc import Callable, Iterator
 from contextlib import contextmanager
@@ -262,7 +263,8 @@ def pcg(a: sp.csr_matrix, b: np.ndarray, *, tol: float,
 
     It stops at the first iterate whose true residual meets ||b - A x|| <= tol ||b|| and that
     ``accept(x)`` accepts (None: any), at round-off (the recursive residual
-    :data:`DRIFT_AT_ROUNDOFF` times below the true one), or after ``max_iter`` iterations;
+    :data:`DRIFT_AT_ROUNDOFF` times below the true one, or the true one within
+    :func:`attainable_residual`), at a non-finite step, or after ``max_iter`` iterations;
     the caller judges the iterate. A true residual above ``tol`` replaces the recursive one
     and the run goes on, keeping its search direction: restarting CG instead throws away the
     Krylov space, and near a_c* that is what finds the flux through the last constriction
@@ -296,12 +298,19 @@ def pcg(a: sp.csr_matrix, b: np.ndarray, *, tol: float,
             if recursive < DRIFT_AT_ROUNDOFF * residual:
                 break
             if residual > target:
+                # float64 cannot do better than its round-off of the residual: replacing the
+                # recursive residual by that noise and going on (64^2, inlet rows of gap
+                # 3e-3 under RS-CG) lost conjugacy and diverged to 1e110, then NaN
+                if residual <= attainable_residual(a, b, x):
+                    break
                 r, z = true, precondition(true)
                 rz = float(r @ z)
         if iterations >= max_iter or rz == 0.0:
             break
         ap = a @ p
         alpha = rz / float(p @ ap)
+        if not math.isfinite(alpha):  # keep the last finite iterate for the caller to judge
+            break
         x += alpha * p
         r -= alpha * ap
         iterations += 1
