@@ -317,6 +317,25 @@ def test_ladder_records_the_flow_solver_and_combines_with_files_that_do_not(monk
     assert (out["flow_direct"].sel(seed=1) == 1).all()
 
 
+def test_ladders_of_different_lengths_keep_each_variable_s_dimensions():
+    """Ladders of 2 and 3 steps differ in ``step``: combine_by_coords concatenated along it
+    and gave every variable a ``step`` dimension, so a study's wall time and sigma_ref were
+    repeated per step (summing wall_time over step counted each ladder 3 times)."""
+    short = run_ladder(LadderJob(surface=TINY, model="bearing", seeds=(0,),
+                                 area_fractions=(0.1, 0.3)))
+    other = SurfaceParams(gamma=2.0, l_over_lambda_r=2.0, eps_f=0.125, points_per_lambda_s=2)
+    long = run_ladder(LadderJob(surface=other, model="bearing", seeds=(0,),
+                                area_fractions=(0.1, 0.2, 0.3)))
+    study = combine([short, long])
+    for name, v in study.data_vars.items():
+        assert v.dims == long[name].dims, name
+    assert study.sizes["step"] == 3
+    assert float(study["wall_time"].sum()) == pytest.approx(
+        float(short["wall_time"].sum() + long["wall_time"].sum()))
+    # the short ladder's missing step is NaN (integers: the fill value once written)
+    assert np.isnan(study["area_fraction"].sel(gamma=1.0).isel(step=2)).all()
+
+
 def test_combine_rejects_empty():
     with pytest.raises(InputError, match="nothing to aggregate"):
         combine([])
@@ -433,16 +452,28 @@ def test_adhesive_ladder_needs_less_load_and_records_its_adhesion():
     inside = (a >= ela["area_fraction"].values.min()) & (a <= ela["area_fraction"].values.max())
     assert inside.any()
     assert np.all(adh["pressure"].values.ravel()[inside] < 0.5 * p_ela[inside])
-    assert adh.attrs["adhesion_gamma_over_v_full"] == pytest.approx(0.1)
-    assert adh.attrs["adhesion_range_over_lambda_s"] == pytest.approx(0.8)
-    assert adh.attrs["adhesion_tabor"] > 0 and adh.attrs["adhesion_repulsion"] == "hard"
-    assert adh.attrs["adhesion_contact_within"] == 0.5
-    # the ladder names its adhesion as contact and threshold files do (datasets.results.
-    # adhesion_attrs), plus the range in lambda_s; no unprefixed leftovers
-    assert {k for k in adh.attrs if "adhesion" in k or "tabor" in k or "energy" in k} == {
-        "adhesion_surface_energy", "adhesion_range", "adhesion_repulsion",
-        "adhesion_contact_within", "adhesion_tabor", "adhesion_curvature_radius",
-        "adhesion_v_ela_full", "adhesion_gamma_over_v_full", "adhesion_range_over_lambda_s"}
+    # the adhesion per seed, as variables named as contact files name their attributes
+    # (datasets.results.adhesion_attrs), plus the range in lambda_s
+    assert adh["adhesion_gamma_over_v_full"].item() == pytest.approx(0.1)
+    assert adh["adhesion_range_over_lambda_s"].item() == pytest.approx(0.8)
+    assert adh["adhesion_tabor"].item() > 0 and str(adh["adhesion_repulsion"].item()) == "hard"
+    assert adh["adhesion_contact_within"].item() == 0.5
+    assert adh["adhesion_surface_energy"].dims[-1] == "seed"
+    assert all(adh[k].attrs["units"] and adh[k].attrs["long_name"]
+               for k in adh.data_vars if k.startswith("adhesion"))
+    assert not [k for k in adh.attrs if "adhesion" in k or "tabor" in k or "energy" in k]
+    # a study of both models keeps each model's adhesion and theory a_c*: as attributes,
+    # a_c_star_theory (0.4 elastic, 0.5 bearing) was dropped as conflicting, and the
+    # adhesive job's adhesion survived as if it held for every model
+    bea = run_ladder(LadderJob(surface=TINY, model="bearing", seeds=(0,),
+                               area_fractions=targets, a_c_star=0.5))
+    study = combine([adh, ela, bea])
+    assert study["a_c_star_theory"].sel(model="bearing").item() == 0.5
+    assert study["a_c_star_theory"].sel(model="adhesive").item() == 0.4
+    energy = study["adhesion_surface_energy"].squeeze()
+    assert energy.sel(model="adhesive").item() > 0
+    assert np.isnan(energy.sel(model="elastic").item())
+    assert not [k for k in study.attrs if "adhesion" in k or "a_c_star" in k]
 
 
 @pytest.mark.parametrize("key", ["unit", "height_unit"])

@@ -2,8 +2,9 @@
 
 Jobs that did not run leave NaN (never zero); variables that are integers in the job
 files are written back as int32 with the explicit fill value -1; float coordinates get
-no ``_FillValue``. Attributes that differ between jobs are dropped; the job ids are kept
-in the ``jobs`` attribute.
+no ``_FillValue``. Attributes that differ between jobs, or that some jobs lack, are
+dropped (what differs between jobs is written as variables: the ladder's adhesion and
+theory a_c*); the job ids are kept in the ``jobs`` attribute.
 
 Leak files (``roughflow leak``, the measured study) are concatenated along ``scan`` with an
 outer join on ``pressure`` (scans may have different pressure grids: NaN where a scan has
@@ -121,6 +122,24 @@ def _concat_scans(datasets: Sequence[xr.Dataset]) -> xr.Dataset:
     return out
 
 
+def _on_common_inner_coords(datasets: Sequence[xr.Dataset]) -> list[xr.Dataset]:
+    """The job datasets reindexed (NaN where a job has no entry) to the union of each
+    dimension that is neither a parameter nor ``seed`` (a ladder's ``step``): where such a
+    coordinate differs between jobs (ladders of 3 and 4 steps), combine_by_coords
+    concatenates along it too and, with ``data_vars="all"``, gives every variable that
+    dimension: a ladder's wall time and sigma_ref were repeated over its steps (a sum over
+    ``step`` counted them 4 times)."""
+    inner = {d for ds in datasets for d in ds.dims} - {*PARAM_DIMS, "seed"}
+    union = {}
+    for d in sorted(inner):
+        values = [ds[d].values for ds in datasets if d in ds.dims]
+        if any(len(v) != len(values[0]) or not np.array_equal(v, values[0]) for v in values):
+            union[d] = np.unique(np.concatenate(values))
+    if not union:
+        return list(datasets)
+    return [ds.reindex({d: u for d, u in union.items() if d in ds.dims}) for ds in datasets]
+
+
 def combine(datasets: Sequence[xr.Dataset], sources: Sequence[str] | None = None) -> xr.Dataset:
     """Outer combination by coordinates (``xr.combine_by_coords``, falling back to merge) of
     job datasets of one scene that fill disjoint cells (:func:`check_disjoint`)."""
@@ -147,6 +166,7 @@ def combine(datasets: Sequence[xr.Dataset], sources: Sequence[str] | None = None
     elif kinds[0] == "leak_job":
         out = _concat_scans(datasets)
     else:
+        datasets = _on_common_inner_coords(datasets)
         try:
             # compat and coords as today's defaults, which xarray is about to change
             out = xr.combine_by_coords(list(datasets), join="outer", compat="no_conflicts",
@@ -156,6 +176,8 @@ def combine(datasets: Sequence[xr.Dataset], sources: Sequence[str] | None = None
             log.info("combine_by_coords failed (%s); merging instead", exc)
             out = xr.merge(list(datasets), join="outer", compat="no_conflicts",
                            combine_attrs="drop_conflicts")
+        # drop_conflicts keeps an attribute that only some jobs have, as if it held for all
+        out.attrs = {k: v for k, v in out.attrs.items() if all(k in ds.attrs for ds in datasets)}
     ids = [str(ds.attrs.get("job_id", "")) for ds in datasets]
     out.attrs["jobs"] = " ".join(i for i in ids if i)
     out.attrs["n_jobs"] = len(datasets)

@@ -17,6 +17,7 @@ from roughflow.defaults import AXIS_NAMES
 from roughflow.errors import InputError
 
 from .units import (
+    AREAL_ENERGY_UNITS,
     DIMENSIONLESS,
     FLUID_PRESSURE_UNITS,
     FLUX_UNITS,
@@ -89,6 +90,28 @@ def contact_dataset(surface: Surface, result: ContactResult,
     if adhesion is not None:
         ds.attrs.update(adhesion_attrs(surface, adhesion))
     return ds
+
+
+#: The adhesion's numbers (:func:`adhesion_attrs`, plus the range in lambda_s) as a sweep
+#: dataset records them, per seed as variables (the ladder scene): each surface has its own
+#: gamma_s (and R_c, v_ela^full), and the jobs of a study differ in model, so attributes
+#: would hold only one job's first seed and were dropped or kept as if they held for all.
+ADHESION_FIELDS = {
+    "adhesion_surface_energy": (AREAL_ENERGY_UNITS, "surface energy gamma_s of the adhesion"),
+    "adhesion_range": (LENGTH_UNITS, "range rho of the adhesive interaction"),
+    "adhesion_contact_within": (DIMENSIONLESS, "a cell counts as in contact where its gap is "
+                                               "below this many rho"),
+    "adhesion_tabor": (DIMENSIONLESS, "Tabor parameter mu_T of the surface and adhesion"),
+    "adhesion_curvature_radius": (LENGTH_UNITS, "R_c = 1 / rms curvature of the surface "
+                                                "(Tabor parameter)"),
+    "adhesion_v_ela_full": (AREAL_ENERGY_UNITS, "elastic energy per area of full contact "
+                                                "v_ela^full"),
+    "adhesion_gamma_over_v_full": (DIMENSIONLESS, "gamma_s / v_ela^full"),
+    "adhesion_range_over_lambda_s": (DIMENSIONLESS, "range rho / lambda_s"),
+}
+#: The adhesion's wall (text), recorded per job next to :data:`ADHESION_FIELDS`.
+ADHESION_REPULSION_FIELD = ("adhesion_repulsion",
+                            "repulsive wall of the adhesive interaction (hard or harmonic)")
 
 
 def adhesion_attrs(surface: Surface, adhesion: Adhesion) -> dict:

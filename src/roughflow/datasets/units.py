@@ -42,6 +42,8 @@ SIGMA_UNITS = f"{REF_LENGTH}^3/{REF_VISCOSITY}"
 #: Flux density of a flow solve with a unit pressure drop: volume flow per unit width per
 #: unit pressure drop.
 FLUX_UNITS = f"{REF_LENGTH}^2/{REF_VISCOSITY}"
+#: Energy per area (surface energies, elastic energies of a contact): E* L.
+AREAL_ENERGY_UNITS = f"{REF_PRESSURE}*{REF_LENGTH}"
 #: Fluid pressure of a flow solve as a fraction of the pressure drop (inlet 1, outlet 0).
 FLUID_PRESSURE_UNITS = "1"
 #: Contact-solve residual: largest gap error over the rms height (a ratio).

@@ -41,7 +41,9 @@ def draw(ds: xr.Dataset, fit: xr.Dataset | None = None) -> Figure:
         ax.plot(x, y, "-", color="tab:blue", label="full Bruggeman")
         x, y = curve(a, sub["sigma_closed_form"] / ref)
         ax.plot(x, y, "--", color="tab:green", label="closed form, Eq. 16")
-        alt = float(sub.attrs.get("a_c_star_alt", ds.attrs.get("a_c_star_alt", np.nan)))
+        # one value per model (config a_c_star_alt); NaN where a size of the study did not run
+        alts = sub["a_c_star_alt"].values if "a_c_star_alt" in sub else np.array([])
+        alt = float(alts[np.isfinite(alts)][0]) if np.isfinite(alts).any() else np.nan
         if model == "elastic" and np.isfinite(alt):
             x, y = curve(a, emt.sel(emt="isotropic_alt").isel(axis=0) / ref)
             ax.plot(x, y, ":", color="tab:purple", label=f"full Bruggeman, a_c* = {alt:g}")

@@ -23,6 +23,8 @@ import xarray as xr
 from roughflow import contact, flow, percolation, theory
 from roughflow.accuracy import PERIMETER_C, perimeter_corrected_area
 from roughflow.datasets.results import (
+    ADHESION_FIELDS,
+    ADHESION_REPULSION_FIELD,
     AXIS_COORD,
     FLOW_IMBALANCE_FLOOR_LONG_NAME,
     FLOW_IMBALANCE_LONG_NAME,
@@ -63,9 +65,9 @@ def _adhesion(surface: Surface, job: LadderJob, lambda_s: float):
                         gamma_over_v_full=job.surface_energy_ratio, repulsion=job.repulsion)
 
 
-def _adhesion_attrs(surface: Surface, adhesion, lambda_s: float) -> dict:
-    """Dataset attributes of the adhesion (of the job's first seed): those of a contact
-    result, and the range in units of lambda_s."""
+def _adhesion_numbers(surface: Surface, adhesion, lambda_s: float) -> dict:
+    """The adhesion on one seed's surface (:data:`ADHESION_FIELDS`): a contact result's
+    attributes, and the range in units of lambda_s."""
     return {**adhesion_attrs(surface, adhesion),
             "adhesion_range_over_lambda_s": adhesion.range / lambda_s}
 
@@ -144,7 +146,8 @@ def run_ladder(job: LadderJob, *, threads: int | None = None) -> xr.Dataset:
     r["sigma_emt"] = np.full((ns, nk, len(EMT_FORMS), 2), np.nan)
     r["sigma_ref"] = np.full((ns, 2), np.nan)
     r["wall_time"] = np.zeros(ns)
-    job_adhesion_attrs = {}
+    adhesion_seeds = {name: np.full(ns, np.nan) for name in ADHESION_FIELDS}
+    repulsion = ""
     for i, seed in enumerate(job.seeds):
         t0 = time.perf_counter()
         spec = p.spec(seed)
@@ -160,8 +163,10 @@ def run_ladder(job: LadderJob, *, threads: int | None = None) -> xr.Dataset:
         if adhesion is not None:
             log.info("adhesion: surface energy %.4g, range %.4g", adhesion.surface_energy,
                      adhesion.range)
-            if i == 0:
-                job_adhesion_attrs = _adhesion_attrs(surface, adhesion, spec.lambda_s)
+            numbers = _adhesion_numbers(surface, adhesion, spec.lambda_s)
+            for name in ADHESION_FIELDS:
+                adhesion_seeds[name][i] = numbers[name]
+            repulsion = str(numbers[ADHESION_REPULSION_FIELD[0]])
         # each axis's last direct solve orders the next one's cells (flow.CellOrdering)
         orderings: list[flow.CellOrdering | None] = [None, None]
         for k, (target, c, a_cont) in enumerate(
@@ -259,21 +264,32 @@ def run_ladder(job: LadderJob, *, threads: int | None = None) -> xr.Dataset:
         "wall_time": var(r["wall_time"], ("seed",), SECONDS, "wall time of the seed's ladder"),
     }
     data.update(surface_vars(p, job.seeds[0]))
+    a_alt = job.a_c_star_alt if job.a_c_star_alt is not None else math.nan
+    # variables, not attributes: the models of a study differ in them (aggregate keeps an
+    # attribute only where every job has it alike)
+    data["a_c_star_theory"] = var(job.a_c_star, (), DIMENSIONLESS,
+                                  "a_c* of the isotropic Bruggeman (Eq. 5-6) and the closed "
+                                  "form (Eq. 16)")
+    data["a_c_star_alt"] = var(a_alt, (), DIMENSIONLESS,
+                               "second a_c* of the isotropic Bruggeman (emt isotropic_alt; "
+                               "NaN: none)")
+    if job.model == "adhesive":
+        for name, (units, long_name) in ADHESION_FIELDS.items():
+            data[name] = var(adhesion_seeds[name], ("seed",), units, long_name)
+        data[ADHESION_REPULSION_FIELD[0]] = var(np.array(repulsion), (), DIMENSIONLESS,
+                                                ADHESION_REPULSION_FIELD[1])
     coords = param_coords(p, job.model)
     coords["seed"] = ("seed", np.asarray(job.seeds, dtype=np.int64), {"long_name": "surface seed"})
     coords["step"] = ("step", np.arange(nk), {"long_name": "index on the area ladder"})
     coords["axis"] = AXIS_COORD
     coords["emt"] = ("emt", list(EMT_FORMS), {"long_name": "effective-medium form"})
-    a_alt = job.a_c_star_alt if job.a_c_star_alt is not None else math.nan
     ds = xr.Dataset(data, coords=coords, attrs={
         "title": "roughflow ladder scene", "scene": "ladder", "job_id": job.job_id,
         "error_budget_points_per_lambda_s": p.points_per_lambda_s,
         "error_budget_contact_tol": CONTACT_TOL, "error_budget_perimeter_c": PERIMETER_C,
         "error_budget_flow_sigma_tol": FLOW_SIGMA_TOL,
         "error_budget_area_tol": job.area_tol,
-        "a_c_star_theory": job.a_c_star, "a_c_star_alt": a_alt,
         "emt_forms": "isotropic: Eq. 5-6 with a_c_star_theory; isotropic_alt: the same with "
                      "a_c_star_alt; anisotropic_corrected: Eq. 9; anisotropic_persson: Eq. 7-8",
     })
-    ds.attrs.update(job_adhesion_attrs)
     return no_fill_on_coords(ds)
