@@ -32,6 +32,15 @@ def _fit_row(fit: xr.Dataset, group: str, which: str, mode: str) -> dict | None:
     return {k: float(row[k]) for k in row.data_vars}
 
 
+def _err(row: dict) -> str:
+    """a_c*'s error, and where the law misses the data (``lack_of_fit``) by how much: the
+    error measures the seeds' scatter only."""
+    text = f" +- {row['a_star_err']:.3f}" if np.isfinite(row["a_star_err"]) else ""
+    if row.get("lack_of_fit"):
+        text += f" (the law misses the data: chi2/dof {row['chi2_dof']:.2g})"
+    return text
+
+
 def draw(ds: xr.Dataset, fit: xr.Dataset | None = None) -> Figure:
     fig = Figure(figsize=(6.4, 4.8), layout="constrained")
     ax = fig.subplots()
@@ -85,10 +94,9 @@ def draw(ds: xr.Dataset, fit: xr.Dataset | None = None) -> Figure:
                     ls=ls, lw=1)
             ax.plot(eps, scaling(eps, row["a_star"], row["amp_hard"], row["nu"]), color=HARD,
                     ls=ls, lw=1)
-            err = f" +- {row['a_star_err']:.3f}" if np.isfinite(row["a_star_err"]) else ""
             nu_err = f" +- {row['nu_err']:.2f}" if np.isfinite(row["nu_err"]) else ""
             bound = " (at its bound: not determined)" if row.get("nu_at_bound") else ""
-            lines.append(f"joint, nu {mode}: a_c* = {row['a_star']:.3f}{err}, "
+            lines.append(f"joint, nu {mode}: a_c* = {row['a_star']:.3f}{_err(row)}, "
                          f"nu = {row['nu']:.2f}{nu_err if mode == 'free' else ''}{bound}")
             if mode == "fixed" and np.isfinite(row["a_star_err"]):
                 ax.axhspan(row["a_star"] - row["a_star_err"], row["a_star"] + row["a_star_err"],
@@ -96,15 +104,14 @@ def draw(ds: xr.Dataset, fit: xr.Dataset | None = None) -> Figure:
         for which in ("easy", "hard"):
             r = _fit_row(fit, "anisotropic", which, mode)
             if r is not None and mode == "fixed":
-                err = f" +- {r['a_star_err']:.3f}" if np.isfinite(r["a_star_err"]) else ""
                 lines.append(f"{which} alone, nu {_nu_text(r['nu'])}: "
-                             f"a_c* = {r['a_star']:.3f}{err}")
+                             f"a_c* = {r['a_star']:.3f}{_err(r)}")
     iso = _fit_row(fit, "isotropic", "joint", "fixed")
     if iso is not None:
         ax.plot(eps, scaling(eps, iso["a_star"], iso["amp_easy"], iso["nu"]), color="k",
                 lw=0.8, ls=":")
-        err = f" +- {iso['a_star_err']:.3f}" if np.isfinite(iso["a_star_err"]) else ""
-        lines.append(f"isotropic, nu {_nu_text(iso['nu'])}: a_c* = {iso['a_star']:.3f}{err}")
+        lines.append(f"isotropic, nu {_nu_text(iso['nu'])}: a_c* = {iso['a_star']:.3f}"
+                     f"{_err(iso)}")
     if fit is not None and not lines:
         lines.append("fit not determined (too few sizes or seeds: see the fit's log)")
     if lines:
