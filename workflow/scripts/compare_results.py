@@ -11,6 +11,7 @@ of config/test.yaml.
 
 from __future__ import annotations
 
+import argparse
 import sys
 from pathlib import Path
 
@@ -60,4 +61,8 @@ def main(old: str, new: str) -> int:
 
 
 if __name__ == "__main__":
-    sys.exit(main(*sys.argv[1:3]))
+    parser = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
+    parser.add_argument("old", help="results folder of the reference run")
+    parser.add_argument("new", help="results folder of the run to check")
+    args = parser.parse_args()
+    sys.exit(main(args.old, args.new))

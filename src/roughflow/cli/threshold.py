@@ -54,7 +54,8 @@ def register(sub: argparse._SubParsersAction) -> None:
     add_input(p, "surface", kinds="surface", what="surface file", metavar="SURFACE.nc",
               help="surface file written by 'roughflow surface'")
     p.add_argument("--axis", type=axis_arg, default=None, metavar="{x,y,both}",
-                   help="flow direction: x, y or both (both: one shared sequence of solves)")
+                   help="flow direction: x, y or both (default both: one shared sequence of "
+                   "solves)")
     p.add_argument("--model", choices=MODELS, default=DEFAULT_MODEL,
                    help=f"contact model ({DEFAULT_MODEL})")
     p.add_argument("--tol", type=float, default=THRESHOLD_TOL,
