@@ -35,7 +35,7 @@ from roughflow.defaults import ADHESION_RANGE_OVER_LAMBDA_S, ADHESION_SURFACE_EN
 from roughflow.surface import SurfaceSpec, generate
 
 sys.path.insert(0, str(Path(__file__).resolve().parent))
-from bench_contact import write_table  # noqa: E402
+from bench_contact import format_row, write_table  # noqa: E402
 
 #: the minimizers compared, as ``gfmd(..., minimizer=...)`` names them
 MINIMIZERS = {"cg": "auto", "fire": "fire"}
@@ -82,7 +82,7 @@ def rows_for(n: int, loads: list[float], tol: float, repeats: int) -> list[dict]
         row["differing_points"] = int((out["cg"].contact != out["fire"].contact).sum())
         row["max_gap_diff_over_hrms"] = float(np.abs(out["cg"].gap - out["fire"].gap).max()
                                               / hrms)
-        print(row, flush=True)
+        print(format_row(row), flush=True)
         rows.append(row)
     return rows
 

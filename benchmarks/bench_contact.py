@@ -235,6 +235,12 @@ def write_csv(name: str, rows: list[dict]) -> tuple[list[str], list[list[str]]]:
     return keys, cells
 
 
+def format_row(row: dict) -> str:
+    """A row as ``key=value`` pairs with plain numbers (a dict's repr shows np.float64(...))."""
+    return " ".join(f"{k}={v:.4g}" if isinstance(v, float) else f"{k}={v}"
+                    for k, v in row.items())
+
+
 def write_table(name: str, rows: list[dict]) -> None:
     """csv and markdown tables over the union of the rows' keys ("-" where absent)."""
     keys, cells = write_csv(name, rows)
@@ -275,12 +281,14 @@ def plot(rows: list[dict], name: str) -> None:
 def main() -> None:
     ap = argparse.ArgumentParser(description=__doc__,
                                  formatter_class=argparse.RawDescriptionHelpFormatter)
-    ap.add_argument("--sizes", type=int, nargs="*", default=[256, 512, 1024])
+    # every grid holds lambda_s = L/64, which needs >= 2 points: n >= 128 for every size below
+    ap.add_argument("--sizes", type=int, nargs="*", default=[256, 512, 1024],
+                    help="grid sizes n, each >= 128")
     ap.add_argument("--repeats", type=int, default=3)
     ap.add_argument("--big", type=int, nargs="*", default=[],
-                    help="sizes run once, a_c 0.4, tightest tolerance only (e.g. 2048)")
-    ap.add_argument("--ladder-n", type=int, default=512)
-    ap.add_argument("--memory-n", type=int, default=2048)
+                    help="sizes run once, a_c 0.4, tightest tolerance only (e.g. 2048; >= 128)")
+    ap.add_argument("--ladder-n", type=int, default=512, help="grid of the ladder, >= 128")
+    ap.add_argument("--memory-n", type=int, default=2048, help="grid of the memory run, >= 128")
     ap.add_argument("--skip", nargs="*", default=[], choices=["time", "ladder", "memory"])
     ap.add_argument("--tag", default="", help="suffix of the time/error output files")
     args = ap.parse_args()

@@ -80,6 +80,11 @@ def main() -> None:
         chosen = [jobs[j] for j in args.jobs]
     else:
         chosen = [j for j in one_per_class(jobs) if grid_points(j) <= args.max_points]
+    if not chosen:  # stop before writing anything (rows[0] below needs a row)
+        smallest = min((grid_points(j) for j in jobs.values()), default=None)
+        raise SystemExit(f"nothing to measure: no scene job of {args.config} has at most "
+                         f"--max-points {args.max_points} grid points (the smallest has "
+                         f"{smallest}); raise --max-points or name --jobs")
     OUT.mkdir(parents=True, exist_ok=True)
     rows = []
     with tempfile.TemporaryDirectory() as d:

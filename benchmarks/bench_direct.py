@@ -107,7 +107,8 @@ def compare(gap, axis: int, lx: float, ly: float, repeats: int,
 
 def main() -> None:
     ap = argparse.ArgumentParser(description=__doc__.split("\n")[0])
-    ap.add_argument("--sizes", type=int, nargs="+", default=[512, 1024])
+    ap.add_argument("--sizes", type=int, nargs="+", default=[512, 1024],
+                    help="grid sizes n, each >= 128 (L/lambda_r = n/128 must be >= 1)")
     ap.add_argument("--pressures", type=float, nargs="+", default=list(PRESSURES))
     ap.add_argument("--models", nargs="+", default=["elastic", "bearing"],
                     choices=("elastic", "bearing"))

@@ -6,7 +6,8 @@ lambda_s = L / 64 ... points per lambda_s = n / 64). One axis (x), tolerance 1e-
 (ours) and the peer's own default (1e-12 relative residual). For each case:
 median wall time of ``--repeats`` runs, CG iterations, peak traced memory (one
 extra untimed run under tracemalloc, which sees numpy/scipy buffers), sigma and
-its relative difference to our RS result.
+its relative difference to our RS result (``ours-rs``; where that did not run, to the first
+solver that did: the table's "rel. diff to" column names it).
 
 Solvers: ours with RS-AMG (default), the same on the hierarchy pyamg builds itself (the
 same kernels with pyamg's copies and conversions between them), the same with pyamg's
@@ -22,6 +23,8 @@ reynoldsflow with ``scipy.amg-rs`` (its default), ``scipy.amg-sa`` and ``scipy-s
 (n <= --direct-max).
 
     OPENBLAS_NUM_THREADS=1 .venv/bin/python benchmarks/bench_flow.py --sizes 512 1024 2048
+
+Sizes must be >= 128 (the surface needs 2 points per lambda_s: n / 64 >= 2).
 
 Writes results/benchmarks/bench_flow.{csv,md,png}.
 """
@@ -47,6 +50,11 @@ from roughflow.flow import amg, linsolve, solve  # noqa: E402
 from roughflow.surface import SurfaceSpec, generate  # noqa: E402
 
 OUT = Path(__file__).resolve().parents[1] / "results" / "benchmarks"
+#: every solver the script runs, in run order; the plot gives each its own colour from this
+#: order (tab20, dark shades first: tab10 has too few for all of them)
+SOLVERS = ("ours-rs", "ours-rs-pyamg-setup", "ours-rs-pyamg-cycle", "ours-rs-symmetric",
+           "ours-sa", "ours-auto", "ours-direct", "cg-noprec", "rf-amg-rs", "rf-amg-sa",
+           "rf-spsolve")
 
 
 def bearing_gap(heights: np.ndarray, a_c: float) -> np.ndarray:
@@ -111,7 +119,8 @@ def measure(fn, gap, repeats, memory):
 
 def main() -> None:
     ap = argparse.ArgumentParser(description=__doc__.split("\n")[0])
-    ap.add_argument("--sizes", type=int, nargs="+", default=[512, 1024, 2048])
+    ap.add_argument("--sizes", type=int, nargs="+", default=[512, 1024, 2048],
+                    help="grid sizes n (n x n), each >= 128")
     ap.add_argument("--ac", type=float, nargs="+", default=[0.1, 0.3, 0.38, 0.45])
     ap.add_argument("--repeats", type=int, default=3)
     ap.add_argument("--peer-repeats", type=int, default=3,
@@ -179,7 +188,7 @@ def main() -> None:
                     cases.append(("rf-spsolve", peer("scipy-spsolve"), args.peer_repeats, False))
             if args.solvers:
                 cases = [c for c in cases if c[0] in args.solvers]
-            ref = None
+            ref, ref_name = None, ""
             for name, fn, reps, mem in cases:
                 try:
                     t, (sigma, its), peak = measure(fn, gap, reps, mem and not args.no_memory)
@@ -188,13 +197,13 @@ def main() -> None:
                     rows.append(dict(n=n, a_c=a_c, solver=name, time_s=float("nan"),
                                      iterations=getattr(exc, "iterations", -1),
                                      mem_mib=float("nan"), sigma=float("nan"),
-                                     rel_diff=float("nan"), repeats=reps))
+                                     rel_diff=float("nan"), repeats=reps, ref_solver=""))
                     continue
-                if ref is None:
-                    ref = sigma
+                if ref is None:  # ours-rs runs first: the reference unless it failed
+                    ref, ref_name = sigma, name
                 rel = sigma / ref - 1.0 if ref else float("nan")
                 row = dict(n=n, a_c=a_c, solver=name, time_s=t, iterations=its, mem_mib=peak,
-                           sigma=sigma, rel_diff=rel, repeats=reps)
+                           sigma=sigma, rel_diff=rel, repeats=reps, ref_solver=ref_name)
                 rows.append(row)
                 print(f"n={n} a_c={a_c} {name}: {t:.3f}s it={its} mem={peak:.0f}MiB "
                       f"sigma={sigma:.10e} rel={rel:.1e}", flush=True)
@@ -213,15 +222,19 @@ def read_csv(path):
             out.append(dict(n=int(r["n"]), a_c=float(r["a_c"]), solver=r["solver"],
                             time_s=float(r["time_s"]), iterations=int(r["iterations"]),
                             mem_mib=float(r["mem_mib"]), sigma=float(r["sigma"]),
-                            rel_diff=float(r["rel_diff"]), repeats=int(r["repeats"])))
+                            rel_diff=float(r["rel_diff"]), repeats=int(r["repeats"]),
+                            ref_solver=r.get("ref_solver")))  # absent in older files
         return out
 
 
 def write_markdown(rows, path):
     lines = ["| n | a_c | solver | time (s) | CG its | peak mem (MiB) | sigma | rel. diff | "
-             "t / t(rf fastest) |", "|---|---|---|---|---|---|---|---|---|"]
+             "rel. diff to | t / t(rf fastest) |", "|---|---|---|---|---|---|---|---|---|---|"]
     for n, a_c in sorted({(r["n"], r["a_c"]) for r in rows}):
         group = [r for r in rows if r["n"] == n and r["a_c"] == a_c]
+        # files written before ref_solver was stored: the reference was the group's first
+        # solver with a result
+        first = next((r["solver"] for r in group if np.isfinite(r["sigma"])), "")
         peers = [r["time_s"] for r in group if r["solver"].startswith("rf-")
                  and np.isfinite(r["time_s"])]
         best = min(peers) if peers else float("nan")
@@ -230,6 +243,7 @@ def write_markdown(rows, path):
             lines.append(
                 f"| {n} | {a_c} | {r['solver']} | {r['time_s']:.3g} | {its} | "
                 f"{r['mem_mib']:.0f} | {r['sigma']:.6e} | {r['rel_diff']:.1e} | "
+                f"{r['ref_solver'] if r['ref_solver'] is not None else first} | "
                 f"{r['time_s'] / best:.2f} |"
             )
     path.write_text("\n".join(lines) + "\n")
@@ -241,13 +255,17 @@ def plot(rows, path):
     matplotlib.use("Agg")
     import matplotlib.pyplot as plt
 
-    fig, axes = plt.subplots(1, 2, figsize=(11, 4.5))
-    solvers = sorted({r["solver"] for r in rows})
-    colors = {s: plt.cm.tab10(i) for i, s in enumerate(solvers)}
-    # the measured contact fractions, the lower half in the left panel, the upper in the right
+    solvers = sorted({r["solver"] for r in rows}, key=lambda s: (
+        SOLVERS.index(s) if s in SOLVERS else len(SOLVERS), s))
+    shades = [*range(0, 20, 2), *range(1, 20, 2)]
+    colors = {s: plt.cm.tab20(shades[i % 20]) for i, s in enumerate(solvers)}
+    # the measured contact fractions, the lower half in the left panel, the upper in the
+    # right; one panel when there is only one fraction (the right one would be empty)
     fractions = sorted({r["a_c"] for r in rows})
     half = (len(fractions) + 1) // 2
-    for ax, a_c_set in zip(axes, (fractions[:half], fractions[half:]), strict=True):
+    sets = [fractions[:half], fractions[half:]] if len(fractions) > 1 else [fractions]
+    fig, axes = plt.subplots(1, len(sets), figsize=(5.5 * len(sets), 4.5), squeeze=False)
+    for ax, a_c_set in zip(axes[0], sets, strict=True):
         for solver in solvers:
             for a_c, ls in zip(a_c_set, ("-", "--", ":", "-."), strict=False):
                 pts = sorted((r["n"] ** 2, r["time_s"]) for r in rows

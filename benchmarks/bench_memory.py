@@ -12,6 +12,7 @@ out-of-memory killer and a SLURM memory limit see). Inputs (surface and contact 
 are made beforehand by separate processes. ``imports`` is a process that imports every
 module the commands use and runs a 64 x 64 case: the fixed cost every command pays.
 
+All peaks are in MB = 1e6 bytes (ru_maxrss is in KiB; bench_cost_model.py uses MB too).
 Writes results/benchmarks/memory.csv (peak RSS per command and size) and memory.md: per
 command the peak at the largest size, the slope in bytes per grid point between the two
 largest sizes, and the model of ``roughflow.resources`` there (the table of
@@ -72,13 +73,18 @@ MODEL_TASK = {"surface": "surface", "contact": "contact", "contact_cg": "contact
               "scene_threshold": "threshold", "scene_ladder": "ladder"}
 
 
+def _mb(usage) -> float:
+    """Peak RSS in MB (1e6 bytes): Linux reports ru_maxrss in KiB."""
+    return usage.ru_maxrss * 1024 / 1e6
+
+
 def run_child(argv: list[str]) -> tuple[int, float]:
     """(exit status, peak RSS in MB) of ``roughflow argv`` in a fresh process."""
     code = "import sys; from roughflow.cli import main; sys.exit(main(sys.argv[1:]))"
     proc = subprocess.Popen([sys.executable, "-c", code, *argv], stdout=subprocess.DEVNULL)
     _, status, usage = os.wait4(proc.pid, 0)
     proc.returncode = os.waitstatus_to_exitcode(status)
-    return proc.returncode, usage.ru_maxrss / 1024.0
+    return proc.returncode, _mb(usage)
 
 
 def base_mb() -> float:
@@ -90,7 +96,7 @@ def base_mb() -> float:
             "flow.solve(r.gap, 0)")
     proc = subprocess.Popen([sys.executable, "-c", code])
     _, _, usage = os.wait4(proc.pid, 0)
-    return usage.ru_maxrss / 1024.0
+    return _mb(usage)
 
 
 def main() -> None:
@@ -122,7 +128,7 @@ def main() -> None:
                 rc, peak = run_child(argv)
                 rows.append({"task": task, "n": n, "points": n * n, "rc": rc,
                              "peak_mb": round(peak, 1)})
-                print(rows[-1], flush=True)
+                print(rows[-1] if rc == 0 else f"{rows[-1]}  FAILED", flush=True)
     if not rows:
         raise SystemExit(f"nothing measured: tasks {args.tasks} at --sizes {args.sizes} "
                          f"(commands) and --job-sizes {args.job_sizes} (thresholds, scenes: "
@@ -142,20 +148,23 @@ def table(rows: list[dict], base: float) -> str:
         from roughflow.resources import estimate_bytes
     except ImportError:  # a roughflow without the model: measure only
         estimate_bytes = None
-    lines = [f"Base (imports + a 64^2 case): {base * 2**20 / 1e6:.0f} MB", "",
+    lines = [f"Base (imports + a 64^2 case): {base:.0f} MB", "",
              "| command | task | n | peak RSS at largest n (MB) | slope (B/point) | "
              "model at largest n (MB) | model / peak |", "|---|---|---|---|---|---|---|"]
     for task in dict.fromkeys(r["task"] for r in rows):
         rs = sorted((r for r in rows if r["task"] == task), key=lambda r: r["points"])
         b = rs[-1]
-        peak = b["peak_mb"] * 2**20 / 1e6
+        peak = b["peak_mb"]
         slope = float("nan")
         if len(rs) > 1:
             a = rs[-2]
-            slope = (b["peak_mb"] - a["peak_mb"]) * 2**20 / (b["points"] - a["points"])
+            slope = (b["peak_mb"] - a["peak_mb"]) * 1e6 / (b["points"] - a["points"])
+        # a failed child's peak is that of a run that stopped early: say so beside the task
+        failed = ", ".join(f"n={r['n']} rc={r['rc']}" for r in rs if r["rc"] != 0)
+        label = f"{task} (FAILED: {failed})" if failed else task
         model = (estimate_bytes(MODEL_TASK[task], b["points"]) / 1e6 if estimate_bytes
                  else float("nan"))
-        lines.append(f"| {task} | {MODEL_TASK[task]} | {', '.join(str(r['n']) for r in rs)} | "
+        lines.append(f"| {label} | {MODEL_TASK[task]} | {', '.join(str(r['n']) for r in rs)} | "
                      f"{peak:.0f} | {slope:.0f} | {model:.0f} | {model / peak:.2f} |")
     return "\n".join(lines)
 

@@ -59,7 +59,8 @@ def run(src: str | None, level: str, n: int, repeats: int) -> dict:
 
 def main() -> None:
     ap = argparse.ArgumentParser(description=__doc__.split("\n")[0])
-    ap.add_argument("--n", type=int, default=512)
+    ap.add_argument("--n", type=int, default=512,
+                    help="grid size, >= 128 (lambda_s = L/64 needs 2 points)")
     ap.add_argument("--repeats", type=int, default=7)
     ap.add_argument("--rounds", type=int, default=3, help="interleaved rounds of processes")
     ap.add_argument("--before-src", default=None)

@@ -57,7 +57,8 @@ class Timed:
 
 def main() -> None:
     ap = argparse.ArgumentParser(description=__doc__.split("\n")[0])
-    ap.add_argument("--sizes", type=int, nargs="+", default=[512, 1024])
+    ap.add_argument("--sizes", type=int, nargs="+", default=[512, 1024],
+                    help="grid sizes n, each >= 128 (n / 64 points per lambda_s, at least 2)")
     ap.add_argument("--ac", type=float, nargs="+", default=[0.05, 0.2, 0.35])
     ap.add_argument("--repeats", type=int, default=5)
     ap.add_argument("--tag", default="")

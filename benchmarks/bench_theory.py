@@ -60,7 +60,8 @@ def time_state(state, gamma: float, repeats: int) -> dict:
 
 def main() -> None:
     ap = argparse.ArgumentParser(description=__doc__.split("\n")[0])
-    ap.add_argument("--sizes", type=int, nargs="+", default=[512, 1024])
+    ap.add_argument("--sizes", type=int, nargs="+", default=[512, 1024],
+                    help="grid sizes n, each >= 128 (L/lambda_r = n/128 must be >= 1)")
     ap.add_argument("--gammas", type=float, nargs="+", default=[1.0, 2.0])
     ap.add_argument("--pressures", type=float, nargs="+", default=list(PRESSURES))
     ap.add_argument("--seed", type=int, default=9)

@@ -35,7 +35,8 @@ DEFAULT_PRESSURES = "0.02,0.04,0.06,0.08,0.1,0.12,0.14,0.16,0.18"
 
 
 def sample_threshold(surface) -> float:
-    """Mean of the x and y fluid-percolation thresholds of this sample (roughflow.search)."""
+    """Mean of the x and y fluid-percolation thresholds of this sample
+    (roughflow.search.threshold)."""
     from roughflow.search import threshold
 
     th = threshold(surface, axis=None, model="elastic", tol=2e-3)
@@ -147,7 +148,7 @@ def main() -> None:
     t_c = float(np.median([r["t_contact_s"] for r in rows]))
     t_f = float(np.median([r["t_flow_s"] for r in rows]))
     a_s = sorted({r["a_c_star_sample"] for r in rows})
-    lines += ["", "sample thresholds a_c* (mean of x and y, roughflow.percolation): "
+    lines += ["", "sample thresholds a_c* (mean of x and y, roughflow.search.threshold): "
               + ", ".join(f"{a:.4f}" for a in a_s)]
     lines += ["", f"median time per point: contact {t_c:.2f} s, flow (both axes) {t_f:.2f} s",
               "dev = sigma_theory/sigma_Reynolds - 1 (mean over seeds)"]

@@ -35,9 +35,9 @@ import numpy as np
 
 os.environ.setdefault("ROUGHFLOW_FFT_THREADS", "1")
 
-from roughflow import accuracy, contact, flow  # noqa: E402
+from roughflow import accuracy, contact, fft, flow  # noqa: E402
 from roughflow.errors import ConvergenceError  # noqa: E402
-from roughflow.search import LoadSearch, SearchOptions, threshold  # noqa: E402
+from roughflow.search import LoadSearch, SearchOptions, threshold, warm_up  # noqa: E402
 from roughflow.surface import Surface, SurfaceSpec, generate  # noqa: E402
 
 TARGETS = (0.2, 0.35)
@@ -72,6 +72,21 @@ def _surface(seed: int, ppl: int, ppl_max: int, cache: dict, gamma: float = 1.0,
         raise SystemExit(f"grid {s.shape} at ppl {ppl_max} is not {k} x the grid "
                          f"({coarse.nx}, {coarse.ny}) at ppl {ppl}")
     return Surface.from_array(np.ascontiguousarray(s.heights[::k, ::k]), lx=s.lx, ly=s.ly)
+
+
+def _warm_up() -> None:
+    """Keep one-off costs out of the timings: numba compilation of the contact and search
+    kernels (search.warm_up) and the flow solvers' imports (one small untimed solve)."""
+    warm_up()
+    s = generate(SurfaceSpec.from_sweep(points_per_lambda_s=2, seed=0))
+    flow.solve(contact.solve(s, 0.1).gap, 0, lx=s.lx, ly=s.ly)
+
+
+def _plan(shape) -> None:
+    """FFTW plans are made per shape at first use: make them before a size is timed (the
+    solvers use the float32 plan as well)."""
+    fft.plan(shape)
+    fft.plan(shape, single=True)
 
 
 def _faces(contact_mask) -> dict:
@@ -146,6 +161,7 @@ def phase_resolution(args) -> None:
         if seed not in cache:
             cache.clear()
         surf = _surface(seed, ppl, ppl_max, cache, args.gamma, args.l_over_lambda_r)
+        _plan(surf.shape)
         base = dict(seed=seed, ppl=ppl, n=surf.shape[0], ny=surf.shape[1],
                     gamma=args.gamma, l_over_lambda_r=args.l_over_lambda_r,
                     dx=surf.dx, dy=surf.dy)
@@ -203,6 +219,7 @@ def phase_tol(args) -> None:
     for seed in args.seeds:
         spec = SurfaceSpec.from_sweep(points_per_lambda_s=ppl, seed=seed)
         surf = generate(spec)
+        _plan(surf.shape)
         # contact tolerance at fixed load (a_c ~ 0.35 and ~ 0.2), cold solves
         for target in TARGETS:
             p = contact.ContactLaw().control(target)
@@ -280,6 +297,18 @@ def _write(outdir: Path, stem: str, md: list[str], csv_rows: list[str], fig, png
     print("\n".join(md))
 
 
+#: note under every table whose reference is the first-order Richardson extrapolation
+EXTRAP_NOTE = ("Rows marked (extrapolation) are the two grids the reference is extrapolated "
+               "from: their errors are -r/(r-1) and -1/(r-1) times the difference of the two "
+               "grids (r = spacing ratio), fixed by construction, not measured.")
+
+
+def _ppl(p: int, fine) -> int | str:
+    """ppl cell of a table: the reference's own grids are marked (their error is no
+    measurement)."""
+    return f"{p} (extrapolation)" if p in fine else p
+
+
 def _fit_c(sig: list[dict], ppls: list[int], exclude_seed=None) -> float:
     pts = [r for r in sig if r["ppl"] in ppls and r["seed"] != exclude_seed]
     if len({r["ppl"] for r in pts}) < 2:
@@ -351,12 +380,13 @@ def report(args) -> None:
                 e_c.append(rr[p]["a_fixed"] - cs * rr[p]["perim_fixed"] - a_ref)
                 e_g.append(rr[p]["gap_fixed"] / ref["gap_fixed"] - 1)
             if e_a:
-                rows.append([target, p, float(np.mean(e_a)), float(np.mean(e_c)),
+                rows.append([target, _ppl(p, ppls[-2:]), float(np.mean(e_a)),
+                             float(np.mean(e_c)),
                              float(np.mean(np.abs(e_g)))])
     md.append("## Contact area and mean gap at fixed load\n")
     md.append("Error of a_c against the Richardson extrapolation of the two finest grids; "
               "perimeter-corrected a_c; relative error of the mean gap against the finest grid "
-              "(means over seeds).\n")
+              f"(means over seeds; 0 on the finest grid by construction). {EXTRAP_NOTE}\n")
     md.append(_md_table(["a_c target", "ppl", "a_c error", "corrected a_c error",
                          "|mean gap rel. error|"], rows) + "\n")
 
@@ -408,13 +438,15 @@ def report(args) -> None:
                                         else float("nan")))
         for k, v in variants.items():
             for p, t, rms, mean, sd in v:
-                rows.append([k, p, t, mean, rms, sd])
+                rows.append([k, _ppl(p, (f0, f1)) if k != "richardson" else p, t, mean, rms,
+                             sd])
         md.append("## a_c* against resolution (both axes)\n")
         md.append(f"Reference: Richardson extrapolation (first order) of the two finest grids "
                   f"(ppl {ppls[-2]}, {ppls[-1]}), per seed and axis. Seed-to-seed standard "
                   f"deviation of the reference a_c*: {spread:.4f} (over {len(seeds)} seeds x 2 "
                   f"axes). Time: median wall time of one threshold (both axes) per seed; "
-                  f"Richardson = both grids; perimeter = threshold + one contact solve.\n")
+                  f"Richardson = both grids; perimeter = threshold + one contact solve. "
+                  f"{EXTRAP_NOTE}\n")
         md.append(_md_table(["variant", "ppl", "time [s]", "mean error", "rms error",
                              "sd of error over seeds"], rows) + "\n")
         pareto["a_c_star"] = variants
@@ -441,7 +473,8 @@ def report(args) -> None:
         refs = {}
         for s in seeds:
             rr = {q["ppl"]: q for q in sig if q["seed"] == s and q["target"] == target}
-            if f0 in rr and f1 in rr and f0 != f1:
+            # sigma is nan where the state did not percolate (small cells): no reference
+            if f0 in rr and f1 in rr and f0 != f1 and rr[f0]["sigma"] > 0 < rr[f1]["sigma"]:
                 refs[s] = accuracy.richardson(math.log(rr[f0]["sigma"]),
                                               math.log(rr[f1]["sigma"]), ratio=f1 / f0)
         for p in ppls:
@@ -449,7 +482,7 @@ def report(args) -> None:
             tt = []
             for s in seeds:
                 rr = {q["ppl"]: q for q in sig if q["seed"] == s and q["target"] == target}
-                if p not in rr or s not in refs:
+                if p not in rr or s not in refs or not rr[p]["sigma"] > 0:
                     continue
                 q = rr[p]
                 ref = refs[s]
@@ -459,7 +492,7 @@ def report(args) -> None:
                 ln_cor = _sigma_at_corrected_area(q, target, cs)
                 e["perimeter"].append(ln_cor - ref)
                 tt.append(q["time_contact"] + q["time_flow"])
-                if p // 2 in rr and p < f1:
+                if p // 2 in rr and p < f1 and rr[p // 2]["sigma"] > 0:
                     ln_ri = accuracy.richardson(math.log(rr[p // 2]["sigma"]), ln_raw)
                     e["richardson"].append(ln_ri - ref)
                     t_ri = tt[-1] + rr[p // 2]["time_contact"] + rr[p // 2]["time_flow"]
@@ -477,7 +510,8 @@ def report(args) -> None:
                     if k == "richardson":  # both grids
                         t_k += float(np.median([pp[1] for pp in pts["raw"] if pp[0] == p // 2]))
                     pts[k].append((p, t_k, rms, float(np.mean(ea))))
-                    rows.append([target, k, p, t_k, float(np.mean(ea)), rms])
+                    rows.append([target, k, _ppl(p, (f0, f1)) if k != "richardson" else p,
+                                 t_k, float(np.mean(ea)), rms])
         if len(refs) > 1:
             md.append(f"Seed-to-seed sd of ln sigma at a_c = {target} (reference): "
                       f"{np.std(list(refs.values()), ddof=1):.3f}\n")
@@ -499,7 +533,7 @@ def report(args) -> None:
               "slope d ln sigma / d a_c = 3 d ln(mean gap)/d a_c - (69/20)/(a_c* - a_c), "
               "Eq. 16, the mean-gap derivative measured from the two nearest solves). Time: "
               "contact solves to reach the target area (warm-started secant) + one flow "
-              "solve.\n")
+              f"solve. {EXTRAP_NOTE}\n")
     md.append(_md_table(["a_c", "variant", "ppl", "time [s]", "mean ln error", "rms ln error"],
                         rows) + "\n")
     fig.tight_layout()
@@ -696,7 +730,7 @@ def report_anisotropic(args) -> None:
           "gamma:1 rectangles. Reference: first-order Richardson extrapolation of the two "
           "finest grids per seed (and axis). Face terms: tx, ty = contact/non-contact faces "
           "normal to x, y per cell; 'geometric' = tx sqrt(dy/dx) + ty sqrt(dx/dy) (the "
-          "pre-issue-20 perimeter_term), 'pixel' = tx + ty.\n"]
+          f"pre-issue-20 perimeter_term), 'pixel' = tx + ty. {EXTRAP_NOTE}\n"]
     csv = ["gamma,quantity,direction,variant,ppl,seed,value,reference,error"]
     fixed_all = []
     rows_fit, rows_fixed, rows_thr = [], [], []
@@ -740,7 +774,8 @@ def report_anisotropic(args) -> None:
                         e[form].append(rr[p]["a_fixed"] - c0 * _face_term(rr[p], "_fixed", form)
                                        - ref)
                 if e["raw"]:
-                    rows_fixed.append([g, target, p, *[float(np.mean(e[k])) for k in e]])
+                    rows_fixed.append([g, target, _ppl(p, (f0, f1)),
+                                       *[float(np.mean(e[k])) for k in e]])
         # a_c* per direction
         refs = {}
         for s in seeds:
@@ -779,7 +814,8 @@ def report_anisotropic(args) -> None:
                     ea = np.asarray(e[k])
                     sd = float(np.std(ea, ddof=1)) if ea.size > 1 else float("nan")
                     curves[k].append((p, float(np.mean(ea)), sd / math.sqrt(ea.size)))
-                    rows_thr.append([g, d, k, p, float(np.mean(ea)), sd / math.sqrt(ea.size),
+                    rows_thr.append([g, d, k, _ppl(p, (f0, f1)), float(np.mean(ea)),
+                                     sd / math.sqrt(ea.size),
                                      sd, len(ea)])
             for k, col in zip(curves, ("k", "C0", "C3", "C2"), strict=True):
                 xs = [p for p, *_ in curves[k]]
@@ -855,6 +891,8 @@ def main(argv=None) -> int:
     ap.add_argument("--fit-min-ppl", type=int, default=4,
                     help="smallest resolution used to fit the perimeter constant")
     args = ap.parse_args(argv)
+    if args.phase != "report":
+        _warm_up()
     if args.phase in ("tol", "all"):
         phase_tol(args)
     if args.phase in ("resolution", "all"):

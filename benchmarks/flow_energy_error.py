@@ -4,18 +4,24 @@ Usage:
     ROUGHFLOW_FFT_THREADS=1 python benchmarks/flow_energy_error.py GAP.npy [--iterations 220]
 
 ``GAP.npy``: a gap kept by ``stress_flow.py --keep-above`` (its name ends in ``_x`` or ``_y``,
-the flow axis). sigma comes from the dissipation D(p), and D(p_k) - D(p*) = ||e_k||_A^2 is
-the energy error of the CG iterate p_k (docs/flow.md "Flux check"). This script solves the
-state directly for D(p*), then runs preconditioned CG with the RS V-cycle from zero and
-records, every iteration, the relative residual, the true relative error of sigma
-(D(p_k) - D(p*)) / D(p*), and the Hestenes-Stiefel estimate of that error from the next d
-iterations, sum_{j=k}^{k+d-1} alpha_j r_j.z_j / D(p*) (exact in exact arithmetic as d grows,
-a lower bound otherwise). Writes results/benchmarks/flow_energy_error_<gap name>.md.
+the flow axis). The system is assembled on the cell lx x ly that ``GAP.json`` beside it
+records (stress_flow.py writes it); ``--lx``/``--ly`` override it, and without either the cell
+is the unit square that stress_flow.py's surfaces have (``SurfaceSpec.from_sweep``: unit
+area, aspect lx/ly = 1, so at gamma != 1 the pixels are gamma:1 rectangles, not squares).
+
+sigma comes from the dissipation D(p), and D(p_k) - D(p*) = ||e_k||_A^2 is the energy error
+of the CG iterate p_k (docs/flow.md "Flux check"). This script solves the state directly
+for D(p*), then runs preconditioned CG with the RS V-cycle from zero and records, every
+iteration, the relative residual, the true relative error of sigma (D(p_k) - D(p*)) / D(p*),
+and the Hestenes-Stiefel estimate of that error from the next d iterations,
+sum_{j=k}^{k+d-1} alpha_j r_j.z_j / D(p*) (exact in exact arithmetic as d grows, a lower
+bound otherwise). Writes results/benchmarks/flow_energy_error_<gap name>.md.
 """
 
 from __future__ import annotations
 
 import argparse
+import json
 import math
 import sys
 import time
@@ -36,12 +42,25 @@ def main() -> None:
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("gap", type=Path)
     ap.add_argument("--iterations", type=int, default=220)
+    ap.add_argument("--lx", type=float, default=None,
+                    help="cell length along x (default: GAP.json's, else 1)")
+    ap.add_argument("--ly", type=float, default=None,
+                    help="cell length along y (default: GAP.json's, else 1)")
     args = ap.parse_args()
     gap = np.load(args.gap)
     axis = 1 if args.gap.stem.endswith("_y") else 0
+    # the cell's lengths set the faces' conductances: the grid's shape alone does not give
+    # them (the sweep's gamma != 1 cells are unit squares with rectangular pixels)
+    meta = args.gap.with_suffix(".json")
+    cell = json.loads(meta.read_text()) if meta.exists() else {"lx": 1.0, "ly": 1.0}
+    lx = args.lx if args.lx is not None else cell["lx"]
+    ly = args.ly if args.ly is not None else cell["ly"]
+    print(f"cell {lx:g} x {ly:g} on {gap.shape[0]} x {gap.shape[1]} points "
+          f"({meta.name if meta.exists() else 'no ' + meta.name}"
+          f"{', overridden' if args.lx is not None or args.ly is not None else ''})")
     s = gap**3 / 12.0
-    # the system flow.solve assembles (on a unit square)
-    system = reynolds_system(s, flowing_cells(s, axis), axis, lx=1.0, ly=1.0)
+    # the system flow.solve assembles
+    system = reynolds_system(s, flowing_cells(s, axis), axis, lx=lx, ly=ly)
     faces, act, cells, a, b = (system.faces, system.active, system.cells, system.matrix,
                                system.rhs)
 
@@ -84,7 +103,7 @@ def main() -> None:
 
     head = ("| iteration | relative residual | true error of sigma | "
             + " | ".join(f"estimate, d = {d}" for d in DELAYS) + " |")
-    lines = [f"{args.gap.name}: {a.shape[0]} unknowns", "", head,
+    lines = [f"{args.gap.name}: {a.shape[0]} unknowns, cell {lx:g} x {ly:g}", "", head,
              "|" + "---|" * (3 + len(DELAYS))]
     for k in range(0, len(errors), 5):
         est = [sum(terms[k:k + d]) if k + d <= len(terms) else math.nan for d in DELAYS]

@@ -82,7 +82,10 @@ def summary(rows: list[dict], pressures: list[float]) -> str:
 def main() -> None:
     ap = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
     ap.add_argument("--seeds", type=int, default=10)
-    ap.add_argument("--size", type=float, default=8.0, help="L / lambda_r of the big cell")
+    ap.add_argument("--size", type=float, default=8.0,
+                    help="L / lambda_r of the big cell; its grid, ppl * size / eps_f a side, "
+                    "must be >= 64 (size >= 2 at the default --ppl and --eps-f): smaller "
+                    "windows are too coarse for their threshold search's tol 0.002")
     ap.add_argument("--eps-f", type=float, default=0.125)
     ap.add_argument("--ppl", type=float, default=4.0, help="points per lambda_s")
     ap.add_argument("--pressures", type=float, nargs="+", default=[0.02, 0.05, 0.1],

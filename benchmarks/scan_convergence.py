@@ -88,8 +88,12 @@ def table(rows: list[dict], p: np.ndarray) -> str:
 def main() -> None:
     ap = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
     ap.add_argument("scan")
-    ap.add_argument("--size", default=None)
-    ap.add_argument("--unit", default=None)
+    ap.add_argument("--size", default=None,
+                    help="physical size where the file gives none (a .npy: required), "
+                    "e.g. 500nm or 0.126mm,0.094mm")
+    ap.add_argument("--unit", default=None,
+                    help="length unit of sizes and heights where the file gives none "
+                    "(a .npy: required), e.g. nm")
     ap.add_argument("--fill", default="none")
     ap.add_argument("--crop", default=None)
     ap.add_argument("--pressures", type=float, nargs="+", default=[0.015, 0.04, 0.08],

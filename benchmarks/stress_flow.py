@@ -20,7 +20,8 @@ the upper bound on its error (``FlowResult.sigma_error``), its relative differen
 reference, whether the two intervals [sigma (1 - error), sigma] overlap (each sigma is an
 upper bound on the exact one, so they must), and the decades spanned by the flowing cells'
 u^3. The gap of a failed solve is kept in ``results/benchmarks/stress_flow_gaps/`` to
-reproduce it.
+reproduce it (``NAME.npy``, with the cell lengths lx, ly and the surface spec in
+``NAME.json``: the grid alone does not give them, gamma != 1 cells have non-square pixels).
 Rows are appended as they come (an interrupted run keeps its rows). Writes
 results/benchmarks/stress_flow[_TAG].{csv,md}; docs/flow.md quotes it.
 """
@@ -29,6 +30,7 @@ from __future__ import annotations
 
 import argparse
 import itertools
+import json
 import math
 import sys
 import time
@@ -139,6 +141,9 @@ def run_case(size: float, eps_f: float, model: str, gamma: float, hurst: float, 
                 gaps_dir.mkdir(parents=True, exist_ok=True)
                 name = f"{model}_g{gamma:g}_H{hurst:g}_s{seed}_{n}_a{target:g}_{'xy'[ax]}.npy"
                 np.save(gaps_dir / name, c.gap)
+                # the cell lengths, which flow_energy_error.py reads back
+                (gaps_dir / name).with_suffix(".json").write_text(json.dumps(
+                    {"lx": lx, "ly": ly, "spec": surface.spec.as_attrs()}))
                 row["gap_file"] = name
             yield row
 

@@ -11,6 +11,7 @@ from __future__ import annotations
 
 import argparse
 import csv
+import sys
 from collections import defaultdict
 from pathlib import Path
 
@@ -26,6 +27,9 @@ def main() -> None:
     ap.add_argument("config", nargs="?", default="config/paper.yaml")
     ap.add_argument("--benchmarks", default=None, help="compare with a finished run")
     args = ap.parse_args()
+    # a mistyped folder must not pass as "no finished jobs"
+    if args.benchmarks and not Path(args.benchmarks).is_dir():
+        ap.error(f"--benchmarks {args.benchmarks}: no such folder")
     jobs = expand_studies(yaml.safe_load(open(args.config))["studies"])
     leaks = [j for j in jobs.values() if j.kind == "leak"]
     if leaks:  # their cost depends on the scans' grids, known only after the import
@@ -43,7 +47,14 @@ def main() -> None:
           f"{grid_points(largest)} grid points, {describe(estimated_memory(largest))}; "
           f"most memory: {describe(max(map(estimated_memory, jobs.values())))}")
     if args.benchmarks:
-        for tsv in sorted(Path(args.benchmarks).glob("jobs/*/*.tsv")):
+        tsvs = sorted(Path(args.benchmarks).glob("jobs/*/*.tsv"))
+        if not tsvs:
+            print(f"warning: no jobs/*/*.tsv under {args.benchmarks}: nothing to compare",
+                  file=sys.stderr)
+        elif not any(t.stem in jobs for t in tsvs):
+            print(f"warning: none of the {len(tsvs)} tsv files under {args.benchmarks} is a "
+                  f"job of {args.config}", file=sys.stderr)
+        for tsv in tsvs:
             job = jobs.get(tsv.stem)
             if job is None:
                 continue
