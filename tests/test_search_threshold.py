@@ -386,9 +386,10 @@ def test_elastic_mean_threshold_gamma_1():
     # Paper: a_c* = 0.415 +- 0.01 in the large-system limit, "about 0.4" at its default
     # size L/lambda_r = 4 (gamma = 1, H = 0.8, eps_f = 1/16); the target is a mean in
     # 0.40-0.43. CI affords 10 seeds at 256^2 (4 points per lambda_s). The single-axis
-    # spread is 0.03 at this size, so the 10-seed mean carries a standard error of about
-    # 0.006, computed from the data; the band is widened by two of them. (Larger runs in
-    # docs/percolation.md: 0.432 +- 0.006 at 512^2, 0.436 +- 0.005 at L/lambda_r = 8.)
+    # spread is 0.035 at this size, so the 10-seed mean carries a standard error of about
+    # 0.01 (0.431 +- 0.010 measured), computed from the data; the band is widened by two of
+    # them. (Other rows in docs/percolation.md: 0.425 +- 0.009 at 512^2, 0.439 +- 0.004 at
+    # L/lambda_r = 8.)
     # The same surfaces in the bearing model must sit clearly higher (paper: 0.4 vs 0.5).
     el, be, co = [], [], []
     for seed in range(10):
