@@ -169,6 +169,22 @@ def test_noncontact_at_threshold_is_harmonic_mean():
     assert nc.sigma_0 == 0.0
 
 
+def test_noncontact_at_threshold_counted_cell_by_cell():
+    """400 of 1000 cells closed, a_c* = 0.4: the cell weights sum to 0.40000000000000013,
+    and the decomposition raised 'a_c exceeds a_c*' instead of giving Eq. (13)'s limit, the
+    harmonic mean over the open cells (1e-12 of the mean: round-off of 600 terms)."""
+    rng = np.random.default_rng(0)
+    sigma = np.zeros(1000)
+    sigma[400:] = rng.uniform(0.1, 1.0, 600)
+    nc = noncontact_decomposition(sigma, a_c_star=0.4)
+    assert nc.sigma_nc == pytest.approx(1.0 / np.mean(1.0 / sigma[400:]), rel=1e-12)
+    assert nc.sigma_0 == 0.0 and nc.delta_a_tilde == 0.0
+    beyond = sigma.copy()
+    beyond[400] = 0.0  # one cell more in contact is beyond the threshold
+    with pytest.raises(InputError, match="exceeds a_c"):
+        noncontact_decomposition(beyond, a_c_star=0.4)
+
+
 def test_gap_field_route():
     rng = np.random.default_rng(3)
     gap = np.maximum(rng.normal(size=(32, 48)), 0.0)  # ~50 % contact

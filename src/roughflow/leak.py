@@ -1,5 +1,5 @@
 """The leak question of a surface: contact, percolation and Reynolds flow over a list of
-nominal pressures, and the sealing pressure (paper Sect. 2.2, Eq. 3-4; docs/measured.md).
+nominal pressures, and the sealing pressure (paper Sect. 2.1, Eq. 3-4; docs/measured.md).
 
 :func:`leak_curve` works in the dimensionless system (E* = 1, lengths in L, eta = 1;
 pressures in E*, which is E* gbar for generated surfaces with rms gradient 1); the

@@ -1,4 +1,4 @@
-"""Reynolds flow through the gap of a rough contact (paper Sect. 2.2, Eq. 3-4).
+"""Reynolds flow through the gap of a rough contact (paper Sect. 2.1, Eq. 3-4).
 
 ``solve(gap, axis, ...) -> FlowResult`` and ``conductance(gap, axis=None, ...)`` (a float, or
 ``Conductances(sigma_x, sigma_y)`` for both axes)

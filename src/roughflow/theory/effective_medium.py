@@ -321,7 +321,10 @@ def noncontact_decomposition(sigma_values: ArrayLike | Medium, *, a_c_star: floa
     Da~ = (a_c* - a_c)/(1 - a_c*) and <...>_nc the average over non-contact cells,
     so that sigma_0 = sigma_nc (1 - a_c/a_c*) (Eq. 12). ``sigma_nc_eq11`` is the value
     from Eq. (11) given the full sigma_0 (nan at or beyond a_c*, where sigma_0 = 0).
-    ``sigma_values``, ``weights``: as for :func:`bruggeman`.
+    ``sigma_values``, ``weights``: as for :func:`bruggeman`. The paper writes Eq. (13) as an
+    integral over Pr(sigma); read with the full distribution, whose weight is 1 - a_c, it
+    disagrees with Eq. (11) and (12) (3.5e-6 against 6.8e-6 on one gap); the non-contact
+    average is the reading they imply, and Eq. (11) checks it (``sigma_nc_eq11``).
     """
     a_c_star = _check_a_c_star(a_c_star)
     m = _as_medium(sigma_values, weights)
@@ -330,6 +333,10 @@ def noncontact_decomposition(sigma_values: ArrayLike | Medium, *, a_c_star: floa
         raise InputError("every cell is in contact (all sigma = 0): no non-contact part")
     d = 1.0 / (1.0 - a_c_star)
     x0, res0 = m.root(d, d - 1.0)
+    if abs(z - a_c_star) <= AREA_ROUNDOFF:
+        # exactly at the threshold (400 of 1000 cells closed summed to 0.40000000000000013):
+        # Da~ -> 0, and Eq. (13) gives the harmonic mean over the non-contact cells
+        z = a_c_star
     dat = (a_c_star - z) / (1.0 - a_c_star)
     dap = 1.0 - z / a_c_star
     if dat < 0:
@@ -352,6 +359,11 @@ def noncontact_decomposition(sigma_values: ArrayLike | Medium, *, a_c_star: floa
 
 
 # ----------------------------------------------------------------------------- internals
+
+#: Round-off of a contact fraction summed over cell weights: a_c within this of a_c* is
+#: a_c*.
+AREA_ROUNDOFF = 1e-12
+
 
 
 def _wsum(w: np.ndarray, v: np.ndarray) -> float:
