@@ -96,5 +96,22 @@ def test_a_free_nu_at_its_bound_is_said_in_the_figure():
     fit["nu_at_bound"].loc[{"group": "anisotropic", "fit": "joint", "nu_mode": "free"}] = 1
     fit["a_star"].loc[{"group": "anisotropic", "fit": "joint", "nu_mode": "free"}] = 0.4
     fig = threshold_vs_size.draw(ds, fit)
-    text = " ".join(t.get_text() for t in fig.axes[0].texts)
+    text = " ".join(t.get_text() for ax in fig.axes for t in ax.texts)
     assert "nu free" in text and "at its bound: not determined" in text
+
+
+def test_the_fitted_values_do_not_hide_data():
+    """The fits' text box sat inside the plot, over the lower left, and hid a point of the
+    default run (gamma = 4, hard, a_c* 0.33); it is below the plot now, and says where the
+    law misses the seed means."""
+    from roughflow.fits import fit_dataset
+
+    ds = study([2.0], n_seeds=3, eps_t=(0.125, 0.25, 0.5))
+    fit = fit_dataset(ds, n_boot=0)
+    fit["lack_of_fit"].loc[{"group": "anisotropic", "fit": "joint", "nu_mode": "fixed"}] = 1
+    fit["chi2_dof"].loc[{"group": "anisotropic", "fit": "joint", "nu_mode": "fixed"}] = 12.0
+    fig = threshold_vs_size.draw(ds, fit)
+    plot, below = fig.axes
+    assert not [t for t in plot.texts if "a_c* =" in t.get_text()]
+    text = " ".join(t.get_text() for t in below.texts)
+    assert "joint, nu fixed" in text and "misses the seed means: chi2/dof 12" in text

@@ -9,7 +9,7 @@ from matplotlib.figure import Figure
 from roughflow.datasets.sweep import single_setting, threshold_values
 from roughflow.defaults import NU_PERCOLATION
 from roughflow.errors import InputError
-from roughflow.fits import direction_names, fitted_setting, scaling
+from roughflow.fits import direction_names, fitted_setting, main_gamma, scaling
 
 from ._style import EASY, HARD, seed_stats, setting_text
 from ._threshold import no_data
@@ -37,13 +37,15 @@ def _err(row: dict) -> str:
     error measures the seeds' scatter only."""
     text = f" +- {row['a_star_err']:.3f}" if np.isfinite(row["a_star_err"]) else ""
     if row.get("lack_of_fit"):
-        text += f" (the law misses the data: chi2/dof {row['chi2_dof']:.2g})"
+        text += f" (the law misses the seed means: chi2/dof {row['chi2_dof']:.2g})"
     return text
 
 
 def draw(ds: xr.Dataset, fit: xr.Dataset | None = None) -> Figure:
-    fig = Figure(figsize=(6.4, 4.8), layout="constrained")
-    ax = fig.subplots()
+    # the fitted values go below the plot: inside it, their box hid data points
+    fig = Figure(figsize=(6.4, 5.6), layout="constrained")
+    ax, box = fig.subplots(2, 1, height_ratios=(4.8, 0.8))
+    box.axis("off")
     a = single_setting(threshold_values(ds))  # the fits' check: one model, hurst, eps_f
     if fit is not None:  # a fit of another series drew its lines through these points
         mine = fitted_setting(a)
@@ -54,9 +56,8 @@ def draw(ds: xr.Dataset, fit: xr.Dataset | None = None) -> Figure:
             raise InputError("the fit file fitted another series: " + ", ".join(differ))
     mean, sem, _ = seed_stats(a)
     gammas = [float(g) for g in a["gamma"].values]
+    main = main_gamma(a)  # the series the anisotropic fits take
     aniso = [g for g in gammas if not np.isclose(g, 1.0)]
-    counts = {g: int(np.isfinite(mean.sel(gamma=g, axis="x")).sum()) for g in aniso}
-    main = max(counts, key=counts.get) if counts else None
     eps_max = 0.0
     for g in gammas:
         names = direction_names(g)  # x is easy for gamma > 1, y below (as the fits take it)
@@ -77,7 +78,7 @@ def draw(ds: xr.Dataset, fit: xr.Dataset | None = None) -> Figure:
                 # the other gammas may lie on both sides of 1: their entry names the
                 # direction, whose colour they share, not an axis
                 lab = (f"gamma = {g:g}, {axis} ({names[axis]})" if g == main
-                       else (f"other gamma, {names[axis]}"
+                       else (f"other gamma, {names[axis]} (not fitted)"
                              if g == min(set(aniso) - {main}) else None))
                 ax.errorbar(e, m.values[ok], yerr=s, marker=marker, color=color, ls="none",
                             mfc="white" if marker == "o" else color, capsize=2, label=lab)
@@ -115,8 +116,7 @@ def draw(ds: xr.Dataset, fit: xr.Dataset | None = None) -> Figure:
     if fit is not None and not lines:
         lines.append("fit not determined (too few sizes or seeds: see the fit's log)")
     if lines:
-        ax.text(0.02, 0.02, "\n".join(lines), transform=ax.transAxes, fontsize=6.5,
-                va="bottom", bbox={"facecolor": "white", "alpha": 0.8, "lw": 0})
+        box.text(0.0, 1.0, "\n".join(lines), transform=box.transAxes, fontsize=7, va="top")
     if eps_max == 0.0:
         no_data(ax)
     ax.set_title(setting_text(a), fontsize=9)
