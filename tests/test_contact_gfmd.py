@@ -424,3 +424,17 @@ def test_a_nan_stops_the_hard_wall_at_its_first_check(numba):
     assert np.isnan(max_abs(a)) and np.isnan(max_abs_free(a, active))
     active[7] = True  # on the active set it is not looked at
     assert max_abs_free(a, active) == 1.0
+
+
+def test_a_setup_or_start_of_the_transposed_grid_is_refused():
+    """A (150, 100) setup has the size of a (100, 150) grid but another spectrum (150 x 51
+    against 100 x 76): it passed the size check and the solve reported 'converged' with
+    a_c 0.126 against the true 0.222 (gap off by 0.14). A start of the transposed shape
+    was flattened the same way."""
+    s = generate(SurfaceSpec(nx=150, ny=100, lx=1.0, ly=1.0, hurst=0.8, gamma=1.0,
+                             lambda_r=0.5, lambda_s=0.05, seed=1))
+    h, ht = s.heights, np.ascontiguousarray(s.heights.T)
+    with pytest.raises(InputError, match=r"\(150, 100\) points passed for \(100, 150\)"):
+        G.gfmd(ht, 1.0, 1.0, 0.1, tol=1e-6, max_iter=100, setup=G.hard_wall_setup(h, 1.0, 1.0))
+    with pytest.raises(InputError, match=r"u0 of shape \(150, 100\)"):
+        G.gfmd(ht, 1.0, 1.0, 0.1, tol=1e-6, max_iter=100, u0=h)

@@ -270,13 +270,13 @@ def test_non_percolating_gives_zero_without_solve(monkeypatch):
     monkeypatch.setattr(flow_core, "solve_prepared", boom)
     g = np.full((20, 16), 0.5)
     g[9, :] = 0.0  # a contact line across x blocks flow along x
-    r = solve(g, 0)
+    r = solve(g, 0, ly=1.0)
     assert isinstance(r, FlowResult)
     assert r.sigma == 0.0 and not r.percolating and r.iterations == 0
     assert np.all(np.isnan(r.pressure)) and not r.flux_x.any() and not r.flux_y.any()
     assert conductance(np.zeros((8, 8)), 1) == 0.0  # all contact
     with pytest.raises(AssertionError):  # along y the same gap percolates and is solved
-        solve(g, 1)
+        solve(g, 1, ly=1.0)
 
 
 @pytest.mark.parametrize("method", ["direct", "rs"])
@@ -293,13 +293,13 @@ def test_gaps_below_float64_resolution_are_closed(monkeypatch, caplog, method):
     g = np.full((20, 16), u0)
     g[9, :] = tiny
     with caplog.at_level("WARNING", logger="roughflow.flow.core"):
-        along_y = solve(g, 1, method=method)
+        along_y = solve(g, 1, method=method, ly=1.0)
     assert not caplog.records  # the row blocks nothing along y: no word
     assert along_y.sigma == pytest.approx(sigma_of(u0) * 19 / 20, rel=1e-12)
     assert np.isnan(along_y.pressure[9]).all()
     monkeypatch.setattr(flow_core, "solve_prepared", lambda *a, **k: pytest.fail("solver called"))
     with caplog.at_level("WARNING", logger="roughflow.flow.core"):
-        blocked = solve(g, 0, method=method)
+        blocked = solve(g, 0, method=method, ly=1.0)
     assert blocked.sigma == 0.0 and not blocked.percolating
     # the open cells do span: the zero is the floor's, and a warning says so
     assert "flow along x" in caplog.text and "Unresolved gaps" in caplog.text
@@ -308,7 +308,7 @@ def test_gaps_below_float64_resolution_are_closed(monkeypatch, caplog, method):
     # round-off of a system whose conductivities span 15 decades
     monkeypatch.undo()
     g[9, :] = u0 * (10 * FLOW_CLOSED_BELOW) ** (1 / 3)
-    open_row = solve(g, 0, method=method)
+    open_row = solve(g, 0, method=method, ly=1.0)
     assert open_row.percolating
     series = 20 / (19 / sigma_of(u0) + 1 / sigma_of(g[9, 0]))
     assert open_row.sigma == pytest.approx(series, rel=1e-6)
@@ -653,14 +653,14 @@ def test_amg_solve_at_round_off_is_certified_by_its_bound(caplog, monkeypatch):
     g[9, :] = u0 * (10 * FLOW_CLOSED_BELOW) ** (1 / 3)
     series = 20 / (19 / sigma_of(u0) + 1 / sigma_of(g[9, 0]))
     with caplog.at_level("WARNING", logger="roughflow.flow.core"):
-        r = solve(g, 0, method="rs")
+        r = solve(g, 0, method="rs", ly=1.0)
     assert r.flux_imbalance > flow_core.FLOW_IMBALANCE_MAX
     assert r.sigma_error < 1e-12 and not caplog.text
     # the series value is itself rounded (about 1e-15)
     assert abs(r.sigma / series - 1) <= r.sigma_error + 1e-15
     monkeypatch.setattr(flow_core, "FLOW_SIGMA_RTOL", 0.0)
     with caplog.at_level("WARNING", logger="roughflow.flow.core"):
-        unchecked = solve(g, 0, method="rs")
+        unchecked = solve(g, 0, method="rs", ly=1.0)
     assert "within what round-off leaves" in caplog.text
     assert unchecked.sigma == r.sigma
 
@@ -713,7 +713,7 @@ def test_rectangular_cells_discretise_the_same_medium_as_square_ones():
     phase = np.random.default_rng(0).random((16, 16)) < 0.5
     square = conductance(np.where(np.kron(phase, np.ones((8, 8), bool)), u1, u2))
     for block in ((8, 4), (4, 8)):
-        rect = conductance(np.where(np.kron(phase, np.ones(block, bool)), u1, u2))
+        rect = conductance(np.where(np.kron(phase, np.ones(block, bool)), u1, u2), ly=1.0)
         assert rect[0] == pytest.approx(square[0], rel=0.03), block
         assert rect[1] == pytest.approx(square[1], rel=0.03), block
         assert rect[0] / rect[1] == pytest.approx(square[0] / square[1], rel=0.01), block
@@ -733,3 +733,23 @@ def test_sa_is_repeatable_and_leaves_the_global_stream_alone(heights):
         np.random.seed(seed)  # noqa: NPY002
         assert after == np.random.rand(), "the solve moved the caller's global stream"  # noqa: NPY002
     assert sigmas[0] == sigmas[1]
+
+
+def test_a_non_square_grid_needs_both_cell_lengths():
+    """ly defaulted to lx (a square cell, as generate makes at gamma != 1), while
+    Surface.from_array makes square pixels: an isotropic 150 x 250 array wrapped by it gave
+    sigma_x 31 % high and sigma_y 31 % low, and a Peklenik number of 1.67, with the
+    defaults. A non-square grid now needs ly; a square one keeps lx."""
+    from roughflow.accuracy import contact_line_length
+    from roughflow.theory import peklenik_number
+
+    g = np.ones((150, 250))
+    noise = np.random.default_rng(0).random(g.shape)
+    for call in (lambda: solve(g, 0), lambda: conductance(g), lambda: peklenik_number(noise),
+                 lambda: contact_line_length(g == 0)):
+        with pytest.raises(InputError, match=r"150 x 250: give ly too .*1\.66667 for square "
+                                             r"pixels, 1 for a square cell"):
+            call()
+    square_pixels = conductance(g, lx=1.0, ly=250 / 150)
+    assert square_pixels.sigma_x == pytest.approx(square_pixels.sigma_y, rel=1e-12)  # uniform
+    assert solve(np.ones((64, 64)), 0).sigma == pytest.approx(1 / 12, rel=1e-12)

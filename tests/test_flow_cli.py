@@ -78,7 +78,7 @@ def test_cli_single_axis_and_errors(tmp_path, gap, capsys):
 
 
 def test_plot_flux_returns_axes(tmp_path, gap):
-    r = solve(gap, 0)
+    r = solve(gap, 0, ly=1.0)
     ax = plot_flux(r, gap == 0)
     assert "sigma" in ax.get_title()
     ax.figure.savefig(tmp_path / "p.png")

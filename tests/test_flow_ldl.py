@@ -153,7 +153,7 @@ def test_a_foreign_ordering_is_refused_before_any_work(heights, which, monkeypat
 
     monkeypatch.setattr(flow_core, "_balanced_solution", no_solve)
     with pytest.raises(InputError, match="ordering"):
-        solve(bad[0], bad[1], ordering=bad[2])
+        solve(bad[0], bad[1], ordering=bad[2], ly=1.0)
 
 
 def test_without_the_c_routines_qdldl_solver_orders_afresh(heights, monkeypatch):

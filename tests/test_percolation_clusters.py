@@ -89,3 +89,27 @@ def test_contact_patches_are_4_connected_by_default_as_in_the_paper():
     c[2, 2] = c[3, 3] = True
     assert cluster_stats(c).n_patches == 2
     assert cluster_stats(c, patch_connectivity=8).n_patches == 1
+
+
+def test_helpers_refuse_fields_of_another_grid():
+    """The low-level helpers took fields of mismatched grids: a (7, 5) mask for a (5, 7) gap
+    ordered 35 cells without a word, an order of 35 cells on a 36-cell grid gave areas in
+    35ths, and a 1D shape or a (5, 7)/(7, 5) pair died in numpy's unpacking and
+    broadcasting."""
+    from roughflow import fft
+    from roughflow.percolation import critical_open_count, predicted_thresholds
+    from roughflow.percolation.sweep import open_first_order, openness
+
+    gap, pressure = np.ones((5, 7)), np.zeros((5, 7))
+    for f in (open_first_order, openness):
+        with pytest.raises(InputError, match=r"share one grid.*\(7, 5\)"):
+            f(gap, np.zeros((7, 5), bool), pressure)
+    with pytest.raises(InputError, match="each of the 6 x 6 cells once, got 35"):
+        predicted_thresholds(np.arange(35), (6, 6))
+    with pytest.raises(InputError, match=r"2D grid's \(nx, ny\), got \(8,\)"):
+        critical_open_count(np.arange(8), (8,), 0)
+    with pytest.raises(InputError, match=r"2D array, got shape \(8,\)"):
+        fft.rfft2(np.ones(8))
+    with pytest.raises(InputError, match=r"spectrum of shape \(8, 5\), got \(1, 5\)"):
+        fft.irfft2(np.ones((1, 5)), (8, 8))  # a row broadcast over all 8 rows before
+    np.testing.assert_allclose(fft.irfft2(fft.rfft2(gap), gap.shape), gap, atol=1e-15)

@@ -128,7 +128,7 @@ def test_flow_file_values_are_carried(tmp_path, capsys):
     from roughflow import flow
     from roughflow.datasets import flow_dataset
 
-    res = {ax: flow.solve(gap, ax) for ax in (0, 1)}
+    res = {ax: flow.solve(gap, ax, lx=1.0, ly=1.0) for ax in (0, 1)}
     write_dataset(flow_dataset(res, gap <= 0, lx=1.0, ly=1.0, eta=1.0, tol=1e-8),
                   tmp_path / "f.nc")
     out = tmp_path / "t.nc"

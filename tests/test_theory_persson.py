@@ -207,10 +207,11 @@ def test_height_peklenik_number_of_random_phase_surfaces(gamma):
     spec = SurfaceSpec.from_sweep(gamma=gamma, points_per_lambda_s=2)
     s = generate(spec)
     assert peklenik_number(s.heights, s.lx, s.ly) == pytest.approx(gamma, rel=1e-3)
-    # the default cell is square like the generated one (not square pixels: the grid is
-    # 2^k x 2^(k+1) at gamma = 2, where square pixels gave 1.00001)
+    # the grid is 2^k x 2^(k+1) at gamma = 2: without ly the cell is ambiguous (square
+    # pixels gave 1.00001 here, a square cell gamma), so it is refused
     assert s.heights.shape[0] != s.heights.shape[1]
-    assert peklenik_number(s.heights) == pytest.approx(gamma, rel=1e-3)
+    with pytest.raises(InputError, match="give ly too"):
+        peklenik_number(s.heights)
 
 
 def test_correlation_lengths_of_a_stretched_gaussian():

@@ -31,7 +31,13 @@ from typing import TYPE_CHECKING
 
 import numpy as np
 
-from roughflow.errors import InputError, require_finite, require_mask, require_positive
+from roughflow.errors import (
+    InputError,
+    require_cell,
+    require_finite,
+    require_mask,
+    require_positive,
+)
 
 if TYPE_CHECKING:
     from collections.abc import Hashable, Iterable
@@ -61,8 +67,7 @@ def contact_line_length(contact: ArrayLike, lx: float = 1.0, ly: float | None = 
     A face between cells ix and ix+1 has length dy; one between iy and iy+1 has length dx.
     """
     m = require_mask("contact mask", contact)
-    lx = require_positive("lx", lx)
-    ly = lx if ly is None else require_positive("ly", ly)
+    lx, ly = require_cell(lx, ly, m.shape)
     fx, fy = contact_faces(m)
     nx, ny = m.shape
     return fx * ly / ny + fy * lx / nx

@@ -58,6 +58,22 @@ def require_positive(name: str, value: float) -> float:
     return x
 
 
+def require_cell(lx: float, ly: float | None, shape: tuple[int, ...]) -> tuple[float, float]:
+    """The cell lengths (lx, ly) of a field of ``shape`` points; ``ly`` None is lx on a
+    square grid and an :class:`InputError` on any other. A non-square grid is a square
+    cell of rectangular pixels (``surface.generate`` at gamma != 1) or a rectangle of square
+    pixels (``Surface.from_array``, scans): guessing either gave the other's users sigma off
+    by 30 % and gamma 1.67 for an isotropic surface."""
+    x = require_positive("lx", lx)
+    if ly is not None:
+        return x, require_positive("ly", ly)
+    nx, ny = shape[0], shape[1]
+    if nx != ny:
+        raise InputError(f"the grid is {nx} x {ny}: give ly too (the Surface's ly; "
+                         f"{x * ny / nx:.6g} for square pixels, {x:g} for a square cell)")
+    return x, x
+
+
 #: Largest seed: seeds are stored as 64-bit integers in the netCDF files.
 MAX_SEED = 2**63 - 1
 

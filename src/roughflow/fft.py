@@ -225,12 +225,20 @@ plan.cache_clear = _plan.cache_clear
 def rfft2(a: np.ndarray, threads: int | None = None) -> np.ndarray:
     """Forward real FFT of a 2D array; returns a new array."""
     a = np.asarray(a, dtype=np.float64)
+    if a.ndim != 2:
+        raise InputError(f"rfft2 takes a 2D array, got shape {a.shape}")
     return plan(a.shape, threads).forward(a).copy()
 
 
 def irfft2(c: np.ndarray, shape: tuple[int, int], threads: int | None = None) -> np.ndarray:
     """Inverse of :func:`rfft2` for a real array of ``shape``; returns a new array."""
-    return plan(tuple(shape), threads).inverse(c).copy()
+    shape = tuple(int(v) for v in shape)
+    half = (shape[0], shape[1] // 2 + 1) if len(shape) == 2 else None
+    if half is None or np.shape(c) != half:
+        # the plan's buffer would broadcast a single row over every row without a word
+        raise InputError(f"irfft2 of a {shape} array takes a spectrum of shape {half}, got "
+                         f"{np.shape(c)}")
+    return plan(shape, threads).inverse(c).copy()
 
 
 def wavevectors(nx: int, ny: int, lx: float, ly: float) -> tuple[np.ndarray, np.ndarray]:

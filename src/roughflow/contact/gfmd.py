@@ -422,6 +422,9 @@ def gfmd(
         raise InputError(f"backend={backend!r} serves the hard wall's CG only")
     if u0 is not None:
         require_field("u0", u0)  # a nan start would leave every minimizer on nan
+        if np.shape(u0) != np.shape(heights):  # flattened below: the size alone passed
+            raise InputError(f"u0 of shape {np.shape(u0)} passed for heights of shape "
+                             f"{np.shape(heights)}")
     if adhesion is None and minimizer == "auto":
         return _hard_wall(heights, lx, ly, load, tol=tol, max_iter=max_iter, u0=u0,
                           threads=threads, use_numba=use_numba, setup=setup, work=work,
@@ -486,9 +489,12 @@ def _hard_wall(
         neg_k, neg_k32, comp32, _ = _device_factors(shape, lx, ly)
     if setup is None:
         setup = hard_wall_setup(heights, lx, ly, threads, backend)
-    elif setup.h.size != size or (setup.lx, setup.ly) != (lx, ly):
-        raise InputError(f"setup of a {setup.lx} x {setup.ly} cell with {setup.h.size} points "
-                         f"passed for {shape} points on {lx} x {ly}")
+    elif tuple(setup.heights.shape) != tuple(shape) or (setup.lx, setup.ly) != (lx, ly):
+        # the shape, not only the size: a transposed grid's setup passed and gave a wrong
+        # answer reported as converged (its spectrum is another array)
+        raise InputError(f"setup of a {setup.lx} x {setup.ly} cell with "
+                         f"{tuple(setup.heights.shape)} points passed for {tuple(shape)} "
+                         f"points on {lx} x {ly}")
     h0, h, pre, hscale = setup.h0, setup.h, setup.pre, setup.hscale
     if on_gpu and gpu.array_module(h) is np:
         h, pre = _on_device(setup)

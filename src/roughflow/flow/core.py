@@ -34,6 +34,7 @@ from roughflow.errors import (
     ConvergenceError,
     InputError,
     check_axis,
+    require_cell,
     require_field,
     require_positive,
 )
@@ -613,7 +614,8 @@ def solve(
 ) -> FlowResult:
     """Reynolds flow along ``axis`` (0/"x" or 1/"y") through the gap field ``gap[ix, iy]``.
 
-    ``lx``, ``ly``: cell lengths (``ly`` defaults to ``lx``); ``eta``: viscosity;
+    ``lx``, ``ly``: cell lengths (``ly`` may be left out on a square grid only:
+    :func:`roughflow.errors.require_cell`); ``eta``: viscosity;
     ``tol``: relative residual of the linear solve, at most ``FLOW_TOL_MAX`` (refined
     further, down to round-off, until |Q_in - Q_out| / Q <= ``tol``); ``method``: None/"auto"
     (direct up to 70k unknowns or where at most 3/4 of the cells carry flow, else "rs"),
@@ -650,8 +652,7 @@ def solve(
     ax = check_axis(axis)
     if not isinstance(periodic, (bool, np.bool_)):  # a string such as "no" is truthy
         raise InputError(f"periodic must be True or False, got {periodic!r}")
-    lx = require_positive("lx", lx)
-    ly = lx if ly is None else require_positive("ly", ly)
+    lx, ly = require_cell(lx, ly, g.shape)
     eta = require_positive("eta", eta)
     tol = require_positive("tol", tol)
     if tol > FLOW_TOL_MAX:

@@ -142,7 +142,7 @@ def critical_open_count(order: np.ndarray, shape: tuple[int, int], axis: int | s
     (only possible when ``order`` is not a permutation of all cells).
     """
     ax = check_axis(axis)
-    nx, ny = (int(s) for s in shape)
+    nx, ny = _grid(shape)
     if nx * ny >= 2**31:
         raise InputError(f"grid {nx} x {ny} too large for the int32 union-find")
     order = np.ascontiguousarray(order, dtype=np.int64)
@@ -382,9 +382,28 @@ def bearing_bracket(heights: np.ndarray, axis: int | str) -> BearingBracket:
                           height=float(hs[k - 1]))
 
 
+def _grid(shape) -> tuple[int, int]:
+    """(nx, ny) of a 2D grid's ``shape``; InputError for any other."""
+    try:
+        nx, ny = (int(s) for s in shape)
+    except (TypeError, ValueError):
+        raise InputError(f"shape must be a 2D grid's (nx, ny), got {shape!r}") from None
+    return nx, ny
+
+
+def _same_grid(gap: np.ndarray, contact: np.ndarray, pressure: np.ndarray) -> None:
+    """A contact state's fields on one grid: a transposed mask of the same size passed and
+    ordered the cells of another state."""
+    shapes = {np.shape(gap), np.shape(contact), np.shape(pressure)}
+    if len(shapes) != 1:
+        raise InputError(f"gap, contact and pressure must share one grid, got shapes "
+                         f"{np.shape(gap)}, {np.shape(contact)}, {np.shape(pressure)}")
+
+
 def open_first_order(gap: np.ndarray, contact: np.ndarray, pressure: np.ndarray) -> np.ndarray:
     """Flat indices of a contact state from the most open to the most closed cell: open cells
     by decreasing gap, then contact cells by increasing contact pressure."""
+    _same_grid(gap, contact, pressure)
     flat_c = np.asarray(contact, dtype=bool).ravel()
     idx_open = np.flatnonzero(~flat_c)
     idx_cont = np.flatnonzero(flat_c)
@@ -400,6 +419,7 @@ def openness(gap: np.ndarray, contact: np.ndarray, pressure: np.ndarray) -> np.n
     wall a contact cell may lie off the wall, in tension (without the shift the search's
     predictions fell below their own states' areas, and every a_c* came out at the bracket's
     lower end)."""
+    _same_grid(gap, contact, pressure)
     closed = np.asarray(contact, dtype=bool)
     # arithmetic instead of np.where: a random mask makes where() 3-10x slower (measured)
     key = np.multiply(gap, ~closed)
@@ -428,7 +448,10 @@ def predicted_thresholds(order: np.ndarray, shape: tuple[int, int],
     """Predicted a_c* per axis: the contact area at which the open set built in ``order``
     first spans, taken at the middle of the critical cell (exact for the bearing model with
     heights as the order, first order for an elastic state with :func:`open_first_order`)."""
-    n = order.size
+    nx, ny = _grid(shape)
+    if np.size(order) != nx * ny:  # the areas are fractions of the grid's cells
+        raise InputError(f"order must hold each of the {nx} x {ny} cells once, got "
+                         f"{np.size(order)} indices")
     # keyed by axis number whether an axis was given as 0/1 or "x"/"y"
-    return {check_axis(ax): _area_at_count(critical_open_count(order, shape, ax), n)
+    return {check_axis(ax): _area_at_count(critical_open_count(order, shape, ax), nx * ny)
             for ax in axes}

@@ -23,7 +23,7 @@ from typing import TYPE_CHECKING
 import numpy as np
 
 from roughflow import fft
-from roughflow.errors import InputError, require_field, require_positive
+from roughflow.errors import InputError, require_cell, require_field
 
 from .effective_medium import local_conductivity
 
@@ -59,15 +59,15 @@ def correlation_lengths(
 ) -> tuple[float, float]:
     """Correlation lengths (xi_x, xi_y) of ``field[ix, iy]``: where C first drops to ``level``.
 
-    ``lx``, ``ly``: the cell's side lengths; ``ly`` defaults to ``lx`` (a square cell, as
-    :func:`roughflow.flow.solve` takes it and as :func:`roughflow.surface.generate` makes
-    it at any gamma, whose grids have fewer points along the stretched axis). Only the
-    first half of the periodic cell is searched along each axis.
+    ``lx``, ``ly``: the cell's side lengths; ``ly`` may be left out on a square grid only
+    (:func:`roughflow.errors.require_cell`: a non-square grid is a square cell of
+    rectangular pixels from :func:`roughflow.surface.generate` at gamma != 1, or square
+    pixels from an array or scan). Only the first half of the periodic cell is searched
+    along each axis.
     """
     acf = autocorrelation(field)
     nx, ny = acf.shape
-    lx = require_positive("lx", lx)
-    ly = lx if ly is None else require_positive("ly", ly)
+    lx, ly = require_cell(lx, ly, acf.shape)
     if not 0.0 < level < 1.0:
         raise InputError(f"level must lie in (0, 1), got {level!r}")
     xi_x = _crossing(acf[: nx // 2 + 1, 0], lx / nx, level, "x")
