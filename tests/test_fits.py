@@ -246,7 +246,10 @@ def test_one_seed_says_why_there_is_no_bootstrap_error(caplog):
     with caplog.at_level("WARNING", logger="roughflow.fits"):
         res = fit_dataset(ds, n_boot=20)
     assert "one seed (nothing to resample)" in caplog.text
-    assert np.isnan(res["a_star_err"]).all() and (res["n_boot_used"] == 0).all()
+    # -1 (missing once written): the isotropic group has no easy or hard fit
+    assert np.isnan(res["a_star_err"]).all() and (res["n_boot_used"] <= 0).all()
+    assert (res["n_boot_used"].sel(group="isotropic", fit=["easy", "hard"]) == -1).all()
+    assert (res["underdetermined"].sel(group="isotropic", fit="joint") >= 0).all()
 
 
 def test_a_fit_records_its_series_and_a_figure_refuses_another_s(tmp_path):
@@ -318,7 +321,7 @@ def test_a_law_that_misses_the_data_is_flagged():
     joint = fit_dataset(same, n_boot=20).sel(group="anisotropic", fit="joint", nu_mode="fixed")
     assert float(joint["a_star_err"]) < 1e-15 and int(joint["lack_of_fit"]) == 1
     exact = fit_dataset(_threshold_dataset(noise=0.0), n_boot=20)
-    assert (exact["lack_of_fit"] == 0).all()  # the law itself, to the fit's precision
+    assert (exact["lack_of_fit"] != 1).all()  # the law itself, to the fit's precision
 
 
 def test_an_axis_without_data_at_one_size_keeps_the_other_and_the_errors(caplog):

@@ -261,6 +261,14 @@ def test_aggregate_outer_join_keeps_missing_as_nan(tmp_path):
         for c in ("gamma", "eps_t", "eps_f", "hurst"):
             assert "_FillValue" not in raw[c].attrs
     assert np.isnan(back["n_solves"].sel(gamma=2.0, seed=2)).all()
+    # per-job variables keep their dimensions: with data_vars="all", the seed groups of
+    # gamma = 1 gave nx, ny, ... a seed dimension (a sum of nx * ny over the study counted
+    # each grid once per seed)
+    for name in ("nx", "ny", "points_per_lambda_s", "l_over_lambda_r"):
+        assert "seed" not in back[name].dims, name
+    # an attribute that differs between jobs is not kept, whatever groups combine_by_coords
+    # made first (a job's id and command line survived in a study of three models)
+    assert "job_id" not in back.attrs and "job_parameters" not in back.attrs
 
 
 def test_ladder_records_the_flow_solver_and_combines_with_files_that_do_not(monkeypatch):
@@ -474,6 +482,7 @@ def test_adhesive_ladder_needs_less_load_and_records_its_adhesion():
     assert energy.sel(model="adhesive").item() > 0
     assert np.isnan(energy.sel(model="elastic").item())
     assert not [k for k in study.attrs if "adhesion" in k or "a_c_star" in k]
+    assert "job_id" not in study.attrs and "job_parameters" not in study.attrs
 
 
 @pytest.mark.parametrize("key", ["unit", "height_unit"])
@@ -509,6 +518,14 @@ def test_a_study_records_how_its_jobs_computed(tmp_path, monkeypatch, caplog):
     with xr.open_dataset(tmp_path / "two.nc") as ds:
         assert ds.attrs["fftw_effort"] == "mixed: FFTW_ESTIMATE, FFTW_MEASURE"
         assert ds.attrs["fft_threads"] == "mixed: 1, 2"
+    # a fit passes its study's on: it recorded its own process's (and no jobs' commit)
+    from roughflow.cli import main
+
+    monkeypatch.setenv("ROUGHFLOW_FFT_THREADS", "3")
+    main(["fit", str(tmp_path / "one.nc"), "--bootstrap", "0", "-o", str(tmp_path / "f.nc")])
+    with xr.open_dataset(tmp_path / "f.nc") as fit, xr.open_dataset(a) as job:
+        assert int(fit.attrs["fft_threads"]) == 1 and fit.attrs["fftw_effort"] == "FFTW_ESTIMATE"
+        assert fit.attrs["jobs_roughflow_commit"] == job.attrs["roughflow_commit"]
 
 
 def test_a_bad_study_level_quantity_is_named_as_the_study_s(tmp_path, monkeypatch):

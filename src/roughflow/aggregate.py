@@ -83,8 +83,10 @@ def check_disjoint(datasets: Sequence[xr.Dataset], sources: Sequence[str]) -> No
                 raise InputError(f"{sources[j]} and {src} both hold seeds {common} of {params}: "
                                  "combining them would drop or duplicate data")
             a, b = _settings(other), _settings(ds)
-            # variables (points_per_lambda_s, nx, ...) say it plainest, job_settings last
-            diff = sorted((k for k in set(a) | set(b) if a.get(k) != b.get(k)),
+            # variables (points_per_lambda_s, nx, ...) say it plainest, job_settings last; a
+            # variable one file lacks is no conflict (a job written before it existed: lx,
+            # ly, lambda_r, lambda_s since 2026-12-06), the warning on mixed commits covers it
+            diff = sorted((k for k in set(a) & set(b) if a[k] != b[k]),
                           key=lambda k: (k == "job_settings", k))
             if diff:
                 what = "; ".join(f"{k} {a.get(k, '(none)')} vs {b.get(k, '(none)')}"
@@ -120,6 +122,14 @@ def _concat_scans(datasets: Sequence[xr.Dataset]) -> xr.Dataset:
     # a study with a generated surface): it survives only where every scan has it alike
     out.attrs = {k: v for k, v in out.attrs.items() if all(k in ds.attrs for ds in datasets)}
     return out
+
+
+def _same(a, b) -> bool:
+    """Two attribute values alike (numpy arrays element by element)."""
+    try:
+        return bool(np.array_equal(np.asarray(a), np.asarray(b)))
+    except (TypeError, ValueError):
+        return a == b
 
 
 def _on_common_inner_coords(datasets: Sequence[xr.Dataset]) -> list[xr.Dataset]:
@@ -169,15 +179,21 @@ def combine(datasets: Sequence[xr.Dataset], sources: Sequence[str] | None = None
         datasets = _on_common_inner_coords(datasets)
         try:
             # compat and coords as today's defaults, which xarray is about to change
+            # data_vars "minimal": a variable is concatenated along a dimension only where
+            # it has it; "all" gave the per-job nx, ny, ... a seed dimension wherever jobs
+            # of one setting were split into seed groups (summing nx * ny counted 10x)
             out = xr.combine_by_coords(list(datasets), join="outer", compat="no_conflicts",
                                        coords="different", combine_attrs="drop_conflicts",
-                                       data_vars="all")
+                                       data_vars="minimal")
         except ValueError as exc:
             log.info("combine_by_coords failed (%s); merging instead", exc)
             out = xr.merge(list(datasets), join="outer", compat="no_conflicts",
                            combine_attrs="drop_conflicts")
-        # drop_conflicts keeps an attribute that only some jobs have, as if it held for all
-        out.attrs = {k: v for k, v in out.attrs.items() if all(k in ds.attrs for ds in datasets)}
+        # drop_conflicts keeps an attribute that only some jobs have, as if it held for all,
+        # and one that differs between groups combine_by_coords makes first (a job's id
+        # and command line survived in a study of three models)
+        out.attrs = {k: v for k, v in out.attrs.items()
+                     if all(k in ds.attrs and _same(ds.attrs[k], v) for ds in datasets)}
     ids = [str(ds.attrs.get("job_id", "")) for ds in datasets]
     out.attrs["jobs"] = " ".join(i for i in ids if i)
     out.attrs["n_jobs"] = len(datasets)

@@ -21,7 +21,7 @@ import xarray as xr
 from scipy.optimize import least_squares
 from scipy.stats import f as f_distribution
 
-from roughflow.datasets.sweep import single_setting, threshold_values
+from roughflow.datasets.sweep import INT_FILL, single_setting, threshold_values
 from roughflow.datasets.units import DIMENSIONLESS
 from roughflow.defaults import (
     CORRECTION_MIN_POINTS,
@@ -377,13 +377,12 @@ def fit_dataset(ds: xr.Dataset, *, n_boot: int = FIT_BOOTSTRAP, nu: float = NU_P
                                                "amp_easy_err", "amp_hard", "amp_hard_err",
                                                "nu", "nu_err", "rms_residual",
                                                "chi2_dof")}
-    out["n_points"] = np.zeros(shape, dtype=np.int32)
-    out["n_seeds"] = np.zeros(shape, dtype=np.int32)
-    out["lack_of_fit"] = np.zeros(shape, dtype=np.int32)
-    out["n_boot_used"] = np.zeros(shape, dtype=np.int32)
-    out["nu_at_bound"] = np.zeros(shape, dtype=np.int32)
-    out["a_star_out_of_range"] = np.zeros(shape, dtype=np.int32)
-    out["underdetermined"] = np.zeros(shape, dtype=np.int32)
+    # integers stay at the fill value (missing once read) where a fit does not apply (easy
+    # and hard of the isotropic group, a group without data): 0 read as "determined"
+    counts = ("n_points", "n_seeds", "lack_of_fit", "n_boot_used", "nu_at_bound",
+              "a_star_out_of_range", "underdetermined")
+    for name in counts:
+        out[name] = np.full(shape, INT_FILL, dtype=np.int32)
     # a dataset of several settings is refused whole; the one setting is recorded
     setting = fitted_setting(single_setting(threshold_values(ds)))
     seeds = ds.indexes["seed"] if "seed" in ds.indexes else None
@@ -412,6 +411,8 @@ def fit_dataset(ds: xr.Dataset, *, n_boot: int = FIT_BOOTSTRAP, nu: float = NU_P
             if any(d not in eps for d in dirs):
                 continue
             for mi, mode in enumerate(modes):
+                for name in counts:
+                    out[name][gi, fi, mi] = 0
                 try:
                     f = bootstrap_fit({d: eps[d] for d in dirs}, {d: aseed[d] for d in dirs},
                                       nu=nu if mode == "fixed" else None, n_boot=n_boot,
@@ -495,7 +496,6 @@ def fit_dataset(ds: xr.Dataset, *, n_boot: int = FIT_BOOTSTRAP, nu: float = NU_P
     if not np.isfinite(out["a_star"]).any():
         log.warning("no fit could be determined: every fit needs at least two system sizes "
                     "per direction (and three for a free nu)")
-    for name in ("n_points", "n_seeds", "n_boot_used", "nu_at_bound", "lack_of_fit",
-                 "a_star_out_of_range", "underdetermined"):
-        res[name].encoding = {"dtype": "int32", "_FillValue": np.int32(-1)}
+    for name in counts:
+        res[name].encoding = {"dtype": "int32", "_FillValue": np.int32(INT_FILL)}
     return res

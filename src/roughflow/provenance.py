@@ -140,13 +140,21 @@ class Provenance:
 
 def settings_of_inputs(*datasets) -> tuple[tuple[str, str | int], ...]:
     """What the input datasets record of how they were computed (:data:`COMPUTE_ATTRS`, and
-    their ``roughflow_commit`` as ``jobs_roughflow_commit``): each value where all agree,
-    "mixed: a, b" where they differ (a study whose jobs ran with other settings)."""
+    their ``roughflow_commit`` as ``jobs_roughflow_commit``, or the one a study dataset
+    passes on from its jobs): each value where all agree, "mixed: a, b" where they differ
+    (a study whose jobs ran with other settings). A fit of a study so records its jobs'
+    settings, not those of the fit's own process, which computed no transform."""
     out: list[tuple[str, str | int]] = []
+
+    def value(ds, key: str):
+        attrs = getattr(ds, "attrs", {})
+        if key == "roughflow_commit" and "jobs_roughflow_commit" in attrs:
+            return attrs["jobs_roughflow_commit"]
+        return attrs.get(key)
+
     for key, name in (*((k, k) for k in COMPUTE_ATTRS),
                       ("roughflow_commit", "jobs_roughflow_commit")):
-        values = {str(v): v for ds in datasets
-                  if (v := getattr(ds, "attrs", {}).get(key)) is not None}
+        values = {str(v): v for ds in datasets if (v := value(ds, key)) is not None}
         if len(values) == 1:
             out.append((name, next(iter(values.values()))))
         elif values:

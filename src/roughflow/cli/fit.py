@@ -31,9 +31,11 @@ def run(args: argparse.Namespace) -> None:
 
     from roughflow.fits import fit_dataset
     from roughflow.io import write_dataset
+    from roughflow.provenance import settings_of_inputs
 
     ds = args.data["dataset"]
     res = fit_dataset(ds, n_boot=args.bootstrap, nu=args.nu, seed=args.seed)
     provenance = replace(args.provenance.using("scaling"),
-                         study_config=str(ds.attrs.get("study_config", "")))
+                         study_config=str(ds.attrs.get("study_config", "")),
+                         from_inputs=settings_of_inputs(ds))
     write_dataset(res, args.output, provenance=provenance)

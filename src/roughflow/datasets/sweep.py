@@ -17,7 +17,7 @@ from roughflow.defaults import CORRECTION_MIN_POINTS, STUDY_ONE_VALUE
 from roughflow.errors import InputError
 
 from .results import AXIS_COORD
-from .units import DIMENSIONLESS, INT_FILL
+from .units import DIMENSIONLESS, INT_FILL, LENGTH_UNITS
 
 if TYPE_CHECKING:
     from numpy.typing import ArrayLike
@@ -83,7 +83,18 @@ def surface_vars(p: SurfaceParams, seed: int) -> dict:
         "nx": var(np.int32(spec.nx), (), DIMENSIONLESS, "grid points along x"),
         "ny": var(np.int32(spec.ny), (), DIMENSIONLESS, "grid points along y"),
         "points_per_lambda_s": var(float(p.points_per_lambda_s), (), DIMENSIONLESS,
-                                   "grid points per shortest wavelength"),
+                                   "grid points per shortest wavelength (requested; the grid "
+                                   "has nx lambda_s sqrt(gamma) / lx along x, ny lambda_s / "
+                                   "(sqrt(gamma) ly) along y)"),
+        # the geometry itself, not only the request it was made from: a researcher needs the
+        # spacing (the cell is 1 x 1 at every gamma, its pixels then not square)
+        "lx": var(float(spec.lx), (), LENGTH_UNITS, "cell length along x"),
+        "ly": var(float(spec.ly), (), LENGTH_UNITS, "cell length along y"),
+        "lambda_r": var(float(spec.lambda_r), (), LENGTH_UNITS,
+                        "roll-off wavelength of the isotropic spectrum (Eq. 1-2; the surface's "
+                        "is sqrt(gamma) times it along x, 1 / sqrt(gamma) along y)"),
+        "lambda_s": var(float(spec.lambda_s), (), LENGTH_UNITS,
+                        "short cut-off wavelength of the isotropic spectrum (as lambda_r)"),
     }
 
 

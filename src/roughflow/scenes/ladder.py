@@ -239,7 +239,8 @@ def run_ladder(job: LadderJob, *, threads: int | None = None) -> xr.Dataset:
         "percolating": var(r["percolating"], ska, DIMENSIONLESS,
                            "fluid percolates along axis (1/0)"),
         "flow_residual": var(r["flow_residual"], ska, DIMENSIONLESS,
-                             "relative residual of the flow solve"),
+                             "relative residual of the flow solve (0: not solved, the fluid "
+                             "does not percolate)"),
         "flow_imbalance": var(r["flow_imbalance"], ska, DIMENSIONLESS, FLOW_IMBALANCE_LONG_NAME),
         "flow_imbalance_floor": var(r["flow_imbalance_floor"], ska, DIMENSIONLESS,
                                     FLOW_IMBALANCE_FLOOR_LONG_NAME),
