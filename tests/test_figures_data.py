@@ -115,3 +115,6 @@ def test_the_fitted_values_do_not_hide_data():
     assert not [t for t in plot.texts if "a_c* =" in t.get_text()]
     text = " ".join(t.get_text() for t in below.texts)
     assert "joint, nu fixed" in text and "misses the seed means: chi2/dof 12" in text
+    # wrapped: one long line squeezed the plot to 0.54 of the figure's width (0.89 without)
+    fig.draw_without_rendering()
+    assert plot.get_position().width > 0.8

@@ -592,3 +592,35 @@ def test_a_threshold_tol_below_one_cell_is_refused_when_the_job_is_made():
     assert ThresholdJob(surface=small, tol=1 / 64).tol == 1 / 64
     # the exact bearing sweep finds a_c* to the cell and takes any tol, as the search does
     assert ThresholdJob(surface=small, model="bearing", tol=0.01).tol == 0.01
+
+
+def test_ladder_seed_groups_without_a_second_threshold_combine():
+    """a_c_star_alt is NaN without a second threshold (the CLI's default): as a per-job
+    variable it was compared as [nan] != [nan], and two seed groups of one ladder setting
+    were refused as 'different settings'."""
+    a = run_ladder(LadderJob(surface=TINY, model="bearing", seeds=(1,), area_fractions=(0.2,)))
+    b = run_ladder(LadderJob(surface=TINY, model="bearing", seeds=(2,), area_fractions=(0.2,)))
+    study = combine([a, b])
+    assert study.sizes["seed"] == 2 and np.isnan(study["a_c_star_alt"]).all()
+    # a variable that only newer job files have is no conflict; another one still is
+    old = a.drop_vars(["lx", "ly", "lambda_r", "lambda_s"])
+    assert combine([old, b]).sizes["seed"] == 2
+    with pytest.raises(InputError, match="different settings"):
+        combine([a.drop_vars("points_per_lambda_s"), b])
+
+
+def test_the_ladder_writes_every_number_of_the_adhesion():
+    """ADHESION_FIELDS names what adhesion_attrs gives (plus the range in lambda_s): a key
+    added to one and not the other was dropped, or raised, in every adhesive ladder."""
+    from roughflow.contact import Adhesion
+    from roughflow.datasets.results import (
+        ADHESION_FIELDS,
+        ADHESION_REPULSION_FIELD,
+        adhesion_attrs,
+    )
+    from roughflow.surface import generate
+
+    s = generate(TINY.spec(0))
+    names = set(adhesion_attrs(s, Adhesion(surface_energy=1e-4, range=0.01)))
+    assert names | {"adhesion_range_over_lambda_s"} == set(ADHESION_FIELDS) | {
+        ADHESION_REPULSION_FIELD[0]}

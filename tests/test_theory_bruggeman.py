@@ -179,6 +179,12 @@ def test_noncontact_at_threshold_counted_cell_by_cell():
     nc = noncontact_decomposition(sigma, a_c_star=0.4)
     assert nc.sigma_nc == pytest.approx(1.0 / np.mean(1.0 / sigma[400:]), rel=1e-12)
     assert nc.sigma_0 == 0.0 and nc.delta_a_tilde == 0.0
+    # just below, on either side of the root finder's own 1e-12 (relative) rule: a second,
+    # absolute rule divided by zero between the two
+    for below in (2e-13, 5e-13, 9e-13, 1e-11):
+        w = [0.4 - below, 0.3 + below / 2, 0.3 + below / 2]
+        nc = noncontact_decomposition([0.0, 1.0, 2.0], a_c_star=0.4, weights=w)
+        assert math.isfinite(nc.sigma_nc) and nc.sigma_0 >= 0.0
     beyond = sigma.copy()
     beyond[400] = 0.0  # one cell more in contact is beyond the threshold
     with pytest.raises(InputError, match="exceeds a_c"):

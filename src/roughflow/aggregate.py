@@ -31,6 +31,7 @@ import xarray as xr
 
 from roughflow.datasets.kinds import check_kind
 from roughflow.datasets.leak import with_scan_variables
+from roughflow.datasets.results import ADHESION_FIELDS, ADHESION_REPULSION_FIELD
 from roughflow.datasets.sweep import INT_FILL, PARAM_DIMS
 from roughflow.defaults import JOB_KINDS
 from roughflow.errors import InputError
@@ -43,6 +44,13 @@ log = logging.getLogger(__name__)
 def load(path: str | os.PathLike, kinds: str | tuple[str, ...] | None = None) -> xr.Dataset:
     """Read a dataset (:func:`roughflow.io.read_dataset`), optionally of given kinds."""
     return read_dataset(path, kinds, what="dataset")
+
+
+#: Variables that job files written since 2026-12-06 have and older ones lack (the cell's
+#: geometry; the ladder's theory a_c* and adhesion, attributes before): their absence is
+#: no conflict between seed groups of one setting.
+ADDED_JOB_VARIABLES = frozenset({"lx", "ly", "lambda_r", "lambda_s", "a_c_star_theory",
+                                 "a_c_star_alt", *ADHESION_FIELDS, ADHESION_REPULSION_FIELD[0]})
 
 
 def _key(ds: xr.Dataset, source: str) -> tuple:
@@ -83,10 +91,11 @@ def check_disjoint(datasets: Sequence[xr.Dataset], sources: Sequence[str]) -> No
                 raise InputError(f"{sources[j]} and {src} both hold seeds {common} of {params}: "
                                  "combining them would drop or duplicate data")
             a, b = _settings(other), _settings(ds)
-            # variables (points_per_lambda_s, nx, ...) say it plainest, job_settings last; a
-            # variable one file lacks is no conflict (a job written before it existed: lx,
-            # ly, lambda_r, lambda_s since 2026-12-06), the warning on mixed commits covers it
-            diff = sorted((k for k in set(a) & set(b) if a[k] != b[k]),
+            # variables (points_per_lambda_s, nx, ...) say it plainest, job_settings last;
+            # one that a job written before it existed lacks is no conflict (its settings,
+            # in job_settings, are still compared; the warning on mixed commits names it)
+            keys = (set(a) | set(b)) - ((set(a) ^ set(b)) & ADDED_JOB_VARIABLES)
+            diff = sorted((k for k in keys if k not in a or k not in b or not _same(a[k], b[k])),
                           key=lambda k: (k == "job_settings", k))
             if diff:
                 what = "; ".join(f"{k} {a.get(k, '(none)')} vs {b.get(k, '(none)')}"
@@ -125,11 +134,12 @@ def _concat_scans(datasets: Sequence[xr.Dataset]) -> xr.Dataset:
 
 
 def _same(a, b) -> bool:
-    """Two attribute values alike (numpy arrays element by element)."""
+    """Two values alike: numpy arrays element by element, NaN equal to NaN (a ladder's
+    a_c_star_alt without a second threshold is NaN in every job)."""
     try:
+        return bool(np.array_equal(np.asarray(a), np.asarray(b), equal_nan=True))
+    except (TypeError, ValueError):  # text: no NaN to compare
         return bool(np.array_equal(np.asarray(a), np.asarray(b)))
-    except (TypeError, ValueError):
-        return a == b
 
 
 def _on_common_inner_coords(datasets: Sequence[xr.Dataset]) -> list[xr.Dataset]:

@@ -28,8 +28,8 @@ if TYPE_CHECKING:
 PARAM_DIMS = ("model", "gamma", "hurst", "eps_t", "eps_f")
 
 __all__ = ["AXIS_COORD", "CORRECTION_MIN_POINTS", "INT_FILL", "PARAM_DIMS", "area_values",
-           "expand", "no_fill_on_coords", "param_coords", "param_key", "rnd", "surface_vars",
-           "threshold_values", "var"]
+           "corrected_taken", "expand", "no_fill_on_coords", "param_coords", "param_key",
+           "rnd", "surface_vars", "threshold_values", "var"]
 
 
 def rnd(v: float) -> float:
@@ -113,11 +113,21 @@ def threshold_values(ds: xr.Dataset) -> xr.DataArray:
     on; the raw ``a_c_star`` elsewhere (at 2 points per lambda_s the correction over-shoots:
     isotropic a_c* 0.385 corrected vs 0.436 raw vs about 0.41 converged)."""
     raw = ds["a_c_star"]
-    if "a_c_star_corrected" not in ds or "points_per_lambda_s" not in ds:
+    take = corrected_taken(ds)
+    if take is None:
         return raw
+    return xr.where(take, ds["a_c_star_corrected"], raw).transpose(*raw.dims)
+
+
+def corrected_taken(ds: xr.Dataset) -> xr.DataArray | None:
+    """Where :func:`threshold_values` takes ``a_c_star_corrected`` (a grid of at least
+    :data:`CORRECTION_MIN_POINTS` points per lambda_s and a corrected value), over
+    ``a_c_star``'s dimensions; None where the dataset cannot tell (raw throughout)."""
+    if "a_c_star_corrected" not in ds or "points_per_lambda_s" not in ds:
+        return None
     fine = ds["points_per_lambda_s"] >= CORRECTION_MIN_POINTS
-    corrected = ds["a_c_star_corrected"]
-    return xr.where(fine & corrected.notnull(), corrected, raw).transpose(*raw.dims)
+    take = (fine & ds["a_c_star_corrected"].notnull()).broadcast_like(ds["a_c_star"])
+    return take.transpose(*ds["a_c_star"].dims)
 
 
 def single_setting(a: xr.DataArray,

@@ -2,6 +2,8 @@
 
 from __future__ import annotations
 
+import textwrap
+
 import numpy as np
 import xarray as xr
 from matplotlib.figure import Figure
@@ -30,6 +32,10 @@ def _fit_row(fit: xr.Dataset, group: str, which: str, mode: str) -> dict | None:
     if not np.isfinite(float(row["a_star"])):
         return None
     return {k: float(row[k]) for k in row.data_vars}
+
+
+#: Characters of a line of the fitted values below the plot (7 pt on a 6.4 inch figure).
+TEXT_WIDTH = 100
 
 
 def _err(row: dict) -> str:
@@ -116,7 +122,13 @@ def draw(ds: xr.Dataset, fit: xr.Dataset | None = None) -> Figure:
     if fit is not None and not lines:
         lines.append("fit not determined (too few sizes or seeds: see the fit's log)")
     if lines:
-        box.text(0.0, 1.0, "\n".join(lines), transform=box.transAxes, fontsize=7, va="top")
+        # wrapped to the panel's width, which sets its height: one long line (a lack-of-fit
+        # note) squeezed the plot to half the figure's width and was still cut off
+        wrapped = [w for line in lines for w in textwrap.wrap(line, TEXT_WIDTH,
+                                                               subsequent_indent="    ")]
+        ax.get_gridspec().set_height_ratios((4.8, 0.14 * len(wrapped) + 0.1))
+        fig.set_figheight(4.9 + 0.14 * len(wrapped))
+        box.text(0.0, 1.0, "\n".join(wrapped), transform=box.transAxes, fontsize=7, va="top")
     if eps_max == 0.0:
         no_data(ax)
     ax.set_title(setting_text(a), fontsize=9)

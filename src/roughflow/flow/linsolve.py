@@ -308,8 +308,11 @@ def pcg(a: sp.csr_matrix, b: np.ndarray, *, tol: float,
         if iterations >= max_iter or rz == 0.0:
             break
         ap = a @ p
-        alpha = rz / float(p @ ap)
-        if not math.isfinite(alpha):  # keep the last finite iterate for the caller to judge
+        pap = float(p @ ap)
+        if not (math.isfinite(pap) and pap > 0.0):  # keep the last iterate for the caller
+            break
+        alpha = rz / pap
+        if not math.isfinite(alpha):
             break
         x += alpha * p
         r -= alpha * ap

@@ -333,9 +333,10 @@ def noncontact_decomposition(sigma_values: ArrayLike | Medium, *, a_c_star: floa
         raise InputError("every cell is in contact (all sigma = 0): no non-contact part")
     d = 1.0 / (1.0 - a_c_star)
     x0, res0 = m.root(d, d - 1.0)
-    if abs(z - a_c_star) <= AREA_ROUNDOFF:
-        # exactly at the threshold (400 of 1000 cells closed summed to 0.40000000000000013):
-        # Da~ -> 0, and Eq. (13) gives the harmonic mean over the non-contact cells
+    if abs(z / a_c_star - 1.0) <= _AT_THRESHOLD:
+        # at the threshold by the root finder's own rule (400 of 1000 cells closed summed to
+        # 0.40000000000000013), which then gives sigma_0 = 0: Da~ -> 0, and Eq. (13) gives
+        # the harmonic mean over the non-contact cells
         z = a_c_star
     dat = (a_c_star - z) / (1.0 - a_c_star)
     dap = 1.0 - z / a_c_star
@@ -345,7 +346,8 @@ def noncontact_decomposition(sigma_values: ArrayLike | Medium, *, a_c_star: floa
             "a_c <= a_c*"
         )
     wn = w / w.sum()
-    snc, res = Medium(s, wn, 0.0).root(1.0 + dat, dat, guess=x0 / dap if x0 > 0 else None)
+    snc, res = Medium(s, wn, 0.0).root(1.0 + dat, dat,
+                                       guess=x0 / dap if x0 > 0 and dap > 0 else None)
     if x0 > 0:
         # Eq. (11): 1/(sigma_nc + sigma_0 (D-1)) = <1/(sigma + sigma_0 (D-1))>_nc
         b = x0 * (d - 1.0)
@@ -359,10 +361,6 @@ def noncontact_decomposition(sigma_values: ArrayLike | Medium, *, a_c_star: floa
 
 
 # ----------------------------------------------------------------------------- internals
-
-#: Round-off of a contact fraction summed over cell weights: a_c within this of a_c* is
-#: a_c*.
-AREA_ROUNDOFF = 1e-12
 
 
 
