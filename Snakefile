@@ -43,6 +43,7 @@ localrules:
     fit,
     figure,
     import_scan,
+    accuracy,
 
 
 rule all:
