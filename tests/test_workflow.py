@@ -389,6 +389,14 @@ BAD = {
         lambda c: c["studies"]["threshold_vs_size"].update(
             points_per_lambda_s=64, series=[{"l_over_lambda_r": [64], "eps_f": [0.01]}]),
         ["studies.threshold_vs_size", "TB", "max_mem_mb"]),
+    # the accuracy target samples the finest grid down: 3 of 8 failed in its job, after the
+    # tolerance job had run; 4.5 reached the script's integer option
+    "accuracy resolution not dividing the finest": (
+        lambda c: c.update(accuracy={"points_per_lambda_s": [3, 8]}),
+        ["accuracy.points_per_lambda_s", "[3] do not divide the largest, 8"]),
+    "accuracy resolution not whole": (
+        lambda c: c.update(accuracy={"points_per_lambda_s": [4.5, 9]}),
+        ["accuracy.points_per_lambda_s", "4.5 is not of type 'integer'"]),
 }
 
 

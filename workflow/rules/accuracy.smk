@@ -7,7 +7,15 @@
 
 _ACC = config.get("accuracy", {}) or {}
 _ACC_SEEDS = " ".join(str(s) for s in _ACC.get("seeds", [0, 1, 2, 3, 4, 5]))
-_ACC_PPL = " ".join(str(p) for p in _ACC.get("points_per_lambda_s", [2, 4, 8, 16]))
+_ACC_PPL_LIST = [int(p) for p in _ACC.get("points_per_lambda_s", [2, 4, 8, 16])]
+# the finer grids are sampled down to the coarser ones (benchmarks/convergence.py): refused
+# here, before the tolerance job runs, not in the resolution job after it
+_ACC_ODD = [p for p in _ACC_PPL_LIST if max(_ACC_PPL_LIST) % p]
+if _ACC_ODD:
+    raise WorkflowError(f"invalid config: key 'accuracy.points_per_lambda_s' = "
+                        f"{_ACC_PPL_LIST}: {_ACC_ODD} do not divide the largest, "
+                        f"{max(_ACC_PPL_LIST)}")
+_ACC_PPL = " ".join(str(p) for p in _ACC_PPL_LIST)
 _ACC_OUT = f"{RESULTS}/benchmarks"
 # the script of the checkout that holds this Snakefile, run by the Python that runs snakemake
 # (as RF in common.smk), not the first `python` on PATH
