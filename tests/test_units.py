@@ -6,6 +6,7 @@ import numpy as np
 import pint
 import pytest
 import xarray as xr
+from dataset_checks import assert_yes_no_variables_are_flagged
 
 from roughflow.cli import main
 from roughflow.datasets import units as U
@@ -115,6 +116,7 @@ def _datasets(tmp_path) -> dict[str, xr.Dataset]:
 def test_every_units_attribute_of_every_cli_dataset_parses(tmp_path, capsys):
     for kind, ds in _datasets(tmp_path).items():
         ureg = registry(ds.attrs)
+        assert_yes_no_variables_are_flagged(ds.encoding["source"])
         for name, v in ds.variables.items():
             if "units" not in v.attrs:
                 assert v.dtype.kind not in "fi" or name in ds.dims or name == "axis", \

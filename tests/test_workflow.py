@@ -19,6 +19,7 @@ import numpy as np
 import pytest
 import xarray as xr
 import yaml
+from dataset_checks import assert_yes_no_variables_are_flagged
 from workflow_copy import copy_workflow
 
 ROOT = Path(__file__).resolve().parents[1]
@@ -180,6 +181,7 @@ def test_every_units_attribute_parses(test_run):
     files = sorted((wd / "results").rglob("*.nc"))
     kinds = set()
     for path in files:
+        assert_yes_no_variables_are_flagged(path)
         with xr.open_dataset(path) as ds:
             kinds.add(ds.attrs.get("title", path.parent.name))
             ureg = registry(ds.attrs)

@@ -24,10 +24,11 @@ from scipy.stats import f as f_distribution
 from roughflow.datasets.sweep import (
     INT_FILL,
     corrected_taken,
+    fine_grid,
     single_setting,
     threshold_values,
 )
-from roughflow.datasets.units import DIMENSIONLESS
+from roughflow.datasets.units import DIMENSIONLESS, flags
 from roughflow.defaults import (
     CORRECTION_MIN_POINTS,
     FIT_BOOTSTRAP,
@@ -299,9 +300,7 @@ def corrected_text(ds: xr.Dataset) -> str:
     if take is None:
         return "raw"
     take = np.asarray(take, dtype=bool)
-    fine = np.asarray((ds["points_per_lambda_s"] >= CORRECTION_MIN_POINTS)
-                      .broadcast_like(ds["a_c_star"]).transpose(*ds["a_c_star"].dims),
-                      dtype=bool)
+    fine = np.asarray(fine_grid(ds), dtype=bool)
     corrected, coarse, missing = used & take, used & ~fine, used & fine & ~take
     if not corrected.any():
         return "raw"
@@ -492,7 +491,9 @@ def fit_dataset(ds: xr.Dataset, *, n_boot: int = FIT_BOOTSTRAP, nu: float = NU_P
         "underdetermined": "1 where the data cannot determine the fit (too few system "
                            "sizes): values NaN",
     }
-    data = {k: (dims, v, {"units": DIMENSIONLESS, "long_name": meta[k]}) for k, v in out.items()}
+    yes_no = ("lack_of_fit", "nu_at_bound", "a_star_out_of_range", "underdetermined")
+    data = {k: (dims, v, {"units": DIMENSIONLESS, "long_name": meta[k],
+                          **(flags() if k in yes_no else {})}) for k, v in out.items()}
     coords = {
         "group": ("group", list(groups), {"long_name": "surfaces fitted: anisotropic (the "
                                           "gamma != 1 with the most sizes, attribute "

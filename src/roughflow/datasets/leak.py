@@ -49,6 +49,7 @@ from .units import (
     REFERENCE_VARIABLES,
     RESIDUAL_UNITS,
     SIGMA_UNITS,
+    flags,
 )
 
 log = logging.getLogger(__name__)
@@ -101,7 +102,8 @@ def leak_dataset(curve: LeakCurve, surface: Surface, *, scales: Scales, fluid_pr
             "units": LENGTH_UNITS, "long_name": "mean interfacial gap"}),
         "percolating": _int(spa, curve.percolating[None], {
             "units": DIMENSIONLESS, "long_name": "1 if the fluid spans the analysed window "
-                                                 "along axis (the seal leaks)"}),
+                                                 "along axis (the seal leaks)",
+            **flags("sealed leaking")}),
         "sigma": (spa, curve.sigma[None], {
             "units": SIGMA_UNITS, "long_name": "effective conductance u^3/(12 eta) along axis "
                                                "(Eq. 3-4; 0 where the fluid does not span)"}),
@@ -133,7 +135,8 @@ def leak_dataset(curve: LeakCurve, surface: Surface, *, scales: Scales, fluid_pr
                                           "sealing_pressure)"}),
         "bracketed": _int(sa, np.array([[0 if t is None else int(t.bracketed) for t in th]]), {
             "units": DIMENSIONLESS, "long_name": "1 if the sealing search found both sides "
-                                                 "within its pressure range"}),
+                                                 "within its pressure range",
+            **flags("not_bracketed bracketed")}),
         REFERENCE_VARIABLES[REF_LENGTH]: ("scan", [scales.length], {
             "units": METRES, "long_name": "reference length L (lengths are in units of L)"}),
         REFERENCE_VARIABLES[REF_PRESSURE]: ("scan", [scales.modulus], {
@@ -206,6 +209,8 @@ SCAN_ATTRS: dict[str, tuple[str, str, str]] = {
     "scan_crop": ("scan_crop", DIMENSIONLESS, "grid window kept of the scan"),
     "scan_periodic": ("scan_periodic", DIMENSIONLESS, "1 if the scan is taken as periodic"),
 }
+#: CF flags of the yes/no variables among :data:`SCAN_ATTRS`.
+SCAN_FLAGS = {"scan_periodic": flags("aperiodic periodic")}
 
 #: Attributes that are not about a scan (provenance, the study) or that are variables of a
 #: leak file already; they never become variables over ``scan``.
@@ -255,7 +260,8 @@ def with_scan_variables(datasets: Sequence[xr.Dataset]) -> list[xr.Dataset]:
         given = [v for v in values if v is not None]
         kinds = {np.asarray(v).dtype.kind for v in given}
         kind = "U" if kinds - set("biuf") else "f" if "f" in kinds else "i"
-        per_scan[attr] = (var, kind, {"units": units, "long_name": long_name})
+        per_scan[attr] = (var, kind, {"units": units, "long_name": long_name,
+                                      **SCAN_FLAGS.get(attr, {})})
     out = []
     for ds in datasets:
         ds = ds.copy()

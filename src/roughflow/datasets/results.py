@@ -18,6 +18,7 @@ from roughflow.errors import InputError
 
 from .units import (
     AREAL_ENERGY_UNITS,
+    CONTACT_FLAGS,
     DIMENSIONLESS,
     FLUID_PRESSURE_UNITS,
     FLUX_UNITS,
@@ -26,6 +27,7 @@ from .units import (
     REF_LENGTH,
     REFERENCE_ATTRS,
     SIGMA_UNITS,
+    flags,
     grid_coords,
 )
 
@@ -76,7 +78,8 @@ def contact_dataset(surface: Surface, result: ContactResult,
             "gap": (("x", "y"), result.gap,
                     {"units": LENGTH_UNITS, "long_name": "interfacial gap u_g >= 0"}),
             "contact": (("x", "y"), result.contact.astype(np.int8),
-                        {"units": DIMENSIONLESS, "long_name": "contact mask (1 = in contact)"}),
+                        {"units": DIMENSIONLESS, "long_name": "contact mask (1 = in contact)",
+                         **CONTACT_FLAGS}),
             "contact_pressure": (("x", "y"), result.contact_pressure,
                                  {"units": PRESSURE_UNITS,
                                   "long_name": "local contact pressure (negative = tension)"}),
@@ -161,9 +164,11 @@ def threshold_dataset(results: Mapping[int, Threshold], surface: Surface | None 
     data = {}
     for name, (units, long_name) in THRESHOLD_FIELDS.items():
         values = np.asarray([getattr(t, name) for t in r])
+        attrs = {"units": units, "long_name": long_name}
         if values.dtype == bool:
             values = values.astype(np.int32)
-        data[name] = ("axis", values, {"units": units, "long_name": long_name})
+            attrs.update(flags())
+        data[name] = ("axis", values, attrs)
     ds = xr.Dataset(
         data,
         coords={"axis": ("axis", [AXIS_NAMES[a] for a in axes], AXIS_COORD[2])},
@@ -197,7 +202,8 @@ def flow_dataset(results: Mapping[int, FlowResult], contact: np.ndarray, *, lx: 
     nx, ny = contact.shape
     out = xr.Dataset(coords=grid_coords(nx, ny, lx, ly))
     out["contact"] = (("x", "y"), np.asarray(contact).astype(np.int8),
-                      {"units": DIMENSIONLESS, "long_name": "contact mask (1 = contact)"})
+                      {"units": DIMENSIONLESS, "long_name": "contact mask (1 = contact)",
+                       **CONTACT_FLAGS})
     attrs = {"title": "roughflow flow", "lx": lx, "ly": ly, "eta": eta, "tol": tol,
              **({} if sigma_tol is None else {"sigma_tol": sigma_tol})}
     for ax, r in results.items():

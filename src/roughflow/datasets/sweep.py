@@ -17,7 +17,7 @@ from roughflow.defaults import CORRECTION_MIN_POINTS, STUDY_ONE_VALUE
 from roughflow.errors import InputError
 
 from .results import AXIS_COORD
-from .units import DIMENSIONLESS, INT_FILL, LENGTH_UNITS
+from .units import DIMENSIONLESS, INT_FILL, LENGTH_UNITS, flags
 
 if TYPE_CHECKING:
     from numpy.typing import ArrayLike
@@ -28,8 +28,8 @@ if TYPE_CHECKING:
 PARAM_DIMS = ("model", "gamma", "hurst", "eps_t", "eps_f")
 
 __all__ = ["AXIS_COORD", "CORRECTION_MIN_POINTS", "INT_FILL", "PARAM_DIMS", "area_values",
-           "corrected_taken", "expand", "no_fill_on_coords", "param_coords", "param_key",
-           "rnd", "surface_vars", "threshold_values", "var"]
+           "corrected_taken", "expand", "fine_grid", "no_fill_on_coords", "param_coords",
+           "param_key", "rnd", "surface_vars", "threshold_values", "var"]
 
 
 def rnd(v: float) -> float:
@@ -68,6 +68,8 @@ def var(values: ArrayLike, extra_dims: tuple[str, ...], units: str, long_name: s
     """A job variable over PARAM_DIMS + ``extra_dims``; integers get the fill value -1."""
     dims, a = expand(values, extra_dims)
     v = xr.Variable(dims, a, {"units": units, "long_name": long_name, **attrs})
+    if a.dtype == bool:
+        v.attrs = {**flags(), **v.attrs}
     if np.issubdtype(a.dtype, np.integer) or a.dtype == bool:
         v = xr.Variable(dims, a.astype(np.int32), v.attrs)
         v.encoding = {"_FillValue": np.int32(INT_FILL), "dtype": "int32"}
@@ -125,9 +127,15 @@ def corrected_taken(ds: xr.Dataset) -> xr.DataArray | None:
     ``a_c_star``'s dimensions; None where the dataset cannot tell (raw throughout)."""
     if "a_c_star_corrected" not in ds or "points_per_lambda_s" not in ds:
         return None
-    fine = ds["points_per_lambda_s"] >= CORRECTION_MIN_POINTS
-    take = (fine & ds["a_c_star_corrected"].notnull()).broadcast_like(ds["a_c_star"])
+    take = (fine_grid(ds) & ds["a_c_star_corrected"].notnull()).broadcast_like(ds["a_c_star"])
     return take.transpose(*ds["a_c_star"].dims)
+
+
+def fine_grid(ds: xr.Dataset) -> xr.DataArray:
+    """Where the grid has at least :data:`CORRECTION_MIN_POINTS` points per lambda_s, over
+    ``a_c_star``'s dimensions: the range the perimeter correction is calibrated on."""
+    fine = ds["points_per_lambda_s"] >= CORRECTION_MIN_POINTS
+    return fine.broadcast_like(ds["a_c_star"]).transpose(*ds["a_c_star"].dims)
 
 
 def single_setting(a: xr.DataArray,

@@ -34,6 +34,18 @@ from roughflow.units import (  # noqa: F401 (re-exported: the names of the datas
 #: Fill value of integer variables (NaN cannot be stored in an integer).
 INT_FILL = -1
 
+
+def flags(meanings: str = "false true", dtype: type = np.int32) -> dict:
+    """CF ``flag_values`` 0, 1, ... and ``flag_meanings`` (one word per value) of a coded
+    integer variable such as a 0/1 mask or yes/no outcome, in the variable's ``dtype``, so
+    that CF readers decode it instead of treating 0 and 1 as measurements."""
+    words = meanings.split()
+    return {"flag_values": np.arange(len(words), dtype=dtype), "flag_meanings": " ".join(words)}
+
+
+#: Flags of a contact mask (stored as int8).
+CONTACT_FLAGS = flags("open contact", np.int8)
+
 LENGTH_UNITS = REF_LENGTH
 PRESSURE_UNITS = REF_PRESSURE
 #: Local and effective conductance u^3 / (12 eta): volume flow per unit width per unit

@@ -54,7 +54,7 @@ def run_threshold(job: ThresholdJob, *, threads: int | None = None) -> xr.Datase
     data = {}
     for name, v in stacked.data_vars.items():
         values = v.transpose("seed", "axis").values
-        data[name] = var(values, ("seed", "axis"), v.attrs["units"], v.attrs["long_name"])
+        data[name] = var(values, ("seed", "axis"), **v.attrs)
     data["wall_time"] = var(seconds, ("seed",), SECONDS, "wall time of the seed's search")
     data["contact_residual"] = var(residual, ("seed",), RESIDUAL_UNITS,
                                    "largest residual of the seed's contact solves")
