@@ -22,11 +22,11 @@ import re
 from pathlib import Path
 from typing import TYPE_CHECKING
 
-import numba
 import numpy as np
 import scipy.sparse as sp
 import scipy.sparse.linalg as spla
 
+from roughflow._jit import njit
 from roughflow.defaults import (
     DETREND_MODES,
     FILL_METHODS,
@@ -150,7 +150,7 @@ def fill_missing(heights: np.ndarray, missing: np.ndarray, method: str) -> np.nd
     return h
 
 
-@numba.njit(cache=True)
+@njit(cache=True)
 def _largest_rectangle(defined):
     """(points, i0, i1, j0, j1) of the largest all-True rectangle of ``defined``: row by
     row, the runs of defined points ending in each row are a histogram, whose largest

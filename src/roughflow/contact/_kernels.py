@@ -12,16 +12,16 @@ run on CuPy arrays, against which ``_cuda_kernels`` (the GPU's fused forms) are 
 
 from __future__ import annotations
 
-import numba
 import numpy as np
 
 from roughflow import fft
+from roughflow._jit import njit
 from roughflow.gpu import array_module
 
 from .adhesion import Adhesion
 
 
-@numba.njit(cache=True, nogil=True)
+@njit(cache=True, nogil=True)
 def wall_forces(fel, u, h, eps, load, f, sigma, active):  # pragma: no cover - compiled
     """f = fel - load off the active set, 0 on it; sigma = wall reaction; active mask.
 
@@ -39,7 +39,7 @@ def wall_forces(fel, u, h, eps, load, f, sigma, active):  # pragma: no cover - c
             f[i] = fi
 
 
-@numba.njit(cache=True, nogil=True)
+@njit(cache=True, nogil=True)
 def reductions(f, v, a, active):  # pragma: no cover - compiled
     """Zero a and v on the active set; return f.v, v.v, v.a, a.a."""
     fv = 0.0
@@ -60,7 +60,7 @@ def reductions(f, v, a, active):  # pragma: no cover - compiled
     return fv, vv, va, aa
 
 
-@numba.njit(cache=True, nogil=True)
+@njit(cache=True, nogil=True)
 def step(u, v, a, h, c1, c2, dt):  # pragma: no cover - compiled
     """v = c1 v + c2 a; u += dt v; clip u >= h (zeroing v there)."""
     for i in range(u.size):
@@ -81,14 +81,14 @@ def step(u, v, a, h, c1, c2, dt):  # pragma: no cover - compiled
 CG_FASTMATH = {"reassoc", "nsz"}
 
 
-@numba.njit(cache=True, inline="always")
+@njit(cache=True, inline="always")
 def _rfft_weight(j, ny):  # pragma: no cover - compiled
     """Multiplicity of rfft2 column j in the full spectrum: the compiled form of
     :func:`roughflow.fft.rfft_weights`."""
     return 1.0 if j == 0 or 2 * j == ny else 2.0
 
 
-@numba.njit(cache=True, nogil=True, fastmath=CG_FASTMATH)
+@njit(cache=True, nogil=True, fastmath=CG_FASTMATH)
 def cg_update(g, f, d, fks, t, alpha, eps, r, active):  # pragma: no cover - compiled
     """Move the gap g along the trial step s of :func:`cg_direction` (recomputed from d and
     ``alpha``: the same arithmetic) by t: g + t s, where the force is f + t fks with
@@ -122,7 +122,7 @@ def cg_update(g, f, d, fks, t, alpha, eps, r, active):  # pragma: no cover - com
     return total
 
 
-@numba.njit(cache=True, nogil=True, fastmath=CG_FASTMATH)
+@njit(cache=True, nogil=True, fastmath=CG_FASTMATH)
 def cg_precondition(rt, pre, rt_old, out, ny):  # pragma: no cover - compiled
     """out = rt pre (spectral preconditioning), rt_old = rt; returns r.z and r_old.z by
     Parseval (z = unnormalised inverse transform of out), without a real-space pass.
@@ -148,7 +148,7 @@ def cg_precondition(rt, pre, rt_old, out, ny):  # pragma: no cover - compiled
     return rz, roz
 
 
-@numba.njit(cache=True, nogil=True, fastmath=CG_FASTMATH)
+@njit(cache=True, nogil=True, fastmath=CG_FASTMATH)
 def cg_direction(z, d, g, f, beta, alpha, s_in, active):  # pragma: no cover - compiled
     """d = z + beta d (0 on the active set); trial gap max(g + alpha d, 0) and the step to
     it, s, into ``s_in`` (the transform's input, float32; :func:`cg_update` recomputes s in
@@ -174,7 +174,7 @@ def cg_direction(z, d, g, f, beta, alpha, s_in, active):  # pragma: no cover - c
     return nclip, fs, zmax, smax
 
 
-@numba.njit(cache=True, nogil=True, fastmath=CG_FASTMATH)
+@njit(cache=True, nogil=True, fastmath=CG_FASTMATH)
 def cg_feasible(g, d, alpha):  # pragma: no cover - compiled
     """The largest t with g + t s >= 0 for the trial step s of :func:`cg_direction` (inf if
     no point moves towards the wall). Needed only to extrapolate a step that clipped
@@ -187,7 +187,7 @@ def cg_feasible(g, d, alpha):  # pragma: no cover - compiled
     return tf
 
 
-@numba.njit(cache=True, nogil=True, fastmath=CG_FASTMATH)
+@njit(cache=True, nogil=True, fastmath=CG_FASTMATH)
 def cg_stiffness(st, neg_k, out, ny):  # pragma: no cover - compiled
     """out = st neg_k (the transform of -K s, neg_k = -k(q)/N) and s.K s by Parseval on the
     rfft2 grid (``st``: transform of the trial step s), the curvature along the step,
@@ -206,7 +206,7 @@ def cg_stiffness(st, neg_k, out, ny):  # pragma: no cover - compiled
     return sks
 
 
-@numba.njit(cache=True, nogil=True, fastmath=CG_FASTMATH)
+@njit(cache=True, nogil=True, fastmath=CG_FASTMATH)
 def cg_finish(g, h, f, active, eps, sigma, gap, contact):  # pragma: no cover - compiled
     """The solved state: sigma = wall reaction -f on the active set (0 elsewhere), gap =
     g, zero where in contact (active, or within eps of the wall); returns sum(g + h), the
@@ -223,7 +223,7 @@ def cg_finish(g, h, f, active, eps, sigma, gap, contact):  # pragma: no cover - 
     return total
 
 
-@numba.njit(cache=True, nogil=True)
+@njit(cache=True, nogil=True)
 def max_abs(a):  # pragma: no cover - compiled
     """max |a| without a temporary array; nan if any element is nan (as numpy's max: a
     residual must not skip a nan and report convergence)."""
@@ -237,7 +237,7 @@ def max_abs(a):  # pragma: no cover - compiled
     return m
 
 
-@numba.njit(cache=True, nogil=True)
+@njit(cache=True, nogil=True)
 def max_abs_free(a, active):  # pragma: no cover - compiled
     """max |a| off the active set; nan if any element there is nan."""
     m = 0.0
@@ -403,7 +403,7 @@ def max_abs_free_np(a, active):
     return _amax(xp.where(active, 0.0, xp.abs(a)))
 
 
-@numba.njit(cache=True, nogil=True)
+@njit(cache=True, nogil=True)
 def adhesive_pressures(g, sigma, amp, w, rho):  # pragma: no cover - compiled
     """sigma = -dv/dg at the gaps g; return the number of points in contact (g < 0)."""
     kappa = amp * w
@@ -420,7 +420,7 @@ def adhesive_pressures(g, sigma, amp, w, rho):  # pragma: no cover - compiled
     return n_contact
 
 
-@numba.njit(cache=True, nogil=True)
+@njit(cache=True, nogil=True)
 def adhesive_line(g, d, t, amp, w, rho):  # pragma: no cover - compiled
     """sum sigma(g + t d) d and sum v''(g + t d) d^2: the interaction's part of the first
     and second derivative of the energy along d (up to sign)."""
@@ -439,7 +439,7 @@ def adhesive_line(g, d, t, amp, w, rho):  # pragma: no cover - compiled
     return s1, s2
 
 
-@numba.njit(cache=True, nogil=True)
+@njit(cache=True, nogil=True)
 def adhesive_move(g, d, t, kd, f, sigma, z, amp, w, rho):  # pragma: no cover - compiled
     """g += t d; f += sigma(g) - sigma_old - t K d; sigma = sigma(g); return the number of
     points in contact and f.z with the updated f (the old z: Polak-Ribiere's f_new.z_old)."""
@@ -468,7 +468,7 @@ def adhesive_move(g, d, t, kd, f, sigma, z, amp, w, rho):  # pragma: no cover - 
     return n_contact, fz
 
 
-@numba.njit(cache=True, nogil=True)
+@njit(cache=True, nogil=True)
 def adhesive_direction(z, kz, beta, d, kd, f, sigma):  # pragma: no cover - compiled
     """d = z + beta d and K d = K z + beta K d; return f.d, sigma.d and d.Kd (the line
     search's coefficients). beta = 0 (a restart) copies z and K z without reading the old

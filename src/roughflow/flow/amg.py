@@ -21,11 +21,11 @@ from __future__ import annotations
 from dataclasses import dataclass
 from typing import TYPE_CHECKING
 
-import numba
 import numpy as np
 import scipy.sparse as sp
 import scipy.sparse.linalg as spla
 
+from roughflow._jit import njit
 from roughflow.errors import InputError
 
 if TYPE_CHECKING:
@@ -81,7 +81,7 @@ class Hierarchy:
         return self.coarse_lu.solve(b)
 
 
-@numba.njit(cache=True)
+@njit(cache=True)
 def _strong_offdiagonal(sp_, sj):  # pragma: no cover (compiled)
     """The strength pattern without its diagonal, each row sorted by column (the order
     pyamg's splitting sees)."""
@@ -105,7 +105,7 @@ def _strong_offdiagonal(sp_, sj):  # pragma: no cover (compiled)
     return tp, tj[:k]
 
 
-@numba.njit(cache=True)
+@njit(cache=True)
 def _kept_entries(cp, cj, keep, values):  # pragma: no cover (compiled)
     """The entries of (cp, cj) where ``keep`` is nonzero, with ``values`` on them."""
     n = cp.size - 1
@@ -124,7 +124,7 @@ def _kept_entries(cp, cj, keep, values):  # pragma: no cover (compiled)
     return op, oj[:k], ox[:k]
 
 
-@numba.njit(cache=True)
+@njit(cache=True)
 def _classical_weights(ap, aj, ax, cp, cj, cx, splitting, pp):  # pragma: no cover (compiled)
     """Classical (Ruge-Stueben) interpolation on the pattern ``pp`` of the kept strong
     connections (cp, cj, cx): P's column indices (coarse numbering) and weights.

@@ -21,9 +21,10 @@ from __future__ import annotations
 
 from dataclasses import dataclass
 
-import numba
 import numpy as np
 import scipy.sparse as sp
+
+from roughflow._jit import njit
 
 
 @dataclass(frozen=True)
@@ -75,7 +76,7 @@ def face_transmissibilities(sigma: np.ndarray, h_flow: float, h_across: float, *
     return Faces(t_along, t_across, t_in, t_out)
 
 
-@numba.njit(cache=True)
+@njit(cache=True)
 def _fill_csr(index, t_along, t_across, t_in, t_out, cells):  # pragma: no cover (compiled)
     n0, n1 = index.shape
     nd = cells.size

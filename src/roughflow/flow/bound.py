@@ -25,9 +25,9 @@ from __future__ import annotations
 import math
 from dataclasses import dataclass
 
-import numba
 import numpy as np
 
+from roughflow._jit import njit
 from roughflow.flow.assembly import Faces
 from roughflow.percolation.sweep import _find
 
@@ -37,7 +37,7 @@ from roughflow.percolation.sweep import _find
 _MANTISSA_DROPPED = 44
 
 
-@numba.njit(cache=True)
+@njit(cache=True)
 def _face_edges(t_along, t_across, t_in, t_out, index, m):  # pragma: no cover
     """The faces as edges (head, tail, T) of a graph on the unknowns 0 .. m-1, the inlet m
     and the outlet m + 1. Edge 0 joins the two reservoirs: no face, it carries nothing and
@@ -79,7 +79,7 @@ def _face_edges(t_along, t_across, t_in, t_out, index, m):  # pragma: no cover
     return head, tail, trans
 
 
-@numba.njit(cache=True)
+@njit(cache=True)
 def _keys(trans):  # pragma: no cover
     """Each edge's sort key, smaller for larger T (a positive float64's bits order it; the
     last :data:`_MANTISSA_DROPPED` are dropped), edge 0's 0 before all; and the number of
@@ -98,7 +98,7 @@ def _keys(trans):  # pragma: no cover
 
 
 # inlined at numba level: as a call it made the tree 1.3x slower (measured)
-@numba.njit(cache=True, inline="always")
+@njit(cache=True, inline="always")
 def _join(parent, size, a, b):  # pragma: no cover
     """Union by size of the sets of ``a`` and ``b`` (shallow trees, fewer random reads);
     False where they are one set already."""
@@ -112,7 +112,7 @@ def _join(parent, size, a, b):  # pragma: no cover
     return True
 
 
-@numba.njit(cache=True)
+@njit(cache=True)
 def _maximum_spanning_tree(head, tail, trans, n_nodes):  # pragma: no cover
     """The maximum spanning tree of the edges ranked by (key, index), the one Kruskal's
     algorithm builds from a stable sort of the keys: which edges form it, each node's
@@ -190,7 +190,7 @@ def _maximum_spanning_tree(head, tail, trans, n_nodes):  # pragma: no cover
     return in_tree, degree, kept == n_nodes - 1
 
 
-@numba.njit(cache=True)
+@njit(cache=True)
 def _rooted(head, tail, in_tree, degree, root):  # pragma: no cover
     """The tree's nodes in breadth-first order from ``root`` and each node's edge to its
     parent (-1 at the root)."""
@@ -225,7 +225,7 @@ def _rooted(head, tail, in_tree, degree, root):  # pragma: no cover
     return order, up
 
 
-@numba.njit(cache=True)
+@njit(cache=True)
 def _add(sums, errors, k, term):  # pragma: no cover
     """Add ``term`` to the compensated (Neumaier) sum ``k``: ``sums[k] + errors[k]``."""
     t = sums[k] + term
@@ -236,7 +236,7 @@ def _add(sums, errors, k, term):  # pragma: no cover
     sums[k] = t
 
 
-@numba.njit(cache=True)
+@njit(cache=True)
 def _widest_tree(t_along, t_across, t_in, t_out, index, m):  # pragma: no cover
     """The faces as edges (head, tail, T) and their maximum spanning tree: its nodes in
     breadth-first order from the inlet and each node's edge to its parent (both empty where
@@ -249,7 +249,7 @@ def _widest_tree(t_along, t_across, t_in, t_out, index, m):  # pragma: no cover
     return head, tail, trans, order, up, True
 
 
-@numba.njit(cache=True)
+@njit(cache=True)
 def _divergence_free(head, tail, trans, order, up, spans, x):  # pragma: no cover
     """The fluxes of the pressures ``x`` of the unknowns, their divergence routed to the
     reservoirs along the tree (:func:`_widest_tree`); returns (Q(x), the energy E of the

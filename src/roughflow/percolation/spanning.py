@@ -12,10 +12,10 @@ from __future__ import annotations
 
 from typing import TYPE_CHECKING
 
-import numba
 import numpy as np
 from scipy import ndimage
 
+from roughflow._jit import njit
 from roughflow.errors import InputError, require_mask
 
 from .labels import _STRUCTURES, check_axis, check_connectivity, merge_seams
@@ -67,7 +67,7 @@ def percolates(open_mask: ArrayLike, axis: int | str, *, connectivity: int = 4,
 _X_ENDS, _Y_ENDS = 3, 12
 
 
-@numba.njit(cache=True)
+@njit(cache=True)
 def _seam_spans(pairs_a, pairs_b, ends, parent, aux, aux_flags, flags):
     """Whether the clusters of a seamless union-find (``parent``, slab bits ``flags``) span
     between the two slabs ``ends`` once the cells ``pairs_a[i]`` and ``pairs_b[i]`` (open,
@@ -90,7 +90,7 @@ def _seam_spans(pairs_a, pairs_b, ends, parent, aux, aux_flags, flags):
     return False
 
 
-@numba.njit(cache=True)
+@njit(cache=True)
 def _spans_4(open_, nx, ny, periodic, parent, size, flags, aux_flags):
     """(spans along x, spans along y) of the 4-connected open cells of ``open_`` (flat, C
     order): one raster pass of a union-find without seams, a row's run of open cells one

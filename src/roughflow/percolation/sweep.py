@@ -16,9 +16,9 @@ from __future__ import annotations
 import math
 from typing import TYPE_CHECKING, NamedTuple
 
-import numba
 import numpy as np
 
+from roughflow._jit import njit
 from roughflow.errors import InputError, require_field
 
 from .labels import check_axis
@@ -29,7 +29,7 @@ if TYPE_CHECKING:
 _LOW, _HIGH = 1, 2
 
 
-@numba.njit(cache=True)
+@njit(cache=True)
 def _find(parent, x):
     while parent[x] != x:
         parent[x] = parent[parent[x]]  # path halving
@@ -37,7 +37,7 @@ def _find(parent, x):
     return x
 
 
-@numba.njit(cache=True)
+@njit(cache=True)
 def _link(parent, size, flags, a, b):
     """Union of the clusters of cells ``a`` and ``b``; returns the new root."""
     ra = _find(parent, a)
@@ -52,7 +52,7 @@ def _link(parent, size, flags, a, b):
     return ra
 
 
-@numba.njit(cache=True)
+@njit(cache=True)
 def _open(c, pos, nlen, parent, size, flags):
     """Open cell ``c`` as a cluster of its own; ``pos``: its index along the axis of
     ``nlen`` cells, for the flags "touches the first / last slab"."""
@@ -66,7 +66,7 @@ def _open(c, pos, nlen, parent, size, flags):
     flags[c] = f
 
 
-@numba.njit(cache=True)
+@njit(cache=True)
 def _sweep(cells, nx, ny, axis, parent, size, flags):
     """Open ``cells`` in turn on the union-find state (parent < 0: closed); returns the
     position + 1 of the cell whose opening first links both ends along ``axis``, or -1."""
@@ -247,7 +247,7 @@ def critical_open_count_by_key(key: np.ndarray, axis: int | str, *, expect: floa
 _RADIX_BITS = 11
 
 
-@numba.njit(cache=True)
+@njit(cache=True)
 def _by_decreasing_key(key, cells):
     """``cells`` ordered by decreasing float32 ``key[cells]``, ties in their given order: an
     LSD radix sort of the keys' bits mapped to unsigned integers in the opposite order of
@@ -285,7 +285,7 @@ def _by_decreasing_key(key, cells):
     return cs
 
 
-@numba.njit(cache=True)
+@njit(cache=True)
 def _collect(key, cut, cut_next, out):
     """Write the indices of the cells with ``cut_next <= key < cut`` into ``out`` in memory
     order; returns how many."""
@@ -298,7 +298,7 @@ def _collect(key, cut, cut_next, out):
     return taken
 
 
-@numba.njit(cache=True)
+@njit(cache=True)
 def _join_block(key, cut, cut_next, nx, ny, axis, nxt, parent, size, flags):
     """Open every cell with ``key >= cut`` in memory order (fresh union-find state) and
     collect the cells with ``cut_next <= key < cut`` in ``nxt``. Returns (number of cells

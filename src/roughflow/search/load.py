@@ -41,9 +41,9 @@ from collections.abc import Callable, Sequence
 from dataclasses import dataclass
 from typing import Protocol
 
-import numba
 import numpy as np
 
+from roughflow._jit import njit
 from roughflow.contact import ContactResult, cell_compliance
 from roughflow.contact.law import ContactLaw
 from roughflow.defaults import DEFAULT_MODEL
@@ -137,14 +137,14 @@ class CompactState:
     residual: float
 
 
-@numba.njit(cache=True, nogil=True)
+@njit(cache=True, nogil=True)
 def _q_kernel(gap, pressure, compliance, out):  # pragma: no cover - compiled
     """out = gap - compliance max(pressure, 0), rounded to ``out``'s dtype (one pass)."""
     for i in range(gap.size):
         out[i] = gap[i] - compliance * max(pressure[i], 0.0)
 
 
-@numba.njit(cache=True, nogil=True)
+@njit(cache=True, nogil=True)
 def _start_kernel(q0, q1, w0, w1, inv_factor, p_scale, gap, pressure,
                   contact):  # pragma: no cover - compiled
     """q = w0 q0 + w1 q1 (in double); gap = max(q, 0) inv_factor, pressure = max(-q, 0)
