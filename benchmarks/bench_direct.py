@@ -45,6 +45,7 @@ from roughflow.defaults import FLOW_SIGMA_TOL  # noqa: E402
 from roughflow.flow import ldl  # noqa: E402
 from roughflow.flow.core import flowing_cells, reynolds_system  # noqa: E402
 from roughflow.flow.linsolve import choose  # noqa: E402
+from roughflow.reynolds import cubic_law  # noqa: E402
 from roughflow.surface import SurfaceSpec, generate  # noqa: E402
 
 sys.path.insert(0, str(Path(__file__).resolve().parent))
@@ -61,7 +62,7 @@ SPLIT_KEYS = ("factor_s", "numeric_s", "ordering_s", "nnz_l")
 def factorisation_split(gap, lx: float, ly: float) -> dict:
     """The fresh LDL^T of the x-axis system of ``gap``: the whole factorisation, the part
     after the ordering, the ordering, the factor's nonzeros."""
-    sigma_local = gap**3 / 12.0
+    sigma_local = cubic_law(gap)
     matrix = reynolds_system(sigma_local, flowing_cells(sigma_local, 0), 0, lx=lx,
                              ly=ly).matrix
     t0 = time.perf_counter()

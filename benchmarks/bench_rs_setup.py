@@ -27,6 +27,7 @@ import numpy as np  # noqa: E402
 
 from roughflow.flow import amg  # noqa: E402
 from roughflow.flow.core import flowing_cells, reynolds_system  # noqa: E402
+from roughflow.reynolds import cubic_law  # noqa: E402
 from roughflow.surface import SurfaceSpec, generate  # noqa: E402
 
 OUT = Path(__file__).resolve().parents[1] / "results" / "benchmarks"
@@ -65,7 +66,7 @@ def main() -> None:
     args = ap.parse_args()
     ours_kernel = amg._classical_weights
     h0 = generate(SurfaceSpec.from_sweep(points_per_lambda_s=2, seed=1)).heights
-    s0 = np.maximum(np.quantile(h0, 0.8) - h0, 0.0) ** 3 / 12.0
+    s0 = cubic_law(np.maximum(np.quantile(h0, 0.8) - h0, 0.0))
     amg.rs_hierarchy(reynolds_system(s0, flowing_cells(s0, 0), 0, lx=1.0, ly=1.0).matrix)
     lines = ["| n | a_c | unknowns | levels | set-up, pyamg's weights [s] | set-up, ours [s] | "
              "ratio | finest weights, pyamg [ms] | ours [ms] | largest weight difference |",
@@ -74,7 +75,7 @@ def main() -> None:
         h = generate(SurfaceSpec.from_sweep(points_per_lambda_s=n / 64, seed=0)).heights
         for a_c in args.ac:
             gap = np.maximum(np.quantile(h, 1.0 - a_c) - h, 0.0)
-            s = gap**3 / 12.0
+            s = cubic_law(gap)
             a = reynolds_system(s, flowing_cells(s, 0), 0, lx=1.0, ly=1.0).matrix
             timed = {"pyamg": Timed(pyamg_weights), "ours": Timed(ours_kernel)}
             total = {k: [] for k in timed}

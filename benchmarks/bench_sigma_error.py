@@ -30,6 +30,7 @@ import numpy as np
 
 from roughflow.flow import core, solve
 from roughflow.flow.linsolve import prepare
+from roughflow.reynolds import cubic_law
 from roughflow.surface import SurfaceSpec, generate
 
 sys.path.insert(0, str(Path(__file__).resolve().parent))
@@ -64,7 +65,7 @@ def rows_for(n: int, areas: list[float], repeats: int) -> list[dict]:
         gap = np.maximum(np.quantile(h, 1.0 - a_c) - h, 0.0)
         t_solve, res = _median_time(
             functools.partial(solve, gap, 0, lx=lx, ly=ly, method="direct"), repeats)
-        local = gap**3 / 12.0  # eta = 1, as solve's default
+        local = cubic_law(gap)  # eta = 1, as solve's default
         system = core.reynolds_system(local, core.flowing_cells(local, 0), 0, lx=lx, ly=ly)
         factor = prepare(system.matrix, "direct").factor
         x = factor.solve(system.rhs)

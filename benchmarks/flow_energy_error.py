@@ -31,6 +31,7 @@ import numpy as np
 
 from roughflow.flow.core import _dissipation, flowing_cells, reynolds_system
 from roughflow.flow.linsolve import prepare
+from roughflow.reynolds import cubic_law
 
 sys.path.insert(0, str(Path(__file__).resolve().parent))
 from bench_contact import OUT  # noqa: E402
@@ -58,7 +59,7 @@ def main() -> None:
     print(f"cell {lx:g} x {ly:g} on {gap.shape[0]} x {gap.shape[1]} points "
           f"({meta.name if meta.exists() else 'no ' + meta.name}"
           f"{', overridden' if args.lx is not None or args.ly is not None else ''})")
-    s = gap**3 / 12.0
+    s = cubic_law(gap)
     # the system flow.solve assembles
     system = reynolds_system(s, flowing_cells(s, axis), axis, lx=lx, ly=ly)
     faces, act, cells, a, b = (system.faces, system.active, system.cells, system.matrix,

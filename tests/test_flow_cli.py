@@ -51,6 +51,32 @@ def test_cli_both_axes(tmp_path, gap):
     assert png.stat().st_size > 1000
 
 
+def test_cli_flux_components_and_cell_centres_on_stripes(tmp_path):
+    """Stripes of a gap that varies only across the flow: the fluid pressure is linear along
+    the flow and every stripe carries its own flux, so the cross component is zero (to
+    round-off, 1e-12 of the main one) and the main one is sigma(stripe) / L_along per unit
+    pressure drop. Each field must sit under its own name and at cell centres."""
+    nx, ny, lx, ly = 12, 8, 1.5, 1.0
+    across_y = np.linspace(0.2, 1.0, ny)[None, :] * np.ones((nx, 1))  # varies along y
+    src, out = tmp_path / "c.nc", tmp_path / "f.nc"
+    write_contact(src, across_y, lx=lx, ly=ly)
+    assert main(["flow", str(src), "--axis", "x", "-o", str(out)]) == 0
+    with xr.open_dataset(out) as ds:
+        np.testing.assert_allclose(ds["x"], (np.arange(nx) + 0.5) * lx / nx, rtol=1e-15)
+        np.testing.assert_allclose(ds["y"], (np.arange(ny) + 0.5) * ly / ny, rtol=1e-15)
+        main_flux = ds["flux_x_x"].values
+        assert np.abs(ds["flux_y_x"]).max() <= 1e-12 * np.abs(main_flux).max()
+        np.testing.assert_allclose(np.abs(main_flux), across_y**3 / 12 / lx, rtol=1e-9)
+    # and the transposed case: flow along y through stripes that vary along x
+    across_x = across_y.T.copy()
+    write_contact(src, across_x, lx=ly, ly=lx)
+    assert main(["flow", str(src), "--axis", "y", "-o", str(out)]) == 0
+    with xr.open_dataset(out) as ds:
+        main_flux = ds["flux_y_y"].values
+        assert np.abs(ds["flux_x_y"]).max() <= 1e-12 * np.abs(main_flux).max()
+        np.testing.assert_allclose(np.abs(main_flux), across_x**3 / 12 / lx, rtol=1e-9)
+
+
 def test_cli_single_axis_and_errors(tmp_path, gap, capsys):
     src, out = tmp_path / "c.nc", tmp_path / "f.nc"
     write_contact(src, gap)

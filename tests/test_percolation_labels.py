@@ -14,6 +14,8 @@ from hypothesis.extra.numpy import arrays
 from roughflow.errors import InputError
 from roughflow.percolation import (
     contact_percolates,
+    critical_open_count,
+    critical_open_count_by_key,
     label,
     percolates,
     percolates_along,
@@ -168,6 +170,31 @@ def test_spanning_matches_flood_fill(m, axis):
     got = spanning_cells(m, axis)
     assert {tuple(c) for c in np.argwhere(got)} == ref
     assert percolates(m, axis) == bool(ref)
+
+
+def _critical_count_by_flood_fill(order, shape, axis):
+    """Smallest k whose first k cells of ``order`` span along ``axis`` (flood fill)."""
+    mask = np.zeros(shape, bool)
+    for k, cell in enumerate(order, start=1):
+        mask.flat[cell] = True
+        if _flood_spans(mask, axis):
+            return k
+    return -1
+
+
+@settings(max_examples=100, deadline=None)
+@given(st.integers(1, 12), st.integers(1, 10), st.integers(0, 2**32 - 1),
+       st.sampled_from([0, 1]))
+def test_critical_open_count_matches_flood_fill(nx, ny, seed, axis):
+    # the sweep's periodic seam across the axis and its last join are what it is for: the
+    # count is exact, one cell early or late is a different threshold
+    rng = np.random.default_rng(seed)
+    order = rng.permutation(nx * ny)
+    ref = _critical_count_by_flood_fill(order, (nx, ny), axis)
+    assert critical_open_count(order, (nx, ny), axis) == ref
+    key = np.empty(nx * ny)
+    key[order] = -np.arange(nx * ny, dtype=float)  # larger key opens first: the same order
+    assert critical_open_count_by_key(key.reshape(nx, ny), axis, expect=rng.uniform()) == ref
 
 
 @settings(max_examples=200, deadline=None)

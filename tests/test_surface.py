@@ -84,6 +84,46 @@ def test_rms_gradient_normalised():
         h = generate(s).heights
         # Spectral gradient over the same discrete modes: exact up to round-off.
         assert rms_gradient(h, s.lx, s.ly) == pytest.approx(s.rms_slope, rel=1e-12)
+        # Independently of the library's half-spectrum weights (generate normalises with
+        # rms_gradient itself): Parseval on the full numpy grid, round-off only.
+        qx = 2 * np.pi * np.fft.fftfreq(s.nx, d=s.lx / s.nx)
+        qy = 2 * np.pi * np.fft.fftfreq(s.ny, d=s.ly / s.ny)
+        q2 = qx[:, None] ** 2 + qy[None, :] ** 2
+        full = np.sqrt((q2 * np.abs(np.fft.fft2(h)) ** 2).sum()) / h.size
+        assert full == pytest.approx(s.rms_slope, rel=1e-12)
+
+
+@pytest.mark.parametrize("gamma", [0.25, 1.0, 4.0])
+def test_phases_inside_the_cutoff_ellipse_are_random(gamma):
+    """Every mode inside the ellipse has a phase of its own: were the phase box smaller than
+    the ellipse along one axis (its extents swapped between x and y, say), the modes outside
+    it would keep phase 0 (a real amplitude), a coherent part of the surface."""
+    s = spec(gamma=gamma, nx=256, ny=256, lambda_s=1 / 48)
+    c = np.fft.rfft2(generate(s).heights)
+    qx, qy = fft.wavevectors(s.nx, s.ny, s.lx, s.ly)
+    qp = peklenik_wavenumber(qx, qy, gamma) * np.ones(c.shape)
+    inside = (qp > 0) & (qp < 0.95 * 2 * np.pi / s.lambda_s) & (np.abs(c) > 0)
+    phase = np.angle(c[inside])
+    # a real amplitude has |sin| < 1e-9 (round-off); uniform phases give that with
+    # probability 6e-10 per mode, so among the ~4000 modes none should
+    assert inside.sum() > 1000
+    assert np.mean(np.abs(np.sin(phase)) < 1e-9) < 0.01
+    # and uniform: the circular mean of e^(i phase) over N modes is ~ 1/sqrt(N); 5 sigma
+    assert abs(np.exp(1j * phase).mean()) < 5 / np.sqrt(phase.size)
+
+
+def test_phases_come_from_the_raw_pcg64_stream():
+    """The phases use numpy's bit-generator stream (fixed across numpy versions, NEP 19),
+    2 pi (r >> 11) 2^-53; today that is also Generator.uniform(0, 2 pi) of the same seed, so
+    a seed's surface is the one earlier versions made."""
+    from roughflow.surface import _phase_box
+
+    s = spec(seed=2**40 + 3, gamma=2.0)
+    phases, _, _ = _phase_box(s)
+    raw = np.random.PCG64(s.seed).random_raw(phases.size).reshape(phases.shape)
+    np.testing.assert_array_equal(phases, (raw >> np.uint64(11)) * 2.0**-53 * (2 * np.pi))
+    np.testing.assert_array_equal(
+        phases, np.random.default_rng(s.seed).uniform(0.0, 2 * np.pi, size=phases.shape))
 
 
 def test_anisotropic_slope_ratio_approaches_one_over_gamma_squared():
@@ -175,7 +215,9 @@ def test_bad_sweep_input():
 
 @pytest.mark.parametrize("gamma", [1.0, 4.0])
 def test_same_seed_same_surface_at_every_resolution(gamma):
-    """Refining the grid samples the same band-limited surface: coarse == fine[::2, ::2]."""
+    """Refining the grid samples the same band-limited surface: coarse == fine[::2, ::2]
+    (from 3 points per lambda_s; at exactly 2 the cutoff modes lie on the coarse grid's
+    Nyquist row and column, where a real grid keeps only their cosine part)."""
     coarse = SurfaceSpec.from_sweep(gamma=gamma, points_per_lambda_s=3, seed=7)
     fine = SurfaceSpec(**{**coarse.as_attrs(), "nx": 2 * coarse.nx, "ny": 2 * coarse.ny})
     a, b = generate(coarse).heights, generate(fine).heights

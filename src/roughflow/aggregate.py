@@ -46,9 +46,9 @@ def load(path: str | os.PathLike, kinds: str | tuple[str, ...] | None = None) ->
     return read_dataset(path, kinds, what="dataset")
 
 
-#: Variables that job files written since 2026-12-06 have and older ones lack (the cell's
-#: geometry; the ladder's theory a_c* and adhesion, attributes before): their absence is
-#: no conflict between seed groups of one setting.
+#: Variables that job files of older roughflow versions lack (the cell's geometry; the
+#: ladder's theory a_c* and adhesion, which they kept as attributes): their absence is no
+#: conflict between seed groups of one setting.
 ADDED_JOB_VARIABLES = frozenset({"lx", "ly", "lambda_r", "lambda_s", "a_c_star_theory",
                                  "a_c_star_alt", *ADHESION_FIELDS, ADHESION_REPULSION_FIELD[0]})
 

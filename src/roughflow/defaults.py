@@ -43,6 +43,7 @@ CONTACT_METHODS = ("gfmd", "cg")
 #: Where the elastic gfmd solves run: "cpu" (numpy, pyFFTW, numba) or "cupy" (a CUDA GPU,
 #: roughflow.gpu).
 BACKENDS = ("cpu", "cupy")
+DEFAULT_BACKEND = "cpu"
 #: Residual of a single contact solve: largest gap error over the rms height.
 CONTACT_TOL = 1e-6
 #: Solver steps between two DEBUG progress lines of a contact solve (roughflow -vv).
@@ -79,8 +80,11 @@ THRESHOLD_TOL_MAX = 0.1
 #: Contact-solve tolerance inside a threshold search (docs/accuracy.md: a_c* moves by less
 #: than 4e-5 against a 1e-8 solve).
 THRESHOLD_CONTACT_TOL = 1e-4
+#: The largest load (E* gbar) a search for a contact area tries: elastic contact is nearly
+#: full at 2 (the elastic law's erf(2 sqrt(pi)) > 0.999).
+MAX_SEARCH_LOAD = 4.0
 #: Pressures (E* gbar) a threshold search may try.
-THRESHOLD_PRESSURE_RANGE = (1e-4, 4.0)
+THRESHOLD_PRESSURE_RANGE = (1e-4, MAX_SEARCH_LOAD)
 #: The largest nominal pressure (E*) a leak curve accepts: a hundred times the contact
 #: modulus is no linear-elastic contact (every gap of a surface with gbar up to 25 is closed
 #: from 4 E* gbar on), but a pressure in pascals passed where the library takes units of E*.

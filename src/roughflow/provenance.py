@@ -38,6 +38,8 @@ from dataclasses import dataclass, field, replace
 from datetime import UTC, datetime
 from pathlib import Path
 
+from roughflow.defaults import DEFAULT_BACKEND
+
 #: Attributes written by :meth:`Provenance.attrs` (never copied from one file into another).
 PROVENANCE_ATTRS = ("roughflow_version", "roughflow_commit", "python_version", "backend",
                     "fft_threads", "fftw_effort", "command", "created", "wall_time_s", "history",
@@ -90,7 +92,7 @@ class Provenance:
     history: str = ""
     references: tuple[str, ...] = ()
     study_config: str = ""
-    backend: str = "cpu"
+    backend: str = DEFAULT_BACKEND
     from_inputs: tuple[tuple[str, str | int], ...] = ()
 
     @classmethod

@@ -335,19 +335,28 @@ def _phase_box(spec: SurfaceSpec) -> tuple[np.ndarray, int, int]:
     sampled on finer grids): resolution studies compare like with like. Its extents change
     with gamma, and every phase with them: one seed at two gammas, or at gamma and 1/gamma,
     is two unrelated surfaces (docs/physics.md, "What a seed fixes").
+
+    The phases are 2 pi (r >> 11) 2^-53 of the raw 64-bit outputs r of PCG64 seeded with
+    ``seed``: numpy keeps a bit generator's raw stream fixed across versions (NEP 19), not
+    the streams of ``Generator`` methods. (``Generator.uniform`` gives the same numbers
+    today.)
     """
     qs = 2 * np.pi / spec.lambda_s
     kx_max = int(np.floor(qs / math.sqrt(spec.gamma) * spec.lx / (2 * np.pi) + 1e-9))
     ky_max = int(np.floor(qs * math.sqrt(spec.gamma) * spec.ly / (2 * np.pi) + 1e-9))
-    rng = np.random.default_rng(spec.seed)
-    return rng.uniform(0.0, 2 * np.pi, size=(2 * kx_max + 1, ky_max + 1)), kx_max, ky_max
+    shape = (2 * kx_max + 1, ky_max + 1)
+    raw = np.random.PCG64(spec.seed).random_raw(shape[0] * shape[1]).reshape(shape)
+    phases = (raw >> np.uint64(11)).astype(np.float64) * (2.0**-53 * 2 * np.pi)
+    return phases, kx_max, ky_max
 
 
 def generate(spec: SurfaceSpec) -> Surface:
     """Random-phase surface for ``spec``: real, zero mean, rms gradient ``spec.rms_slope``.
 
     Amplitudes sqrt(C(q_P)) are deterministic; phases come from :func:`_phase_box`, so the
-    same seed gives the same surface on any grid that resolves it (coarse = fine[::2, ::2]).
+    same seed gives the same surface on any grid with more than 2 points per lambda_s
+    (coarse = fine[::2, ::2]; at exactly 2 the modes at the cutoff lie on the Nyquist row
+    or column, where a real grid keeps only their cosine part: 3e-3 of the rms height).
     Exact Hermitian symmetry on the half (rfft) spectrum: in the columns q_y = 0 and
     q_y = Nyquist the phase of -q is minus that of q (a difference of two independent
     uniform phases is again uniform); the self-conjugate modes (q_x and q_y each 0 or

@@ -1,4 +1,4 @@
-# Accuracy budget (issue 8): convergence of a_c* and sigma against grid resolution, contact
+# Accuracy budget: convergence of a_c* and sigma against grid resolution, contact
 # solver tolerance and bisection tolerance, with wall times; tables and error-vs-time plots
 # under <results>/benchmarks/ (the config's results folder). Not part of the default target:
 # `snakemake --cores 1 accuracy` (about 2 minutes). Seeds and resolutions via

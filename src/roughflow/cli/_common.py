@@ -172,7 +172,7 @@ def warn_if_nonperiodic_scan(ds, source: str, command: str) -> None:
 
 def add_backend(parser: argparse.ArgumentParser) -> None:
     """``--backend {cpu,cupy}``: where the elastic gfmd solves run (``roughflow.gpu``)."""
-    parser.add_argument("--backend", choices=defaults.BACKENDS, default="cpu",
+    parser.add_argument("--backend", choices=defaults.BACKENDS, default=defaults.DEFAULT_BACKEND,
                         help="cpu, or cupy: the elastic gfmd solves on a CUDA GPU (needs CuPy: "
                              "roughflow[gpu]) (cpu)")
 

@@ -281,7 +281,7 @@ def _run_gap(args: argparse.Namespace, ds) -> None:
 
     from roughflow.datasets.units import DIMENSIONLESS, LENGTH_UNITS, SIGMA_UNITS
     from roughflow.io import write_dataset
-    from roughflow.theory import conductivity_peklenik, gap_theory
+    from roughflow.theory import conductivity_peklenik, effective_dimension, gap_theory
 
     gap = ds["gap"]
     if gap.ndim < 2 or gap.ndim > 3:
@@ -315,7 +315,8 @@ def _run_gap(args: argparse.Namespace, ds) -> None:
                 else {})
     cols.update(reynolds)
     out = sys.stdout
-    out.write(f"# Bruggeman (a_c* = {a_star}, D = {1 / (1 - a_star):.4f}) and Eq. 16 ({kind}); "
+    out.write(f"# Bruggeman (a_c* = {a_star}, D = {effective_dimension(a_star):.4f}) and "
+              f"Eq. 16 ({kind}); "
               f"Peklenik: {args.peklenik}\n")
     heads = ("a_c", "mean_gap", "sigma_iso", "sx_corr", "sy_corr", "sx_pers", "sy_pers",
              "closed_form")

@@ -98,7 +98,7 @@ from typing import TYPE_CHECKING
 import numpy as np
 
 from roughflow import fft, gpu
-from roughflow.defaults import SOLVER_LOG_EVERY
+from roughflow.defaults import DEFAULT_BACKEND, SOLVER_LOG_EVERY
 from roughflow.errors import InputError, require_field
 from roughflow.surface import spectral_rms_gradient
 
@@ -254,7 +254,7 @@ class HardWallSetup:
 
 
 def hard_wall_setup(heights: np.ndarray, lx: float, ly: float,
-                    threads: int | None = None, backend: str = "cpu") -> HardWallSetup:
+                    threads: int | None = None, backend: str = DEFAULT_BACKEND) -> HardWallSetup:
     """The :class:`HardWallSetup` of ``heights`` (cell ``lx`` x ``ly``); ``backend="cupy"``:
     the heights' transform and the preconditioner built on the GPU, ``h`` and ``pre`` CuPy
     arrays (the per-shape spectral factors still come from the host)."""
@@ -391,7 +391,7 @@ def gfmd(
     minimizer: str = "auto",
     setup: HardWallSetup | None = None,
     work: HardWallWork | None = None,
-    backend: str = "cpu",
+    backend: str = DEFAULT_BACKEND,
 ) -> SolverOutput:
     """Minimise elastic + interaction + load energy; returns a :class:`SolverOutput`.
 
@@ -450,7 +450,7 @@ def _hard_wall(
     use_numba: bool,
     setup: HardWallSetup | None = None,
     work: HardWallWork | None = None,
-    backend: str = "cpu",
+    backend: str = DEFAULT_BACKEND,
 ) -> SolverOutput:
     """Projected preconditioned CG with a secant step (module docstring, "Hard wall"), its
     transforms in single precision ("Precision"); on the GPU with ``backend="cupy"``."""

@@ -24,7 +24,7 @@ from dataclasses import dataclass
 
 from scipy.special import erf, erfinv
 
-from roughflow.defaults import DEFAULT_MODEL, MODELS
+from roughflow.defaults import DEFAULT_MODEL, MAX_SEARCH_LOAD, MODELS
 from roughflow.errors import InputError
 
 #: Small-load slope da_c/dp of elastic contacts found in GFMD (Persson theory: 1.60).
@@ -33,11 +33,11 @@ ELASTIC_SLOPE = 2.0
 ERF_COEFFICIENT = 0.5 * math.sqrt(math.pi) * ELASTIC_SLOPE
 #: The paper's adhesive case: (contact area, adhesive load / elastic load for that area).
 PAPER_ADHESIVE_LOAD_RATIOS = ((0.1, 1 / 8), (0.4, 1 / 4))
-#: Loads a search may try, per model (E* gbar; bearing: the area). Elastic contact is
-#: nearly full at 2 (erf(2 sqrt(pi)) > 0.999). Adhesive contacts are searched from zero
-#: load up: under tension the contact can have no equilibrium (pull-off), where a solve
-#: cannot converge.
-LOAD_BOUNDS = {"elastic": (1e-6, 4.0), "adhesive": (0.0, 4.0), "bearing": (0.0, 1.0)}
+#: Loads a search may try, per model (E* gbar; bearing: the area). Adhesive contacts are
+#: searched from zero load up: under tension the contact can have no equilibrium
+#: (pull-off), where a solve cannot converge.
+LOAD_BOUNDS = {"elastic": (1e-6, MAX_SEARCH_LOAD), "adhesive": (0.0, MAX_SEARCH_LOAD),
+               "bearing": (0.0, 1.0)}
 # erfinv diverges at 0 and 1: targets are clipped this far inside
 _AREA_MARGIN = 1e-6
 

@@ -12,6 +12,7 @@ from roughflow.defaults import (
     CONTACT_METHODS,
     CONTACT_TOL,
     CONTACT_TOL_MAX,
+    DEFAULT_BACKEND,
     DEFAULT_MODEL,
     MODELS,
 )
@@ -58,7 +59,7 @@ def solve(
     threads: int | None = None,
     setup: HardWallSetup | None = None,
     work: HardWallWork | None = None,
-    backend: str = "cpu",
+    backend: str = DEFAULT_BACKEND,
 ) -> ContactResult:
     """Contact of the rigid rough ``surface`` with a flat elastic half-space (E* = 1).
 
@@ -227,7 +228,8 @@ def solve(
         why = ""
         if model == "adhesive" and load < 0:
             # a tensile load beyond the pull-off force has no equilibrium: the body keeps
-            # moving off (a helper waited 85 s for 50000 steps at 256^2 to be told less)
+            # moving off; without this hint the error names only the residual, after what
+            # can be minutes of steps (50000 steps at 256^2 take 85 s)
             why = (f"; the tensile load {load:g} may lie beyond the pull-off force (no "
                    f"equilibrium: the surfaces separate), the largest gap is "
                    f"{float(out.gap.max()):.3g} against the range {adhesion.range:.3g}")
@@ -302,7 +304,8 @@ def workspace(surface: Surface) -> HardWallWork:
     return hard_wall_work(surface.shape)
 
 
-def prepare(surface: Surface, threads: int | None = None, backend: str = "cpu") -> HardWallSetup:
+def prepare(surface: Surface, threads: int | None = None,
+            backend: str = DEFAULT_BACKEND) -> HardWallSetup:
     """What every elastic gfmd solve of ``surface`` derives from its heights alone (centred
     heights, rms height, preconditioner), built once for ``solve(..., setup=)``. Valid while
     the heights are not modified. ``backend="cupy"``: built on the GPU, for solves with

@@ -4,7 +4,12 @@ no plotting library, so the workflow can fill the report's captions while it pla
 
 from __future__ import annotations
 
-from roughflow.defaults import A_C_STAR_PAPER, A_C_STAR_THEORY, CORRECTION_MIN_POINTS
+from roughflow.defaults import (
+    A_C_STAR_ALT,
+    A_C_STAR_PAPER,
+    A_C_STAR_THEORY,
+    CORRECTION_MIN_POINTS,
+)
 
 _CORRECTED = (
     "a_c* is perimeter-corrected (first-order grid bias of the contact area removed, "
@@ -85,7 +90,8 @@ CAPTIONS: dict[str, str] = {
         "lines) and the closed forms of Eq. 16 (dashed lines), one panel per model the config "
         "contains, lettered in the order elastic (non-adhesive), short-range adhesive and "
         "bearing-area contact (the paper's (a), (b), (c)). In the elastic panel a dotted line "
-        "shows the full Bruggeman treatment with a_c* = 0.5; the other lines use the study's "
+        f"shows the full Bruggeman treatment with a_c* = {A_C_STAR_ALT:g} (the study's "
+        "a_c_star_alt); the other lines use the study's "
         "a_c_star (default "
         + ", ".join(f"{v:g} {k}" for k, v in A_C_STAR_THEORY.items())
         + "; the paper's 0.4 for elastic and adhesive contact). "
@@ -96,10 +102,10 @@ CAPTIONS: dict[str, str] = {
         "0.44-0.48 (search.threshold(model='adhesive'), 512^2, seeds 0-2), so with a_c* = 0.4 "
         "full Bruggeman falls 3.2-3.8 times (the closed form 4-5 times) below full Reynolds "
         "at a_c 0.39, where the paper finds full Bruggeman close (a_c_star "
-        "{adhesive: 0.46} in the config follows the model); and at "
-        "the default 2 points per lambda_s the bearing model's full Bruggeman lies 46-67 % "
-        "above full Reynolds at a_c 0.2-0.3, within about 20 % at the 8 points of "
-        "config/paper.yaml (a helper's runs, 2026-12-06)."
+        "{adhesive: 0.46} in the config follows the model); and at 2 points per lambda_s "
+        "(config/config.yaml) the bearing model's full Bruggeman lies 46-67 % above full "
+        "Reynolds at a_c 0.2-0.3, within about 20 % at the 8 points of config/paper.yaml "
+        "(docs/theory.md, section 'The flow figures against the paper')."
     ),
     "flow_anisotropic": (
         "Fluid conductance in the stretching (easy, x, blue) and contraction (y, red) "
@@ -115,11 +121,12 @@ CAPTIONS: dict[str, str] = {
         "a_c: roughflow gives about 8 at a_c 0.2-0.25 and more beyond, where sigma_y "
         "approaches its own threshold first). "
         "Elastic a_c is perimeter-corrected (first-order grid bias of the contact area "
-        "removed, docs/accuracy.md); bearing and adhesive a_c are cell counts. At the "
-        "default 2 points per lambda_s the bearing model's Bruggeman lines lie 1.9-2.9 times "
-        "above full Reynolds along y at a_c 0.2-0.39 and its chi reaches 6.5 against 3.3; at "
-        "the 8 points of config/paper.yaml chi is 3.4-4.1 and Bruggeman within 10 % up to "
-        "a_c 0.2-0.25, the paper's close agreement (a helper's runs, 2026-12-06)."
+        "removed, docs/accuracy.md); bearing and adhesive a_c are cell counts. At 2 points "
+        "per lambda_s (config/config.yaml) the bearing model's Bruggeman lines lie 1.9-2.9 "
+        "times above full Reynolds along y at a_c 0.2-0.39 and its chi reaches 6.5 against "
+        "3.3; at the 8 points of config/paper.yaml chi is 3.4-4.1 and Bruggeman within 10 % "
+        "up to a_c 0.2-0.25, the paper's close agreement (docs/theory.md, section 'The flow "
+        "figures against the paper')."
     ),
     "measured": (
         "Leak rate Q of a seal versus the nominal contact pressure for each measured scan "

@@ -42,7 +42,7 @@ def draw(ds: xr.Dataset, fit: xr.Dataset | None = None) -> Figure:
         x, y = curve(a, sub["sigma_closed_form"] / ref)
         ax.plot(x, y, "--", color="tab:green", label="closed form, Eq. 16")
         # one value per model (config a_c_star_alt); NaN where a size of the study did not
-        # run; a study aggregated before 2026-12-06 has it as an attribute
+        # run; a study aggregated by an older roughflow has it as an attribute
         alts = (sub["a_c_star_alt"].values if "a_c_star_alt" in sub
                 else np.array([ds.attrs.get("a_c_star_alt", np.nan)], dtype=float))
         alt = float(alts[np.isfinite(alts)][0]) if np.isfinite(alts).any() else np.nan

@@ -40,6 +40,7 @@ from roughflow.errors import (
 )
 from roughflow.percolation import spanning_cells
 from roughflow.resources import check_memory, describe
+from roughflow.reynolds import cubic_law
 
 from .assembly import Faces, assemble, face_transmissibilities
 from .bound import WidestTree, dissipation_bounds, widest_tree
@@ -664,8 +665,7 @@ def solve(
     ordering = check_ordering(ordering, ax, g.shape)
     check_memory("flow", g.shape, what="a Reynolds flow solve")
 
-    with np.errstate(over="ignore"):
-        sigma_local = g**3 / (12.0 * eta)
+    sigma_local = cubic_law(g, eta)
     # an infinite cell would close every other one below the floor (sigma 0, measured)
     if not np.isfinite(sigma_local.max()):
         raise InputError(f"the local conductivity u^3 / (12 eta) overflows float64: largest "

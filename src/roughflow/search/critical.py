@@ -45,6 +45,7 @@ from roughflow.defaults import (
     A_C_STAR_PAPER,
     AXIS_NAMES,
     CONTACT_TOL_MAX,
+    DEFAULT_BACKEND,
     DEFAULT_MODEL,
     MODELS,
     THRESHOLD_CONTACT_TOL,
@@ -584,7 +585,7 @@ def threshold(
     adhesion: Adhesion | None = None,
     options: SearchOptions | None = None,
     threads: int | None = None,
-    backend: str = "cpu",
+    backend: str = DEFAULT_BACKEND,
 ) -> Threshold | dict[int, Threshold]:
     """Critical contact area a_c* for fluid flow along ``axis`` (0 = x, 1 = y).
 

@@ -16,6 +16,7 @@ import numpy as np
 
 from roughflow.defaults import DEFAULT_MODEL, MODELS
 from roughflow.errors import InputError, require_positive
+from roughflow.reynolds import cubic_law
 
 from .effective_medium import _check_a_c_star
 
@@ -60,5 +61,5 @@ def closed_form(
     u = np.asarray(mean_gap, dtype=np.float64)
     if not np.isfinite(u).all() or (u < 0).any():
         raise InputError(f"mean_gap must be finite and >= 0, got {mean_gap!r}")
-    out = u**3 / (12.0 * eta) * criticality_factor(a_c, a_c_star=a_c_star, kind=kind)
+    out = cubic_law(u, eta) * criticality_factor(a_c, a_c_star=a_c_star, kind=kind)
     return float(out) if out.ndim == 0 else out

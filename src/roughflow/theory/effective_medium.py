@@ -30,10 +30,10 @@ import math
 from dataclasses import dataclass
 from typing import TYPE_CHECKING
 
-import numba
 import numpy as np
 from scipy.optimize import brentq
 
+from roughflow._jit import njit
 from roughflow.errors import (
     ConvergenceError,
     InputError,
@@ -43,6 +43,7 @@ from roughflow.errors import (
     require_mask,
     require_positive,
 )
+from roughflow.reynolds import cubic_law
 
 if TYPE_CHECKING:
     from numpy.typing import ArrayLike
@@ -161,7 +162,7 @@ def local_conductivity(gap: ArrayLike, eta: float = 1.0, *,
     """
     eta = require_positive("eta", eta)
     u = _check_nonnegative("gap", gap)
-    sigma = u**3 / (12.0 * eta)
+    sigma = cubic_law(u, eta)
     if contact is not None:
         mask = require_mask("contact mask", contact)
         if mask.shape != u.shape:
@@ -183,7 +184,7 @@ def bruggeman(sigma_values: ArrayLike | Medium, *, a_c_star: float,
     """
     a_c_star = _check_a_c_star(a_c_star)
     m = _as_medium(sigma_values, weights)
-    d = 1.0 / (1.0 - a_c_star)
+    d = effective_dimension(a_c_star)
     x, res = m.root(d, d - 1.0)
     return BruggemanResult(sigma=x, residual=res, a_c=m.z, a_c_star=a_c_star, dimension=d)
 
@@ -222,7 +223,7 @@ def bruggeman_anisotropic(
         raise InputError(f"form must be one of {FORMS}, got {form!r}")
     m = _as_medium(sigma_values, weights)
     z = m.z
-    d = 1.0 / (1.0 - a_c_star)
+    d = effective_dimension(a_c_star)
     c = d - 1.0
     persson = form == "persson"
 
@@ -331,7 +332,7 @@ def noncontact_decomposition(sigma_values: ArrayLike | Medium, *, a_c_star: floa
     s, w, z = m.s, m.w, m.z
     if s.size == 0:
         raise InputError("every cell is in contact (all sigma = 0): no non-contact part")
-    d = 1.0 / (1.0 - a_c_star)
+    d = effective_dimension(a_c_star)
     x0, res0 = m.root(d, d - 1.0)
     if abs(z / a_c_star - 1.0) <= _AT_THRESHOLD:
         # at the threshold by the root finder's own rule (400 of 1000 cells closed summed to
@@ -484,7 +485,7 @@ def _as_medium(sigma_values, weights) -> Medium:
     return medium(sigma_values, weights)
 
 
-@numba.njit(cache=True)
+@njit(cache=True)
 def _emt_sums(t, w, a, b, x):  # pragma: no cover (compiled)
     """sum_i w_i A x / (t_i + B x) (a compensated sum) and its derivative in log x,
     sum_i w_i A x t_i / (t_i + B x)^2: one pass over the cells."""
