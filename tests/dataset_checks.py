@@ -10,14 +10,15 @@ import xarray as xr
 
 def assert_yes_no_variables_are_flagged(path: str | Path) -> None:
     """Every integer variable of the file at ``path`` that codes a yes/no ("1 if",
-    "1 where", "mask (1 = ...") carries CF ``flag_values`` 0, 1 of its own stored dtype and
-    one ``flag_meanings`` word per value, and holds no value but those and its fill value.
+    "1 where", "1:", "mask (1 = ...", "(1/0)") carries CF ``flag_values`` 0, 1 of its own
+    stored dtype and one ``flag_meanings`` word per value, and holds no value but those and
+    its fill value.
     Read undecoded: xarray turns an integer variable with a fill value into floats."""
     with xr.open_dataset(path, mask_and_scale=False) as ds:
         for name, v in ds.variables.items():
             text = str(v.attrs.get("long_name", ""))
-            if v.dtype.kind != "i" or not (text.startswith(("1 if", "1 where"))
-                                           or "(1 =" in text):
+            if v.dtype.kind != "i" or not (text.startswith(("1 if", "1 where", "1:"))
+                                           or "(1 =" in text or "(1/0)" in text):
                 continue
             where = f"{Path(path).name}: {name}"
             assert "flag_values" in v.attrs, where

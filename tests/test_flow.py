@@ -753,3 +753,21 @@ def test_a_non_square_grid_needs_both_cell_lengths():
     square_pixels = conductance(g, lx=1.0, ly=250 / 150)
     assert square_pixels.sigma_x == pytest.approx(square_pixels.sigma_y, rel=1e-12)  # uniform
     assert solve(np.ones((64, 64)), 0).sigma == pytest.approx(1 / 12, rel=1e-12)
+
+
+def test_flow_both_axes_solves_only_where_the_fluid_spans():
+    from roughflow.flow import flow_both_axes
+
+    rng = np.random.default_rng(4)
+    gap = np.maximum(rng.normal(0.5, 0.3, (40, 30)), 0.0)
+    gap[:, 11] = 0.0  # a contact line along x: the fluid spans along x only
+    open_mask = gap > 0
+    fx, fy = flow_both_axes(gap, open_mask, lx=1.0, ly=0.75)
+    assert fx.percolating and fx.sigma == solve(gap, 0, lx=1.0, ly=0.75).sigma
+    assert fx.ordering is fx.result.ordering and fx.ordering is not None  # a direct solve
+    assert not fy.percolating and fy.result is None and fy.sigma == 0.0
+    # the next state of a ladder reuses the orderings; an axis without a solve keeps its own
+    g2 = np.where(gap > 0, gap * 0.9, 0.0)
+    nx_, ny_ = flow_both_axes(g2, g2 > 0, lx=1.0, ly=0.75, previous=(fx, fy))
+    assert nx_.sigma == pytest.approx(solve(g2, 0, lx=1.0, ly=0.75).sigma, rel=1e-12)
+    assert ny_.ordering is fy.ordering

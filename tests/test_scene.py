@@ -375,7 +375,7 @@ def test_a_failed_ladder_flow_solve_keeps_its_gap_and_no_dataset(tmp_path, capsy
         raise ConvergenceError("Reynolds solver (rs) did not reach relative residual 1e-08",
                                residual=7.5e-7, iterations=500)
 
-    monkeypatch.setattr(roughflow.flow, "solve", failing)
+    monkeypatch.setattr(roughflow.flow.axes, "solve", failing)
     out = tmp_path / "ladder.nc"
     with pytest.raises(SystemExit) as exc:
         main(["scene", "ladder", "--model", "bearing", "--l-over-lambda-r", "2", "--eps-f",
@@ -432,7 +432,7 @@ def test_flow_is_solved_only_along_percolating_directions(monkeypatch):
         calls.append(axis)
         return real(gap, axis, **kw)
 
-    monkeypatch.setattr(roughflow.flow, "solve", counting)
+    monkeypatch.setattr(roughflow.flow.axes, "solve", counting)
     ds = run_ladder(LadderJob(surface=TINY, model="bearing", seeds=(0,),
                               area_fractions=(0.1, 0.45, 0.55, 0.9)))
     # one solve per percolating (step, axis) pair and none elsewhere

@@ -36,7 +36,6 @@ from roughflow.defaults import (
 )
 from roughflow.errors import InputError, require_positive
 from roughflow.flow import check_sigma_tol
-from roughflow.percolation import percolates
 from roughflow.resources import check_memory
 from roughflow.search import SearchOptions, Threshold, first_pressure, threshold
 from roughflow.search.critical import check_area_tol
@@ -210,23 +209,21 @@ def pressure_curve(emb: Embedding, pressures: np.ndarray, *, contact_tol: float 
     spans = np.zeros((n, 2), dtype=bool)
     sigma, imbalance, sigma_error = (np.zeros((n, 2)) for _ in range(3))
     state: ContactResult | None = None
-    # each axis's last direct solve orders the next one's cells (flow.CellOrdering)
-    orderings: list[flow.CellOrdering | None] = [None, None]
+    flows = None  # the last pressure's, whose orderings the next solves reuse
     for i, pn in enumerate(pressures):
         state = solve(emb.surface, emb.cell_pressure(pn), tol=contact_tol, init=state,
                       threads=threads)
         seen = emb.observe(state)
         area[i], gap[i] = seen.area_fraction, seen.mean_gap
         its[i], res[i] = state.iterations, state.residual
-        for ax in (0, 1):
-            spans[i, ax] = percolates(~seen.contact, ax, periodic=emb.periodic)
-            if spans[i, ax]:
-                fr = flow.solve(seen.gap, ax, lx=emb.lx, ly=emb.ly, tol=flow_tol,
-                                sigma_tol=flow_sigma_tol, periodic=emb.periodic,
-                                ordering=orderings[ax])
-                orderings[ax] = fr.ordering
-                sigma[i, ax], imbalance[i, ax] = fr.sigma, fr.flux_imbalance
-                sigma_error[i, ax] = fr.sigma_error
+        flows = flow.flow_both_axes(seen.gap, ~seen.contact, lx=emb.lx, ly=emb.ly,
+                                    periodic=emb.periodic, previous=flows, tol=flow_tol,
+                                    sigma_tol=flow_sigma_tol)
+        for ax, f in enumerate(flows):
+            spans[i, ax], sigma[i, ax] = f.percolating, f.sigma
+            if f.result is not None:
+                imbalance[i, ax] = f.result.flux_imbalance
+                sigma_error[i, ax] = f.result.sigma_error
         log.info("p = %.4g E*: a_c = %.4f, percolating x %d y %d, sigma = %.3e, %.3e", pn,
                  area[i], spans[i, 0], spans[i, 1], sigma[i, 0], sigma[i, 1])
     return {"area_fraction": area, "mean_gap": gap, "percolating": spans, "sigma": sigma,

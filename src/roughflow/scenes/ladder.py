@@ -20,7 +20,7 @@ from typing import TYPE_CHECKING
 import numpy as np
 import xarray as xr
 
-from roughflow import contact, flow, percolation, theory
+from roughflow import contact, flow, theory
 from roughflow.accuracy import PERIMETER_C, perimeter_corrected_area
 from roughflow.datasets.results import (
     ADHESION_FIELDS,
@@ -39,6 +39,7 @@ from roughflow.datasets.units import (
     RESIDUAL_UNITS,
     SECONDS,
     SIGMA_UNITS,
+    flags,
 )
 from roughflow.defaults import CONTACT_TOL, FLOW_SIGMA_TOL
 from roughflow.errors import ConvergenceError
@@ -167,8 +168,7 @@ def run_ladder(job: LadderJob, *, threads: int | None = None) -> xr.Dataset:
             for name in ADHESION_FIELDS:
                 adhesion_seeds[name][i] = numbers[name]
             repulsion = str(numbers[ADHESION_REPULSION_FIELD[0]])
-        # each axis's last direct solve orders the next one's cells (flow.CellOrdering)
-        orderings: list[flow.CellOrdering | None] = [None, None]
+        flows = None  # the last step's, whose orderings the next step's solves reuse
         for k, (target, c, a_cont) in enumerate(
                 contact_ladder(surface, job, threads, adhesion)):
             r["area_fraction"][i, k] = c.area_fraction
@@ -178,33 +178,22 @@ def run_ladder(job: LadderJob, *, threads: int | None = None) -> xr.Dataset:
             r["contact_residual"][i, k] = c.residual
             r["contact_iterations"][i, k] = c.iterations
             open_mask = ~np.asarray(c.contact, dtype=bool)
-            for ax in (0, 1):
-                perc = bool(percolation.percolates(open_mask, ax))
-                r["percolating"][i, k, ax] = int(perc)
-                if not perc:  # not solved: no fluid path, sigma = 0 exactly
-                    r["sigma"][i, k, ax] = 0.0
-                    r["flow_iterations"][i, k, ax] = 0
-                    r["flow_direct"][i, k, ax] = 0
-                    r["flow_residual"][i, k, ax] = 0.0
-                    r["flow_imbalance"][i, k, ax] = 0.0
-                    r["flow_imbalance_floor"][i, k, ax] = 0.0
-                    r["flow_sigma_error"][i, k, ax] = 0.0
-                    continue
-                try:
-                    fr = flow.solve(c.gap, ax, lx=lx, ly=ly, sigma_tol=FLOW_SIGMA_TOL,
-                                    ordering=orderings[ax])
-                except ConvergenceError as exc:  # keep what reproduces it (the CLI saves it)
-                    exc.inputs = {"gap": c.gap, "axis": ax, "lx": lx, "ly": ly, "seed": seed,
-                                  "target": target}
-                    raise
-                orderings[ax] = fr.ordering
-                r["sigma"][i, k, ax] = fr.sigma
-                r["flow_residual"][i, k, ax] = fr.residual
-                r["flow_imbalance"][i, k, ax] = fr.flux_imbalance
-                r["flow_imbalance_floor"][i, k, ax] = fr.imbalance_floor
-                r["flow_sigma_error"][i, k, ax] = fr.sigma_error
-                r["flow_iterations"][i, k, ax] = fr.iterations
-                r["flow_direct"][i, k, ax] = int(fr.method == "direct")
+            try:
+                flows = flow.flow_both_axes(c.gap, open_mask, lx=lx, ly=ly, previous=flows,
+                                            sigma_tol=FLOW_SIGMA_TOL)
+            except ConvergenceError as exc:  # the CLI saves the inputs that reproduce it
+                exc.inputs = {**(exc.inputs or {}), "seed": seed, "target": target}
+                raise
+            for ax, f in enumerate(flows):
+                r["percolating"][i, k, ax] = int(f.percolating)
+                r["sigma"][i, k, ax] = f.sigma
+                fr = f.result  # None: not solved, no fluid path, every diagnostic 0
+                r["flow_residual"][i, k, ax] = 0.0 if fr is None else fr.residual
+                r["flow_imbalance"][i, k, ax] = 0.0 if fr is None else fr.flux_imbalance
+                r["flow_imbalance_floor"][i, k, ax] = 0.0 if fr is None else fr.imbalance_floor
+                r["flow_sigma_error"][i, k, ax] = 0.0 if fr is None else fr.sigma_error
+                r["flow_iterations"][i, k, ax] = 0 if fr is None else fr.iterations
+                r["flow_direct"][i, k, ax] = int(fr is not None and fr.method == "direct")
             th = _theory(c.gap, ~open_mask, c.area_fraction if math.isnan(a_cont) else a_cont,
                          job)
             r["sigma_emt"][i, k] = (
@@ -237,7 +226,7 @@ def run_ladder(job: LadderJob, *, threads: int | None = None) -> xr.Dataset:
                                   "iterations of the contact solve"),
         "sigma": var(r["sigma"], ska, SIGMA_UNITS, "full Reynolds conductance sigma"),
         "percolating": var(r["percolating"], ska, DIMENSIONLESS,
-                           "fluid percolates along axis (1/0)"),
+                           "1 if the fluid percolates along axis", **flags("sealed leaking")),
         "flow_residual": var(r["flow_residual"], ska, DIMENSIONLESS,
                              "relative residual of the flow solve (0: not solved, the fluid "
                              "does not percolate)"),
@@ -249,9 +238,10 @@ def run_ladder(job: LadderJob, *, threads: int | None = None) -> xr.Dataset:
         "flow_iterations": var(r["flow_iterations"], ska, DIMENSIONLESS,
                                "iterations of the flow solve"),
         "flow_direct": var(r["flow_direct"], ska, DIMENSIONLESS,
-                           "1: the flow solve was the direct LDL^T solver (small systems, thin "
-                           "flowing clusters, or the fallback of an AMG solve that did not "
-                           "converge or balance the fluxes), 0: AMG-CG or no solve"),
+                           "1 if the flow solve was the direct LDL^T solver (small systems, "
+                           "thin flowing clusters, or the fallback of an AMG solve that did "
+                           "not converge or balance the fluxes), 0: AMG-CG or no solve",
+                           **flags("iterative_or_none direct")),
         "sigma_emt": var(r["sigma_emt"], ("seed", "step", "emt", "axis"), SIGMA_UNITS,
                          "Bruggeman effective-medium conductance"),
         "sigma_closed_form": var(r["sigma_closed_form"], sk, SIGMA_UNITS,
