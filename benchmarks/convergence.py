@@ -36,14 +36,16 @@ import numpy as np
 os.environ.setdefault("ROUGHFLOW_FFT_THREADS", "1")
 
 from roughflow import accuracy, contact, fft, flow  # noqa: E402
+from roughflow.defaults import A_C_STAR_PAPER  # noqa: E402
 from roughflow.errors import ConvergenceError  # noqa: E402
 from roughflow.search import LoadSearch, SearchOptions, threshold, warm_up  # noqa: E402
 from roughflow.surface import Surface, SurfaceSpec, generate  # noqa: E402
+from roughflow.theory.closed_form import EXPONENTS  # noqa: E402
 
 TARGETS = (0.2, 0.35)
-#: d ln sigma / d a_c ~ -beta / (a_c* - a_c), beta = 69/20 (docs/physics.md Sect. 5): used only to
-#: move sigma by the last few 1e-4 of contact area onto the exact target
-BETA, A_STAR = 69 / 20, 0.42
+#: d ln sigma / d a_c ~ -beta / (a_c* - a_c), the elastic exponent of Eq. 16 (docs/physics.md
+#: Sect. 5): used only to move sigma by the last few 1e-4 of contact area onto the exact target
+BETA, A_STAR = EXPONENTS["elastic"], A_C_STAR_PAPER
 
 
 def _append(path: Path, rec: dict) -> None:
@@ -303,6 +305,15 @@ EXTRAP_NOTE = ("Rows marked (extrapolation) are the two grids the reference is e
                "grids (r = spacing ratio), fixed by construction, not measured.")
 
 
+#: the same for the plots: their points at the reference's own grids are labelled "ref"
+PLOT_EXTRAP_NOTE = "ref: a grid of the reference (its error is no measurement)"
+
+
+def _plot_label(p: int, fine, variant: str) -> str:
+    """Label of a plotted point: its points per lambda_s, "ref" on the reference's grids."""
+    return f"{p} ref" if p in fine and variant != "richardson" else str(p)
+
+
 def _ppl(p: int, fine) -> int | str:
     """ppl cell of a table: the reference's own grids are marked (their error is no
     measurement)."""
@@ -459,11 +470,12 @@ def report(args) -> None:
                 ax.loglog([t for _, t, *_ in v], [max(abs(m), 1e-5) for _, _, _, m, _ in v],
                           "s--", color=col, mfc="none", label=f"{k}: |mean| (bias)")
                 for p, t, r, *_ in v:
-                    ax.annotate(str(p), (t, max(r, 1e-5)), fontsize=7)
+                    ax.annotate(_plot_label(p, (f0, f1), k), (t, max(r, 1e-5)), fontsize=7)
         ax.axhline(0.01 / 3, color="k", ls=":", label="1/3 of seed SE (0.01)")
         ax.set_xlabel("wall time per threshold [s]")
         ax.set_ylabel("rms error of a_c*")
-        ax.set_title("a_c* (x and y), labels: points per lambda_s")
+        ax.set_title("a_c* (x and y), labels: points per lambda_s\n"
+                     f"{PLOT_EXTRAP_NOTE}", fontsize=9)
         ax.legend(fontsize=7)
 
     # sigma at fixed a_c against resolution: raw a_c, and a_c perimeter-corrected
@@ -521,10 +533,10 @@ def report(args) -> None:
                 ax.loglog([t for _, t, *_ in v], [max(r, 1e-4) for _, _, r, *_ in v], "o-",
                           label=k)
                 for p, t, r, *_ in v:
-                    ax.annotate(str(p), (t, max(r, 1e-4)), fontsize=7)
+                    ax.annotate(_plot_label(p, (f0, f1), k), (t, max(r, 1e-4)), fontsize=7)
         ax.set_xlabel("wall time (contact to target + flow) [s]")
         ax.set_ylabel("rms |ln(sigma / sigma_ref)|")
-        ax.set_title(f"sigma_x at a_c = {target}")
+        ax.set_title(f"sigma_x at a_c = {target}\n{PLOT_EXTRAP_NOTE}", fontsize=9)
         ax.legend(fontsize=7)
     md.append("## sigma_x at fixed a_c against resolution\n")
     md.append("Error: ln sigma minus the Richardson extrapolation (first order) of ln sigma "

@@ -103,3 +103,15 @@ def test_schema_choices_are_roughflow_choices():
     assert schema["scan_options"]["fill"]["enum"] == list(defaults.FILL_METHODS)
     boundary = schema["measured_study"]["properties"]["boundary"]["enum"]
     assert boundary == list(defaults.BOUNDARY_METHODS)
+
+
+@pytest.mark.parametrize(("block", "key", "limit"), [
+    ("threshold_study", "tol", "THRESHOLD_TOL_MAX"),
+    ("threshold_study", "contact_tol", "CONTACT_TOL_MAX"),
+    ("flow_study", "area_tol", "LADDER_AREA_TOL_MAX"),
+])
+def test_schema_limits_are_the_librarys(block, key, limit):
+    # a config value the schema lets through must not be refused by the job it becomes,
+    # nor one the library takes refused by the schema
+    prop = yaml.safe_load(SCHEMA.read_text())["$defs"][block]["properties"][key]
+    assert prop["maximum"] == getattr(defaults, limit)

@@ -624,3 +624,30 @@ def test_the_ladder_writes_every_number_of_the_adhesion():
     names = set(adhesion_attrs(s, Adhesion(surface_energy=1e-4, range=0.01)))
     assert names | {"adhesion_range_over_lambda_s"} == set(ADHESION_FIELDS) | {
         ADHESION_REPULSION_FIELD[0]}
+
+
+def test_leak_memory_request_follows_the_imported_grid(tmp_path, monkeypatch):
+    """A leak job's mem_mb: a placeholder grid until its scan is imported, then the
+    imported grid embedded as its boundary treatment does (a padded cell holds more
+    points than the scan), doubled on a second attempt."""
+    from roughflow.boundary import cell_points
+    from roughflow.io import surface_to_dataset, write_dataset
+    from roughflow.scenes.jobs import LEAK_GRID_BEFORE_IMPORT, leak_mem_mb, requested_mem_mb
+    from roughflow.surface import Surface
+
+    np.save(tmp_path / "scan.npy", np.zeros((8, 8)))
+    monkeypatch.chdir(tmp_path)
+    (job,) = expand_study("measured", {
+        "modulus": "200GPa", "pressures": "100MPa:20GPa:5", "fluid_pressure": "1MPa",
+        "viscosity": "1mPa.s", "seal_width": "2mm", "seal_length": "60mm",
+        "scans": [{"file": "scan.npy", "size": "1um"}]}).values()
+    imported = tmp_path / "surface.nc"
+    before = leak_mem_mb(job, imported)
+    assert before == requested_mem_mb(job, 1, cell_points(LEAK_GRID_BEFORE_IMPORT, job.boundary))
+    heights = np.random.default_rng(0).normal(size=(3000, 2000))
+    write_dataset(surface_to_dataset(Surface.from_array(heights, lx=1.5, ly=1.0)), imported)
+    after = leak_mem_mb(job, imported)
+    points = cell_points((3000, 2000), job.boundary)
+    assert points >= 3000 * 2000
+    assert after == requested_mem_mb(job, 1, points) > before
+    assert leak_mem_mb(job, imported, attempt=2) == 2 * after

@@ -104,6 +104,8 @@ A_C_STAR_THEORY = {"elastic": 0.4, "adhesive": 0.4, "bearing": 0.5}
 A_C_STAR_ALT = 0.5
 #: Largest |a_c - target| of a pressure-ladder step (contact area, absolute).
 LADDER_AREA_TOL = 5e-3
+#: The loosest such tolerance a ladder accepts: its steps are 0.03-0.05 apart in a_c.
+LADDER_AREA_TOL_MAX = 0.1
 
 # --- Reynolds flow (docs/flow.md) ----------------------------------------------------------
 #: Relative residual of the linear flow solve.

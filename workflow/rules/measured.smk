@@ -1,11 +1,7 @@
 # The measured study: per scan, `roughflow import` (scan -> surface file) and `roughflow leak`
 # (leak curve in physical units); the study's aggregation and figure are the shared rules.
 
-import os  # noqa: E402
-
-import netCDF4  # noqa: E402
-
-from roughflow.boundary import cell_points  # noqa: E402
+from roughflow.scenes.jobs import leak_mem_mb  # noqa: E402
 
 MEASURED = JOBS.get("measured", {})
 
@@ -15,17 +11,6 @@ def measured_job(wildcards):
         return MEASURED[wildcards.scan]
     except KeyError:
         raise WorkflowError(f"no scan {wildcards.scan!r} in config studies.measured") from None
-
-
-def leak_mem_mb(wildcards, input, attempt):
-    # the grid is the imported scan's: Snakemake evaluates this again once the import has
-    # run (before the job is submitted); until then, the estimate of a 1024^2 scan
-    shape = (1024, 1024)
-    if os.path.exists(input[0]):
-        with netCDF4.Dataset(input[0]) as ds:
-            shape = (len(ds.dimensions["x"]), len(ds.dimensions["y"]))
-    job = measured_job(wildcards)
-    return requested_mem_mb(job, attempt, cell_points(shape, job.boundary))
 
 
 rule import_scan:
@@ -63,7 +48,8 @@ rule leak:
         f"{RESULTS}/benchmarks/workflow/jobs/leak/{{scan}}.tsv"
     threads: 1
     resources:
-        mem_mb=leak_mem_mb,
+        # the imported scan's grid (the library's estimate; before the import, a default)
+        mem_mb=lambda wc, input, attempt: leak_mem_mb(measured_job(wc), input[0], attempt),
         runtime=120,
     shell:
         # the table is written whole or not at all, as the dataset is

@@ -238,8 +238,10 @@ class LadderJob(_SeedGroup):
             value = getattr(self, name)
             if value is not None and not 0 < value < 1:
                 raise InputError(f"{name} must lie in (0, 1), got {value!r}")
-        if not (math.isfinite(self.area_tol) and 0 < self.area_tol < 1):
-            raise InputError(f"area_tol must lie in (0, 1), got {self.area_tol!r}")
+        if not (math.isfinite(self.area_tol)
+                and 0 < self.area_tol <= defaults.LADDER_AREA_TOL_MAX):
+            raise InputError(f"area_tol must lie in (0, {defaults.LADDER_AREA_TOL_MAX:g}], "
+                             f"got {self.area_tol!r}")
         if self.model == "bearing":
             # the bearing ladder cuts each area exactly: area_tol is unused, and kept at its
             # default so that a config's value does not rerun the ladder's flow solves
@@ -855,6 +857,26 @@ def requested_mem_mb(job: Job, attempt: int = 1, points: int | None = None) -> i
     attempt (a job that a cluster ended for its memory would only fail again with the
     same request)."""
     return attempt * (WRAPPER_MB + math.ceil(estimated_memory(job, points) / 1e6))
+
+
+#: The scan grid a leak job's ``mem_mb`` assumes until its scan is imported: Snakemake
+#: evaluates ``mem_mb`` again once the import has run, before the job is submitted.
+LEAK_GRID_BEFORE_IMPORT = (1024, 1024)
+
+
+def leak_mem_mb(job: LeakJob, surface_file: str | Path, attempt: int = 1) -> int:
+    """:func:`requested_mem_mb` of a leak job on the grid of its imported surface file
+    (embedded as its boundary treatment does); :data:`LEAK_GRID_BEFORE_IMPORT` while the
+    file does not exist yet."""
+    import netCDF4
+
+    from roughflow.boundary import cell_points
+
+    shape = LEAK_GRID_BEFORE_IMPORT
+    if Path(surface_file).exists():
+        with netCDF4.Dataset(surface_file) as ds:
+            shape = (len(ds.dimensions["x"]), len(ds.dimensions["y"]))
+    return requested_mem_mb(job, attempt, cell_points(shape, job.boundary))
 
 
 def check_job_memory(job: Job, *, limit: int | None = None) -> int:
