@@ -269,6 +269,12 @@ def test_aggregate_outer_join_keeps_missing_as_nan(tmp_path):
     # an attribute that differs between jobs is not kept, whatever groups combine_by_coords
     # made first (a job's id and command line survived in a study of three models)
     assert "job_id" not in back.attrs and "job_parameters" not in back.attrs
+    # the order the files are listed in changes nothing, the list of jobs included
+    rev = aggregate(files[::-1], tmp_path / "reversed.nc", study="test")
+    xr.testing.assert_identical(rev.drop_attrs(), out.drop_attrs())
+    skip = {"created", "history", "wall_time_s", "command"}  # provenance of the run itself
+    assert {k: str(v) for k, v in rev.attrs.items() if k not in skip} \
+        == {k: str(v) for k, v in out.attrs.items() if k not in skip}
 
 
 def test_ladder_records_the_flow_solver_and_combines_with_files_that_do_not(monkeypatch):

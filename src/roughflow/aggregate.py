@@ -204,7 +204,8 @@ def combine(datasets: Sequence[xr.Dataset], sources: Sequence[str] | None = None
         # and command line survived in a study of three models)
         out.attrs = {k: v for k, v in out.attrs.items()
                      if all(k in ds.attrs and _same(ds.attrs[k], v) for ds in datasets)}
-    ids = [str(ds.attrs.get("job_id", "")) for ds in datasets]
+    # sorted: the study's attributes do not depend on the order its files were listed in
+    ids = sorted(str(ds.attrs.get("job_id", "")) for ds in datasets)
     out.attrs["jobs"] = " ".join(i for i in ids if i)
     out.attrs["n_jobs"] = len(datasets)
     for name in out.variables:
