@@ -52,6 +52,21 @@ def test_netcdf_written_by_surfacetopography_gives_size_and_unit(tmp_path):
         from_scan(tmp_path / "scan.nc", size="3um")
 
 
+def test_a_refused_scan_leaves_its_reader_closed(tmp_path, monkeypatch):
+    # a refusal after the file is open (its size given twice) closes the reader too: a
+    # session that imports many scans held one open file per refused one
+    import roughflow.scan as scan
+
+    closed = []
+    monkeypatch.setattr(scan, "_close", lambda reader: closed.append(type(reader).__name__))
+    ST.Topography(heights(), (2.0, 1.5), unit="um").to_netcdf(str(tmp_path / "scan.nc"))
+    with pytest.raises(InputError, match="already gives its size"):
+        from_scan(tmp_path / "scan.nc", size="3um")
+    assert len(closed) == 1
+    from_scan(tmp_path / "scan.nc")
+    assert len(closed) == 2  # and once, not twice, on success
+
+
 def test_npy_needs_size_and_unit(tmp_path):
     h = heights()
     np.save(tmp_path / "scan.npy", h)

@@ -402,6 +402,7 @@ def _open(path: Path):
     # the NASA SRTM reader has no header to check: it takes any file of 2 n^2 bytes (a
     # 32-byte text file reads as a 4 x 4 map), so it is trusted only for .hgt files
     if type(reader).__name__ == "HGTReader" and path.suffix.lower() != ".hgt":
+        _close(reader)
         own = _own_reader_error(path)
         raise InputError(f"{str(path)!r} is not a topography that SurfaceTopography can read "
                          + (f"({own})" if own else "(only the header-less NASA SRTM reader "
@@ -570,117 +571,119 @@ def read_scan(path: str | os.PathLike, *,
             raise InputError(f"missing_value must be finite (nan always counts as missing), "
                              f"got {missing_value!r}")
     reader = _open(path)
-    ch = _channel(reader, channel, path)
-    if ch.dim != 2 or not ch.is_uniform:
-        raise InputError(f"{str(path)!r} channel {ch.name!r} is a {ch.dim}D "
-                         f"{'uniform' if ch.is_uniform else 'non-uniform'} topography; "
-                         "roughflow needs a 2D map on a uniform grid")
-    reader_name = type(reader).__name__
-    if reader_name == "AscReader":
-        nx, ny = ch.nb_grid_pts
-        if nx <= 4 < ny and ny > 4 * nx and _is_point_list(path):
-            # the coordinate-list reader refused it (a point missing from the grid, a
-            # fourth column) and the matrix reader took its columns for the scan's lines
-            raise InputError(f"{str(path)!r} looks like a list of points ({ny} lines of "
-                             f"{nx} values), not a matrix: SurfaceTopography reads a list "
-                             "of x y z lines (three columns) only where it covers every "
-                             "point of a uniform grid; drop other columns and write missing "
-                             "points with a height of nan")
-        _check_text_complete(path, tuple(ch.nb_grid_pts))
-    file_unit, file_size = ch.unit, ch.physical_sizes
-    if isinstance(file_unit, tuple):  # (lateral, data) units: the data are not heights
-        lateral_unit, data_unit = (file_unit + (None, None))[:2]
-        if data_unit is None or data_unit != lateral_unit:
-            raise InputError(f"{str(path)!r} channel {ch.name!r} is not a height map (its "
-                             f"data unit is {data_unit!r}, its lateral unit "
-                             f"{lateral_unit!r}); pick a height channel (channels: "
-                             f"{_channel_list(reader)})")
-        file_unit = lateral_unit
-    if file_size is not None:  # plain floats in messages, not numpy's repr
-        file_size = tuple(float(v) for v in file_size)
-    if file_unit is not None and (unit is not None or height_unit is not None):
-        raise InputError(f"{str(path)!r} already gives its unit ({file_unit}): drop "
-                         f"unit={unit!r} / height_unit={height_unit!r}")
-    if file_size is not None and size is not None:
-        given_in = file_unit or _header_size_unit(ch, path)
-        raise InputError(f"{str(path)!r} already gives its size {file_size[0]:g} x "
-                         f"{file_size[1]:g}{' ' + given_in if given_in else ''}: drop "
-                         f"size={size!r}")
-    header_unit = _header_size_unit(ch, path) if file_unit is None and file_size else None
-    if header_unit is not None:
-        # a text header that gives the size with its unit ("Width: 20 um") but not the
-        # heights' unit: SurfaceTopography keeps the numbers and drops the unit, so the
-        # size was read in unit= (measured: 20 um read as 20 nm with --unit nm)
-        if unit is not None and length_factor(unit, "unit") != length_factor(header_unit,
-                                                                              "unit"):
-            raise InputError(f"{str(path)!r} gives its size in {header_unit} "
-                             f"({file_size[0]:g} x {file_size[1]:g}); unit={unit!r} would "
-                             f"read it in {unit}: give the heights' unit with height_unit= "
-                             "(CLI --height-unit) and drop unit=")
-        if unit is None and height_unit is None:
-            raise InputError(f"{str(path)!r} gives its size in {header_unit} but not the unit "
-                             "of its heights: pass height_unit= (CLI --height-unit), or unit= "
-                             f"where they are in {header_unit} too")
-        height_unit, unit, file_unit = height_unit or unit, None, header_unit
-    # a size with its units and height_unit say all that unit= would (the size must then
-    # carry units: _sizes refuses bare numbers without unit=)
-    st_unit = unit
-    if file_unit is None and unit is None and height_unit is not None and size is not None:
-        st_unit = height_unit
-    missing = []  # named together, not one per run
-    if file_unit is None and st_unit is None:
-        missing.append("its length unit: pass unit= (e.g. 'nm'; CLI --unit), or with a size "
-                       "in units the heights' height_unit= (CLI --height-unit)")
-    if file_size is None and size is None:
-        missing.append("its physical size: pass size= (e.g. '500nm' or '0.126mm,0.094mm'; "
-                       "CLI --size)")
-    if missing:
-        hint = ""
-        if reader_name == "H5Reader" and path.suffix.lower() == ".nc":
-            hint = (" (a netCDF-4 file, read as plain HDF5 without its attributes: "
-                    "SurfaceTopography reads the length and unit attributes of netCDF-3 "
-                    "files, e.g. xarray's to_netcdf(path, format='NETCDF3_64BIT'))")
-        raise InputError(f"{str(path)!r} does not give " + ", nor ".join(missing) + hint)
-    lateral = length_factor(file_unit or st_unit, "unit")
-    if file_size is not None:
-        lx_m, ly_m = (float(v) * lateral for v in file_size)
-        if not (math.isfinite(lx_m) and math.isfinite(ly_m) and lx_m > 0 and ly_m > 0):
-            raise InputError(f"{str(path)!r} gives the size {tuple(file_size)}: not positive")
-    else:
-        # bare numbers are in unit=, else in the file's own unit
-        lx_m, ly_m = scan_size(size, unit if unit is not None else file_unit)
-    vertical = lateral if height_unit is None else length_factor(height_unit, "height_unit")
-    auto_crop = crop is not None and str(crop).strip() == SCAN_CROP_DEFINED
-    y_first = _netcdf_y_first(path)
-    # the netCDF reader takes the grid from the x and y dimensions, the HDF5 one (netCDF-4
-    # files) from the array as stored
-    grid = tuple(ch.nb_grid_pts)[::-1] if y_first and reader_name != "NCReader" else \
-        tuple(ch.nb_grid_pts)
-    window = parse_crop(crop, grid)
+    try:  # closed on every error path too (an open file per failed import otherwise)
+        ch = _channel(reader, channel, path)
+        if ch.dim != 2 or not ch.is_uniform:
+            raise InputError(f"{str(path)!r} channel {ch.name!r} is a {ch.dim}D "
+                             f"{'uniform' if ch.is_uniform else 'non-uniform'} topography; "
+                             "roughflow needs a 2D map on a uniform grid")
+        reader_name = type(reader).__name__
+        if reader_name == "AscReader":
+            nx, ny = ch.nb_grid_pts
+            if nx <= 4 < ny and ny > 4 * nx and _is_point_list(path):
+                # the coordinate-list reader refused it (a point missing from the grid, a
+                # fourth column) and the matrix reader took its columns for the scan's lines
+                raise InputError(f"{str(path)!r} looks like a list of points ({ny} lines of "
+                                 f"{nx} values), not a matrix: SurfaceTopography reads a list "
+                                 "of x y z lines (three columns) only where it covers every "
+                                 "point of a uniform grid; drop other columns and write missing "
+                                 "points with a height of nan")
+            _check_text_complete(path, tuple(ch.nb_grid_pts))
+        file_unit, file_size = ch.unit, ch.physical_sizes
+        if isinstance(file_unit, tuple):  # (lateral, data) units: the data are not heights
+            lateral_unit, data_unit = (file_unit + (None, None))[:2]
+            if data_unit is None or data_unit != lateral_unit:
+                raise InputError(f"{str(path)!r} channel {ch.name!r} is not a height map (its "
+                                 f"data unit is {data_unit!r}, its lateral unit "
+                                 f"{lateral_unit!r}); pick a height channel (channels: "
+                                 f"{_channel_list(reader)})")
+            file_unit = lateral_unit
+        if file_size is not None:  # plain floats in messages, not numpy's repr
+            file_size = tuple(float(v) for v in file_size)
+        if file_unit is not None and (unit is not None or height_unit is not None):
+            raise InputError(f"{str(path)!r} already gives its unit ({file_unit}): drop "
+                             f"unit={unit!r} / height_unit={height_unit!r}")
+        if file_size is not None and size is not None:
+            given_in = file_unit or _header_size_unit(ch, path)
+            raise InputError(f"{str(path)!r} already gives its size {file_size[0]:g} x "
+                             f"{file_size[1]:g}{' ' + given_in if given_in else ''}: drop "
+                             f"size={size!r}")
+        header_unit = _header_size_unit(ch, path) if file_unit is None and file_size else None
+        if header_unit is not None:
+            # a text header that gives the size with its unit ("Width: 20 um") but not the
+            # heights' unit: SurfaceTopography keeps the numbers and drops the unit, so the
+            # size was read in unit= (measured: 20 um read as 20 nm with --unit nm)
+            if unit is not None and length_factor(unit, "unit") != length_factor(header_unit,
+                                                                                  "unit"):
+                raise InputError(f"{str(path)!r} gives its size in {header_unit} "
+                                 f"({file_size[0]:g} x {file_size[1]:g}); unit={unit!r} would "
+                                 f"read it in {unit}: give the heights' unit with height_unit= "
+                                 "(CLI --height-unit) and drop unit=")
+            if unit is None and height_unit is None:
+                raise InputError(f"{str(path)!r} gives its size in {header_unit} but not the unit "
+                                 "of its heights: pass height_unit= (CLI --height-unit), or unit= "
+                                 f"where they are in {header_unit} too")
+            height_unit, unit, file_unit = height_unit or unit, None, header_unit
+        # a size with its units and height_unit say all that unit= would (the size must then
+        # carry units: _sizes refuses bare numbers without unit=)
+        st_unit = unit
+        if file_unit is None and unit is None and height_unit is not None and size is not None:
+            st_unit = height_unit
+        missing = []  # named together, not one per run
+        if file_unit is None and st_unit is None:
+            missing.append("its length unit: pass unit= (e.g. 'nm'; CLI --unit), or with a size "
+                           "in units the heights' height_unit= (CLI --height-unit)")
+        if file_size is None and size is None:
+            missing.append("its physical size: pass size= (e.g. '500nm' or '0.126mm,0.094mm'; "
+                           "CLI --size)")
+        if missing:
+            hint = ""
+            if reader_name == "H5Reader" and path.suffix.lower() == ".nc":
+                hint = (" (a netCDF-4 file, read as plain HDF5 without its attributes: "
+                        "SurfaceTopography reads the length and unit attributes of netCDF-3 "
+                        "files, e.g. xarray's to_netcdf(path, format='NETCDF3_64BIT'))")
+            raise InputError(f"{str(path)!r} does not give " + ", nor ".join(missing) + hint)
+        lateral = length_factor(file_unit or st_unit, "unit")
+        if file_size is not None:
+            lx_m, ly_m = (float(v) * lateral for v in file_size)
+            if not (math.isfinite(lx_m) and math.isfinite(ly_m) and lx_m > 0 and ly_m > 0):
+                raise InputError(f"{str(path)!r} gives the size {tuple(file_size)}: not positive")
+        else:
+            # bare numbers are in unit=, else in the file's own unit
+            lx_m, ly_m = scan_size(size, unit if unit is not None else file_unit)
+        vertical = lateral if height_unit is None else length_factor(height_unit, "height_unit")
+        auto_crop = crop is not None and str(crop).strip() == SCAN_CROP_DEFINED
+        y_first = _netcdf_y_first(path)
+        # the netCDF reader takes the grid from the x and y dimensions, the HDF5 one (netCDF-4
+        # files) from the array as stored
+        grid = tuple(ch.nb_grid_pts)[::-1] if y_first and reader_name != "NCReader" else \
+            tuple(ch.nb_grid_pts)
+        window = parse_crop(crop, grid)
 
-    kw = {} if file_size is not None else {"physical_sizes": tuple(float(v) / lateral for v in
-                                                                   (lx_m, ly_m))}
-    if ch.unit is None:
-        kw["unit"] = file_unit or st_unit
-    try:
-        topo = ch.topography(**kw)
-        raw = topo.heights()
-    except Exception as exc:
-        raise InputError(f"cannot read the heights of {str(path)!r} "
-                         f"({type(exc).__name__}: {exc})") from None
-    if y_first:
-        log.info("%s: heights stored over (y, x), transposed to roughflow's (x, y)", path)
-        raw = raw.T
-    if raw.shape != grid:
-        raise InputError(f"{str(path)!r}: the reader gave {raw.shape[0]} x {raw.shape[1]} "
-                         f"heights for a {grid[0]} x {grid[1]} grid")
-    missing = np.ma.getmaskarray(raw) | ~np.isfinite(np.ma.getdata(raw))
-    if missing_value is not None:
-        missing |= np.isclose(np.ma.getdata(raw), missing_value, rtol=MISSING_VALUE_RTOL,
-                              atol=0.0)
-    h = np.array(np.ma.getdata(raw), dtype=np.float64) * vertical
-    del raw, topo
-    _close(reader)
+        kw = {} if file_size is not None else {"physical_sizes": tuple(float(v) / lateral for v in
+                                                                       (lx_m, ly_m))}
+        if ch.unit is None:
+            kw["unit"] = file_unit or st_unit
+        try:
+            topo = ch.topography(**kw)
+            raw = topo.heights()
+        except Exception as exc:
+            raise InputError(f"cannot read the heights of {str(path)!r} "
+                             f"({type(exc).__name__}: {exc})") from None
+        if y_first:
+            log.info("%s: heights stored over (y, x), transposed to roughflow's (x, y)", path)
+            raw = raw.T
+        if raw.shape != grid:
+            raise InputError(f"{str(path)!r}: the reader gave {raw.shape[0]} x {raw.shape[1]} "
+                             f"heights for a {grid[0]} x {grid[1]} grid")
+        missing = np.ma.getmaskarray(raw) | ~np.isfinite(np.ma.getdata(raw))
+        if missing_value is not None:
+            missing |= np.isclose(np.ma.getdata(raw), missing_value, rtol=MISSING_VALUE_RTOL,
+                                  atol=0.0)
+        h = np.array(np.ma.getdata(raw), dtype=np.float64) * vertical
+        del raw, topo
+    finally:
+        _close(reader)
     nx0, ny0 = h.shape
     if auto_crop:
         window = largest_defined_window(missing)
