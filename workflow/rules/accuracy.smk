@@ -35,6 +35,12 @@ rule accuracy_resolution:
         seeds=_ACC_SEEDS,
         ppl=_ACC_PPL,
     threads: 1
+    resources:
+        # grids up to 16 points per lambda_s (1024^2 at the default eps_f): the library's
+        # estimate of a contact-and-flow job there is 1.7 GB (roughflow.resources, "ladder");
+        # the default six seeds take about a minute
+        mem_mb=3000,
+        runtime=60,
     shell:
         "rm -f {output} && ROUGHFLOW_FFT_THREADS={threads} {_ACC_SCRIPT} "
         "resolution --out {_ACC_OUT} --seeds {params.seeds} --ppl {params.ppl} > {log} 2>&1"
@@ -49,6 +55,9 @@ rule accuracy_tolerances:
     params:
         seeds=_ACC_SEEDS,
     threads: 1
+    resources:
+        mem_mb=2000,
+        runtime=60,
     shell:
         "rm -f {output} && ROUGHFLOW_FFT_THREADS={threads} {_ACC_SCRIPT} "
         "tol --out {_ACC_OUT} --seeds {params.seeds} > {log} 2>&1"
