@@ -44,7 +44,8 @@ from roughflow.theory.closed_form import EXPONENTS  # noqa: E402
 
 TARGETS = (0.2, 0.35)
 #: d ln sigma / d a_c ~ -beta / (a_c* - a_c), the elastic exponent of Eq. 16 (docs/physics.md
-#: Sect. 5): used only to move sigma by the last few 1e-4 of contact area onto the exact target
+#: Sect. 5), with the seed's own reference a_c*(x) (the paper's value where the run has no
+#: thresholds): moves sigma along the load path onto the perimeter-corrected target
 BETA, A_STAR = EXPONENTS["elastic"], A_C_STAR_PAPER
 
 
@@ -330,10 +331,10 @@ def _fit_c(sig: list[dict], ppls: list[int], exclude_seed=None) -> float:
     return fit.c
 
 
-def _sigma_at_corrected_area(q: dict, target: float, c: float) -> float:
+def _sigma_at_corrected_area(q: dict, target: float, c: float, a_star: float = A_STAR) -> float:
     """ln sigma at the state whose perimeter-corrected area equals ``target``."""
     a, a0 = q["a"], q["a_fixed"]
-    slope = -BETA / (A_STAR - a)
+    slope = -BETA / (a_star - a)
     if abs(a - a0) > 1e-4:
         slope += 3 * (math.log(q["mean_gap"]) - math.log(q["gap_fixed"])) / (a - a0)
     a_cor = a - c * q["perim"]
@@ -479,6 +480,7 @@ def report(args) -> None:
         ax.legend(fontsize=7)
 
     # sigma at fixed a_c against resolution: raw a_c, and a_c perimeter-corrected
+    a_star_x = {s: refs[(s, 0)] for s in seeds} if thr and len(ppls) >= 2 else {}
     rows = []
     for j, target in enumerate(TARGETS):
         pts = {"raw": [], "perimeter": [], "richardson": []}
@@ -501,7 +503,7 @@ def report(args) -> None:
                 cs = _fit_c(fixed, fit_ppls, exclude_seed=s) if len(seeds) > 1 else c_all
                 ln_raw = math.log(q["sigma"])
                 e["raw"].append(ln_raw - ref)
-                ln_cor = _sigma_at_corrected_area(q, target, cs)
+                ln_cor = _sigma_at_corrected_area(q, target, cs, a_star_x.get(s, A_STAR))
                 e["perimeter"].append(ln_cor - ref)
                 tt.append(q["time_contact"] + q["time_flow"])
                 if p // 2 in rr and p < f1 and rr[p // 2]["sigma"] > 0:
