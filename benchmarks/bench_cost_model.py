@@ -1,5 +1,5 @@
 """CPU time and peak memory of a config's scene jobs against the cost and memory models
-(calibrates ``roughflow.scenes.jobs.estimated_seconds``).
+(calibrates ``roughflow.scenes.requests.estimated_seconds``).
 
 Usage:
     python benchmarks/bench_cost_model.py [config/paper.yaml] [--max-points 4200000]
@@ -30,7 +30,7 @@ from pathlib import Path
 import yaml
 
 from roughflow.scenes import estimated_memory, expand_studies, grid_points
-from roughflow.scenes.jobs import estimated_seconds
+from roughflow.scenes.requests import estimated_seconds
 
 OUT = Path(__file__).resolve().parents[1] / "results" / "benchmarks"
 

@@ -1,6 +1,6 @@
 """The workflow's cost model against measured CPU times of config/paper.yaml's jobs.
 
-``roughflow.scenes.jobs.estimated_seconds`` sets each cluster job's time limit
+``roughflow.scenes.requests.estimated_seconds`` sets each cluster job's time limit
 (``requested_runtime_min``) and the core-hour estimate of the README. The CPU seconds below
 were measured with one thread per job on the shared 2-core development machine
 (``benchmarks/bench_cost_model.py``; table in docs/workflow.md "Cost"): the threshold and
@@ -23,7 +23,7 @@ import pytest
 import yaml
 
 from roughflow.scenes import expand_studies
-from roughflow.scenes.jobs import RUNTIME_FLOOR_MIN, estimated_seconds, requested_runtime_min
+from roughflow.scenes.requests import RUNTIME_FLOOR_MIN, estimated_seconds, requested_runtime_min
 
 ROOT = Path(__file__).resolve().parents[1]
 

@@ -96,7 +96,7 @@ def test_paper_sizes_as_the_readme_states():
     import yaml
 
     from roughflow.scenes import expand_studies
-    from roughflow.scenes.jobs import estimated_seconds
+    from roughflow.scenes.requests import estimated_seconds
 
     studies = yaml.safe_load((ROOT / "config" / "paper.yaml").read_text())["studies"]
     jobs = [job for job in expand_studies(studies).values() if job.kind != "leak"]

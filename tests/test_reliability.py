@@ -23,7 +23,8 @@ from roughflow.scenes import (
     estimated_memory,
     expand_study,
 )
-from roughflow.scenes.jobs import check_collisions, check_plan_memory
+from roughflow.scenes.jobs import check_collisions
+from roughflow.scenes.requests import check_plan_memory
 from roughflow.surface import SurfaceSpec, generate
 
 SMALL = SurfaceParams(l_over_lambda_r=4, eps_f=0.25, points_per_lambda_s=2)
@@ -178,7 +179,7 @@ def test_plan_memory_refuses_the_54_terabyte_config():
 def test_job_memory_is_the_snakemake_request():
     # the workflow requests the estimate plus the Snakemake wrapper, doubled on the retry
     # (workflow/rules/common.smk: mem_mb)
-    from roughflow.scenes.jobs import WRAPPER_MB, requested_mem_mb
+    from roughflow.scenes.requests import WRAPPER_MB, requested_mem_mb
 
     job = ThresholdJob(surface=SMALL)
     assert estimated_memory(job) == resources.estimate_bytes("threshold", 32 * 32)

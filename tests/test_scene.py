@@ -638,7 +638,7 @@ def test_leak_memory_request_follows_the_imported_grid(tmp_path, monkeypatch):
     points than the scan), doubled on a second attempt."""
     from roughflow.boundary import cell_points
     from roughflow.io import surface_to_dataset, write_dataset
-    from roughflow.scenes.jobs import LEAK_GRID_BEFORE_IMPORT, leak_mem_mb, requested_mem_mb
+    from roughflow.scenes.requests import LEAK_GRID_BEFORE_IMPORT, leak_mem_mb, requested_mem_mb
     from roughflow.surface import Surface
 
     np.save(tmp_path / "scan.npy", np.zeros((8, 8)))

@@ -200,7 +200,7 @@ def _leak_request(wd: Path, output: str) -> int:
 
     from roughflow.boundary import cell_points
     from roughflow.scenes import expand_study
-    from roughflow.scenes.jobs import requested_mem_mb
+    from roughflow.scenes.requests import requested_mem_mb
 
     name = Path(output).stem
     cfg = yaml.safe_load((wd / "config" / "test.yaml").read_text())["studies"]["measured"]

@@ -310,9 +310,9 @@ def test_only_requested_targets_run(tmp_path):
     assert counts == {"scene": 4, "aggregate": 1, "figure": 1}
     assert "ladder" not in dry.stdout
     # each job requests the library's memory estimate plus the Snakemake wrapper
-    # (roughflow.scenes.jobs.requested_mem_mb) and the cost model's time with its margin
+    # (roughflow.scenes.requests.requested_mem_mb) and the cost model's time with its margin
     from roughflow.scenes import estimated_memory, expand_study
-    from roughflow.scenes.jobs import WRAPPER_MB, requested_mem_mb, requested_runtime_min
+    from roughflow.scenes.requests import WRAPPER_MB, requested_mem_mb, requested_runtime_min
 
     cfg = yaml.safe_load((wd / "config" / "test.yaml").read_text())["studies"]
     jobs = expand_study("threshold_vs_gamma", cfg["threshold_vs_gamma"])

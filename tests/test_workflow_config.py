@@ -161,7 +161,7 @@ def test_a_failed_attempt_keeps_its_log(tmp_path):
     """Snakemake removes a job's log before each attempt, so the retry's log replaced the
     failed attempt's and the cause of the failure was lost. The rules' commands end in
     KEEP_FAILED_LOG: a failed attempt leaves a copy, and the exit status is the command's."""
-    from roughflow.scenes.jobs import KEEP_FAILED_LOG
+    from roughflow.scenes.requests import KEEP_FAILED_LOG
 
     (tmp_path / "Snakefile").write_text(
         "rule a:\n"

@@ -7,7 +7,7 @@ processes at 128^2 ... 2048^2 points; docs/workflow.md "Memory") and rounded up.
 numbers refuse work that cannot fit (the library entry points call :func:`check_memory`
 before allocating: ``surface.generate``, ``contact.solve``, ``flow.solve``,
 ``search.threshold``, the Persson spectrum, ``theory.gap_theory``, every scene job) and set
-the Snakemake ``mem_mb`` of a job (:func:`roughflow.scenes.jobs.estimated_memory`).
+the Snakemake ``mem_mb`` of a job (:func:`roughflow.scenes.requests.estimated_memory`).
 
 Tasks: ``surface`` (generate a surface), ``contact`` (one elastic or adhesive solve, GFMD or
 CG), ``bearing``, ``threshold`` (an elastic threshold search: each warm-start state is kept

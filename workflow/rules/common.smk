@@ -63,9 +63,9 @@ from roughflow.defaults import FLOW_STUDIES, MEASURED_STUDY, THRESHOLD_STUDIES  
 from roughflow.figures import caption as figure_caption  # noqa: E402
 from roughflow.resources import total_bytes  # noqa: E402
 from roughflow.scenes import expand_study, study_defaults  # noqa: E402
-from roughflow.scenes.jobs import (  # noqa: E402
+from roughflow.scenes.jobs import aggregated_config  # noqa: E402
+from roughflow.scenes.requests import (  # noqa: E402
     KEEP_FAILED_LOG,
-    aggregated_config,
     check_plan_memory,
     requested_mem_mb,
     requested_runtime_min,

@@ -1,7 +1,7 @@
 # The measured study: per scan, `roughflow import` (scan -> surface file) and `roughflow leak`
 # (leak curve in physical units); the study's aggregation and figure are the shared rules.
 
-from roughflow.scenes.jobs import leak_mem_mb  # noqa: E402
+from roughflow.scenes.requests import leak_mem_mb  # noqa: E402
 
 MEASURED = JOBS.get("measured", {})
 

@@ -1,4 +1,4 @@
-"""Core-hours of a config from the cost model ``roughflow.scenes.jobs.estimated_seconds``.
+"""Core-hours of a config from the cost model ``roughflow.scenes.requests.estimated_seconds``.
 
     python workflow/scripts/estimate_cost.py config/paper.yaml
 
@@ -19,7 +19,7 @@ import yaml
 
 from roughflow.resources import describe
 from roughflow.scenes import estimated_memory, expand_studies, grid_points
-from roughflow.scenes.jobs import estimated_seconds
+from roughflow.scenes.requests import estimated_seconds
 
 
 def main() -> None:

@@ -5,7 +5,8 @@
 - :func:`run_channels`: the two surfaces of Fig. 1 and their fluid channels.
 
 Jobs are frozen dataclasses (:mod:`roughflow.scenes.jobs`); a config study expands into
-jobs with :func:`expand_study`. The runners are imported on first use, so planning jobs
+jobs with :func:`expand_study`; what a job asks of the scheduler (memory, runtime) is in
+:mod:`roughflow.scenes.requests`. The runners are imported on first use, so planning jobs
 (the workflow's job graph, cost estimates) does not load the solvers.
 """
 
@@ -19,14 +20,13 @@ from .jobs import (
     LadderJob,
     SurfaceParams,
     ThresholdJob,
-    check_job_memory,
-    estimated_memory,
     expand_studies,
     expand_study,
     grid_points,
     job_methods,
     study_defaults,
 )
+from .requests import check_job_memory, estimated_memory
 
 if TYPE_CHECKING:
     import xarray as xr
@@ -48,7 +48,7 @@ def __getattr__(name: str):
 
 def run(job: Job, *, threads: int | None = None) -> xr.Dataset:
     """Run any job and return its dataset (refused before any work if the job would need
-    more memory than the machine has, :func:`roughflow.scenes.jobs.check_job_memory`)."""
+    more memory than the machine has, :func:`roughflow.scenes.requests.check_job_memory`)."""
     from roughflow.fft import check_threads
 
     check_threads(threads)
