@@ -82,6 +82,8 @@ def test_scales_round_trip_through_the_registry():
     assert q.to(U.CONDUCTANCE_SI).to(U.SIGMA_UNITS).magnitude == pytest.approx(sigma)
     assert ureg.Quantity(0.02, U.PRESSURE_UNITS).to("MPa").magnitude == pytest.approx(4000.0)
     assert ureg.Quantity(2.0, U.LENGTH_UNITS).to("nm").magnitude == pytest.approx(1000.0)
+    assert float(s.length_to_si(2.0)) == pytest.approx(
+        ureg.Quantity(2.0, U.LENGTH_UNITS).to("m").magnitude, rel=1e-12)
     assert float(s.pressure_from_si(s.pressure_to_si(0.3))) == pytest.approx(0.3)
 
 

@@ -64,11 +64,3 @@ def full_contact_energy(heights: np.ndarray, lx: float, ly: float, e_star: float
     c = fft.rfft2(heights) / (nx * ny)
     w = fft.rfft_weights(ny)
     return float(0.25 * e_star * (w * _qabs(nx, ny, float(lx), float(ly)) * np.abs(c) ** 2).sum())
-
-
-def full_contact_pressure_peak(heights: np.ndarray, lx: float, ly: float) -> float:
-    """Max over r of the zero-mean pressure that flattens ``heights``: a load above this
-    gives full contact (E* = 1)."""
-    nx, ny = heights.shape
-    p = fft.irfft2(fft.rfft2(heights) * stiffness((nx, ny), lx, ly), (nx, ny))
-    return float(-p.min())
