@@ -191,6 +191,13 @@ def test_cli_leak_warns_where_the_fluid_pressure_is_not_small(imported, tmp_path
     assert f"note: {said}" in out
     assert xr.open_dataset(tmp_path / "b.nc").attrs["fluid_pressure_note"].startswith(said)
     assert xr.open_dataset(tmp_path / "a.nc").attrs["fluid_pressure_note"] == ""
+    # equal to the lowest contact pressure (the README's example: 1 MPa against 1MPa:...):
+    # not below it, although the round trip through E* leaves the lowest one ulp above
+    # (1e6 / 2e11 * 2e11 = 1000000.0000000001)
+    argv[argv.index("--pressures") + 1] = "1MPa:100MPa:2"
+    argv[argv.index("--fluid-pressure") + 1] = "1MPa"
+    assert main(["leak", str(imported), *argv, "-o", str(tmp_path / "c.nc")]) == 0
+    assert "is not small against the lowest contact pressure 1e+06 Pa" in capsys.readouterr().err
 
 
 @pytest.mark.parametrize("change, match", [

@@ -430,3 +430,22 @@ def test_solving_commands_print_their_result(tmp_path, capsys):
     with xr.open_dataset(t) as ds:
         a = float(ds["a_c_star"].sel(axis="x"))
         assert code == 0 and f"x {a:.4f} in [" in out and "contact solves" in out
+
+
+def test_a_closed_pipe_on_stdout_ends_quietly():
+    # `roughflow cite --format bibtex | head -1` printed a BrokenPipeError traceback and
+    # exited 1, the status of "a bug: please report"; now it ends as a killed pipe writer
+    import os
+    import signal
+    import subprocess
+    import sys
+
+    read_end, write_end = os.pipe()
+    os.close(read_end)  # the reader went away before the first line
+    try:
+        res = subprocess.run([sys.executable, "-m", "roughflow", "cite", "--format", "bibtex"],
+                             stdout=write_end, stderr=subprocess.PIPE, text=True, timeout=120)
+    finally:
+        os.close(write_end)
+    assert res.returncode == 128 + int(signal.SIGPIPE), res.stderr
+    assert "Traceback" not in res.stderr and "Exception ignored" not in res.stderr

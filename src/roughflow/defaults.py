@@ -78,7 +78,7 @@ THRESHOLD_TOL = 2e-3
 #: Widest bracket accepted (a_c* itself varies by about 0.1 between systems).
 THRESHOLD_TOL_MAX = 0.1
 #: Contact-solve tolerance inside a threshold search (docs/accuracy.md: a_c* moves by less
-#: than 4e-5 against a 1e-8 solve).
+#: than 6e-5 against a 1e-7 solve).
 THRESHOLD_CONTACT_TOL = 1e-4
 #: The largest load (E* gbar) a search for a contact area tries: elastic contact is nearly
 #: full at 2 (the elastic law's erf(2 sqrt(pi)) > 0.999).

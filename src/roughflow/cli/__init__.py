@@ -19,6 +19,7 @@ from __future__ import annotations
 import argparse
 import importlib
 import logging
+import os
 import pkgutil
 import signal
 import sys
@@ -42,6 +43,8 @@ EXIT_STATUS = {0: "success", 1: "unexpected error (a bug: please report the trac
                5: "an output could not be written (disk or quota full, folder unwritable); "
                   "none of the command's outputs was left",
                130: "interrupted",
+               128 + int(signal.SIGPIPE): "the reader of the standard output went away "
+                                          "(`roughflow cite | head`)",
                **{128 + int(s): f"terminated by {signal.Signals(s).name}"
                   + (" (kill, scancel, a time limit)" if s == signal.SIGTERM else "")
                   for s in TERMINATING_SIGNALS}}
@@ -165,6 +168,7 @@ def main(argv: list[str] | None = None) -> int:
         args.provenance = replace(provenance, history=input_history(*single),
                                   references=input_references(*single, *listed))
         args.func(args)
+        sys.stdout.flush()  # a closed pipe raises here, not in the interpreter's exit
         stale = _failed_path(args)
         if stale is not None:  # an earlier failed attempt's inputs no longer apply
             stale.unlink(missing_ok=True)
@@ -179,6 +183,11 @@ def main(argv: list[str] | None = None) -> int:
         parser.exit(5, f"{name}: error: {exc}\n")
     except KeyboardInterrupt:
         parser.exit(130, f"{name}: interrupted\n")
+    except BrokenPipeError:
+        # no traceback, and none again when Python flushes stdout at exit: what follows
+        # goes nowhere, as a killed pipe writer's would
+        os.dup2(os.open(os.devnull, os.O_WRONLY), sys.stdout.fileno())
+        return 128 + int(signal.SIGPIPE)
     except _Terminated as exc:
         parser.exit(128 + int(exc.signum),
                     f"{name}: terminated ({signal.Signals(exc.signum).name})\n")

@@ -29,7 +29,7 @@ PARAM_DIMS = ("model", "gamma", "hurst", "eps_t", "eps_f")
 
 __all__ = ["AXIS_COORD", "CORRECTION_MIN_POINTS", "INT_FILL", "PARAM_DIMS", "area_values",
            "corrected_taken", "expand", "fine_grid", "no_fill_on_coords", "param_coords",
-           "param_key", "rnd", "surface_vars", "threshold_values", "var"]
+           "param_key", "rnd", "seed_coord", "surface_vars", "threshold_values", "var"]
 
 
 def rnd(v: float) -> float:
@@ -74,6 +74,12 @@ def var(values: ArrayLike, extra_dims: tuple[str, ...], units: str, long_name: s
         v = xr.Variable(dims, a.astype(np.int32), v.attrs)
         v.encoding = {"_FillValue": np.int32(INT_FILL), "dtype": "int32"}
     return v
+
+
+def seed_coord(seeds) -> tuple:
+    """The ``seed`` coordinate of a job's dataset."""
+    return ("seed", np.asarray(seeds, dtype=np.int64),
+            {"units": DIMENSIONLESS, "long_name": "surface seed"})
 
 
 def surface_vars(p: SurfaceParams, seed: int) -> dict:

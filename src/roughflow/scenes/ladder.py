@@ -31,7 +31,13 @@ from roughflow.datasets.results import (
     FLOW_SIGMA_ERROR_LONG_NAME,
     adhesion_attrs,
 )
-from roughflow.datasets.sweep import no_fill_on_coords, param_coords, surface_vars, var
+from roughflow.datasets.sweep import (
+    no_fill_on_coords,
+    param_coords,
+    seed_coord,
+    surface_vars,
+    var,
+)
 from roughflow.datasets.units import (
     DIMENSIONLESS,
     LENGTH_UNITS,
@@ -270,8 +276,9 @@ def run_ladder(job: LadderJob, *, threads: int | None = None) -> xr.Dataset:
         data[ADHESION_REPULSION_FIELD[0]] = var(np.array(repulsion), (), DIMENSIONLESS,
                                                 ADHESION_REPULSION_FIELD[1])
     coords = param_coords(p, job.model)
-    coords["seed"] = ("seed", np.asarray(job.seeds, dtype=np.int64), {"long_name": "surface seed"})
-    coords["step"] = ("step", np.arange(nk), {"long_name": "index on the area ladder"})
+    coords["seed"] = seed_coord(job.seeds)
+    coords["step"] = ("step", np.arange(nk), {"units": DIMENSIONLESS,
+                                              "long_name": "index on the area ladder"})
     coords["axis"] = AXIS_COORD
     coords["emt"] = ("emt", list(EMT_FORMS), {"long_name": "effective-medium form"})
     ds = xr.Dataset(data, coords=coords, attrs={

@@ -14,7 +14,13 @@ import xarray as xr
 
 from roughflow.accuracy import PERIMETER_C
 from roughflow.datasets import threshold_dataset
-from roughflow.datasets.sweep import no_fill_on_coords, param_coords, surface_vars, var
+from roughflow.datasets.sweep import (
+    no_fill_on_coords,
+    param_coords,
+    seed_coord,
+    surface_vars,
+    var,
+)
 from roughflow.datasets.units import RESIDUAL_UNITS, SECONDS
 from roughflow.defaults import AXIS_NAMES
 from roughflow.search import SearchOptions, threshold
@@ -60,7 +66,7 @@ def run_threshold(job: ThresholdJob, *, threads: int | None = None) -> xr.Datase
                                    "largest residual of the seed's contact solves")
     data.update(surface_vars(p, job.seeds[0]))
     coords = param_coords(p, job.model)
-    coords["seed"] = ("seed", np.asarray(job.seeds, dtype=np.int64), {"long_name": "surface seed"})
+    coords["seed"] = seed_coord(job.seeds)
     coords["axis"] = ("axis", stacked["axis"].values, stacked["axis"].attrs)
     ds = xr.Dataset(data, coords=coords, attrs={
         "title": "roughflow threshold scene", "scene": "threshold", "tol": job.tol,
