@@ -25,6 +25,15 @@ def test_contact_line_length_of_rectangles():
     assert accuracy.perimeter_term(s) == pytest.approx(20 / 100)
 
 
+def test_contact_line_length_on_rectangular_cells():
+    # dx = 2 / 20 = 0.1, dy = 6 / 30 = 0.2: a face normal to x is dy long, one normal to y
+    # dx long, so the 5 x 12 cell rectangle (0.5 x 2.4) has perimeter 2 (0.5 + 2.4) = 5.8;
+    # spacings swapped it would be 24 dx + 10 dy = 4.4. Sums of a few products: round-off.
+    m = np.zeros((20, 30), dtype=bool)
+    m[3:8, 10:22] = True
+    assert accuracy.contact_line_length(m, 2.0, 6.0) == pytest.approx(5.8, rel=1e-12)
+
+
 def test_perimeter_term_is_one_cell_area_per_face_on_rectangular_cells():
     # the 5 x 12 cell rectangle has 24 faces normal to x and 10 normal to y: the term counts
     # faces per cell whatever the cell's aspect ratio (gamma:1 cells of anisotropic surfaces)

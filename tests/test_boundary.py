@@ -126,6 +126,16 @@ def test_window_and_periodic():
     assert per.observe(res) is res
 
 
+def test_window_margins_follow_each_axis_s_own_length():
+    """The margin is a share of each side: on a 32 x 48 scan 0.125 drops 4 cells at either
+    end along x and 6 along y (a y margin taken from nx kept 4 + 4 rows too many)."""
+    s = Surface(heights=np.random.default_rng(3).normal(size=(32, 48)), lx=1.0, ly=1.5)
+    emb = embed(s, "window", margin=0.125)
+    assert emb.window == (slice(4, 28), slice(6, 42)) and emb.shape == (24, 36)
+    # the window's size in L: 24 of 32 cells of 1.0, 36 of 48 cells of 1.5
+    assert emb.lx == pytest.approx(0.75, rel=1e-12) and emb.ly == pytest.approx(1.125, rel=1e-12)
+
+
 def test_bad_embeddings_are_refused():
     with pytest.raises(InputError, match="'tile'"):
         embed(scan(), "tile")

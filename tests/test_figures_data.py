@@ -8,6 +8,7 @@ import matplotlib
 matplotlib.use("Agg")
 
 import numpy as np  # noqa: E402
+import pytest  # noqa: E402
 import xarray as xr  # noqa: E402
 from matplotlib.colors import to_rgba  # noqa: E402
 
@@ -66,6 +67,20 @@ def test_one_seed_has_no_error_bar_not_a_zero_one():
     assert np.isfinite(seed_stats(three)[1]).all()
 
 
+def test_error_bar_is_the_standard_error_of_the_seed_mean():
+    # std (ddof 1) / sqrt(n): seeds 0 and 2 -> sqrt(2) / sqrt(2) = 1; 0, 1, 2 -> 1 / sqrt(3)
+    # (the population std gives 1/sqrt(2) and sqrt(2)/3, the std alone sqrt(2) and 1).
+    # A few floating-point operations: equal to round-off.
+    two = xr.DataArray([0.0, 2.0], dims="seed")
+    mean, sem, n = seed_stats(two)
+    assert float(mean) == 1.0 and int(n) == 2
+    assert float(sem) == pytest.approx(1.0, rel=1e-14)
+    three = xr.DataArray([0.0, 1.0, 2.0, np.nan], dims="seed")  # NaN: a seed not run
+    mean, sem, n = seed_stats(three)
+    assert float(mean) == 1.0 and int(n) == 3
+    assert float(sem) == pytest.approx(1 / np.sqrt(3), rel=1e-14)
+
+
 def test_one_gamma_keeps_its_axis_around_it():
     """With one gamma the log axis autoscaled to 0.96-1.04, so the 2-4 % nudges that keep
     the eps_f series apart looked like other gammas."""
@@ -118,3 +133,28 @@ def test_the_fitted_values_do_not_hide_data():
     # wrapped: one long line squeezed the plot to 0.54 of the figure's width (0.89 without)
     fig.draw_without_rendering()
     assert plot.get_position().width > 0.8
+
+
+def test_the_hard_fit_line_has_the_hard_amplitude():
+    """The red (hard) line of the joint fit is a_c* + A_hard eps^(1/nu), the blue one
+    a_c* + A_easy eps^(1/nu): amplitudes of opposite sign, so the easy one drawn in red
+    shows. The figure evaluates the same expression on its own eps grid: exact to
+    round-off."""
+    from roughflow.fits import fit_dataset
+
+    ds = study([2.0], n_seeds=3, eps_t=(0.125, 0.25, 0.5))
+    fit = fit_dataset(ds, n_boot=0)
+    joint = {"group": "anisotropic", "fit": "joint", "nu_mode": "fixed"}
+    fit["amp_easy"].loc[joint] = -0.1
+    fit["amp_hard"].loc[joint] = 0.1
+    row = fit.sel(joint)
+    a_star, nu = float(row["a_star"]), float(row["nu"])
+    ax = threshold_vs_size.draw(ds, fit).axes[0]
+    solid = {to_rgba(c): line for line in ax.get_lines()
+             if line.get_linestyle() == "-" and len(line.get_xdata()) > 10
+             for c in [line.get_color()]}
+    for color, amp in ((HARD, 0.1), (EASY, -0.1)):
+        line = solid[to_rgba(color)]
+        x = np.asarray(line.get_xdata())
+        np.testing.assert_allclose(line.get_ydata(), a_star + amp * x ** (1 / nu),
+                                   rtol=1e-14, atol=1e-15)

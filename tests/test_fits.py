@@ -9,10 +9,12 @@ import xarray as xr
 from roughflow.errors import InputError
 from roughflow.fits import (
     NU_PERCOLATION,
+    ScalingFit,
     UnderdeterminedFit,
     bootstrap_fit,
     fit_dataset,
     fit_scaling,
+    lack_of_fit_limit,
     scaling,
     threshold_points,
 )
@@ -216,6 +218,22 @@ def test_threshold_values_take_the_corrected_a_c_star_only_where_it_is_calibrate
     np.testing.assert_array_equal(threshold_values(no_ppl).values, [0.44, 0.43, 0.425])
 
 
+def test_flow_figures_take_the_corrected_area_where_the_ladder_stored_one():
+    """sigma is plotted against the perimeter-corrected a_c where it is finite (elastic
+    ladders) and the raw a_c where it is NaN (adhesive: not calibrated), point by point."""
+    from roughflow.datasets.sweep import area_values
+
+    ds = xr.Dataset({"area_fraction": (("seed", "step"), [[0.11, 0.21], [0.12, 0.22]]),
+                     "area_fraction_corrected": (("seed", "step"),
+                                                 [[0.10, np.nan], [np.nan, 0.20]])})
+    a = area_values(ds)
+    assert a.dims == ("seed", "step")
+    np.testing.assert_array_equal(a.values, [[0.10, 0.21], [0.12, 0.20]])
+    # a dataset without the corrected variable: the raw a_c throughout
+    raw = ds.drop_vars("area_fraction_corrected")
+    np.testing.assert_array_equal(area_values(raw).values, [[0.11, 0.21], [0.12, 0.22]])
+
+
 def test_fit_dataset_refuses_duplicated_seeds():
     """A seed twice in the dataset counted twice in every mean (the joint a_c* moved from
     0.413 to 0.377 without a word)."""
@@ -322,6 +340,33 @@ def test_a_law_that_misses_the_data_is_flagged():
     assert float(joint["a_star_err"]) < 1e-15 and int(joint["lack_of_fit"]) == 1
     exact = fit_dataset(_threshold_dataset(noise=0.0), n_boot=20)
     assert (exact["lack_of_fit"] != 1).all()  # the law itself, to the fit's precision
+
+
+def test_lack_of_fit_limit_is_the_f_quantile_of_the_fit_s_degrees_of_freedom():
+    """chi2_dof of seed means is F-distributed with (points - parameters, seeds - 1) degrees
+    of freedom; the limit is its FIT_LACK_OF_FIT_QUANTILE quantile, the same scipy call
+    here (hence exact). 12 points, 5 seeds: F(9, 4) with nu fixed (3 parameters), F(8, 4)
+    with nu free (4): the two arguments differ, so swapping them shows."""
+    from scipy.stats import f as f_dist
+
+    from roughflow.defaults import FIT_LACK_OF_FIT_QUANTILE
+
+    eps, a = synthetic(n_seeds=5)
+    for nu, n_par in ((NU_PERCOLATION, 3), (None, 4)):
+        fit = bootstrap_fit(eps, a, nu=nu, n_boot=0)
+        assert fit.n_points == 12 and fit.n_seeds == 5
+        want = f_dist.ppf(FIT_LACK_OF_FIT_QUANTILE, 12 - n_par, 5 - 1)
+        assert lack_of_fit_limit(fit, 2) == want
+
+    # one degree of freedom left still has a limit; none, or one seed, has none (inf)
+    def bare(n_points, n_seeds):
+        return ScalingFit(a_star=0.4, amplitude={"easy": 0.1, "hard": -0.1},
+                          nu=NU_PERCOLATION, nu_free=False, rms_residual=0.0,
+                          n_points=n_points, n_seeds=n_seeds)
+
+    assert lack_of_fit_limit(bare(4, 5), 2) == f_dist.ppf(FIT_LACK_OF_FIT_QUANTILE, 1, 4)
+    assert lack_of_fit_limit(bare(3, 5), 2) == np.inf
+    assert lack_of_fit_limit(bare(12, 1), 2) == np.inf
 
 
 def test_an_axis_without_data_at_one_size_keeps_the_other_and_the_errors(caplog):

@@ -102,6 +102,33 @@ def test_sealing_bracket_agrees_with_the_curve(curve):
         assert (curve.sigma[above, ax] == 0).all()
 
 
+def test_sealing_search_scales_its_pressures_with_the_rms_gradient():
+    """Heights x 100 (gbar 1 -> 100): in linear elasticity the same contact states come at
+    100 times the pressure, so the search, whose range (up to MAX_SEARCH_LOAD E* gbar) and
+    first pressure are in E* gbar, must still bracket both thresholds, at 100 x the
+    pressures. Its pressures scale exactly, so the brackets agree to the contact solver's
+    tolerance; asserted to within the unscaled bracket's width (the search's own resolution
+    in pressure). Unscaled, the range ends far below the x 100 thresholds."""
+    from roughflow.boundary import embed
+    from roughflow.leak import sealing_search
+    from roughflow.surface import rms_gradient
+
+    s = generate(SurfaceSpec.from_sweep(l_over_lambda_r=2, eps_f=0.25, points_per_lambda_s=4))
+    found = {}
+    for k in (1.0, 100.0):
+        h = k * s.heights
+        gbar = rms_gradient(h, s.lx, s.ly)
+        assert gbar == pytest.approx(k, rel=1e-9)  # generated with gbar = 1
+        found[k] = sealing_search(embed(Surface(heights=h, lx=s.lx, ly=s.ly), "periodic"),
+                                  gbar=gbar)
+    for ax, t in found[1.0].items():
+        big = found[100.0][ax]
+        assert t.bracketed and big.bracketed, ax
+        width = t.p_hi - t.p_lo
+        assert abs(big.p_hi / 100 - t.p_hi) <= width and abs(big.p_lo / 100 - t.p_lo) <= width
+        assert big.a_c_star == pytest.approx(t.a_c_star, abs=t.tol)
+
+
 def test_periodic_surfaces_are_analysed_as_they_are():
     s = generate(SurfaceSpec.from_sweep(l_over_lambda_r=2, eps_f=0.25, points_per_lambda_s=4))
     c = leak_curve(s, [0.05], sealing=False)

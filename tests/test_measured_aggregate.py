@@ -84,6 +84,17 @@ def _all_have_units(ds: xr.Dataset) -> None:
         assert ds[name].attrs.get("units") and ds[name].attrs.get("long_name"), name
 
 
+def test_sealing_pressures_are_the_bracket_s_ends_in_pascals():
+    """The fluid stops spanning between p_lo (leaking) and p_hi (sealed): sealing_pressure
+    is p_hi E*, the lowest pressure found sealed, and sealing_pressure_lo is p_lo E*. The
+    helper's bracket is (2, 3) x and (2, 4) x its top pressure (1 GPa / E* here); one
+    product and one quotient: round-off."""
+    ds = leak_file("a", [1e8, 1e9])
+    np.testing.assert_allclose(ds["sealing_pressure"].sel(scan="a"), [3e9, 4e9], rtol=1e-12)
+    np.testing.assert_allclose(ds["sealing_pressure_lo"].sel(scan="a"), [2e9, 2e9],
+                               rtol=1e-12)
+
+
 def test_different_pressure_grids_keep_per_scan_dims(tmp_path):
     a = leak_file("a", [1e9, 2e9])
     c = leak_file("c", [1e7, 1e8])

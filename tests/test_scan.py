@@ -322,6 +322,20 @@ def test_harmonic_fill_is_exact_for_a_plane_inside():
     np.testing.assert_allclose(filled, plane, atol=1e-12)
 
 
+def test_harmonic_fill_has_zero_normal_slope_at_the_scan_s_edges():
+    """Outside the scan nothing is known: the fill's edges are Neumann (zero normal slope),
+    so a constant field is filled with that constant wherever the missing points touch the
+    edge or a corner. An edge taken as a fixed value (say 0 outside) pulls them towards it.
+    The solve is a sparse direct one: round-off only, hence 1e-12."""
+    field = np.full((20, 15), 2.5)
+    miss = np.zeros(field.shape, bool)
+    miss[:3, :2] = True  # a corner
+    miss[8:13, -1] = True  # along the last column
+    miss[-1, 5:9] = True  # along the last row
+    filled = fill_missing(np.where(miss, 0.0, field), miss, "harmonic")
+    np.testing.assert_allclose(filled, field, rtol=0, atol=1e-12)
+
+
 def test_detrend_removes_plane_and_curvature_exactly():
     x = np.linspace(-1, 1, 20)[:, None]
     y = np.linspace(-1, 1, 15)[None, :]

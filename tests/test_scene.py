@@ -238,6 +238,65 @@ def test_elastic_ladder_warm_starts_and_increasing_area():
     assert np.all(ds["contact_iterations"].values > 0)
 
 
+#: TINY stretched along x (gamma = 2: x the easy direction) on a 2:1 cell (lx = sqrt(2),
+#: ly = 1 / sqrt(2), 32 x 32 points), so that lx and ly swapped show
+TINY_G2 = SurfaceParams(gamma=2.0, l_over_lambda_r=2.0, eps_f=0.125, points_per_lambda_s=2,
+                        aspect=2.0)
+
+
+@pytest.fixture(scope="module")
+def ladder_g2():
+    # a_c* 0.4, not the bearing model's 0.5: at 0.5 (D - 1 = 1) Eq. 7 and Eq. 9 coincide
+    job = LadderJob(surface=TINY_G2, model="bearing", seeds=(0,), area_fractions=(0.1, 0.2),
+                    a_c_star=0.4)
+    return job, run_ladder(job).squeeze(("model", "gamma", "hurst", "eps_t", "eps_f"))
+
+
+def test_anisotropic_bruggeman_columns_are_in_x_y_order(ladder_g2):
+    """sigma_emt[..., axis] holds (sigma_x, sigma_y) of both anisotropic forms. Eq. 9's
+    self-consistency gamma~ = gamma sqrt(sigma_y / sigma_x) holds for the stored gamma~ only
+    in that order (swapped it gives gamma sqrt(sigma_x / sigma_y)); the solver accepts a
+    solution whose relative error in it is below 1e-6 (bruggeman_anisotropic), hence rel
+    1e-6. For gamma > 1 x is the easy direction: sigma_x > sigma_y in both forms."""
+    _, ds = ladder_g2
+    emt = ds["sigma_emt"].sel(seed=0)
+    cor = emt.sel(emt="anisotropic_corrected")
+    sx, sy = cor.sel(axis="x").values, cor.sel(axis="y").values
+    np.testing.assert_allclose(ds["gamma_tilde"].sel(seed=0).values, 2.0 * np.sqrt(sy / sx),
+                               rtol=1e-6)
+    assert np.all(sx > sy) and np.all(sy > 0)
+    per = emt.sel(emt="anisotropic_persson")
+    assert np.all(per.sel(axis="x").values > per.sel(axis="y").values)
+    assert not np.allclose(per.values, cor.values, rtol=1e-3)  # the two forms differ here
+
+
+def test_sigma_ref_is_the_conductance_of_the_undeformed_gap(ladder_g2):
+    """sigma_ref, the paper's normalisation, is the Reynolds conductance of the gap
+    max(h) - h of the seed's surface along x and y. Both solves stop at a proven relative
+    error of sigma below FLOW_SIGMA_TOL (1e-6) or at round-off, so they agree to twice it."""
+    from roughflow import flow
+
+    job, ds = ladder_g2
+    s = generate(job.surface.spec(0))
+    want = flow.conductance(s.heights.max() - s.heights, None, lx=s.lx, ly=s.ly)
+    np.testing.assert_allclose(ds["sigma_ref"].sel(seed=0).values, list(want),
+                               rtol=2 * FLOW_SIGMA_TOL)
+    assert want[0] > want[1] > 0  # easy x, hard y: an x/y swap would show
+    assert s.lx != s.ly  # and so would lx and ly swapped
+
+
+def test_eps_t_is_the_easy_direction_s_lambda_r_over_l():
+    """eps_t = max(sqrt(gamma), 1 / sqrt(gamma)) lambda_r / L: gamma = 2 and 1/2 stretch
+    by the same factor, along x and along y, so at one L they share eps_t = sqrt(2) / L
+    (sqrt(gamma) alone gives gamma = 1/2 half of it, sqrt(2)/4 at L = 2). The property
+    rounds to 12 significant digits (datasets.sweep.rnd), hence rel 1e-11."""
+    for gamma in (2.0, 0.5):
+        p = SurfaceParams(gamma=gamma, l_over_lambda_r=2.0, eps_f=0.125,
+                          points_per_lambda_s=2)
+        assert p.eps_t == pytest.approx(np.sqrt(2) / 2, rel=1e-11), gamma
+    assert TINY.eps_t == pytest.approx(0.5, rel=1e-11)
+
+
 def _tiny_threshold_file(tmp_path, gamma, seeds):
     p = SurfaceParams(gamma=gamma, l_over_lambda_r=4 * max(np.sqrt(gamma), 1 / np.sqrt(gamma)),
                       eps_f=0.125, points_per_lambda_s=2)
