@@ -168,8 +168,9 @@ def test_without_the_c_routines_qdldl_solver_orders_afresh(heights, monkeypatch)
 
 
 def record_flow_solves(monkeypatch) -> list:
-    """Record (axis, the ordering passed, the ordering returned) of each ``flow.solve``."""
-    from roughflow import flow
+    """Record (axis, the ordering passed, the ordering returned) of each ``flow.solve`` that
+    ``flow.flow_both_axes`` (the ladder's and the leak curve's) makes."""
+    from roughflow.flow import axes as flow
 
     calls = []
     real = flow.solve

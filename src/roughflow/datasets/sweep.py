@@ -76,7 +76,7 @@ def var(values: ArrayLike, extra_dims: tuple[str, ...], units: str, long_name: s
     return v
 
 
-def seed_coord(seeds) -> tuple:
+def seed_coord(seeds: ArrayLike) -> tuple:
     """The ``seed`` coordinate of a job's dataset."""
     return ("seed", np.asarray(seeds, dtype=np.int64),
             {"units": DIMENSIONLESS, "long_name": "surface seed"})
