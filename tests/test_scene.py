@@ -469,9 +469,14 @@ def _forbid(*_, **__):
 
 def test_threshold_jobs_never_solve_flow(monkeypatch):
     import roughflow.flow
+    import roughflow.flow.axes
+    import roughflow.flow.core
 
-    monkeypatch.setattr(roughflow.flow, "solve", _forbid)
+    # every name the flow solver is reached by (the package, its core, flow_both_axes)
+    for module in (roughflow.flow, roughflow.flow.core, roughflow.flow.axes):
+        monkeypatch.setattr(module, "solve", _forbid)
     monkeypatch.setattr(roughflow.flow, "conductance", _forbid)
+    monkeypatch.setattr(roughflow.flow.core, "conductance", _forbid)
     ds = run_threshold(ThresholdJob(surface=TINY, model="elastic", seeds=(0,), tol=0.02))
     assert np.isfinite(ds["a_c_star"]).all()
 
