@@ -480,7 +480,9 @@ def report(args) -> None:
         ax.legend(fontsize=7)
 
     # sigma at fixed a_c against resolution: raw a_c, and a_c perimeter-corrected
-    a_star_x = {s: refs[(s, 0)] for s in seeds} if thr and len(ppls) >= 2 else {}
+    # each seed's reference a_c*(x) where its searches bracketed one
+    a_star_x = ({s: refs[(s, 0)] for s in seeds if math.isfinite(refs[(s, 0)])}
+                if thr and len(ppls) >= 2 else {})
     rows = []
     for j, target in enumerate(TARGETS):
         pts = {"raw": [], "perimeter": [], "richardson": []}

@@ -5,86 +5,23 @@ from __future__ import annotations
 import importlib
 import inspect
 
-MODULES = [
-    "roughflow.figures",
-    "roughflow.scenes",
-    "roughflow.cli",
-    "roughflow.surface",
-    "roughflow.scan",
-    "roughflow.units",
-    "roughflow.errors",
-    "roughflow.accuracy",
-    "roughflow.gpu",
-    "roughflow.leak",
-    "roughflow.io",
-    "roughflow.provenance",
-    "roughflow.resources",
-    "roughflow.fft",
-    "roughflow.boundary",
-    "roughflow.fits",
-    "roughflow.aggregate",
-    "roughflow.contact.adhesion",
-    "roughflow.contact.adhesive_cg",
-    "roughflow.contact.bearing",
-    "roughflow.contact.cg",
-    "roughflow.contact.elastic",
-    "roughflow.contact.gfmd",
-    "roughflow.contact.law",
-    "roughflow.contact.solve",
-    "roughflow.percolation.clusters",
-    "roughflow.percolation.labels",
-    "roughflow.percolation.spanning",
-    "roughflow.percolation.sweep",
-    "roughflow.flow.amg",
-    "roughflow.flow.assembly",
-    "roughflow.flow.bound",
-    "roughflow.flow.core",
-    "roughflow.flow.ldl",
-    "roughflow.flow.linsolve",
-    "roughflow.flow.plot",
-    "roughflow.theory.closed_form",
-    "roughflow.theory.effective_medium",
-    "roughflow.theory.gap",
-    "roughflow.theory.peklenik",
-    "roughflow.theory.persson",
-    "roughflow.search.critical",
-    "roughflow.search.load",
-    "roughflow.search.warmup",
-    "roughflow.datasets.kinds",
-    "roughflow.datasets.leak",
-    "roughflow.datasets.results",
-    "roughflow.datasets.sweep",
-    "roughflow.datasets.units",
-    "roughflow.cli.aggregate",
-    "roughflow.cli.cite",
-    "roughflow.cli.contact",
-    "roughflow.cli.figure",
-    "roughflow.cli.fit",
-    "roughflow.cli.flow",
-    "roughflow.cli.import_scan",
-    "roughflow.cli.leak",
-    "roughflow.cli.scene",
-    "roughflow.cli.surface",
-    "roughflow.cli.theory",
-    "roughflow.cli.threshold",
-    "roughflow.figures.captions",
-    "roughflow.figures.channels",
-    "roughflow.figures.flow_anisotropic",
-    "roughflow.figures.flow_isotropic",
-    "roughflow.figures.measured",
-    "roughflow.figures.threshold_vs_gamma",
-    "roughflow.figures.threshold_vs_hurst",
-    "roughflow.figures.threshold_vs_size",
-    "roughflow.scenes.channels",
-    "roughflow.scenes.config_file",
-    "roughflow.scenes.jobs",
-    "roughflow.scenes.ladder",
-    "roughflow.scenes.threshold",
-    "roughflow.citation",
-    "roughflow.progress",
-    "roughflow.wisdom",
-    "roughflow.defaults",
-]
+
+def _modules() -> list[str]:
+    """Every public module of the package (none whose name starts with "_": the numba
+    kernels, ``__main__``, which runs the command line on import): a new module is checked
+    without being listed here."""
+    import pkgutil
+
+    import roughflow
+
+    names = ["roughflow"]
+    for info in pkgutil.walk_packages(roughflow.__path__, "roughflow."):
+        if not any(part.startswith("_") for part in info.name.split(".")):
+            names.append(info.name)
+    return names
+
+
+MODULES = _modules()
 
 _SKIPPED_KINDS = (inspect.Parameter.VAR_POSITIONAL, inspect.Parameter.VAR_KEYWORD)
 

@@ -36,9 +36,20 @@ def test_kernels_are_cached_under_the_keyed_directory_and_numba_setting_stays():
     from roughflow.percolation import spanning
 
     here = _jit.cache_dir()
-    assert here.name == f"roughflow-{_jit.source_key()}"
+    assert here is not None and here.name == _jit.source_key()
     assert Path(spanning._spans_4._cache.cache_path).is_relative_to(here)
     assert numba.config.CACHE_DIR == os.environ.get("NUMBA_CACHE_DIR", "")
+
+
+def test_an_editor_lock_file_does_not_stop_the_imports(tmp_path):
+    # Emacs marks an unsaved file with a dangling link ".#name.py": reading it failed, and
+    # with it every import of a solver
+    pkg = tmp_path / "pkg"
+    pkg.mkdir()
+    (pkg / "a.py").write_text("x = 1\n")
+    key = _jit.source_key(pkg)
+    (pkg / ".#a.py").symlink_to("user@host.1234:1700000000")
+    assert _jit.source_key(pkg) == key
 
 
 def _run(code: str, env: dict) -> str:
@@ -48,19 +59,34 @@ def _run(code: str, env: dict) -> str:
     return out.stdout.strip()
 
 
-def test_old_versions_are_pruned(tmp_path):
-    parent = tmp_path / "cache"
-    for i in range(_jit.KEEP + 2):
-        old = parent / f"roughflow-old{i}"
-        old.mkdir(parents=True)
-        os.utime(old, (time.time() - 1000 * (i + 1),) * 2)
-    (parent / "someone-else").mkdir()  # not roughflow's: left alone
-    env = {**os.environ, "NUMBA_CACHE_DIR": str(parent)}
-    here = _run("from roughflow._jit import cache_dir; print(cache_dir())", env)
+def test_old_versions_are_pruned_once_unused(tmp_path):
+    parent = tmp_path / "cache" / "roughflow"
+    day = _jit.PRUNE_AFTER_S
+    ages = {f"old{i}": 2 * day * (i + 1) for i in range(_jit.KEEP + 2)}
+    ages["recent"] = 60.0  # beyond KEEP by age order, but used a minute ago: kept
+    for name, age in ages.items():
+        (parent / name).mkdir(parents=True)
+        os.utime(parent / name, (time.time() - age,) * 2)
+    (tmp_path / "cache" / "roughflow-paper_0123").mkdir()  # numba's own folder of a user's
+    env = {**os.environ, "NUMBA_CACHE_DIR": str(tmp_path / "cache")}
+    here = Path(_run("from roughflow._jit import cache_dir; print(cache_dir())", env))
+    assert here.parent == parent
     kept = sorted(p.name for p in parent.iterdir())
-    assert Path(here).name in kept
-    assert kept == sorted([Path(here).name, "someone-else"]
-                          + [f"roughflow-old{i}" for i in range(_jit.KEEP - 1)])
+    newest = sorted(ages, key=ages.get)[:_jit.KEEP - 1]  # with the present one, KEEP
+    assert kept == sorted({here.name, "recent", *newest})
+    assert (tmp_path / "cache" / "roughflow-paper_0123").is_dir()
+
+
+def test_an_unwritable_cache_falls_back_to_the_temporary_folder(tmp_path):
+    # numba itself falls back to the per-file cache beside the source, the stale one
+    blocker = tmp_path / "file"
+    blocker.write_text("")
+    env = {**os.environ, "NUMBA_CACHE_DIR": str(blocker / "sub"), "TMPDIR": str(tmp_path)}
+    code = ("from roughflow._jit import cache_dir; from roughflow.percolation import "
+            "spanning; print(cache_dir()); print(spanning._spans_4._cache.cache_path)")
+    here, kernel = (Path(line) for line in _run(code, env).splitlines())
+    assert here.is_relative_to(tmp_path) and not here.is_relative_to(blocker)
+    assert kernel.is_relative_to(here)
 
 
 def test_a_changed_callee_in_another_module_is_not_served_stale(tmp_path):

@@ -179,12 +179,14 @@ def test_plan_memory_refuses_the_54_terabyte_config():
 def test_job_memory_is_the_snakemake_request():
     # the workflow requests the estimate plus the Snakemake wrapper, doubled on the retry
     # (workflow/rules/common.smk: mem_mb)
-    from roughflow.scenes.requests import WRAPPER_MB, requested_mem_mb
+    from roughflow.scenes.requests import WRAPPER_MB, requested_mem_mb, task_mem_mb
 
     job = ThresholdJob(surface=SMALL)
     assert estimated_memory(job) == resources.estimate_bytes("threshold", 32 * 32)
     mb = WRAPPER_MB + math.ceil(estimated_memory(job) / 1e6)
     assert requested_mem_mb(job) == mb and requested_mem_mb(job, attempt=2) == 2 * mb
+    # the accuracy study's jobs (no sweep jobs) by the same rule, from a task and a grid
+    assert task_mem_mb("threshold", 32 * 32) == mb and task_mem_mb("threshold", 1024, 2) == 2 * mb
 
 
 def test_threads_must_be_positive():

@@ -449,3 +449,17 @@ def test_a_closed_pipe_on_stdout_ends_quietly():
         os.close(write_end)
     assert res.returncode == 128 + int(signal.SIGPIPE), res.stderr
     assert "Traceback" not in res.stderr and "Exception ignored" not in res.stderr
+
+
+def test_a_command_started_without_stdout_still_succeeds(tmp_path):
+    # a launcher may start it with file descriptor 1 closed (sys.stdout is None): flushing
+    # the output it never had must not turn a written file into exit 1 and a traceback
+    import subprocess
+    import sys
+
+    out = tmp_path / "s.nc"
+    cmd = (f"{sys.executable} -m roughflow surface --l-over-lambda-r 1 --eps-f 0.25 "
+           f"--points-per-lambda-s 2 -o {out} >&-")
+    res = subprocess.run(cmd, shell=True, stderr=subprocess.PIPE, text=True, timeout=120)
+    assert res.returncode == 0, res.stderr
+    assert out.exists() and "Traceback" not in res.stderr

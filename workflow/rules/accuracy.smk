@@ -5,6 +5,9 @@
 # config["accuracy"] (optional):
 #   accuracy: {seeds: [0, 1, 2, 3, 4, 5], points_per_lambda_s: [2, 4, 8, 16]}
 
+from roughflow.scenes.requests import task_mem_mb  # noqa: E402
+from roughflow.surface import SurfaceSpec  # noqa: E402
+
 _ACC = config.get("accuracy", {}) or {}
 _ACC_SEEDS = " ".join(str(s) for s in _ACC.get("seeds", [0, 1, 2, 3, 4, 5]))
 _ACC_PPL_LIST = [int(p) for p in _ACC.get("points_per_lambda_s", [2, 4, 8, 16])]
@@ -16,6 +19,10 @@ if _ACC_ODD:
                         f"{_ACC_PPL_LIST}: {_ACC_ODD} do not divide the largest, "
                         f"{max(_ACC_PPL_LIST)}")
 _ACC_PPL = " ".join(str(p) for p in _ACC_PPL_LIST)
+# contact and flow solves on the finest grid (resolution) and at 4 points (tolerances:
+# convergence.py's --tol-ppl default), sized by the library's estimate of a ladder job
+_ACC_FINEST = SurfaceSpec.from_sweep(points_per_lambda_s=max(_ACC_PPL_LIST))
+_ACC_TOL_GRID = SurfaceSpec.from_sweep(points_per_lambda_s=4)
 _ACC_OUT = f"{RESULTS}/benchmarks"
 # the script of the checkout that holds this Snakefile, run by the Python that runs snakemake
 # (as RF in common.smk), not the first `python` on PATH
@@ -36,10 +43,9 @@ rule accuracy_resolution:
         ppl=_ACC_PPL,
     threads: 1
     resources:
-        # grids up to 16 points per lambda_s (1024^2 at the default eps_f): the library's
-        # estimate of a contact-and-flow job there is 1.7 GB (roughflow.resources, "ladder");
-        # the default six seeds take about a minute
-        mem_mb=3000,
+        # the default 16 points per lambda_s: 1024^2, 1.9 GB; the six seeds take a minute
+        mem_mb=lambda wc, attempt: task_mem_mb(
+            "ladder", _ACC_FINEST.nx * _ACC_FINEST.ny, attempt),
         runtime=60,
     shell:
         "rm -f {output} && ROUGHFLOW_FFT_THREADS={threads} {_ACC_SCRIPT} "
@@ -56,7 +62,8 @@ rule accuracy_tolerances:
         seeds=_ACC_SEEDS,
     threads: 1
     resources:
-        mem_mb=2000,
+        mem_mb=lambda wc, attempt: task_mem_mb(
+            "ladder", _ACC_TOL_GRID.nx * _ACC_TOL_GRID.ny, attempt),
         runtime=60,
     shell:
         "rm -f {output} && ROUGHFLOW_FFT_THREADS={threads} {_ACC_SCRIPT} "

@@ -152,7 +152,7 @@ def job_args(wildcards):
 
 
 def runtime_min(wildcards, attempt=1):
-    # the cost model of roughflow.scenes.jobs with its margin (minutes)
+    # the cost model of roughflow.scenes.requests with its margin (minutes)
     return requested_runtime_min(job_of(wildcards), attempt)
 
 

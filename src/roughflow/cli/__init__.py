@@ -142,6 +142,30 @@ def _save_failed(exc: ConvergenceError, args: argparse.Namespace) -> str:
     return f"; the failed solve's gap and {keys} are saved in {path}"
 
 
+def _flush_stdout() -> None:
+    """Flush what the command printed, so that a closed pipe raises inside :func:`main`
+    (not at the interpreter's exit) and a full disk is an output error (exit 5)."""
+    if sys.stdout is None:  # started with its standard output closed
+        return
+    try:
+        sys.stdout.flush()
+    except BrokenPipeError:
+        raise
+    except OSError as exc:
+        raise OutputError(f"the standard output could not be written ({exc})") from None
+
+
+def _silence_stdout() -> None:
+    """Point the process's real standard output at /dev/null (not a stream a host or a
+    test put in its place, whose file descriptor is not ours to change)."""
+    if sys.stdout is None or sys.stdout is not sys.__stdout__:
+        return
+    try:
+        os.dup2(os.open(os.devnull, os.O_WRONLY), sys.stdout.fileno())
+    except (OSError, ValueError):
+        pass
+
+
 def main(argv: list[str] | None = None) -> int:
     from roughflow.fft import check_environment
     from roughflow.provenance import Provenance, input_history, input_references
@@ -168,7 +192,7 @@ def main(argv: list[str] | None = None) -> int:
         args.provenance = replace(provenance, history=input_history(*single),
                                   references=input_references(*single, *listed))
         args.func(args)
-        sys.stdout.flush()  # a closed pipe raises here, not in the interpreter's exit
+        _flush_stdout()
         stale = _failed_path(args)
         if stale is not None:  # an earlier failed attempt's inputs no longer apply
             stale.unlink(missing_ok=True)
@@ -184,10 +208,11 @@ def main(argv: list[str] | None = None) -> int:
     except KeyboardInterrupt:
         parser.exit(130, f"{name}: interrupted\n")
     except BrokenPipeError:
-        # no traceback, and none again when Python flushes stdout at exit: what follows
-        # goes nowhere, as a killed pipe writer's would
-        os.dup2(os.open(os.devnull, os.O_WRONLY), sys.stdout.fileno())
-        return 128 + int(signal.SIGPIPE)
+        # the reader of stdout went away (`roughflow cite | head`): a line on stderr, and
+        # no second error when the interpreter flushes stdout at exit
+        _silence_stdout()
+        parser.exit(128 + int(signal.SIGPIPE), f"{name}: the standard output was closed "
+                                                "by its reader\n")
     except _Terminated as exc:
         parser.exit(128 + int(exc.signum),
                     f"{name}: terminated ({signal.Signals(exc.signum).name})\n")

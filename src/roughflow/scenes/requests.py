@@ -41,7 +41,19 @@ def requested_mem_mb(job: Job, attempt: int = 1, points: int | None = None) -> i
     """Snakemake ``mem_mb`` of ``job``: its estimate plus :data:`WRAPPER_MB`, times the
     attempt (a job that a cluster ended for its memory would only fail again with the
     same request)."""
-    return attempt * (WRAPPER_MB + math.ceil(estimated_memory(job, points) / 1e6))
+    return _mem_mb(estimated_memory(job, points), attempt)
+
+
+def task_mem_mb(task: str, points: int, attempt: int = 1) -> int:
+    """:func:`requested_mem_mb` of a job that is no sweep job (the accuracy study's): the
+    estimate of :mod:`roughflow.resources`' ``task`` on ``points`` grid points."""
+    from roughflow.resources import estimate_bytes
+
+    return _mem_mb(estimate_bytes(task, points), attempt)
+
+
+def _mem_mb(estimate: float, attempt: int) -> int:
+    return attempt * (WRAPPER_MB + math.ceil(estimate / 1e6))
 
 
 #: The scan grid a leak job's ``mem_mb`` assumes until its scan is imported: Snakemake
