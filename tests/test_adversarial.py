@@ -170,6 +170,20 @@ def test_01_aggregate_refuses_jobs_differing_only_in_resolution(files, capsys):
     assert code == 2 and "points_per_lambda_s" in err, err
 
 
+def test_01_aggregate_refuses_disjoint_seeds_of_different_settings(files, capsys):
+    """Jobs of the same parameters on disjoint seeds but a different --tol: only their
+    job_settings tell them apart (no variable records tol), and the study dataset has no
+    dimension for it. (a01 and b01 above share seed 0, so the seed check refused them
+    first and the settings were never compared.)"""
+    d = files["dir"]
+    a = _job(d, "a01", "--points-per-lambda-s", "2", "--seeds", "0", "1", "--tol", "0.01")
+    e = _job(d, "e01", "--points-per-lambda-s", "2", "--seeds", "2", "--tol", "0.002")
+    code, err = run(["aggregate", a, e, "-o", d / "ae.nc"], capsys)
+    assert code == 2 and "job_settings" in err and "different settings" in err, err
+    assert "0.01" in err and "0.002" in err, err
+    assert not (d / "ae.nc").exists()
+
+
 def test_01_aggregate_keeps_every_seed_of_disjoint_jobs(files, capsys):
     code, _ = run(["aggregate", files["job"], files["job2"], "-o", files["dir"] / "ok.nc"],
                   capsys)
@@ -501,6 +515,19 @@ def test_flow_file_and_its_plot_appear_together(files, capsys, monkeypatch, tmp_
               "--plot", str(tmp_path / "f.png")])
     assert list(tmp_path.iterdir()) == []
     capsys.readouterr()
+
+
+def test_out_of_memory_exits_4_saying_so(files, capsys, monkeypatch, tmp_path):
+    """A MemoryError inside a command is exit status 4 with a line, not a traceback."""
+    from roughflow.cli import flow as flow_cli
+
+    def exhausted(args):
+        raise MemoryError
+
+    monkeypatch.setattr(flow_cli, "run", exhausted)
+    code, err = run(["flow", files["contact"], "-o", tmp_path / "f.nc"], capsys)
+    assert code == 4 and "roughflow flow: out of memory" in err and "Traceback" not in err
+    assert list(tmp_path.iterdir()) == []
 
 
 def test_a_full_disk_exits_5_naming_the_output(files, capsys, monkeypatch, tmp_path):

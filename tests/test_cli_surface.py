@@ -6,11 +6,12 @@ import subprocess
 import sys
 
 import numpy as np
+import pytest
 import xarray as xr
 
 from roughflow.cli import main
 from roughflow.io import read_surface
-from roughflow.surface import SurfaceSpec, generate
+from roughflow.surface import SurfaceSpec, generate, rms_gradient
 
 
 def test_surface_file_is_self_describing(tmp_path):
@@ -33,6 +34,19 @@ def test_explicit_grid(tmp_path):
     main(["surface", "--nx", "64", "--ny", "256", "--lx", "0.5", "--ly", "2",
           "--lambda-r", "0.25", "--lambda-s", "0.025", "-o", str(out)])
     assert read_surface(out).heights.shape == (64, 256)
+
+
+def test_sweep_form_takes_the_rms_slope(tmp_path):
+    """--rms-slope was once dropped in the sweep form (no --nx): the surface came out with
+    the default rms gradient 1. generate() scales the heights to the spec's rms gradient,
+    measured here spectrally on the periodic map; rel 1e-12 is round-off of that scaling."""
+    out = tmp_path / "s.nc"
+    assert main(["surface", "--points-per-lambda-s", "2", "--rms-slope", "0.3",
+                 "-o", str(out)]) == 0
+    with xr.open_dataset(out) as ds:
+        assert ds.attrs["spec_rms_slope"] == 0.3
+    s = read_surface(out)
+    assert rms_gradient(s.heights, s.spec.lx, s.spec.ly) == pytest.approx(0.3, rel=1e-12)
 
 
 def _run(*args):

@@ -143,3 +143,19 @@ def test_cells_marked_as_contact_are_closed(tmp_path, capsys):
         assert float(res["sigma_x"]) == 0.0 and res.attrs["percolating_x"] == 0
         # along y the contact row carries nothing: 15 of 16 rows (exact for this grid)
         assert float(res["sigma_y"]) == pytest.approx(15 / 16 * 0.2**3 / 12, rel=1e-12)
+
+
+def test_cli_eta_reaches_the_solver(tmp_path, gap):
+    """--eta was once recorded in the file but not passed to the solve: sigma = u^3/(12 eta)
+    scales exactly as 1/eta, so eta 2 must give half of eta 1 (rtol 1e-10: both are direct
+    solves of the same system scaled by a power of two, equal up to round-off)."""
+    src = tmp_path / "c.nc"
+    write_contact(src, gap, lx=1.5, ly=1.0)
+    sigma = {}
+    for eta in ("1", "2"):
+        out = tmp_path / f"f{eta}.nc"
+        assert main(["flow", str(src), "--axis", "x", "--eta", eta, "-o", str(out)]) == 0
+        with xr.open_dataset(out) as ds:
+            sigma[eta] = float(ds["sigma_x"])
+    assert sigma["1"] > 0
+    assert sigma["2"] == pytest.approx(sigma["1"] / 2, rel=1e-10)

@@ -329,3 +329,33 @@ def test_a_sealing_tolerance_below_one_window_cell_is_refused_first(monkeypatch,
     monkeypatch.setattr(leak, "solve", lambda *a, **k: pytest.fail("a contact solve ran"))
     with pytest.raises(InputError, match=f"1/{cells} "):
         leak_curve(small, [0.05], boundary=boundary)
+
+
+def test_cli_leak_rate_is_the_conductance_over_the_given_seal(imported, tmp_path):
+    """The command passed the seal's width and length to the dataset swapped: the leak rates
+    were off by (l / w)^2 = 900 while the table looked plausible. Q = sigma l dp / w by hand
+    from the command's own inputs (w = 2 mm along the flow, l = 60 mm across it, dp = 1 MPa);
+    rtol 1e-12: the same three products in floating point, a few ulp at most."""
+    out = tmp_path / "leak.nc"
+    assert main(["leak", str(imported), *LEAK, "-o", str(out)]) == 0
+    with xr.open_dataset(out) as ds:
+        assert ds.attrs["seal_width_m"] == pytest.approx(2e-3, rel=1e-15)
+        assert ds.attrs["seal_length_m"] == pytest.approx(60e-3, rel=1e-15)
+        assert ds.attrs["fluid_pressure_Pa"] == pytest.approx(1e6, rel=1e-15)
+        sigma = ds["conductance"].values
+        assert np.any(sigma > 0)  # an open seal somewhere, or the check says nothing
+        np.testing.assert_allclose(ds["leak_rate"].values, sigma * 60e-3 * 1e6 / 2e-3,
+                                   rtol=1e-12, atol=0)
+
+
+@pytest.mark.parametrize("boundary", ["mirror", "periodic"])
+def test_cli_leak_boundary_reaches_the_curve(imported, tmp_path, boundary):
+    """--boundary was once dropped on the way to leak_curve: the scan went through the
+    default window treatment and the file recorded it. A non-default choice is recorded."""
+    assert boundary != BOUNDARY
+    argv = list(LEAK)
+    argv[argv.index("--pressures") + 1] = "1MPa:100GPa:2"
+    out = tmp_path / "leak.nc"
+    assert main(["leak", str(imported), *argv, "--boundary", boundary, "-o", str(out)]) == 0
+    with xr.open_dataset(out) as ds:
+        assert ds.attrs["boundary"] == boundary

@@ -201,3 +201,14 @@ def test_units_of_a_study_whose_scans_differ_in_length_convert_per_scan(tmp_path
         sigma = ureg.Quantity(one["sigma"].values, one["sigma"].attrs["units"])
         np.testing.assert_allclose(sigma.to("m^3/(Pa*s)").magnitude,
                                    one["conductance"].values, rtol=1e-12)
+
+
+def test_scans_are_sorted_by_name_whatever_the_order_of_the_files(tmp_path):
+    """The study's scan axis is in name order, so that it does not depend on the order the
+    workflow listed the files in; each scan keeps its own values (b's length is 2e-5 m,
+    a's 1e-5 m: stored as given, compared exactly)."""
+    b = leak_file("b", [1e8, 1e9], length=2e-5)
+    a = leak_file("a", [1e8, 1e9], length=1e-5)
+    ds = _study(tmp_path, {"B": b, "A": a})  # files listed b first
+    assert ds["scan"].values.tolist() == ["a", "b"]
+    assert ds["length_scale"].values.tolist() == [1e-5, 2e-5]

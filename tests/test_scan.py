@@ -82,6 +82,23 @@ def test_npy_needs_size_and_unit(tmp_path):
     check_scaled(s, h * UM, 2 * UM, 1.5 * UM)
 
 
+def test_cli_import_passes_the_height_unit(tmp_path):
+    """`roughflow import` once dropped --height-unit: the heights were read in --unit (nm),
+    1000 times too small against heights in um. The command's surface is from_scan's, and
+    both are the raw numbers in um."""
+    h = heights()
+    np.save(tmp_path / "scan.npy", h)
+    out = tmp_path / "s.nc"
+    assert main(["import", str(tmp_path / "scan.npy"), "--size", "2000,1500", "--unit", "nm",
+                 "--height-unit", "um", "--detrend", "none", "-o", str(out)]) == 0
+    got = read_surface(out)
+    check_scaled(got, h * UM, 2 * UM, 1.5 * UM)
+    want = from_scan(tmp_path / "scan.npy", size="2000,1500", unit="nm", height_unit="um",
+                     detrend_mode="none")
+    np.testing.assert_array_equal(got.heights, want.heights)
+    assert got.scan.length_scale == want.scan.length_scale
+
+
 def test_npy_missing_unit_and_size_are_named_together(tmp_path):
     # they were refused one per run; and a size in units with height_unit= was refused for
     # lacking unit=, which would have said nothing more

@@ -144,6 +144,7 @@ def test_aggregation_records_the_study_without_fit_options_and_labels():
     LadderJob(surface=SurfaceParams()),
     ThresholdJob(surface=TINY, model="bearing", seeds=(0, 1), tol=0.01),
     ThresholdJob(surface=SurfaceParams()),
+    ThresholdJob(surface=SurfaceParams(), contact_tol=5e-5),  # not the default
     ChannelsJob(),
     ChannelsJob(gamma=2.0, hurst=0.3, l_over_lambda_r=8.0, eps_f=0.05, area_fraction=0.3,
                 model="bearing", seed=7, points_per_lambda_s=3.0),

@@ -138,3 +138,21 @@ def test_flow_file_values_are_carried(tmp_path, capsys):
         assert float(ds["sigma_x_reynolds"][0]) == res[0].sigma
         assert float(ds["sigma_y_reynolds"][0]) == res[1].sigma
         assert ds["sigma_x_reynolds"].attrs["units"]
+
+
+def test_gap_file_eta_reaches_every_column(tmp_path):
+    """The gap-file form once ignored --eta. Every conductance is u^3/(12 eta) times a
+    function of the gaps alone, so every sigma column at eta 2 is half of eta 1 (rtol 1e-12:
+    halving is exact in floating point, what is left is the order of the operations)."""
+    _gap_file(tmp_path / "r.nc")
+    got = {}
+    for eta in ("1", "2"):
+        out = tmp_path / f"t{eta}.nc"
+        assert main(["theory", str(tmp_path / "r.nc"), "--eta", eta, "-o", str(out)]) == 0
+        got[eta] = xr.load_dataset(out)
+    names = [n for n in got["1"].data_vars if n.startswith("sigma")]
+    assert len(names) >= 5, names
+    for n in names:
+        assert np.all(got["1"][n].values > 0), n
+        np.testing.assert_allclose(got["2"][n].values, got["1"][n].values / 2, rtol=1e-12,
+                                   err_msg=n)

@@ -89,3 +89,24 @@ def test_cli_threshold_adhesive_defaults_to_the_papers_case(surface_file, tmp_pa
         assert ds.attrs["adhesion_range"] == pytest.approx(0.8 * s.spec.lambda_s, rel=1e-12)
         assert ds.attrs["adhesion_gamma_over_v_full"] == pytest.approx(0.1, rel=1e-12)
         assert float(ds["a_c_star"][0]) == ref.a_c_star
+
+
+def test_cli_threshold_contact_tol_reaches_the_search(surface_file, tmp_path, monkeypatch):
+    """--contact-tol was once left out of the SearchOptions: the search solved to the
+    default. The options the search receives carry a non-default value (the search itself
+    is replaced: what it would do with the value is tested in test_search_threshold)."""
+    import roughflow.search
+    from roughflow.defaults import THRESHOLD_CONTACT_TOL
+
+    class Reached(Exception):
+        pass
+
+    def search(surface, axis=None, *, options, **kw):
+        raise Reached(options)
+
+    monkeypatch.setattr(roughflow.search, "threshold", search)
+    _, path = surface_file
+    assert THRESHOLD_CONTACT_TOL != 5e-5
+    with pytest.raises(Reached) as got:
+        main(["threshold", str(path), "--contact-tol", "5e-5", "-o", str(tmp_path / "t.nc")])
+    assert got.value.args[0].contact_tol == 5e-5

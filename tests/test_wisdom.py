@@ -355,3 +355,47 @@ def test_a_precision_the_build_lacks_is_valid_empty_wisdom():
     a file was refused as damaged and rewritten by every process, its timings never read."""
     assert wisdom._valid("")
     assert not wisdom._valid("(garbage")
+
+
+def test_a_time_limit_out_of_range_is_refused_and_the_file_replaced(tmp_path):
+    """An entry's time limit is a 9-bit field in FFTW: #x1ff is its largest value, #x200
+    (512) is out of range and would make FFTW abort while planning. The file is refused
+    before FFTW reads it and replaced; the largest valid value is still accepted."""
+    env = {wisdom.ENV: str(tmp_path), "ROUGHFLOW_FFTW_EFFORT": "FFTW_MEASURE"}
+    run_plan(env)
+    file = measure_file(tmp_path)
+    data = json.loads(file.read_text())
+    lines = data["double"].splitlines()
+
+    def with_time_limit(value):
+        fields = lines[1].split()
+        fields[4] = value  # name, rank, two flag fields, the time limit, four hashes
+        edited = " ".join(["", *fields]).replace(" ", "  ", 1)
+        return "\n".join([lines[0], edited, *lines[2:]]) + "\n"
+
+    assert wisdom._valid(with_time_limit("#x1ff"))
+    data["double"] = with_time_limit("#x200")
+    assert not wisdom._valid(data["double"])
+    fresh = tmp_path / "fresh"
+    fresh.mkdir()
+    measure_file(fresh).write_text(json.dumps(data))
+    out = run_plan({**env, wisdom.ENV: str(fresh)})
+    assert "exact True" in out and "has a field out of range" in out
+    assert all(wisdom._valid(w) for w in json.loads(measure_file(fresh).read_text()).values())
+
+
+def test_the_machine_key_changes_with_the_cpu(monkeypatch):
+    """Wisdom timed on one CPU is not another's: the file name's key hashes the CPU's
+    description (a node of another CPU model sharing the home directory read it)."""
+    wisdom.machine_key.cache_clear()
+    try:
+        monkeypatch.setattr(wisdom, "_cpu_description", lambda: "model name=CPU A")
+        a = wisdom.machine_key()
+        wisdom.machine_key.cache_clear()
+        monkeypatch.setattr(wisdom, "_cpu_description", lambda: "model name=CPU B")
+        b = wisdom.machine_key()
+        wisdom.machine_key.cache_clear()
+        assert wisdom.machine_key() == b  # the key is a function of the description
+    finally:
+        wisdom.machine_key.cache_clear()
+    assert a != b

@@ -467,3 +467,30 @@ def test_cluster_profile_settings_take_effect(monkeypatch):
     assert "cpus_per_task" not in args.default_resources.keys()
     _, local = parse_args(["-n"])
     assert (local.executor, local.keep_going, local.retries) == (None, False, 0)
+
+
+def test_compare_results_reports_every_difference():
+    # workflow/scripts/compare_results.py checks that a change keeps the results of
+    # config/test.yaml: a comparison with a tolerance, or one that takes NaN for a
+    # difference, or skips a variable of one side, would say "identical" wrongly (or never)
+    import importlib.util
+
+    path = ROOT / "workflow" / "scripts" / "compare_results.py"
+    spec = importlib.util.spec_from_file_location("compare_results", path)
+    compare = importlib.util.module_from_spec(spec)
+    spec.loader.exec_module(compare)
+    old = xr.Dataset({"a": ("x", [1.0, np.nan, 3.0]), "n": ("x", [1, 2, 3])})
+    assert compare.differences(old, old.copy(deep=True)) == []  # NaN equals NaN
+    new = old.copy(deep=True)
+    new["a"].values[0] = 1.0 + 1e-12  # above one ulp of 1 (2.2e-16): a real difference
+    [said] = compare.differences(old, new)
+    assert said.startswith("a: max |diff| 1e-12"), said
+    new = old.copy(deep=True)
+    new["a"].values[1] = 2.0  # NaN against a number
+    [said] = compare.differences(old, new)
+    assert said.startswith("a:") and "NaN in one only: 1" in said, said
+    new = old.copy(deep=True)
+    new["n"].values[2] = 4
+    assert compare.differences(old, new) == ["n: differs"]
+    assert compare.differences(old, old.assign(b=("x", [0.0, 0.0, 0.0]))) == ["b: only in new"]
+    assert compare.differences(old.assign(b=("x", [0.0] * 3)), old) == ["b: only in old"]

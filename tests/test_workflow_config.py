@@ -182,3 +182,44 @@ def test_a_failed_attempt_keeps_its_log(tmp_path):
                          capture_output=True, text=True, timeout=120)
     assert res.returncode != 0 and not (tmp_path / "out.txt").exists()
     assert "exit status 7" in res.stderr + res.stdout
+
+
+# (e) study options reach the commands: the fit's nu, the fit in the size figure
+def test_fit_nu_and_the_fit_file_reach_their_commands(tmp_path):
+    wd = copy_workflow(tmp_path)
+    write_case(wd, studies=("threshold_vs_size",), results="out")
+    cfg = yaml.safe_load((wd / "config" / "case.yaml").read_text())
+    cfg["studies"]["threshold_vs_size"]["fit"]["nu"] = 1.2
+    (wd / "config" / "case.yaml").write_text(yaml.safe_dump(cfg))
+    res = dry_run(wd)
+    assert res.returncode == 0, res.stderr[-2000:]
+    [fit] = [c for c in shell_commands(res.stdout, " fit ") if "fit" in c and "-o" in c
+             and c[c.index("-o") + 1] == "out/threshold_vs_size/fit.nc"]
+    assert fit[fit.index("--nu") + 1] == "1.2", fit
+    [figure] = shell_commands(res.stdout, " figure threshold_vs_size ")
+    assert figure[figure.index("--fit") + 1] == "out/threshold_vs_size/fit.nc", figure
+
+
+# (f) the accuracy seeds reach both convergence runs
+def test_accuracy_seeds_reach_both_convergence_runs(tmp_path):
+    wd = copy_workflow(tmp_path)
+    write_case(wd, accuracy={"seeds": [7]})
+    res = dry_run(wd, "accuracy")
+    assert res.returncode == 0, res.stderr[-2000:]
+    cmds = [c for c in shell_commands(res.stdout, "convergence.py")
+            if "resolution" in c or "tol" in c]
+    assert sorted(c[c.index("--out") - 1] for c in cmds) == ["resolution", "tol"], cmds
+    for cmd in cmds:
+        i = cmd.index("--seeds")
+        assert cmd[i + 1] == "7" and not cmd[i + 2].isdigit(), cmd
+
+
+# (g) a resolution below 2 points per lambda_s is refused by the schema, naming the key
+def test_accuracy_resolution_below_two_is_refused(tmp_path):
+    wd = copy_workflow(tmp_path)
+    write_case(wd, accuracy={"points_per_lambda_s": [1, 2]})  # 1 divides 2: only the
+    res = dry_run(wd, "accuracy")  # schema's minimum refuses it
+    out = res.stdout + res.stderr
+    assert res.returncode != 0
+    assert "invalid config" in out and "accuracy.points_per_lambda_s" in out, out[-2000:]
+    assert not (wd / "results").exists()
