@@ -27,6 +27,8 @@ from pathlib import Path
 
 import numba
 
+from roughflow.files import user_cache_dir
+
 #: Versions of the compiled kernels kept ...
 KEEP = 4
 #: ... and the time (s) a version must have gone unused before it is removed: a long job
@@ -50,16 +52,7 @@ def source_key(package: Path = _PACKAGE) -> str:
 def _parents() -> list[Path]:
     """Where the versions may live, the preferred place first."""
     given = os.environ.get("NUMBA_CACHE_DIR")
-    xdg = os.environ.get("XDG_CACHE_HOME")
-    home = os.path.expanduser("~")
-    if given:
-        first = Path(given).expanduser() / "roughflow"
-    elif xdg:
-        first = Path(xdg) / "roughflow" / "numba"
-    elif os.path.isabs(home):
-        first = Path(home) / ".cache" / "roughflow" / "numba"
-    else:
-        first = None
+    first = Path(given).expanduser() / "roughflow" if given else user_cache_dir("numba")
     spare = Path(tempfile.gettempdir()) / f"roughflow-numba-{os.getuid()}"
     return [p for p in (first, spare) if p is not None]
 

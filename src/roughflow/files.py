@@ -11,6 +11,7 @@ from __future__ import annotations
 
 import os
 import signal
+from pathlib import Path
 
 #: Signals that end a command, whose default action would stop it where it stands: SIGTERM
 #: (kill, scancel, a time limit), SIGHUP (a closed terminal), SIGUSR1 and SIGUSR2 (what
@@ -32,3 +33,15 @@ def publish(tmp: str | os.PathLike, path: str | os.PathLike) -> None:
     rename it to ``path``."""
     os.chmod(tmp, new_file_mode())
     os.replace(tmp, path)
+
+
+def user_cache_dir(name: str) -> Path | None:
+    """roughflow's cache folder ``name`` of this user: ``$XDG_CACHE_HOME/roughflow/<name>``,
+    else ``~/.cache/roughflow/<name>``; None where there is no home directory (HOME unset
+    and a user id the password database does not know, as in some containers: ``~`` stays
+    ``~``)."""
+    base = os.environ.get("XDG_CACHE_HOME")
+    if base:
+        return Path(base) / "roughflow" / name
+    home = os.path.expanduser("~")
+    return Path(home) / ".cache" / "roughflow" / name if os.path.isabs(home) else None

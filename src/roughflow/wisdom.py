@@ -38,7 +38,7 @@ from functools import lru_cache
 from pathlib import Path
 
 from roughflow.errors import InputError
-from roughflow.files import publish
+from roughflow.files import publish, user_cache_dir
 
 log = logging.getLogger(__name__)
 
@@ -63,26 +63,15 @@ _ENTRY = re.compile(r"  \([A-Za-z0-9_]+ \d+ #x[0-9a-f]{1,5} #x[0-9a-f]{1,5} #x([
                     r"( #x[0-9a-f]{1,8}){4}\)")
 
 
-def _home() -> Path | None:
-    """The user's home directory; None where there is none (HOME unset and a user id that
-    the password database does not know, as in some containers: ``~`` stays ``~``)."""
-    home = os.path.expanduser("~")
-    return Path(home) if os.path.isabs(home) else None
-
-
 def directory() -> Path | None:
     """The wisdom directory from :data:`ENV` (None: ``off``, or no directory to default to)."""
     raw = os.environ.get(ENV)
     if raw is None:
-        base = os.environ.get("XDG_CACHE_HOME")
-        if base:
-            return Path(base) / "roughflow" / "fftw"
-        home = _home()
-        if home is None:
+        default = user_cache_dir("fftw")
+        if default is None:
             _report("no home directory to keep the file in", "HOME is not set",
                     f"the wisdom stays in the process (set {ENV} to share it)")
-            return None
-        return home / ".cache" / "roughflow" / "fftw"
+        return default
     if raw.strip().lower() == "off":
         return None
     if not raw.strip():
