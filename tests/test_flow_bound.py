@@ -37,7 +37,7 @@ def _counted(monkeypatch, name: str) -> list:
 def _bound(sy, x):
     """(the bound on the error of ``x`` without its round-off allowance, its dissipation)."""
     bounds = dissipation_bounds(sy.faces, sy.active, sy.cells, x)
-    dissipation = flow_core._flux_balance(sy.faces, sy.active, sy.cells, x)[1]
+    dissipation = flow_core._flux_balance(sy.faces, sy.active, sy.cells, x).dissipation
     assert bounds.upper == pytest.approx(dissipation, rel=1e-14)  # the same Q(x)
     return bounds.relative_error, dissipation
 
@@ -87,7 +87,7 @@ def test_bound_holds_and_is_tight_on_rs_iterates(heights):
             if sy.cells.size == 0:
                 continue
             x_star = spla.splu(sy.matrix.tocsc()).solve(sy.rhs)
-            q_star = flow_core._flux_balance(sy.faces, sy.active, sy.cells, x_star)[1]
+            q_star = flow_core._flux_balance(sy.faces, sy.active, sy.cells, x_star).dissipation
             m = prepare(sy.matrix, "rs").preconditioner
             for its in (1, 2, 3, 5):
                 x = pcg(sy.matrix, sy.rhs, tol=1e-30, max_iter=its, accept=lambda x: False,
@@ -154,7 +154,7 @@ def _residual_terms(gap):
     d = solve(gap, 0, method="direct")
     sy = _system(gap)
     x = d.pressure.ravel()[sy.cells]
-    dissipation = flow_core._flux_balance(sy.faces, sy.active, sy.cells, x)[1]
+    dissipation = flow_core._flux_balance(sy.faces, sy.active, sy.cells, x).dissipation
     factor = prepare_solver(sy.matrix, "direct").factor.solve
     r = sy.rhs - sy.matrix @ x
     return (float(r @ factor(r)) / dissipation,
@@ -256,7 +256,7 @@ def test_bound_holds_on_other_geometries(shape, periodic, lx, ly):
             continue
         sy = flow_core.reynolds_system(s, active, axis, lx=lx, ly=ly, periodic=periodic)
         x_star = spla.splu(sy.matrix.tocsc()).solve(sy.rhs)
-        q_star = flow_core._flux_balance(sy.faces, sy.active, sy.cells, x_star)[1]
+        q_star = flow_core._flux_balance(sy.faces, sy.active, sy.cells, x_star).dissipation
         assert dissipation_bounds(sy.faces, sy.active, sy.cells, x_star).relative_error < 1e-15
         x = x_star + 1e-3 * rng.standard_normal(x_star.size)
         bound, dissipation = _bound(sy, x)
@@ -306,8 +306,8 @@ def test_cg_energy_decrease_is_the_dissipations(heights):
     run = pcg(sy.matrix, sy.rhs, tol=1e-10, max_iter=50,
               preconditioner=prepare(sy.matrix, "rs").preconditioner,
               certify=lambda x, drop: drops.append(drop) or False)
-    q0 = flow_core._flux_balance(sy.faces, sy.active, sy.cells, np.zeros(sy.cells.size))[1]
-    qk = flow_core._flux_balance(sy.faces, sy.active, sy.cells, run.x)[1]
+    q0 = flow_core._flux_balance(sy.faces, sy.active, sy.cells, np.zeros(sy.cells.size)).dissipation
+    qk = flow_core._flux_balance(sy.faces, sy.active, sy.cells, run.x).dissipation
     assert len(drops) == run.iterations >= 5 and not run.certified
     assert q0 - sum(drops) == pytest.approx(qk, rel=1e-8)
 
@@ -319,7 +319,7 @@ def test_a_failed_check_waits_for_the_estimate_to_fall_by_what_it_missed(heights
     sy = _system(_open_and_last_gaps(heights)[0.1])
     x = pcg(sy.matrix, sy.rhs, tol=1e-30, max_iter=2, accept=lambda x: False,
             preconditioner=prepare(sy.matrix, "rs").preconditioner).x
-    q = flow_core._flux_balance(sy.faces, sy.active, sy.cells, x)[1]
+    q = flow_core._flux_balance(sy.faces, sy.active, sy.cells, x).dissipation
     target = 1e-9
     check = flow_core._SigmaCertificate(sy.faces, sy.active, sy.cells, target)
     drop = 0.5 * target * q  # what CG's estimate would say near the end of a run

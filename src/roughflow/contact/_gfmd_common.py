@@ -4,6 +4,7 @@
 from __future__ import annotations
 
 import functools
+from typing import NamedTuple
 
 import numpy as np
 
@@ -16,10 +17,19 @@ from .elastic import compliance, stiffness
 Z_MASS = 3.0
 
 
+class SpectralFactors(NamedTuple):
+    """Read-only spectral factors of one grid of N points (the 1/N of the unnormalised
+    inverse transform folded in)."""
+
+    k: np.ndarray  #: stiffness k(q)
+    neg_k_n: np.ndarray  #: -k(q) / N
+    compliance_n: np.ndarray  #: G(q) / N
+    kmin: float  #: the smallest k > 0
+
+
 @functools.lru_cache(maxsize=2)  # large grids: 3 spectral arrays each
-def spectral_factors(shape: tuple[int, int], lx: float, ly: float):
-    """Read-only spectral factors for one grid: k(q), -k(q)/N, G(q)/N (the 1/N of the
-    unnormalised inverse transform folded in), and the smallest k > 0."""
+def spectral_factors(shape: tuple[int, int], lx: float, ly: float) -> SpectralFactors:
+    """The :class:`SpectralFactors` of one grid."""
     size = shape[0] * shape[1]
     k = stiffness(shape, lx, ly)
     kmin = float(k[k > 0].min())
@@ -27,7 +37,7 @@ def spectral_factors(shape: tuple[int, int], lx: float, ly: float):
     comp = compliance(shape, lx, ly) * (1.0 / size)
     for a in (k, neg_k, comp):
         a.setflags(write=False)
-    return k, neg_k, comp, kmin
+    return SpectralFactors(k, neg_k, comp, kmin)
 
 
 def load_scale(kmin: float, hscale: float, load: float, adhesive: bool) -> float:

@@ -653,7 +653,7 @@ def _fire(
     plan = fft.plan(shape, threads)
     neg_k = stiffness(shape, lx, ly)  # a new array: negated in place below
     kmin = float(neg_k[neg_k > 0].min())
-    comp_n = spectral_factors(shape, lx, ly)[2]
+    comp_n = spectral_factors(shape, lx, ly).compliance_n
     h0 = float(heights.mean())
     h = np.ascontiguousarray(heights - h0).ravel()
     hscale = height_scale(h)

@@ -20,6 +20,7 @@ unknowns; every face touching another cell has zero transmissibility anyway.
 from __future__ import annotations
 
 from dataclasses import dataclass
+from typing import NamedTuple
 
 import numpy as np
 import scipy.sparse as sp
@@ -129,7 +130,15 @@ def _fill_csr(index, t_along, t_across, t_in, t_out, cells):  # pragma: no cover
     return indptr, indices[:k], data[:k], rhs
 
 
-def assemble(faces: Faces, active: np.ndarray) -> tuple[sp.csr_matrix, np.ndarray, np.ndarray]:
+class LinearSystem(NamedTuple):
+    """The assembled equations of the unknown pressures (:func:`assemble`)."""
+
+    matrix: sp.csr_matrix
+    rhs: np.ndarray
+    cells: np.ndarray  #: flat cell index of each unknown
+
+
+def assemble(faces: Faces, active: np.ndarray) -> LinearSystem:
     """Matrix, right-hand side and flat cell indices of the unknowns.
 
     Unknowns are the cells where ``active`` is True, in C order; inlet pressure
@@ -147,4 +156,4 @@ def assemble(faces: Faces, active: np.ndarray) -> tuple[sp.csr_matrix, np.ndarra
     nd = cells.size
     matrix = sp.csr_matrix((data, indices, indptr), shape=(nd, nd))
     matrix.sum_duplicates()  # sorts the rows; n1 == 2 has two faces between the same cells
-    return matrix, rhs, cells
+    return LinearSystem(matrix, rhs, cells)

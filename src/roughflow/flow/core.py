@@ -281,15 +281,21 @@ class _Balanced:
         return self.certified or (self.balanced and self.solution.method == "direct")
 
 
-def _flux_balance(faces: Faces, act: np.ndarray, cells: np.ndarray, x: np.ndarray):
-    """(pressure on the grid, 0 in inactive cells; dissipation Q(p); |Q_in - Q_out| / Q(p))
-    of the unknowns ``x``."""
+class _FluxBalance(NamedTuple):
+    pressure: np.ndarray  #: on the grid, 0 in inactive cells
+    dissipation: float  #: Q(p)
+    imbalance: float  #: |Q_in - Q_out| / Q(p)
+
+
+def _flux_balance(faces: Faces, act: np.ndarray, cells: np.ndarray,
+                  x: np.ndarray) -> _FluxBalance:
+    """The :class:`_FluxBalance` of the unknowns ``x``."""
     q = np.zeros(act.shape)
     q.ravel()[cells] = x
     dissipation = _dissipation(faces, q)
     q_in = float(np.sum(faces.t_in * (1.0 - q[0])))
     q_out = float(np.sum(faces.t_out * q[-1]))
-    return q, dissipation, abs(q_in - q_out) / dissipation
+    return _FluxBalance(q, dissipation, abs(q_in - q_out) / dissipation)
 
 
 #: how far above :func:`_imbalance_floor` an AMG solve's imbalance must end for it to raise
@@ -402,7 +408,7 @@ class _SigmaCertificate:
     def __call__(self, x: np.ndarray, drop: float) -> bool:
         if drop > self.threshold * self.dissipation:  # no pass over the faces needed
             return False
-        self.dissipation = _flux_balance(self.faces, self.act, self.cells, x)[1]
+        self.dissipation = _flux_balance(self.faces, self.act, self.cells, x).dissipation
         if drop > self.threshold * self.dissipation:
             return False
         if self.tree is None:
@@ -444,7 +450,7 @@ def _solve_flux_balanced(matrix, rhs, cells, act, faces: Faces, *, tol: float, m
     # not also "within _imbalance_floor": near a_c* that stopped RS with sigma 3e-4 off where
     # going on to round-off gave 1e-8 (1024^2, a_c 0.44, y)
     def balanced(x: np.ndarray) -> bool:
-        return _flux_balance(faces, act, cells, x)[2] <= tol
+        return _flux_balance(faces, act, cells, x).imbalance <= tol
 
     # one factorisation for every refinement round: near a_c* it costs as much as a round
     certificate = None if sigma_tol is None else _SigmaCertificate(faces, act, cells, sigma_tol)

@@ -40,6 +40,7 @@ import threading
 from collections.abc import Callable, Iterator
 from contextlib import contextmanager
 from dataclasses import dataclass, replace
+from typing import NamedTuple
 
 import numpy as np
 import qdldl
@@ -379,13 +380,21 @@ def solve_spd(
     return LinearSolution(y, residual, iterations, method, certified)
 
 
+class PreparedSolution(NamedTuple):
+    """A solution of :func:`solve_prepared` and what was prepared for it (for further solves
+    of the same matrix)."""
+
+    solution: LinearSolution
+    prepared: Prepared
+
+
 def solve_prepared(a: sp.csr_matrix, b: np.ndarray, *, tol: float, method: str = "auto",
                    flowing_fraction: float | None = None,
                    direct_max_flowing_fraction: float | None = None,
                    accept: Callable[[np.ndarray], bool] | None = None,
                    certify: Callable[[np.ndarray, float], bool] | None = None,
                    hint: OrderHint | None = None,
-                   ) -> tuple[LinearSolution, Prepared]:
+                   ) -> PreparedSolution:
     """:func:`prepare` and :func:`solve_spd` of ``a x = b``, returning the solution and what
     was prepared (for further solves of the same matrix). ``flowing_fraction``: the
     unknowns' share of the grid's cells, and ``direct_max_flowing_fraction``, for
@@ -408,7 +417,7 @@ def solve_prepared(a: sp.csr_matrix, b: np.ndarray, *, tol: float, method: str =
     try:
         sol = solve_spd(a, b, tol=tol, prepared=prepared, accept=accept, certify=certify,
                         max_iter=AMG_ITER_BEFORE_FALLBACK if fallback and fits else None)
-        return sol, prepared
+        return PreparedSolution(sol, prepared)
     except ConvergenceError as exc:
         if not fallback:
             raise
@@ -423,4 +432,5 @@ def solve_prepared(a: sp.csr_matrix, b: np.ndarray, *, tol: float, method: str =
     log.warning("%s; retrying with the direct solver (%d unknowns)", failed, a.shape[0])
     prepared = prepare(a, "direct", hint=hint)
     sol = solve_spd(a, b, tol=tol, prepared=prepared)
-    return replace(sol, iterations=sol.iterations + failed.iterations), prepared
+    return PreparedSolution(replace(sol, iterations=sol.iterations + failed.iterations),
+                            prepared)
