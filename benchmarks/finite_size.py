@@ -5,9 +5,10 @@ Phases (results under ``--out``, default ``results/benchmarks``):
 - ``run``: thresholds per (model, gamma, L/lambda_r, aspect, seed): the threshold scene's
   search (same surfaces, tolerances and corrected a_c* as the workflow) plus, for the
   elastic model, the contact-line faces normal to x and y at each axis' threshold
-  (``convergence.threshold_record``), so that any weighting of the perimeter correction can
-  be evaluated afterwards. Every result is appended to ``finite_size.jsonl`` and never
-  computed twice: a run can be stopped and resumed, and seeds or sizes can be added later.
+  (``roughflow.convergence.measure.threshold_record``), so that any weighting of the
+  perimeter correction can be evaluated afterwards. Every result is appended to
+  ``finite_size.jsonl`` and never computed twice: a run can be stopped and resumed, and
+  seeds or sizes can be added later.
 - ``report``: the fits of :mod:`roughflow.fits` (a_c*(eps) = a_c* + A eps^(1/nu), bootstrap
   over whole seeds) on the default config's design and on everything measured; the
   easy-hard midpoint against the isotropic a_c* at the same mapped size; the correlation of
@@ -50,11 +51,8 @@ import numpy as np
 
 os.environ.setdefault("ROUGHFLOW_FFT_THREADS", "1")
 
-sys.path.insert(0, str(Path(__file__).resolve().parent))
-
-from convergence import threshold_record  # noqa: E402
-
 from roughflow import accuracy, defaults, fits  # noqa: E402
+from roughflow.convergence.measure import threshold_record  # noqa: E402
 from roughflow.errors import InputError  # noqa: E402
 from roughflow.scenes import SurfaceParams  # noqa: E402
 from roughflow.search import SearchOptions, threshold  # noqa: E402

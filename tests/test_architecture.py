@@ -12,7 +12,8 @@ PACKAGE = Path(roughflow.__file__).resolve().parent
 
 #: Layers, lowest first: each top-level module or subpackage of roughflow may import its own
 #: layer and those below. The physics stages in the paper's order, then the orchestration
-#: of solves, the datasets, the sweep side and the command line.
+#: of solves, the datasets, the sweep side (the accuracy study, convergence, runs searches,
+#: contact and flow solves and writes through io) and the command line.
 LAYERS = (
     {"defaults", "errors", "files", "progress", "units", "resources", "wisdom", "fft", "gpu",
      "citation", "provenance", "reynolds", "_jit"},
@@ -27,6 +28,7 @@ LAYERS = (
     {"scenes"},
     {"fits"},
     {"figures"},
+    {"convergence"},
     {"cli", "__main__"},
 )
 

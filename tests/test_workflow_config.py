@@ -84,19 +84,23 @@ def test_duplicate_config_key_is_refused(tmp_path, case):
     assert not (wd / "results").exists()
 
 
-# (c) the accuracy rules: the Python that runs snakemake, under the config's results folder
+# (c) the accuracy rules: `roughflow accuracy` of the Python that runs snakemake (as every
+# rule calls roughflow), under the config's results folder
 def test_accuracy_rules_use_this_python_and_the_results_folder(tmp_path):
     wd = copy_workflow(tmp_path)
     write_case(wd, results="acc_out")
     res = dry_run(wd, "accuracy")
     assert res.returncode == 0, res.stderr[-2000:]
-    cmds = shell_commands(res.stdout, "convergence.py")
+    cmds = shell_commands(res.stdout, " accuracy ")
     assert len(cmds) == 3
+    assert sorted(c[c.index("accuracy") + 1] for c in cmds) == ["report", "resolution", "tol"]
     for cmd in cmds:
-        python = cmd[cmd.index(next(w for w in cmd if w.endswith("convergence.py"))) - 1]
-        assert Path(python).parent == Path(sys.executable).parent, cmd  # this venv
+        i = cmd.index("accuracy")
+        assert cmd[i - 2:i] == ["-m", "roughflow"], cmd
+        assert Path(cmd[i - 3]).parent == Path(sys.executable).parent, cmd  # this venv
         assert cmd[cmd.index("--out") + 1] == "acc_out/benchmarks", cmd
     assert "results/benchmarks" not in res.stdout + res.stderr
+    assert "convergence.py" not in res.stdout + res.stderr
 
 
 # (d) a results folder with a trailing or doubled slash is normalised ('out/' -> 'out')
@@ -206,7 +210,7 @@ def test_accuracy_seeds_reach_both_convergence_runs(tmp_path):
     write_case(wd, accuracy={"seeds": [7]})
     res = dry_run(wd, "accuracy")
     assert res.returncode == 0, res.stderr[-2000:]
-    cmds = [c for c in shell_commands(res.stdout, "convergence.py")
+    cmds = [c for c in shell_commands(res.stdout, " accuracy ")
             if "resolution" in c or "tol" in c]
     assert sorted(c[c.index("--out") - 1] for c in cmds) == ["resolution", "tol"], cmds
     for cmd in cmds:

@@ -15,9 +15,9 @@ the measurements):
   surfaces the constant fitted that way drifts with gamma while the per-face one does not;
   docs/accuracy.md.) ``c`` is fitted to converged references with
   :func:`fit_perimeter_constant`; :data:`PERIMETER_C` is the value measured by
-  ``benchmarks/convergence.py`` on the default sweep surfaces (elastic, H = 0.8,
-  eps_f = 1/16). Yastrebov, Anciaux & Molinari (Tribol. Int. 114 (2017) 161) derived a
-  correction of the same form from the geometry of the contact edge.
+  ``roughflow accuracy`` (:mod:`roughflow.convergence`) on the default sweep surfaces
+  (elastic, H = 0.8, eps_f = 1/16). Yastrebov, Anciaux & Molinari (Tribol. Int. 114 (2017)
+  161) derived a correction of the same form from the geometry of the contact edge.
 - :func:`richardson`: extrapolation of a first-order quantity from two resolutions,
   a_inf = (r^p a_fine - a_coarse) / (r^p - 1).
 
@@ -44,7 +44,7 @@ if TYPE_CHECKING:
 
     from numpy.typing import ArrayLike
 
-#: Perimeter constant c fitted by ``benchmarks/convergence.py`` (elastic contact, default
+#: Perimeter constant c fitted by ``roughflow accuracy`` (elastic contact, default
 #: sweep surfaces, 4 to 16 points per lambda_s; docs/accuracy.md): the misclassified area
 #: per contact/non-contact face, in cell areas. Fitted on square cells (gamma = 1) and
 #: confirmed per face on the rectangular cells of gamma = 2 and 4 surfaces.

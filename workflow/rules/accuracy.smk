@@ -1,18 +1,20 @@
 # Accuracy budget: convergence of a_c* and sigma against grid resolution, contact
 # solver tolerance and bisection tolerance, with wall times; tables and error-vs-time plots
-# under <results>/benchmarks/ (the config's results folder). Not part of the default target:
+# under <results>/benchmarks/ (the config's results folder). Each rule is one
+# `roughflow accuracy` call (roughflow.convergence). Not part of the default target:
 # `snakemake --cores 1 accuracy` (about 2 minutes). Seeds and resolutions via
 # config["accuracy"] (optional):
 #   accuracy: {seeds: [0, 1, 2, 3, 4, 5], points_per_lambda_s: [2, 4, 8, 16]}
 
+from roughflow.convergence.options import ToleranceOptions  # noqa: E402
 from roughflow.scenes.requests import task_mem_mb  # noqa: E402
 from roughflow.surface import SurfaceSpec  # noqa: E402
 
 _ACC = config.get("accuracy", {}) or {}
 _ACC_SEEDS = " ".join(str(s) for s in _ACC.get("seeds", [0, 1, 2, 3, 4, 5]))
 _ACC_PPL_LIST = [int(p) for p in _ACC.get("points_per_lambda_s", [2, 4, 8, 16])]
-# the finer grids are sampled down to the coarser ones (benchmarks/convergence.py): refused
-# here, before the tolerance job runs, not in the resolution job after it
+# the finer grids are sampled down to the coarser ones (`roughflow accuracy resolution`):
+# refused here, before the tolerance job runs, not in the resolution job after it
 _ACC_ODD = [p for p in _ACC_PPL_LIST if max(_ACC_PPL_LIST) % p]
 if _ACC_ODD:
     raise WorkflowError(f"invalid config: key 'accuracy.points_per_lambda_s' = "
@@ -20,14 +22,11 @@ if _ACC_ODD:
                         f"{max(_ACC_PPL_LIST)}")
 _ACC_PPL = " ".join(str(p) for p in _ACC_PPL_LIST)
 # contact and flow solves on the finest grid (resolution) and at 4 points (tolerances:
-# convergence.py's --tol-ppl default), sized by the library's estimate of a ladder job
+# the default --tol-ppl of `roughflow accuracy tol`), sized by the library's estimate of a
+# ladder job
 _ACC_FINEST = SurfaceSpec.from_sweep(points_per_lambda_s=max(_ACC_PPL_LIST))
-_ACC_TOL_GRID = SurfaceSpec.from_sweep(points_per_lambda_s=4)
+_ACC_TOL_GRID = SurfaceSpec.from_sweep(points_per_lambda_s=ToleranceOptions().ppl)
 _ACC_OUT = f"{RESULTS}/benchmarks"
-# the script of the checkout that holds this Snakefile, run by the Python that runs snakemake
-# (as RF in common.smk), not the first `python` on PATH
-_ACC_SCRIPT = f"{PYTHON} " + shlex.quote(
-    str(Path(workflow.basedir) / "benchmarks" / "convergence.py"))
 
 
 rule accuracy_resolution:
@@ -48,7 +47,7 @@ rule accuracy_resolution:
             "ladder", _ACC_FINEST.nx * _ACC_FINEST.ny, attempt),
         runtime=60,
     shell:
-        "rm -f {output} && ROUGHFLOW_FFT_THREADS={threads} {_ACC_SCRIPT} "
+        "rm -f {output} && ROUGHFLOW_FFT_THREADS={threads} {RF} accuracy "
         "resolution --out {_ACC_OUT} --seeds {params.seeds} --ppl {params.ppl} > {log} 2>&1"
 
 
@@ -66,7 +65,7 @@ rule accuracy_tolerances:
             "ladder", _ACC_TOL_GRID.nx * _ACC_TOL_GRID.ny, attempt),
         runtime=60,
     shell:
-        "rm -f {output} && ROUGHFLOW_FFT_THREADS={threads} {_ACC_SCRIPT} "
+        "rm -f {output} && ROUGHFLOW_FFT_THREADS={threads} {RF} accuracy "
         "tol --out {_ACC_OUT} --seeds {params.seeds} > {log} 2>&1"
 
 
@@ -83,4 +82,4 @@ rule accuracy:
     log:
         f"{_ACC_OUT}/logs/convergence_report.log",
     shell:
-        "{_ACC_SCRIPT} report --out {_ACC_OUT} > {log} 2>&1"
+        "{RF} accuracy report --out {_ACC_OUT} > {log} 2>&1"

@@ -1,7 +1,8 @@
 """The shared input/output layer of the subcommands.
 
 A subcommand declares its files with :func:`add_input` (a dataset of given kinds,
-:mod:`roughflow.datasets.kinds`) and :func:`add_output`; before its ``func`` runs,
+:mod:`roughflow.datasets.kinds`) and :func:`add_output` (or :func:`add_output_folder`, a
+folder of files with fixed names); before its ``func`` runs,
 :func:`roughflow.cli.main` checks every output path (:func:`roughflow.io.check_output`:
 writable, not a directory, the right suffix) and reads every input (:func:`read_inputs`:
 readable netCDF of the expected kind, loaded into ``args.data[dest]``). Any failure is an
@@ -13,6 +14,7 @@ from __future__ import annotations
 
 import argparse
 import logging
+from collections.abc import Callable
 from pathlib import Path
 
 from roughflow import defaults
@@ -20,6 +22,7 @@ from roughflow.errors import InputError
 
 #: Namespace attributes where the helpers record what to check (set with set_defaults).
 _OUTPUTS = "_outputs"
+_OUTPUT_FOLDERS = "_output_folders"
 _INPUTS = "_inputs"
 _SOURCES = "_sources"
 
@@ -58,6 +61,15 @@ def add_output(parser: argparse.ArgumentParser, *flags: str, dest: str = "output
     parser.add_argument(*flags, dest=dest, required=required, default=None, metavar=metavar,
                         help=help)
     _record(parser, _OUTPUTS, (dest, flags[-1], tuple(suffixes)))
+
+
+def add_output_folder(parser: argparse.ArgumentParser, flag: str, *, default: str,
+                      files: Callable[[argparse.Namespace], list[str]], help: str) -> None:
+    """An output folder option, in which the subcommand writes the files ``files(args)``
+    (names inside the folder); each is checked by :func:`roughflow.io.check_output` before
+    the subcommand runs, as an :func:`add_output` file is."""
+    parser.add_argument(flag, default=default, metavar="DIR", help=f"{help} ({default})")
+    _record(parser, _OUTPUT_FOLDERS, (dest_of(flag), flag, files))
 
 
 def add_input(parser: argparse.ArgumentParser, *names: str, kinds: str | tuple[str, ...] | None,
@@ -138,6 +150,12 @@ def check_outputs(args: argparse.Namespace) -> None:
                     Path(out).exists() and source.exists() and Path(out).samefile(source)):
                 raise InputError(f"{option} {str(out)!r} is also an input of the command: "
                                  "writing it would replace that file; give another name")
+    for dest, option, files in getattr(args, _OUTPUT_FOLDERS, None) or []:
+        folder = Path(getattr(args, dest))
+        if folder.exists() and not folder.is_dir():
+            raise InputError(f"{option} {str(folder)!r} is a file; give a folder")
+        for name in files(args):
+            check_output(folder / name, option=option, suffixes=(Path(name).suffix,))
 
 
 def read_inputs(args: argparse.Namespace) -> None:

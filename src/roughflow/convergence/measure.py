@@ -1,0 +1,292 @@
+"""The measurements of the accuracy study: the resolution and the tolerance phases.
+
+Each appends one JSON record per measurement to its file (:mod:`.records`) and hands it to
+``on_record`` as well (the command line prints it). Wall times are taken after
+:func:`warm_up`, and FFT plans are made before a grid size is timed.
+"""
+
+from __future__ import annotations
+
+import os
+import time
+from collections.abc import Callable
+from dataclasses import dataclass
+from pathlib import Path
+
+import numpy as np
+
+from roughflow import accuracy, contact, fft, flow
+from roughflow.errors import ConvergenceError, InputError
+from roughflow.search import LoadSearch, SearchOptions, threshold
+from roughflow.search import warm_up as search_warm_up
+from roughflow.surface import Surface, SurfaceSpec, generate
+
+from .load_path import shifted_sigma
+from .options import TARGETS, ResolutionOptions, ToleranceOptions
+from .records import append_record, load_records, resolution_file, tolerance_file
+
+OnRecord = Callable[[dict], None]
+
+
+def warm_up() -> None:
+    """Keep one-off costs out of the timings: numba compilation of the contact and search
+    kernels (:func:`roughflow.search.warm_up`) and the flow solvers' imports (one small
+    untimed solve)."""
+    search_warm_up()
+    s = generate(SurfaceSpec.from_sweep(points_per_lambda_s=2, seed=0))
+    flow.solve(contact.solve(s, 0.1).gap, 0, lx=s.lx, ly=s.ly)
+
+
+def _plan(shape: tuple[int, int]) -> None:
+    """FFTW plans are made per shape at first use: make them before a size is timed (the
+    solvers use the float32 plan as well)."""
+    fft.plan(shape)
+    fft.plan(shape, single=True)
+
+
+def _faces(contact_mask: np.ndarray) -> dict:
+    """Contact/non-contact faces normal to x and to y per cell (pixel counts)."""
+    fx, fy = accuracy.contact_faces(contact_mask)
+    n = contact_mask.size
+    return {"tx": fx / n, "ty": fy / n}
+
+
+def sampled_surface(finest: Surface, ppl: int, ppl_max: int, *, seed: int, gamma: float = 1.0,
+                    l_over_lambda_r: float | None = None) -> Surface:
+    """``finest`` (the seed's surface generated at ``ppl_max``) sampled down to ``ppl``
+    points per lambda_s: the same physical surface on the coarser grid (for gamma != 1 the
+    grid has ``ppl`` points per shortest wavelength along each axis, so both axes are
+    sampled by the same factor). The resolutions are those of
+    :func:`~.options.check_resolutions`."""
+    k = ppl_max // ppl
+    coarse = SurfaceSpec.from_sweep(gamma=gamma, l_over_lambda_r=l_over_lambda_r,
+                                    points_per_lambda_s=ppl, seed=seed)
+    if k * ppl != ppl_max or (coarse.nx * k, coarse.ny * k) != finest.shape:
+        raise InputError(f"grid {finest.shape} at ppl {ppl_max} is not {k} x the grid "
+                         f"({coarse.nx}, {coarse.ny}) at ppl {ppl}")
+    return Surface.from_array(np.ascontiguousarray(finest.heights[::k, ::k]),
+                              lx=finest.lx, ly=finest.ly)
+
+
+@dataclass(frozen=True)
+class AreaHit:
+    """The contact solves of a load search onto a target area: its ``first`` solve (at the
+    contact law's load, the same at every resolution), the ``last`` one (the area within
+    tolerance) and how many it took."""
+
+    first: contact.ContactResult
+    last: contact.ContactResult
+    n_solves: int
+
+
+def hit_area(surf: Surface, target: float, *, tol_a: float, ctol: float,
+             init: contact.ContactResult | None = None) -> AreaHit:
+    """Contact solves until |a_c - target| <= tol_a (the shared load search, whose first
+    load is the contact law's)."""
+    solves = []
+
+    def solve(p, warm):
+        solves.append(contact.solve(surf, p, tol=ctol, init=init if warm is None else warm))
+        return solves[-1]
+
+    found = LoadSearch(solve, contact.ContactLaw()).solve_for(target, tol_a, max_solves=8)
+    return AreaHit(solves[0], found.result, found.solves)
+
+
+def threshold_record(surf: Surface, *, tol: float, contact_tol: float,
+                     on_unbracketed: str = "raise") -> dict:
+    """a_c* along x and y (raw and as the search corrects it), and one contact solve at
+    each axis' bracket midpoint: the contact-line faces normal to x and to y per cell
+    (``tx_{ax}``, ``ty_{ax}``) at that axis' threshold, from which any weighting of the
+    perimeter term can be evaluated afterwards. Also used by benchmarks/finite_size.py."""
+    t0 = time.perf_counter()
+    th = threshold(surf, axis=None, tol=tol, options=SearchOptions(
+        contact_tol=contact_tol, on_unbracketed=on_unbracketed))
+    rec = dict(time=time.perf_counter() - t0, n_solves=th[0].n_solves)
+    t0 = time.perf_counter()
+    rm = None
+    for ax in (0, 1):
+        rec[f"a_star_{ax}"] = th[ax].a_c_star
+        rec[f"a_star_corrected_{ax}"] = th[ax].a_c_star_corrected
+        rec[f"a_lo_{ax}"], rec[f"a_hi_{ax}"] = th[ax].a_lo, th[ax].a_hi
+        if not th[ax].bracketed:
+            rec.update({f"{k}_{ax}": float("nan") for k in ("a_mid", "perim", "tx", "ty")})
+            continue
+        rm = contact.solve(surf, 0.5 * (th[ax].p_lo + th[ax].p_hi), tol=contact_tol, init=rm)
+        rec[f"a_mid_{ax}"] = rm.area_fraction
+        rec[f"perim_{ax}"] = accuracy.perimeter_term(rm.contact)
+        rec.update({f"{k}_{ax}": v for k, v in _faces(rm.contact).items()})
+    rec["time_mid"] = (time.perf_counter() - t0) / 2
+    rec["perim_mid"] = 0.5 * (rec["perim_0"] + rec["perim_1"])
+    return rec
+
+
+def _fixed_loads(surf: Surface, base: dict, targets: tuple[float, ...], contact_tol: float,
+                 emit: OnRecord) -> None:
+    """Contact solves at the contact law's loads for ``targets`` (the same pressures at every
+    resolution): the points that fit the perimeter constant."""
+    init = None
+    for target in targets:
+        p = contact.ContactLaw().control(target)
+        t0 = time.perf_counter()
+        r = contact.solve(surf, p, tol=contact_tol, init=init)
+        init = r
+        emit(dict(
+            kind="fixed", **base, target=target, p_fixed=p,
+            a_fixed=r.area_fraction, gap_fixed=r.mean_gap,
+            perim_fixed=accuracy.perimeter_term(r.contact),
+            **{f"{k}_fixed": v for k, v in _faces(r.contact).items()},
+            contact_tol=contact_tol, time_contact=time.perf_counter() - t0))
+
+
+def _sigma_targets(surf: Surface, base: dict, opts: ResolutionOptions, emit: OnRecord) -> None:
+    """sigma_x at each of :data:`~.options.TARGETS` (the load search, then one flow solve),
+    with the search's first solve at the contact law's load."""
+    init = None
+    for target in TARGETS:
+        t0 = time.perf_counter()
+        hit = hit_area(surf, target, tol_a=opts.area_tol, ctol=opts.contact_tol, init=init)
+        t_c = time.perf_counter() - t0
+        first, r = hit.first, hit.last
+        init = r
+        t0 = time.perf_counter()
+        fr = flow.solve(r.gap, 0, lx=surf.lx, ly=surf.ly)
+        t_f = time.perf_counter() - t0
+        a = r.area_fraction
+        sig = fr.sigma
+        emit(dict(
+            kind="sigma", **base, target=target,
+            p_fixed=first.pressure, a_fixed=first.area_fraction,
+            gap_fixed=first.mean_gap,
+            perim_fixed=accuracy.perimeter_term(first.contact),
+            **{f"{k}_fixed": v for k, v in _faces(first.contact).items()},
+            a=a, perim=accuracy.perimeter_term(r.contact),
+            sigma_raw=sig, sigma=shifted_sigma(sig, a, target), mean_gap=r.mean_gap,
+            n_contact_solves=hit.n_solves, time_contact=t_c, time_flow=t_f,
+            flow_residual=fr.residual, flux_imbalance=fr.flux_imbalance,
+            contact_tol=opts.contact_tol,
+        ))
+
+
+def _emitter(path: Path, on_record: OnRecord | None) -> OnRecord:
+    def emit(rec: dict) -> None:
+        append_record(path, rec)
+        if on_record is not None:
+            on_record(rec)
+    return emit
+
+
+def measure_resolution(out: str | os.PathLike, opts: ResolutionOptions, *,
+                       on_record: OnRecord | None = None, warm: bool = True) -> Path:
+    """The resolution study into :func:`~.records.resolution_file` under ``out``; returns
+    that file. Records already in it are not computed again (a run can be resumed).
+    ``warm``: :func:`warm_up` first (False where the caller has)."""
+    if warm:
+        warm_up()
+    path = resolution_file(out, opts.gamma)
+    emit = _emitter(path, on_record)
+    ppl_max = max(opts.ppl)
+    done = {(r["kind"], r["seed"], r["ppl"], r.get("target")) for r in load_records(path)}
+    finest: dict[int, Surface] = {}
+    # seed by seed (every resolution of a seed before the next seed): an interrupted run
+    # leaves complete seeds, and only one finest surface is held in memory
+    for seed, ppl in ((s, p) for s in opts.seeds for p in sorted(opts.ppl)):
+        todo_fixed = tuple(t for t in opts.fixed_targets if ("fixed", seed, ppl, t) not in done)
+        has_threshold = ("threshold", seed, ppl, None) in done
+        if has_threshold and (opts.with_sigma or not todo_fixed):
+            continue
+        if seed not in finest:
+            finest.clear()
+            finest[seed] = generate(SurfaceSpec.from_sweep(
+                gamma=opts.gamma, l_over_lambda_r=opts.l_over_lambda_r,
+                points_per_lambda_s=ppl_max, seed=seed))
+        surf = sampled_surface(finest[seed], ppl, ppl_max, seed=seed, gamma=opts.gamma,
+                               l_over_lambda_r=opts.l_over_lambda_r)
+        _plan(surf.shape)
+        base = dict(seed=seed, ppl=ppl, n=surf.shape[0], ny=surf.shape[1],
+                    gamma=opts.gamma, l_over_lambda_r=opts.l_over_lambda_r,
+                    dx=surf.dx, dy=surf.dy)
+        if not has_threshold:
+            emit(dict(kind="threshold", **base, bisect_tol=opts.bisect_tol,
+                      contact_tol=opts.threshold_contact_tol,
+                      **threshold_record(surf, tol=opts.bisect_tol,
+                                         contact_tol=opts.threshold_contact_tol)))
+        if opts.with_sigma:
+            _sigma_targets(surf, base, opts, emit)
+        else:
+            _fixed_loads(surf, base, todo_fixed, opts.contact_tol, emit)
+    return path
+
+
+def _contact_tolerances(surf: Surface, seed: int, opts: ToleranceOptions,
+                        emit: OnRecord) -> None:
+    """Contact tolerance at fixed load (a_c ~ 0.2 and ~ 0.35), cold solves."""
+    for target in TARGETS:
+        p = contact.ContactLaw().control(target)
+        for ctol in opts.contact_tols:
+            t0 = time.perf_counter()
+            r = contact.solve(surf, p, tol=ctol)
+            t_c = time.perf_counter() - t0
+            t0 = time.perf_counter()
+            sig = flow.solve(r.gap, 0, lx=surf.lx, ly=surf.ly).sigma
+            t_f = time.perf_counter() - t0
+            emit(dict(kind="contact_tol", seed=seed, ppl=opts.ppl, target=target,
+                      p=p, contact_tol=ctol, a=r.area_fraction,
+                      mean_gap=r.mean_gap, sigma=sig, iterations=r.iterations,
+                      time_contact=t_c, time_flow=t_f))
+
+
+def _threshold_contact_tolerances(surf: Surface, seed: int, opts: ToleranceOptions,
+                                  emit: OnRecord) -> None:
+    """Contact tolerance inside the threshold bisection (a loose one makes a(p) jump: a
+    search that fails is recorded as such)."""
+    for ctol in opts.threshold_contact_tols:
+        t0 = time.perf_counter()
+        try:
+            th = threshold(surf, axis=None, tol=opts.threshold_bisect_tol,
+                           options=SearchOptions(contact_tol=ctol, max_solves=80))
+        except ConvergenceError as e:
+            emit(dict(kind="threshold_contact_tol_failed", seed=seed, ppl=opts.ppl,
+                      contact_tol=ctol, bisect_tol=opts.threshold_bisect_tol,
+                      error=str(e)))
+            continue
+        emit(dict(kind="threshold_contact_tol", seed=seed, ppl=opts.ppl,
+                  contact_tol=ctol, bisect_tol=opts.threshold_bisect_tol,
+                  time=time.perf_counter() - t0, n_solves=th[0].n_solves,
+                  a_star_0=th[0].a_c_star, a_star_1=th[1].a_c_star))
+
+
+def _bisection_tolerances(surf: Surface, seed: int, opts: ToleranceOptions,
+                          emit: OnRecord) -> None:
+    """a_c* against the bisection tolerance."""
+    for btol in opts.bisect_tols:
+        t0 = time.perf_counter()
+        try:
+            th = threshold(surf, axis=None, tol=btol, options=SearchOptions(
+                max_solves=80, contact_tol=opts.threshold_contact_tol))
+        except ConvergenceError as e:
+            emit(dict(kind="bisect_tol_failed", seed=seed, ppl=opts.ppl,
+                      bisect_tol=btol, error=str(e)))
+            continue
+        emit(dict(kind="bisect_tol", seed=seed, ppl=opts.ppl, bisect_tol=btol,
+                  contact_tol=opts.threshold_contact_tol,
+                  time=time.perf_counter() - t0, n_solves=th[0].n_solves,
+                  a_star_0=th[0].a_c_star, a_star_1=th[1].a_c_star,
+                  width_0=th[0].width, width_1=th[1].width))
+
+
+def measure_tolerances(out: str | os.PathLike, opts: ToleranceOptions, *,
+                       on_record: OnRecord | None = None, warm: bool = True) -> Path:
+    """The tolerance study into :func:`~.records.tolerance_file` under ``out`` (appended);
+    returns that file. ``warm``: :func:`warm_up` first (False where the caller has)."""
+    if warm:
+        warm_up()
+    path = tolerance_file(out)
+    emit = _emitter(path, on_record)
+    for seed in opts.seeds:
+        surf = generate(SurfaceSpec.from_sweep(points_per_lambda_s=opts.ppl, seed=seed))
+        _plan(surf.shape)
+        _contact_tolerances(surf, seed, opts, emit)
+        _threshold_contact_tolerances(surf, seed, opts, emit)
+        _bisection_tolerances(surf, seed, opts, emit)
+    return path

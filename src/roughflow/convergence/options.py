@@ -1,0 +1,118 @@
+"""The accuracy study's settings: frozen option sets, checked when they are made.
+
+Only the standard library and :mod:`roughflow.errors` are imported here (the command line
+reads its defaults from these classes to build its parser); the grid check of
+:class:`ResolutionOptions` imports :mod:`roughflow.surface` when it runs.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Iterable
+from dataclasses import dataclass
+
+from roughflow.errors import InputError, require_int, require_positive, require_seeds
+
+#: a_c of the sigma measurements (resolution) and of the fixed-load contact solves (tolerances)
+TARGETS = (0.2, 0.35)
+
+
+def _positive_tuple(name: str, values: Iterable[float]) -> tuple[float, ...]:
+    out = tuple(require_positive(f"{name} entry", v) for v in values)
+    if not out:
+        raise InputError(f"{name} is empty")
+    return out
+
+
+def check_resolutions(ppl: Iterable[int], *, gamma: float = 1.0,
+                      l_over_lambda_r: float | None = None) -> tuple[int, ...]:
+    """``ppl`` (points per lambda_s) as a tuple of integers >= 2 whose grids are the finest
+    one sampled down: each must divide the largest, and the FFT-friendly rounding of the
+    grid sizes must keep that ratio; :class:`InputError` naming the value otherwise."""
+    out = tuple(require_int("ppl entry", p, minimum=2) for p in ppl)
+    if not out:
+        raise InputError("ppl is empty")
+    finest = max(out)
+    odd = [p for p in out if finest % p]
+    if odd:
+        raise InputError(f"ppl {', '.join(map(str, odd))} "
+                         f"{'does' if len(odd) == 1 else 'do'} not divide the largest, "
+                         f"{finest}: the finest grid is sampled down to the coarser ones")
+    from roughflow.surface import SurfaceSpec
+
+    fine = SurfaceSpec.from_sweep(gamma=gamma, l_over_lambda_r=l_over_lambda_r,
+                                  points_per_lambda_s=finest)
+    for p in out:
+        k = finest // p
+        coarse = SurfaceSpec.from_sweep(gamma=gamma, l_over_lambda_r=l_over_lambda_r,
+                                        points_per_lambda_s=p)
+        if (coarse.nx * k, coarse.ny * k) != (fine.nx, fine.ny):
+            raise InputError(f"ppl {p}: the grid ({coarse.nx}, {coarse.ny}) "
+                             f"is not 1/{k} of the grid ({fine.nx}, {fine.ny}) at "
+                             f"{finest} (FFT-friendly rounding broke the ratio)")
+    return out
+
+
+@dataclass(frozen=True)
+class ResolutionOptions:
+    """The resolution study: one surface per seed, sampled down from ``max(ppl)``.
+
+    ``sigma`` None: sigma at :data:`TARGETS` for gamma 1 only; without sigma the contact
+    law's ``fixed_targets`` loads are solved instead (the points that fit the perimeter
+    constant). ``bisect_tol``, ``threshold_contact_tol``: the threshold searches;
+    ``contact_tol``: the fixed-area and fixed-load solves; ``area_tol``: how close a_c comes
+    to the sigma targets.
+    """
+
+    seeds: tuple[int, ...] = (0, 1, 2)
+    ppl: tuple[int, ...] = (2, 4, 8, 16)
+    gamma: float = 1.0
+    l_over_lambda_r: float | None = None
+    sigma: bool | None = None
+    fixed_targets: tuple[float, ...] = (0.2, 0.35, 0.42)
+    bisect_tol: float = 1e-3
+    threshold_contact_tol: float = 1e-5
+    contact_tol: float = 1e-6
+    area_tol: float = 3e-4
+
+    def __post_init__(self) -> None:
+        object.__setattr__(self, "seeds", require_seeds("seeds", self.seeds))
+        object.__setattr__(self, "fixed_targets",
+                           _positive_tuple("fixed_targets", self.fixed_targets))
+        for name in ("bisect_tol", "threshold_contact_tol", "contact_tol", "area_tol"):
+            require_positive(name, getattr(self, name))
+        object.__setattr__(self, "ppl", check_resolutions(
+            self.ppl, gamma=self.gamma, l_over_lambda_r=self.l_over_lambda_r))
+
+    @property
+    def with_sigma(self) -> bool:
+        """Whether sigma is measured (``sigma``, or by default for gamma 1 only)."""
+        return self.gamma == 1.0 if self.sigma is None else self.sigma
+
+
+@dataclass(frozen=True)
+class ToleranceOptions:
+    """The tolerance study at ``ppl`` points per lambda_s (the last of each list is the
+    reference): ``contact_tols`` at the fixed loads of :data:`TARGETS` (cold solves),
+    ``threshold_contact_tols`` inside a threshold search of bisection tol
+    ``threshold_bisect_tol``, and ``bisect_tols`` with contact tol ``threshold_contact_tol``."""
+
+    seeds: tuple[int, ...] = (0, 1, 2)
+    ppl: int = 4
+    contact_tols: tuple[float, ...] = (1e-3, 1e-4, 1e-5, 1e-6, 1e-8)
+    threshold_contact_tols: tuple[float, ...] = (1e-3, 1e-4, 1e-5, 1e-7)
+    threshold_bisect_tol: float = 1e-3
+    bisect_tols: tuple[float, ...] = (0.032, 0.016, 0.008, 0.004, 0.002, 0.001, 0.0005,
+                                      0.00025)
+    threshold_contact_tol: float = 1e-5
+
+    def __post_init__(self) -> None:
+        object.__setattr__(self, "seeds", require_seeds("seeds", self.seeds))
+        object.__setattr__(self, "ppl", require_int("tol_ppl", self.ppl, minimum=2))
+        for name in ("contact_tols", "threshold_contact_tols", "bisect_tols"):
+            object.__setattr__(self, name, _positive_tuple(name, getattr(self, name)))
+        for name in ("threshold_bisect_tol", "threshold_contact_tol"):
+            require_positive(name, getattr(self, name))
+
+
+#: smallest resolution whose records fit the perimeter constant in the reports
+FIT_MIN_PPL = 4

@@ -1,0 +1,54 @@
+"""The study's files: their names, and the JSON-lines records appended and read one per
+line.
+
+Records are appended as they are measured (an interrupted run keeps what it finished, and a
+rerun into the same file computes only what is missing).
+"""
+
+from __future__ import annotations
+
+import json
+import os
+from pathlib import Path
+
+#: the tolerance study's records
+TOLERANCE_FILE = "convergence_tol.jsonl"
+#: every resolution file (one per gamma), for the anisotropic report
+RESOLUTION_GLOB = "convergence_resolution*.jsonl"
+#: the isotropic report: STEM.md, STEM.csv and its two plots (resolution, tolerances)
+REPORT_STEM = "convergence"
+REPORT_PLOTS = ("convergence_resolution.png", "convergence_tolerances.png")
+#: the anisotropic report: STEM.md, STEM.csv and STEM.png
+ANISOTROPIC_STEM = "convergence_anisotropic"
+
+
+def report_files() -> list[str]:
+    """The names of every file the reports write."""
+    return [f"{REPORT_STEM}.md", f"{REPORT_STEM}.csv", *REPORT_PLOTS,
+            *(f"{ANISOTROPIC_STEM}{suffix}" for suffix in (".md", ".csv", ".png"))]
+
+
+def resolution_file(out: str | os.PathLike, gamma: float) -> Path:
+    """JSON-lines file of the resolution study for one gamma (the isotropic name is kept)."""
+    name = ("convergence_resolution.jsonl" if gamma == 1.0
+            else f"convergence_resolution_g{gamma:g}.jsonl")
+    return Path(out) / name
+
+
+def tolerance_file(out: str | os.PathLike) -> Path:
+    """JSON-lines file of the tolerance study."""
+    return Path(out) / TOLERANCE_FILE
+
+
+def append_record(path: Path, rec: dict) -> None:
+    """Append ``rec`` as one JSON line to ``path`` (folders created)."""
+    path.parent.mkdir(parents=True, exist_ok=True)
+    with path.open("a") as f:
+        f.write(json.dumps(rec) + "\n")
+
+
+def load_records(path: Path) -> list[dict]:
+    """The records of ``path`` ([] when it does not exist)."""
+    if not path.exists():
+        return []
+    return [json.loads(line) for line in path.read_text().splitlines() if line.strip()]

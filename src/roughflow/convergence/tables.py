@@ -1,0 +1,69 @@
+"""What the reports share: markdown tables, the notes on extrapolated references, cell and
+plot labels, and writing a report's files together."""
+
+from __future__ import annotations
+
+import os
+from collections.abc import Sequence
+from dataclasses import dataclass
+from pathlib import Path
+from typing import TYPE_CHECKING
+
+if TYPE_CHECKING:
+    from matplotlib.figure import Figure
+
+#: note under every table whose reference is the first-order Richardson extrapolation
+EXTRAP_NOTE = ("Rows marked (extrapolation) are the two grids the reference is extrapolated "
+               "from: their errors are -r/(r-1) and -1/(r-1) times the difference of the two "
+               "grids (r = spacing ratio), fixed by construction, not measured.")
+
+#: the same for the plots: their points at the reference's own grids are labelled "ref"
+PLOT_EXTRAP_NOTE = "ref: a grid of the reference (its error is no measurement)"
+
+
+def md_table(header: list[str], rows: list[list]) -> str:
+    """A markdown table; floats with 4 significant digits."""
+    def fmt(v):
+        if isinstance(v, float):
+            return f"{v:.4g}"
+        return str(v)
+    lines = ["| " + " | ".join(header) + " |", "|" + "---|" * len(header)]
+    lines += ["| " + " | ".join(fmt(v) for v in r) + " |" for r in rows]
+    return "\n".join(lines)
+
+
+def plot_label(p: int, fine: Sequence[int], variant: str) -> str:
+    """Label of a plotted point: its points per lambda_s, "ref" on the reference's grids."""
+    return f"{p} ref" if p in fine and variant != "richardson" else str(p)
+
+
+def ppl_cell(p: int, fine: Sequence[int]) -> int | str:
+    """ppl cell of a table: the reference's own grids are marked (their error is no
+    measurement)."""
+    return f"{p} (extrapolation)" if p in fine else p
+
+
+@dataclass(frozen=True)
+class ReportFiles:
+    """A written report: its markdown text and the files (tables, CSV, plots)."""
+
+    markdown: str
+    paths: tuple[Path, ...]
+
+
+def write_report_files(out: str | os.PathLike, stem: str, md: list[str], csv_rows: list[str],
+                       figures: dict[str, Figure]) -> ReportFiles:
+    """``stem``.md and ``stem``.csv and each figure (name -> Figure, 120 dpi) under ``out``,
+    published together (:func:`roughflow.io.write_together`: all or none)."""
+    from roughflow.io import figure_writer, write_together
+
+    outdir = Path(out)
+    text = "\n".join(md)
+    csv_text = "\n".join(csv_rows) + "\n"
+    writers = []
+    for name, fig in figures.items():
+        fig.tight_layout()
+        writers.append(figure_writer(fig, outdir / name, dpi=120))
+    writers += [(outdir / f"{stem}.md", lambda tmp: Path(tmp).write_text(text)),
+                (outdir / f"{stem}.csv", lambda tmp: Path(tmp).write_text(csv_text))]
+    return ReportFiles(text, tuple(write_together(writers)))
