@@ -227,3 +227,22 @@ def test_accuracy_resolution_below_two_is_refused(tmp_path):
     assert res.returncode != 0
     assert "invalid config" in out and "accuracy.points_per_lambda_s" in out, out[-2000:]
     assert not (wd / "results").exists()
+
+
+# (h) the accuracy jobs are held to max_mem_mb as the sweep's jobs are, but only where the
+# accuracy target is planned: the default target never runs them
+def test_accuracy_grid_above_max_mem_mb_is_refused_only_for_its_target(tmp_path):
+    wd = copy_workflow(tmp_path)
+    # the finest grid at 16 points per lambda_s is 1024^2: about 1.7 GB for a ladder, against
+    # a 1 GB node; the test config's sweep jobs are far below it
+    write_case(wd, max_mem_mb=1000, accuracy={"points_per_lambda_s": [4, 16]})
+    res = dry_run(wd, "accuracy")
+    out = res.stdout + res.stderr
+    assert res.returncode != 0
+    assert "invalid config" in out and "max_mem_mb = 1000" in out, out[-2000:]
+    assert "the accuracy study's finest grid" in out, out[-2000:]
+    assert not (wd / "results").exists()
+    assert dry_run(wd).returncode == 0  # the default target plans as before
+    write_case(wd, max_mem_mb=4000, accuracy={"points_per_lambda_s": [4, 16]})
+    res = dry_run(wd, "accuracy")
+    assert res.returncode == 0, (res.stdout + res.stderr)[-2000:]

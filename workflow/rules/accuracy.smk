@@ -7,7 +7,7 @@
 #   accuracy: {seeds: [0, 1, 2, 3, 4, 5], points_per_lambda_s: [2, 4, 8, 16]}
 
 from roughflow.convergence.options import ToleranceOptions  # noqa: E402
-from roughflow.scenes.requests import task_mem_mb  # noqa: E402
+from roughflow.scenes.requests import check_task_memory, task_mem_mb  # noqa: E402
 from roughflow.surface import SurfaceSpec  # noqa: E402
 
 _ACC = config.get("accuracy", {}) or {}
@@ -29,8 +29,28 @@ _ACC_TOL_GRID = SurfaceSpec.from_sweep(points_per_lambda_s=ToleranceOptions().pp
 _ACC_OUT = f"{RESULTS}/benchmarks"
 
 
+def accuracy_fits(spec, what):
+    """An input function with no inputs that refuses the job, when the accuracy target is
+    planned, if its grid does not fit the memory limit (max_mem_mb, else this machine's):
+    as the sweep's jobs are refused, but only where the target is asked for (the default
+    target never runs these jobs)."""
+
+    def check(wildcards):
+        if _MEM_LIMIT[0] is not None:
+            try:
+                check_task_memory("ladder", spec.nx * spec.ny, limit=_MEM_LIMIT[0],
+                                  source=_MEM_LIMIT[1], what=what)
+            except InputError as exc:
+                raise WorkflowError(f"invalid config: key 'accuracy': {exc}") from None
+        return []
+
+    return check
+
+
 rule accuracy_resolution:
     """a_c*, a_c and sigma at a_c = 0.2, 0.35 on one surface per seed at every resolution."""
+    input:
+        accuracy_fits(_ACC_FINEST, "the accuracy study's finest grid"),
     output:
         f"{_ACC_OUT}/convergence_resolution.jsonl",
     log:
@@ -53,6 +73,8 @@ rule accuracy_resolution:
 
 rule accuracy_tolerances:
     """Contact-solver and bisection tolerances at the default resolution."""
+    input:
+        accuracy_fits(_ACC_TOL_GRID, "the accuracy study's tolerance grid"),
     output:
         f"{_ACC_OUT}/convergence_tol.jsonl",
     log:

@@ -100,6 +100,20 @@ def check_plan_memory(jobs: dict[str, dict[str, Job]], limit: int, source: str) 
                 raise ResourceError(f"config studies.{study}: {exc} ({source})") from None
 
 
+def check_task_memory(task: str, points: int, *, limit: int, source: str, what: str) -> None:
+    """Refuse ``what``, a job that is no sweep job (the accuracy study's), if the estimate of
+    :mod:`roughflow.resources`' ``task`` on ``points`` grid points exceeds ``limit`` bytes
+    (``source`` says where the limit comes from), as :func:`check_plan_memory` refuses a
+    sweep job."""
+    from roughflow.errors import ResourceError
+    from roughflow.resources import check_memory
+
+    try:
+        check_memory(task, points, limit=limit, what=what)
+    except ResourceError as exc:
+        raise ResourceError(f"{exc} ({source})") from None
+
+
 # Cost model: CPU seconds on one core of the 2-core development machine, fitted to single
 # `roughflow scene` runs (one thread) of config/paper.yaml's jobs, 0.26 M to 33.5 M points
 # (docs/workflow.md "Cost", all on 2026-11-27: threshold searches with FFTW_MEASURE plans,
