@@ -101,6 +101,12 @@ def test_accuracy_rules_use_this_python_and_the_results_folder(tmp_path):
         assert cmd[cmd.index("--out") + 1] == "acc_out/benchmarks", cmd
     assert "results/benchmarks" not in res.stdout + res.stderr
     assert "convergence.py" not in res.stdout + res.stderr
+    # the report job declares every file the report writes (the anisotropic report's three
+    # were written but not declared: snakemake neither tracked nor cleaned them)
+    from roughflow.convergence.records import report_files
+
+    for name in report_files():
+        assert f"acc_out/benchmarks/{name}" in res.stdout, name
 
 
 # (d) a results folder with a trailing or doubled slash is normalised ('out/' -> 'out')

@@ -7,6 +7,7 @@
 #   accuracy: {seeds: [0, 1, 2, 3, 4, 5], points_per_lambda_s: [2, 4, 8, 16]}
 
 from roughflow.convergence.options import ToleranceOptions  # noqa: E402
+from roughflow.convergence.records import report_files  # noqa: E402
 from roughflow.scenes.requests import check_task_memory, task_mem_mb  # noqa: E402
 from roughflow.surface import SurfaceSpec  # noqa: E402
 
@@ -97,10 +98,9 @@ rule accuracy:
         f"{_ACC_OUT}/convergence_resolution.jsonl",
         f"{_ACC_OUT}/convergence_tol.jsonl",
     output:
-        f"{_ACC_OUT}/convergence.md",
-        f"{_ACC_OUT}/convergence.csv",
-        f"{_ACC_OUT}/convergence_resolution.png",
-        f"{_ACC_OUT}/convergence_tolerances.png",
+        # the isotropic and the anisotropic report (the resolution records carry the face
+        # counts the latter needs): every file `roughflow accuracy report` writes
+        [f"{_ACC_OUT}/{name}" for name in report_files()],
     log:
         f"{_ACC_OUT}/logs/convergence_report.log",
     shell:
