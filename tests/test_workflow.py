@@ -395,7 +395,7 @@ BAD = {
     # tolerance job had run; 4.5 reached the script's integer option
     "accuracy resolution not dividing the finest": (
         lambda c: c.update(accuracy={"points_per_lambda_s": [3, 8]}),
-        ["accuracy.points_per_lambda_s", "[3] do not divide the largest, 8"]),
+        ["accuracy.points_per_lambda_s", "ppl 3 does not divide the largest, 8"]),
     "accuracy resolution not whole": (
         lambda c: c.update(accuracy={"points_per_lambda_s": [4.5, 9]}),
         ["accuracy.points_per_lambda_s", "4.5 is not of type 'integer'"]),

@@ -6,7 +6,7 @@
 # config["accuracy"] (optional):
 #   accuracy: {seeds: [0, 1, 2, 3, 4, 5], points_per_lambda_s: [2, 4, 8, 16]}
 
-from roughflow.convergence.options import ToleranceOptions  # noqa: E402
+from roughflow.convergence.options import ToleranceOptions, check_resolutions  # noqa: E402
 from roughflow.convergence.records import report_files  # noqa: E402
 from roughflow.scenes.requests import check_task_memory, task_mem_mb  # noqa: E402
 from roughflow.surface import SurfaceSpec  # noqa: E402
@@ -16,11 +16,11 @@ _ACC_SEEDS = " ".join(str(s) for s in _ACC.get("seeds", [0, 1, 2, 3, 4, 5]))
 _ACC_PPL_LIST = [int(p) for p in _ACC.get("points_per_lambda_s", [2, 4, 8, 16])]
 # the finer grids are sampled down to the coarser ones (`roughflow accuracy resolution`):
 # refused here, before the tolerance job runs, not in the resolution job after it
-_ACC_ODD = [p for p in _ACC_PPL_LIST if max(_ACC_PPL_LIST) % p]
-if _ACC_ODD:
+try:
+    check_resolutions(_ACC_PPL_LIST)
+except InputError as exc:
     raise WorkflowError(f"invalid config: key 'accuracy.points_per_lambda_s' = "
-                        f"{_ACC_PPL_LIST}: {_ACC_ODD} do not divide the largest, "
-                        f"{max(_ACC_PPL_LIST)}")
+                        f"{_ACC_PPL_LIST}: {exc}") from None
 _ACC_PPL = " ".join(str(p) for p in _ACC_PPL_LIST)
 # contact and flow solves on the finest grid (resolution) and at 4 points (tolerances:
 # the default --tol-ppl of `roughflow accuracy tol`), sized by the library's estimate of a
