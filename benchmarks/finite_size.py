@@ -52,6 +52,7 @@ import numpy as np
 os.environ.setdefault("ROUGHFLOW_FFT_THREADS", "1")
 
 from roughflow import accuracy, defaults, fits  # noqa: E402
+from roughflow.convergence.anisotropic import face_term  # noqa: E402
 from roughflow.convergence.measure import threshold_record  # noqa: E402
 from roughflow.errors import InputError  # noqa: E402
 from roughflow.scenes import SurfaceParams  # noqa: E402
@@ -154,7 +155,7 @@ DEFAULT_DESIGN = {
 #: the workflow's value, per-face perimeter term of both bracketing states); corrected from
 #: the stored faces at the bracket midpoint with accuracy.PERIMETER_C and either face
 #: weighting ("pixel" = per face, the current term, equal to "ac" within 1e-5; "geometric"
-#: = the pre-issue-20 weighting, see convergence.FORMS)
+#: = the pre-issue-20 weighting: roughflow.convergence.anisotropic.face_term)
 FIELDS = {"a": "raw", "ac": "corrected (workflow)",
           "geometric": "corrected, pre-issue-20 geometric weighting",
           "pixel": "corrected, pixel weighting"}
@@ -163,10 +164,7 @@ FIELDS = {"a": "raw", "ac": "corrected (workflow)",
 def _value(r: dict, field: str, ax: str) -> float:
     if field in ("a", "ac"):
         return r[f"{field}_{ax}"]
-    tx, ty = r[f"tx_{ax}"], r[f"ty_{ax}"]
-    q = math.sqrt(r["dy"] / r["dx"])
-    term = tx + ty if field == "pixel" else tx * q + ty / q
-    return r[f"a_{ax}"] - accuracy.PERIMETER_C * term
+    return r[f"a_{ax}"] - accuracy.PERIMETER_C * face_term(r, f"_{ax}", field)
 
 
 def _values(recs: list[dict], gamma: float, size: float, aspect: float, seeds, field: str):

@@ -396,6 +396,11 @@ BAD = {
     "accuracy resolution not dividing the finest": (
         lambda c: c.update(accuracy={"points_per_lambda_s": [3, 8]}),
         ["accuracy.points_per_lambda_s", "ppl 3 does not divide the largest, 8"]),
+    # the report extrapolates from the two finest: one resolution planned and ran both
+    # measuring jobs, then the report job failed
+    "accuracy with one resolution": (
+        lambda c: c.update(accuracy={"points_per_lambda_s": [4]}),
+        ["accuracy.points_per_lambda_s", "[4]"]),
     "accuracy resolution not whole": (
         lambda c: c.update(accuracy={"points_per_lambda_s": [4.5, 9]}),
         ["accuracy.points_per_lambda_s", "4.5 is not of type 'integer'"]),

@@ -6,14 +6,22 @@
 # config["accuracy"] (optional):
 #   accuracy: {seeds: [0, 1, 2, 3, 4, 5], points_per_lambda_s: [2, 4, 8, 16]}
 
-from roughflow.convergence.options import ToleranceOptions, check_resolutions  # noqa: E402
-from roughflow.convergence.records import report_files  # noqa: E402
+from roughflow.convergence.options import (  # noqa: E402
+    ResolutionOptions,
+    ToleranceOptions,
+    check_resolutions,
+)
+from roughflow.convergence.records import (  # noqa: E402
+    report_files,
+    resolution_file,
+    tolerance_file,
+)
 from roughflow.scenes.requests import check_task_memory, task_mem_mb  # noqa: E402
 from roughflow.surface import SurfaceSpec  # noqa: E402
 
 _ACC = config.get("accuracy", {}) or {}
 _ACC_SEEDS = " ".join(str(s) for s in _ACC.get("seeds", [0, 1, 2, 3, 4, 5]))
-_ACC_PPL_LIST = [int(p) for p in _ACC.get("points_per_lambda_s", [2, 4, 8, 16])]
+_ACC_PPL_LIST = [int(p) for p in _ACC.get("points_per_lambda_s", ResolutionOptions().ppl)]
 # the finer grids are sampled down to the coarser ones (`roughflow accuracy resolution`):
 # refused here, before the tolerance job runs, not in the resolution job after it
 try:
@@ -25,12 +33,15 @@ _ACC_PPL = " ".join(str(p) for p in _ACC_PPL_LIST)
 # contact and flow solves on the finest grid (resolution) and at 4 points (tolerances:
 # the default --tol-ppl of `roughflow accuracy tol`), sized by the library's estimate of a
 # ladder job
+_ACC_TASK = "ladder"
 _ACC_FINEST = SurfaceSpec.from_sweep(points_per_lambda_s=max(_ACC_PPL_LIST))
 _ACC_TOL_GRID = SurfaceSpec.from_sweep(points_per_lambda_s=ToleranceOptions().ppl)
 _ACC_OUT = f"{RESULTS}/benchmarks"
+_ACC_RESOLUTION = str(resolution_file(_ACC_OUT, 1.0))
+_ACC_TOLERANCES = str(tolerance_file(_ACC_OUT))
 
 
-def accuracy_fits(spec, what):
+def accuracy_fits(spec: SurfaceSpec, what: str):
     """An input function with no inputs that refuses the job, when the accuracy target is
     planned, if its grid does not fit the memory limit (max_mem_mb, else this machine's):
     as the sweep's jobs are refused, but only where the target is asked for (the default
@@ -39,7 +50,7 @@ def accuracy_fits(spec, what):
     def check(wildcards):
         if _MEM_LIMIT[0] is not None:
             try:
-                check_task_memory("ladder", spec.nx * spec.ny, limit=_MEM_LIMIT[0],
+                check_task_memory(_ACC_TASK, (spec.nx, spec.ny), limit=_MEM_LIMIT[0],
                                   source=_MEM_LIMIT[1], what=what)
             except InputError as exc:
                 raise WorkflowError(f"invalid config: key 'accuracy': {exc}") from None
@@ -53,7 +64,7 @@ rule accuracy_resolution:
     input:
         accuracy_fits(_ACC_FINEST, "the accuracy study's finest grid"),
     output:
-        f"{_ACC_OUT}/convergence_resolution.jsonl",
+        _ACC_RESOLUTION,
     log:
         f"{_ACC_OUT}/logs/convergence_resolution.log",
     params:
@@ -65,7 +76,7 @@ rule accuracy_resolution:
     resources:
         # the default 16 points per lambda_s: 1024^2, 1.9 GB; the six seeds take a minute
         mem_mb=lambda wc, attempt: task_mem_mb(
-            "ladder", _ACC_FINEST.nx * _ACC_FINEST.ny, attempt),
+            _ACC_TASK, _ACC_FINEST.nx * _ACC_FINEST.ny, attempt),
         runtime=60,
     shell:
         "rm -f {output} && ROUGHFLOW_FFT_THREADS={threads} {RF} accuracy "
@@ -77,7 +88,7 @@ rule accuracy_tolerances:
     input:
         accuracy_fits(_ACC_TOL_GRID, "the accuracy study's tolerance grid"),
     output:
-        f"{_ACC_OUT}/convergence_tol.jsonl",
+        _ACC_TOLERANCES,
     log:
         f"{_ACC_OUT}/logs/convergence_tol.log",
     params:
@@ -85,7 +96,7 @@ rule accuracy_tolerances:
     threads: 1
     resources:
         mem_mb=lambda wc, attempt: task_mem_mb(
-            "ladder", _ACC_TOL_GRID.nx * _ACC_TOL_GRID.ny, attempt),
+            _ACC_TASK, _ACC_TOL_GRID.nx * _ACC_TOL_GRID.ny, attempt),
         runtime=60,
     shell:
         "rm -f {output} && ROUGHFLOW_FFT_THREADS={threads} {RF} accuracy "
@@ -95,8 +106,8 @@ rule accuracy_tolerances:
 rule accuracy:
     """Tables (markdown, CSV) and error-versus-time (Pareto) plots of the accuracy budget."""
     input:
-        f"{_ACC_OUT}/convergence_resolution.jsonl",
-        f"{_ACC_OUT}/convergence_tol.jsonl",
+        _ACC_RESOLUTION,
+        _ACC_TOLERANCES,
     output:
         # the isotropic and the anisotropic report (the resolution records carry the face
         # counts the latter needs): every file `roughflow accuracy report` writes

@@ -29,12 +29,12 @@ OUT = "results/benchmarks"
 RES, TOL = ({f.name: f for f in fields(c)} for c in (ResolutionOptions, ToleranceOptions))
 
 
-def _default(of: dict[str, Field], name: str):
+def _default(of: dict[str, Field], name: str) -> object:
     value = of[name].default
     return list(value) if isinstance(value, tuple) else value
 
 
-def _shown(value) -> str:
+def _shown(value: float | list[float]) -> str:
     return " ".join(f"{v:g}" for v in value) if isinstance(value, list) else f"{value:g}"
 
 
@@ -89,16 +89,17 @@ def register(sub: argparse._SubParsersAction) -> None:
         description="At one resolution: a_c, mean gap and sigma against the contact "
                     "tolerance (cold solves at fixed load), a_c* against the contact "
                     "tolerance inside the threshold search and against the bisection "
-                    "tolerance. The last value of each list is the reference.")
+                    "tolerance. The smallest value of each list is the reference.")
     _out(t, lambda a: [tolerance_file("").name])
     _option(t, "--seeds", TOL, "surface seeds", kind=int)
     _option(t, "--tol-ppl", TOL, "points per lambda_s of the tolerance study", name="ppl",
             kind=int)
-    _option(t, "--contact-tols", TOL, "contact tols (last = reference)")
-    _option(t, "--threshold-contact-tols", TOL, "contact tols inside the threshold search")
+    _option(t, "--contact-tols", TOL, "contact tols (the smallest is the reference)")
+    _option(t, "--threshold-contact-tols", TOL,
+            "contact tols inside the threshold search (the smallest is the reference)")
     _option(t, "--threshold-bisect-tol", TOL,
             "bisection tol of the contact-tol study inside the threshold")
-    _option(t, "--bisect-tols", TOL, "bisection tols (last = reference)")
+    _option(t, "--bisect-tols", TOL, "bisection tols (the smallest is the reference)")
     _option(t, "--threshold-contact-tol", TOL, "contact tol of the bisection-tol study")
     t.set_defaults(func=run_tol)
 
@@ -153,14 +154,10 @@ def run_tol(args: argparse.Namespace) -> None:
 
 def run_report(args: argparse.Namespace) -> None:
     out = Path(args.out)
-    if not any(out.glob(RESOLUTION_GLOB)):
+    if not any(out.glob(RESOLUTION_GLOB)):  # before matplotlib is imported
         raise InputError(f"--out {str(out)!r} holds no resolution records "
                          f"({RESOLUTION_GLOB}): run `roughflow accuracy resolution` first")
-    from roughflow.convergence.anisotropic import write_anisotropic_report
-    from roughflow.convergence.report import write_report
+    from roughflow.convergence.report import write_reports
 
-    if resolution_file(out, 1.0).exists():  # the isotropic tables need it
-        print(write_report(out, fit_min_ppl=args.fit_min_ppl).markdown)
-    written = write_anisotropic_report(out, fit_min_ppl=args.fit_min_ppl)
-    if written is not None:
+    for written in write_reports(out, fit_min_ppl=args.fit_min_ppl):
         print(written.markdown)

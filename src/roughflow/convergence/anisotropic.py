@@ -21,7 +21,7 @@ from roughflow import accuracy
 
 from .options import FIT_MIN_PPL
 from .records import ANISOTROPIC_STEM, RESOLUTION_GLOB, load_records
-from .tables import EXTRAP_NOTE, ReportFiles, md_table, ppl_cell, write_report_files
+from .tables import EXTRAP_NOTE, ReportDraft, ReportFiles, md_table, ppl_cell, publish_reports
 
 if TYPE_CHECKING:
     from matplotlib.axes import Axes
@@ -219,8 +219,16 @@ def _pooled_fits(fixed_all: list[dict], rows: _Rows) -> None:
 
 def write_anisotropic_report(out: str | os.PathLike, *, fit_min_ppl: int = FIT_MIN_PPL
                              ) -> ReportFiles | None:
-    """The anisotropic report from every resolution file under ``out`` with face counts,
-    written there; None (nothing written) where there is none. Draws without pyplot."""
+    """The anisotropic report (:func:`anisotropic_draft`) written under ``out``; None
+    (nothing written) where there is none."""
+    draft = anisotropic_draft(out, fit_min_ppl=fit_min_ppl)
+    return None if draft is None else publish_reports(out, [draft])[0]
+
+
+def anisotropic_draft(out: str | os.PathLike, *, fit_min_ppl: int = FIT_MIN_PPL
+                      ) -> ReportDraft | None:
+    """The anisotropic report from every resolution file under ``out`` with face counts;
+    None where there is none. Draws without pyplot."""
     from matplotlib.figure import Figure
 
     outdir = Path(out)
@@ -259,5 +267,4 @@ def write_anisotropic_report(out: str | os.PathLike, *, fit_min_ppl: int = FIT_M
               "weighting; pixel with c fitted on the other seeds of this gamma)\n")
     md.append(md_table(["gamma", "direction", "variant", "ppl", "bias", "SE of bias",
                         "sd over seeds", "seeds"], rows.thr) + "\n")
-    return write_report_files(outdir, ANISOTROPIC_STEM, md, rows.csv,
-                              {f"{ANISOTROPIC_STEM}.png": fig})
+    return ReportDraft.of(ANISOTROPIC_STEM, md, rows.csv, {f"{ANISOTROPIC_STEM}.png": fig})

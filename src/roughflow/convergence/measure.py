@@ -98,7 +98,7 @@ def threshold_record(surf: Surface, *, tol: float, contact_tol: float,
     """a_c* along x and y (raw and as the search corrects it), and one contact solve at
     each axis' bracket midpoint: the contact-line faces normal to x and to y per cell
     (``tx_{ax}``, ``ty_{ax}``) at that axis' threshold, from which any weighting of the
-    perimeter term can be evaluated afterwards. Also used by benchmarks/finite_size.py."""
+    perimeter term can be evaluated afterwards."""
     t0 = time.perf_counter()
     th = threshold(surf, axis=None, tol=tol, options=SearchOptions(
         contact_tol=contact_tol, on_unbracketed=on_unbracketed))
@@ -139,11 +139,12 @@ def _fixed_loads(surf: Surface, base: dict, targets: tuple[float, ...], contact_
             contact_tol=contact_tol, time_contact=time.perf_counter() - t0))
 
 
-def _sigma_targets(surf: Surface, base: dict, opts: ResolutionOptions, emit: OnRecord) -> None:
-    """sigma_x at each of :data:`~.options.TARGETS` (the load search, then one flow solve),
-    with the search's first solve at the contact law's load."""
+def _sigma_targets(surf: Surface, base: dict, targets: tuple[float, ...],
+                   opts: ResolutionOptions, emit: OnRecord) -> None:
+    """sigma_x at each of ``targets`` (the load search, then one flow solve), with the
+    search's first solve at the contact law's load."""
     init = None
-    for target in TARGETS:
+    for target in targets:
         t0 = time.perf_counter()
         hit = hit_area(surf, target, tol_a=opts.area_tol, ctol=opts.contact_tol, init=init)
         t_c = time.perf_counter() - t0
@@ -164,8 +165,28 @@ def _sigma_targets(surf: Surface, base: dict, opts: ResolutionOptions, emit: OnR
             sigma_raw=sig, sigma=shifted_sigma(sig, a, target), mean_gap=r.mean_gap,
             n_contact_solves=hit.n_solves, time_contact=t_c, time_flow=t_f,
             flow_residual=fr.residual, flux_imbalance=fr.flux_imbalance,
-            contact_tol=opts.contact_tol,
+            contact_tol=opts.contact_tol, area_tol=opts.area_tol,
         ))
+
+
+def _check_fits(spec: SurfaceSpec, task: str) -> None:
+    """Refuse a grid whose solves would not fit in memory before any of the study runs (the
+    finest grid comes last, after every coarser one)."""
+    from roughflow.resources import check_memory
+
+    check_memory(task, (spec.nx, spec.ny), what="the accuracy study's largest grid")
+
+
+def _check_same_run(path: Path, rec: dict, expected: dict) -> None:
+    """Refuse to resume into ``path`` when its record ``rec`` was made with other settings
+    than ``expected`` (field -> value; a field the record lacks is not compared): the report
+    would mix two runs."""
+    for field, value in expected.items():
+        if field in rec and rec[field] != value:
+            raise InputError(
+                f"{path} holds records of another run: {field} {rec[field]!r} there, "
+                f"{value!r} here (record {rec['kind']}, seed {rec['seed']}): give another "
+                "--out, or remove the file to start afresh")
 
 
 def _emitter(path: Path, on_record: OnRecord | None) -> OnRecord:
@@ -179,22 +200,40 @@ def _emitter(path: Path, on_record: OnRecord | None) -> OnRecord:
 def measure_resolution(out: str | os.PathLike, opts: ResolutionOptions, *,
                        on_record: OnRecord | None = None, warm: bool = True) -> Path:
     """The resolution study into :func:`~.records.resolution_file` under ``out``; returns
-    that file. Records already in it are not computed again (a run can be resumed).
+    that file. Records already in it are not computed again (a run can be resumed); records
+    of other settings (another L/lambda_r, grid or tolerance) are refused before any work.
     ``warm``: :func:`warm_up` first (False where the caller has)."""
-    if warm:
-        warm_up()
-    path = resolution_file(out, opts.gamma)
-    emit = _emitter(path, on_record)
     ppl_max = max(opts.ppl)
-    done = {(r["kind"], r["seed"], r["ppl"], r.get("target")) for r in load_records(path)}
+    grids = {p: SurfaceSpec.from_sweep(gamma=opts.gamma, l_over_lambda_r=opts.l_over_lambda_r,
+                                       points_per_lambda_s=p) for p in opts.ppl}
+    _check_fits(grids[ppl_max], "ladder" if opts.with_sigma else "threshold")
+    path = resolution_file(out, opts.gamma)
+    records = load_records(path)
+    for r in records:
+        expected = dict(gamma=opts.gamma, l_over_lambda_r=opts.l_over_lambda_r)
+        if r["ppl"] in grids:
+            expected.update(n=grids[r["ppl"]].nx, ny=grids[r["ppl"]].ny)
+        if r["kind"] == "threshold":
+            expected.update(bisect_tol=opts.bisect_tol, contact_tol=opts.threshold_contact_tol)
+        else:
+            expected.update(contact_tol=opts.contact_tol, area_tol=opts.area_tol)
+        _check_same_run(path, r, expected)
+    done = {(r["kind"], r["seed"], r["ppl"], r.get("target")) for r in records}
+    todo = []
+    for seed, ppl in ((s, p) for s in opts.seeds for p in sorted(opts.ppl)):
+        loads = TARGETS if opts.with_sigma else opts.fixed_targets
+        kind = "sigma" if opts.with_sigma else "fixed"
+        missing = tuple(t for t in loads if (kind, seed, ppl, t) not in done)
+        has_threshold = ("threshold", seed, ppl, None) in done
+        if not has_threshold or missing:
+            todo.append((seed, ppl, has_threshold, missing))
+    if warm and todo:
+        warm_up()
+    emit = _emitter(path, on_record)
     finest: dict[int, Surface] = {}
     # seed by seed (every resolution of a seed before the next seed): an interrupted run
     # leaves complete seeds, and only one finest surface is held in memory
-    for seed, ppl in ((s, p) for s in opts.seeds for p in sorted(opts.ppl)):
-        todo_fixed = tuple(t for t in opts.fixed_targets if ("fixed", seed, ppl, t) not in done)
-        has_threshold = ("threshold", seed, ppl, None) in done
-        if has_threshold and (opts.with_sigma or not todo_fixed):
-            continue
+    for seed, ppl, has_threshold, missing in todo:
         if seed not in finest:
             finest.clear()
             finest[seed] = generate(SurfaceSpec.from_sweep(
@@ -212,18 +251,30 @@ def measure_resolution(out: str | os.PathLike, opts: ResolutionOptions, *,
                       **threshold_record(surf, tol=opts.bisect_tol,
                                          contact_tol=opts.threshold_contact_tol)))
         if opts.with_sigma:
-            _sigma_targets(surf, base, opts, emit)
+            _sigma_targets(surf, base, missing, opts, emit)
         else:
-            _fixed_loads(surf, base, todo_fixed, opts.contact_tol, emit)
+            _fixed_loads(surf, base, missing, opts.contact_tol, emit)
     return path
 
 
-def _contact_tolerances(surf: Surface, seed: int, opts: ToleranceOptions,
+def _tolerance_key(rec: dict) -> tuple:
+    """What a tolerance record measured: its kind (a failed search counts as its kind), seed
+    and the tolerance (and target) it varied."""
+    kind = rec["kind"].removesuffix("_failed")
+    if kind == "contact_tol":
+        return kind, rec["seed"], rec["target"], rec["contact_tol"]
+    return kind, rec["seed"], rec["contact_tol" if kind == "threshold_contact_tol"
+                                  else "bisect_tol"]
+
+
+def _contact_tolerances(surf: Surface, seed: int, opts: ToleranceOptions, done: set[tuple],
                         emit: OnRecord) -> None:
     """Contact tolerance at fixed load (a_c ~ 0.2 and ~ 0.35), cold solves."""
     for target in TARGETS:
         p = contact.ContactLaw().control(target)
         for ctol in opts.contact_tols:
+            if ("contact_tol", seed, target, ctol) in done:
+                continue
             t0 = time.perf_counter()
             r = contact.solve(surf, p, tol=ctol)
             t_c = time.perf_counter() - t0
@@ -237,10 +288,12 @@ def _contact_tolerances(surf: Surface, seed: int, opts: ToleranceOptions,
 
 
 def _threshold_contact_tolerances(surf: Surface, seed: int, opts: ToleranceOptions,
-                                  emit: OnRecord) -> None:
+                                  done: set[tuple], emit: OnRecord) -> None:
     """Contact tolerance inside the threshold bisection (a loose one makes a(p) jump: a
     search that fails is recorded as such)."""
     for ctol in opts.threshold_contact_tols:
+        if ("threshold_contact_tol", seed, ctol) in done:
+            continue
         t0 = time.perf_counter()
         try:
             th = threshold(surf, axis=None, tol=opts.threshold_bisect_tol,
@@ -256,17 +309,19 @@ def _threshold_contact_tolerances(surf: Surface, seed: int, opts: ToleranceOptio
                   a_star_0=th[0].a_c_star, a_star_1=th[1].a_c_star))
 
 
-def _bisection_tolerances(surf: Surface, seed: int, opts: ToleranceOptions,
+def _bisection_tolerances(surf: Surface, seed: int, opts: ToleranceOptions, done: set[tuple],
                           emit: OnRecord) -> None:
     """a_c* against the bisection tolerance."""
     for btol in opts.bisect_tols:
+        if ("bisect_tol", seed, btol) in done:
+            continue
         t0 = time.perf_counter()
         try:
             th = threshold(surf, axis=None, tol=btol, options=SearchOptions(
                 max_solves=80, contact_tol=opts.threshold_contact_tol))
         except ConvergenceError as e:
             emit(dict(kind="bisect_tol_failed", seed=seed, ppl=opts.ppl,
-                      bisect_tol=btol, error=str(e)))
+                      bisect_tol=btol, contact_tol=opts.threshold_contact_tol, error=str(e)))
             continue
         emit(dict(kind="bisect_tol", seed=seed, ppl=opts.ppl, bisect_tol=btol,
                   contact_tol=opts.threshold_contact_tol,
@@ -277,16 +332,37 @@ def _bisection_tolerances(surf: Surface, seed: int, opts: ToleranceOptions,
 
 def measure_tolerances(out: str | os.PathLike, opts: ToleranceOptions, *,
                        on_record: OnRecord | None = None, warm: bool = True) -> Path:
-    """The tolerance study into :func:`~.records.tolerance_file` under ``out`` (appended);
-    returns that file. ``warm``: :func:`warm_up` first (False where the caller has)."""
-    if warm:
-        warm_up()
+    """The tolerance study into :func:`~.records.tolerance_file` under ``out``; returns that
+    file. Measurements already in it are not made again (a run can be resumed, or extended
+    by seeds and tolerances); records of other settings (resolution, the fixed tolerance of
+    a study) are refused before any work. ``warm``: :func:`warm_up` first (False where the
+    caller has)."""
+    grid = SurfaceSpec.from_sweep(points_per_lambda_s=opts.ppl)
+    _check_fits(grid, "ladder")
     path = tolerance_file(out)
+    records = load_records(path)
+    for r in records:
+        expected: dict = dict(ppl=opts.ppl)
+        if r["kind"].startswith("threshold_contact_tol"):
+            expected.update(bisect_tol=opts.threshold_bisect_tol)
+        elif r["kind"].startswith("bisect_tol"):
+            expected.update(contact_tol=opts.threshold_contact_tol)
+        _check_same_run(path, r, expected)
+    done = {_tolerance_key(r) for r in records}
+    wanted = {("contact_tol", s, t, c) for s in opts.seeds for t in TARGETS
+              for c in opts.contact_tols}
+    wanted |= {("threshold_contact_tol", s, c) for s in opts.seeds
+               for c in opts.threshold_contact_tols}
+    wanted |= {("bisect_tol", s, b) for s in opts.seeds for b in opts.bisect_tols}
+    if warm and wanted - done:
+        warm_up()
     emit = _emitter(path, on_record)
     for seed in opts.seeds:
+        if not any(key[1] == seed for key in wanted - done):
+            continue
         surf = generate(SurfaceSpec.from_sweep(points_per_lambda_s=opts.ppl, seed=seed))
         _plan(surf.shape)
-        _contact_tolerances(surf, seed, opts, emit)
-        _threshold_contact_tolerances(surf, seed, opts, emit)
-        _bisection_tolerances(surf, seed, opts, emit)
+        _contact_tolerances(surf, seed, opts, done, emit)
+        _threshold_contact_tolerances(surf, seed, opts, done, emit)
+        _bisection_tolerances(surf, seed, opts, done, emit)
     return path

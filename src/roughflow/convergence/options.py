@@ -16,21 +16,41 @@ from roughflow.errors import InputError, require_int, require_positive, require_
 TARGETS = (0.2, 0.35)
 
 
-def _positive_tuple(name: str, values: Iterable[float]) -> tuple[float, ...]:
-    out = tuple(require_positive(f"{name} entry", v) for v in values)
-    if not out:
+def _distinct(name: str, values: tuple) -> tuple:
+    """``values``, refused when empty or with a repeated entry (it would be measured again
+    and weigh twice in the fits)."""
+    if not values:
         raise InputError(f"{name} is empty")
+    dup = sorted({v for v in values if values.count(v) > 1})
+    if dup:
+        raise InputError(f"{name} must be distinct, got {list(values)} ({dup} repeated)")
+    return values
+
+
+def _positive_tuple(name: str, values: Iterable[float]) -> tuple[float, ...]:
+    return _distinct(name, tuple(require_positive(f"{name} entry", v) for v in values))
+
+
+def _area_fractions(name: str, values: Iterable[float]) -> tuple[float, ...]:
+    """Distinct contact area fractions in (0, 1) (the contact law's load for 1 or more is
+    that of full contact: every such target would be the same solve)."""
+    out = _positive_tuple(name, values)
+    bad = [v for v in out if not v < 1.0]
+    if bad:
+        raise InputError(f"{name} must lie in (0, 1) (contact area fractions), got {bad}")
     return out
 
 
 def check_resolutions(ppl: Iterable[int], *, gamma: float = 1.0,
                       l_over_lambda_r: float | None = None) -> tuple[int, ...]:
-    """``ppl`` (points per lambda_s) as a tuple of integers >= 2 whose grids are the finest
-    one sampled down: each must divide the largest, and the FFT-friendly rounding of the
-    grid sizes must keep that ratio; :class:`InputError` naming the value otherwise."""
-    out = tuple(require_int("ppl entry", p, minimum=2) for p in ppl)
-    if not out:
-        raise InputError("ppl is empty")
+    """``ppl`` (points per lambda_s) as a tuple of at least two distinct integers >= 2 (the
+    report's reference extrapolates from the two finest) whose grids are the finest one
+    sampled down: each must divide the largest, and the FFT-friendly rounding of the grid
+    sizes must keep that ratio; :class:`InputError` naming the value otherwise."""
+    out = _distinct("ppl", tuple(require_int("ppl entry", p, minimum=2) for p in ppl))
+    if len(out) < 2:
+        raise InputError(f"ppl needs at least two resolutions, got {list(out)}: the errors "
+                         "are measured against an extrapolation from the two finest")
     finest = max(out)
     odd = [p for p in out if finest % p]
     if odd:
@@ -77,7 +97,7 @@ class ResolutionOptions:
     def __post_init__(self) -> None:
         object.__setattr__(self, "seeds", require_seeds("seeds", self.seeds))
         object.__setattr__(self, "fixed_targets",
-                           _positive_tuple("fixed_targets", self.fixed_targets))
+                           _area_fractions("fixed_targets", self.fixed_targets))
         for name in ("bisect_tol", "threshold_contact_tol", "contact_tol", "area_tol"):
             require_positive(name, getattr(self, name))
         object.__setattr__(self, "ppl", check_resolutions(
@@ -91,7 +111,7 @@ class ResolutionOptions:
 
 @dataclass(frozen=True)
 class ToleranceOptions:
-    """The tolerance study at ``ppl`` points per lambda_s (the last of each list is the
+    """The tolerance study at ``ppl`` points per lambda_s (the smallest of each list is the
     reference): ``contact_tols`` at the fixed loads of :data:`TARGETS` (cold solves),
     ``threshold_contact_tols`` inside a threshold search of bisection tol
     ``threshold_bisect_tol``, and ``bisect_tols`` with contact tol ``threshold_contact_tol``."""

@@ -11,6 +11,8 @@ import json
 import os
 from pathlib import Path
 
+from roughflow.errors import InputError
+
 #: the tolerance study's records
 TOLERANCE_FILE = "convergence_tol.jsonl"
 #: every resolution file (one per gamma), for the anisotropic report
@@ -48,7 +50,21 @@ def append_record(path: Path, rec: dict) -> None:
 
 
 def load_records(path: Path) -> list[dict]:
-    """The records of ``path`` ([] when it does not exist)."""
+    """The records of ``path`` ([] when it does not exist); :class:`InputError` naming the
+    line that is no record (an append cut short by a kill or a full disk)."""
     if not path.exists():
         return []
-    return [json.loads(line) for line in path.read_text().splitlines() if line.strip()]
+    records = []
+    for number, line in enumerate(path.read_text().splitlines(), start=1):
+        if not line.strip():
+            continue
+        try:
+            rec = json.loads(line)
+        except json.JSONDecodeError as exc:
+            raise InputError(f"{path}:{number} is not a complete record ({exc.msg}): a run "
+                             "cut short while writing? Remove that line (the run resumes "
+                             "without it) or the file") from None
+        if not isinstance(rec, dict) or "kind" not in rec:
+            raise InputError(f"{path}:{number} is not a record of the accuracy study")
+        records.append(rec)
+    return records

@@ -17,18 +17,29 @@ from typing import TYPE_CHECKING
 import numpy as np
 
 from roughflow import accuracy
+from roughflow.errors import InputError
 
+from .anisotropic import anisotropic_draft
 from .load_path import A_STAR, ln_sigma_at_corrected_area
 from .options import FIT_MIN_PPL, TARGETS
-from .records import REPORT_PLOTS, REPORT_STEM, load_records, resolution_file, tolerance_file
+from .records import (
+    REPORT_PLOTS,
+    REPORT_STEM,
+    RESOLUTION_GLOB,
+    load_records,
+    report_files,
+    resolution_file,
+    tolerance_file,
+)
 from .tables import (
     EXTRAP_NOTE,
     PLOT_EXTRAP_NOTE,
+    ReportDraft,
     ReportFiles,
     md_table,
     plot_label,
     ppl_cell,
-    write_report_files,
+    publish_reports,
 )
 
 if TYPE_CHECKING:
@@ -63,7 +74,7 @@ class _Resolution:
     fit: accuracy.PerimeterFit | None
 
     @classmethod
-    def of(cls, res: list[dict], fit_min_ppl: int) -> _Resolution:
+    def of(cls, res: list[dict], fit_min_ppl: int, source: Path) -> _Resolution:
         thr = [r for r in res if r["kind"] == "threshold"]
         sig = [r for r in res if r["kind"] == "sigma"]
         fixed = [r for r in res if r["kind"] in ("sigma", "fixed")]  # fixed-load solves
@@ -72,6 +83,13 @@ class _Resolution:
         # keep only seeds with every resolution
         seeds = [s for s in seeds if all(any(r["seed"] == s and r["ppl"] == p for r in thr)
                                          for p in ppls)]
+        if len(ppls) < 2 or not seeds:
+            # errors are taken against the extrapolation from the two finest grids
+            raise InputError(
+                f"{source} has no seed with threshold records at two or more resolutions "
+                f"(resolutions {ppls}, seeds {sorted({r['seed'] for r in res})}): an "
+                "interrupted run? Run `roughflow accuracy resolution` again with the same "
+                "options (it resumes)")
         fit_ppls = [p for p in ppls if p >= fit_min_ppl]
         c_all = _fit_c(fixed, fit_ppls) if fixed else float("nan")
         fit = None
@@ -402,13 +420,19 @@ def _bisect_tol_section(tol: list[dict], md: list[str], ax: Axes) -> None:
 
 
 def write_report(out: str | os.PathLike, *, fit_min_ppl: int = FIT_MIN_PPL) -> ReportFiles:
+    """The isotropic report (:func:`report_draft`) written under ``out``."""
+    return publish_reports(out, [report_draft(out, fit_min_ppl=fit_min_ppl)])[0]
+
+
+def report_draft(out: str | os.PathLike, *, fit_min_ppl: int = FIT_MIN_PPL) -> ReportDraft:
     """The isotropic report from the resolution (gamma 1) and tolerance records under
-    ``out``, written there; ``fit_min_ppl``: the smallest resolution that fits the perimeter
-    constant. Draws without pyplot (no backend is selected)."""
+    ``out``; ``fit_min_ppl``: the smallest resolution that fits the perimeter constant.
+    Draws without pyplot (no backend is selected)."""
     from matplotlib.figure import Figure
 
     outdir = Path(out)
-    d = _Resolution.of(load_records(resolution_file(outdir, 1.0)), fit_min_ppl)
+    path = resolution_file(outdir, 1.0)
+    d = _Resolution.of(load_records(path), fit_min_ppl, source=path)
     tol = load_records(tolerance_file(outdir))
     md: list[str] = [TITLE, d.summary()]
     csv_rows: list[str] = ["quantity,variant,ppl,seed,value,reference,error,time_s"]
@@ -430,5 +454,31 @@ def write_report(out: str | os.PathLike, *, fit_min_ppl: int = FIT_MIN_PPL) -> R
     _contact_tol_section(tol, md, axs[0])
     _threshold_contact_tol_section(tol, md, axs[1])
     _bisect_tol_section(tol, md, axs[2])
-    return write_report_files(outdir, REPORT_STEM, md, csv_rows,
-                              dict(zip(REPORT_PLOTS, (resolution, tolerances), strict=True)))
+    return ReportDraft.of(REPORT_STEM, md, csv_rows,
+                          dict(zip(REPORT_PLOTS, (resolution, tolerances), strict=True)))
+
+
+def write_reports(out: str | os.PathLike, *, fit_min_ppl: int = FIT_MIN_PPL
+                  ) -> list[ReportFiles]:
+    """Every report the records under ``out`` make, published together: the isotropic one
+    where there are gamma = 1 resolution records, the anisotropic one where a resolution
+    file has face counts. The files of a report not made this time are removed: they would
+    describe other records. :class:`InputError` where there is no resolution record."""
+    outdir = Path(out)
+    if not any(outdir.glob(RESOLUTION_GLOB)):
+        raise InputError(f"{str(outdir)!r} holds no resolution records ({RESOLUTION_GLOB}): "
+                         "run `roughflow accuracy resolution` first")
+    drafts = []
+    if resolution_file(outdir, 1.0).exists():  # the isotropic tables need it
+        drafts.append(report_draft(outdir, fit_min_ppl=fit_min_ppl))
+    aniso = anisotropic_draft(outdir, fit_min_ppl=fit_min_ppl)
+    if aniso is not None:
+        drafts.append(aniso)
+    if not drafts:
+        raise InputError(f"the resolution records under {str(outdir)!r} make no report "
+                         "(no gamma = 1 file and no face counts)")
+    written = publish_reports(outdir, drafts)
+    made = {name for draft in drafts for name in draft.file_names()}
+    for name in set(report_files()) - made:
+        (outdir / name).unlink(missing_ok=True)
+    return written

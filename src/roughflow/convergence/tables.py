@@ -23,7 +23,7 @@ PLOT_EXTRAP_NOTE = "ref: a grid of the reference (its error is no measurement)"
 
 def md_table(header: list[str], rows: list[list]) -> str:
     """A markdown table; floats with 4 significant digits."""
-    def fmt(v):
+    def fmt(v: object) -> str:
         if isinstance(v, float):
             return f"{v:.4g}"
         return str(v)
@@ -51,19 +51,45 @@ class ReportFiles:
     paths: tuple[Path, ...]
 
 
-def write_report_files(out: str | os.PathLike, stem: str, md: list[str], csv_rows: list[str],
-                       figures: dict[str, Figure]) -> ReportFiles:
-    """``stem``.md and ``stem``.csv and each figure (name -> Figure, 120 dpi) under ``out``,
-    published together (:func:`roughflow.io.write_together`: all or none)."""
+@dataclass(frozen=True)
+class ReportDraft:
+    """A report ready to be written: ``stem``.md, ``stem``.csv and the figures (file name ->
+    Figure, 120 dpi)."""
+
+    stem: str
+    markdown: str
+    csv: str
+    figures: dict[str, Figure]
+
+    @classmethod
+    def of(cls, stem: str, md: list[str], csv_rows: list[str],
+           figures: dict[str, Figure]) -> ReportDraft:
+        return cls(stem, "\n".join(md), "\n".join(csv_rows) + "\n", figures)
+
+    def file_names(self) -> list[str]:
+        return [*self.figures, f"{self.stem}.md", f"{self.stem}.csv"]
+
+
+def publish_reports(out: str | os.PathLike, drafts: Sequence[ReportDraft]) -> list[ReportFiles]:
+    """Every file of ``drafts`` under ``out``, published together
+    (:func:`roughflow.io.write_together`: all or none, so that no report is left beside
+    another's stale files after a failure)."""
     from roughflow.io import figure_writer, write_together
 
     outdir = Path(out)
-    text = "\n".join(md)
-    csv_text = "\n".join(csv_rows) + "\n"
     writers = []
-    for name, fig in figures.items():
-        fig.tight_layout()
-        writers.append(figure_writer(fig, outdir / name, dpi=120))
-    writers += [(outdir / f"{stem}.md", lambda tmp: Path(tmp).write_text(text)),
-                (outdir / f"{stem}.csv", lambda tmp: Path(tmp).write_text(csv_text))]
-    return ReportFiles(text, tuple(write_together(writers)))
+    for draft in drafts:
+        for name, fig in draft.figures.items():
+            fig.tight_layout()
+            writers.append(figure_writer(fig, outdir / name, dpi=120))
+        writers += [(outdir / f"{draft.stem}.md",
+                     lambda tmp, text=draft.markdown: Path(tmp).write_text(text)),
+                    (outdir / f"{draft.stem}.csv",
+                     lambda tmp, text=draft.csv: Path(tmp).write_text(text))]
+    paths = write_together(writers)
+    out_files, start = [], 0
+    for draft in drafts:
+        n = len(draft.file_names())
+        out_files.append(ReportFiles(draft.markdown, tuple(paths[start:start + n])))
+        start += n
+    return out_files

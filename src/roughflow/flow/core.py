@@ -282,6 +282,8 @@ class _Balanced:
 
 
 class _FluxBalance(NamedTuple):
+    """The pressure field of a solution and the fluxes it balances (:func:`_flux_balance`)."""
+
     pressure: np.ndarray  #: on the grid, 0 in inactive cells
     dissipation: float  #: Q(p)
     imbalance: float  #: |Q_in - Q_out| / Q(p)

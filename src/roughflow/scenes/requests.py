@@ -100,16 +100,17 @@ def check_plan_memory(jobs: dict[str, dict[str, Job]], limit: int, source: str) 
                 raise ResourceError(f"config studies.{study}: {exc} ({source})") from None
 
 
-def check_task_memory(task: str, points: int, *, limit: int, source: str, what: str) -> None:
+def check_task_memory(task: str, shape: tuple[int, int], *, limit: int, source: str,
+                      what: str) -> None:
     """Refuse ``what``, a job that is no sweep job (the accuracy study's), if the estimate of
-    :mod:`roughflow.resources`' ``task`` on ``points`` grid points exceeds ``limit`` bytes
+    :mod:`roughflow.resources`' ``task`` on a grid of ``shape`` exceeds ``limit`` bytes
     (``source`` says where the limit comes from), as :func:`check_plan_memory` refuses a
     sweep job."""
     from roughflow.errors import ResourceError
     from roughflow.resources import check_memory
 
     try:
-        check_memory(task, points, limit=limit, what=what)
+        check_memory(task, shape, limit=limit, what=what)
     except ResourceError as exc:
         raise ResourceError(f"{exc} ({source})") from None
 
