@@ -9,6 +9,8 @@ with any version of :func:`roughflow.accuracy.perimeter_term` compare alike.
 
 from __future__ import annotations
 
+import csv
+import io
 import math
 import os
 from dataclasses import dataclass
@@ -84,6 +86,14 @@ def _jackknife_c(pts: list[dict], form: str) -> float:
     cs = np.array([_fit_form([r for r in pts if (r["gamma"], r["seed"]) != gs], form).c
                    for gs in seeds])
     return float(np.sqrt((len(cs) - 1) / len(cs) * np.sum((cs - cs.mean()) ** 2)))
+
+
+def _csv_line(*fields) -> str:
+    """One CSV line of ``fields``, quoted where one holds a comma (the variant
+    "pixel, c fitted")."""
+    buf = io.StringIO()
+    csv.writer(buf, lineterminator="").writerow(fields)
+    return buf.getvalue()
 
 
 def _direction(gamma: float, ax: int) -> str:
@@ -181,7 +191,7 @@ def _gamma_section(recs: list[dict], g: float, fit_min_ppl: int, rows: _Rows,
                 vals["pixel, c fitted"] = v - c_loo * face_term(q, f"_{ax}", "pixel")
                 for k, val in vals.items():
                     e[k].append(val - ref)
-                    rows.csv.append(f"{g},a_c_star,{d},{k},{p},{s},{val},{ref},{val - ref}")
+                    rows.csv.append(_csv_line(g, "a_c_star", d, k, p, s, val, ref, val - ref))
             for k in curves:
                 ea = np.asarray(e[k])
                 sd = float(np.std(ea, ddof=1)) if ea.size > 1 else float("nan")
