@@ -165,6 +165,25 @@ def test_report_a_c_star_rows_against_the_exact_reference(isotropic_report):
     assert "c = 0.3000" in md  # the mean of the three seeds' constants
 
 
+def test_report_richardson_pairs_take_their_own_spacing_ratio(tmp_path):
+    # resolutions 2, 5, 10 (each divides the largest): the Richardson variant pairs 5 with 2
+    # at ratio 2.5; it assumed 2 (p // 2 with ratio 2), off by 0.2 of the 1/p term here
+    recs = []
+    for s in SEEDS:
+        for p in (2, 5, 10):
+            recs.append(dict(kind="threshold", seed=s, ppl=p, time=0.1 * p, time_mid=0.01,
+                             n_solves=10, a_star_0=_a_star(s, 0, p), a_star_1=_a_star(s, 1, p),
+                             perim_0=PERIM[0] / p, perim_1=PERIM[1] / p,
+                             perim_mid=0.5 * (PERIM[0] + PERIM[1]) / p))
+            recs += [_sigma_rec(s, p, t) for t in TARGETS]
+    _write(resolution_file(tmp_path, 1.0), recs)
+    write_report(tmp_path, fit_min_ppl=5)
+    rows = [r for r in _csv(tmp_path / "convergence.csv") if r[1] == "richardson"]
+    assert {r[2] for r in rows} == {"2+5"} and len(rows) == len(SEEDS) * (2 + len(TARGETS))
+    for row in rows:  # exact first-order data: the extrapolation is exact up to round-off
+        assert float(row[6]) == pytest.approx(0.0, abs=1e-12), row
+
+
 def test_report_sigma_rows_follow_eq16_with_the_seed_reference(isotropic_report):
     _, csv = isotropic_report
     rows = [r for r in csv if r[0].startswith("ln_sigma_")]

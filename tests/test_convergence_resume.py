@@ -145,7 +145,6 @@ def test_tolerance_study_resumes_and_refuses_another_resolution(tmp_path, monkey
 
 
 @pytest.mark.parametrize("kwargs, message", [
-    (dict(ppl=(4,)), "at least two resolutions"),
     (dict(ppl=(2, 2, 4)), r"ppl must be distinct, got \[2, 2, 4\]"),
     (dict(fixed_targets=(0.2, 0.2)), "fixed_targets must be distinct"),
     (dict(fixed_targets=(0.2, 1.0)), r"must lie in \(0, 1\)"),

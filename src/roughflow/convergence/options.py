@@ -43,14 +43,12 @@ def _area_fractions(name: str, values: Iterable[float]) -> tuple[float, ...]:
 
 def check_resolutions(ppl: Iterable[int], *, gamma: float = 1.0,
                       l_over_lambda_r: float | None = None) -> tuple[int, ...]:
-    """``ppl`` (points per lambda_s) as a tuple of at least two distinct integers >= 2 (the
-    report's reference extrapolates from the two finest) whose grids are the finest one
-    sampled down: each must divide the largest, and the FFT-friendly rounding of the grid
-    sizes must keep that ratio; :class:`InputError` naming the value otherwise."""
+    """``ppl`` (points per lambda_s) as a tuple of distinct integers >= 2 whose grids are the
+    finest one sampled down: each must divide the largest, and the FFT-friendly rounding of
+    the grid sizes must keep that ratio; :class:`InputError` naming the value otherwise.
+    (One resolution may be measured, and others added by a later run into the same file;
+    the report needs two, and the workflow's schema asks for two at once.)"""
     out = _distinct("ppl", tuple(require_int("ppl entry", p, minimum=2) for p in ppl))
-    if len(out) < 2:
-        raise InputError(f"ppl needs at least two resolutions, got {list(out)}: the errors "
-                         "are measured against an extrapolation from the two finest")
     finest = max(out)
     odd = [p for p in out if finest % p]
     if odd:

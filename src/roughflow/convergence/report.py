@@ -114,6 +114,12 @@ class _Resolution:
                 + "; each seed is corrected with c fitted on the other seeds.\n")
 
 
+def _next_coarser(ppls: list[int]) -> dict[int, int]:
+    """Each resolution's next coarser one in the study (the pair of the Richardson variant,
+    at their own spacing ratio: 2 for 2, 4, 8, 16, but 2.5 from 2 to 5)."""
+    return dict(zip(ppls[1:], ppls[:-1], strict=True))
+
+
 def _fixed_load_section(d: _Resolution, md: list[str]) -> None:
     """a_c (raw and perimeter-corrected) and mean gap at fixed load against resolution."""
     ppls, fixed = d.ppls, d.fixed
@@ -160,6 +166,7 @@ def _threshold_section(d: _Resolution, fine: tuple[int, int], md: list[str],
             refs[(s, a)] = accuracy.richardson(rr[f0][f"a_star_{a}"],
                                                rr[f1][f"a_star_{a}"], ratio=f1 / f0)
     spread = np.std([refs[(s, 0)] for s in seeds] + [refs[(s, 1)] for s in seeds], ddof=1)
+    coarser = _next_coarser(ppls)
     variants = {"raw": [], "perimeter": [], "richardson": []}
     for p in ppls:
         err = {k: [] for k in variants}
@@ -179,12 +186,13 @@ def _threshold_section(d: _Resolution, fine: tuple[int, int], md: list[str],
                 csv_rows.append(f"a_c_star_{'xy'[a]},raw,{p},{s},{v},{ref},{v - ref},{t_raw}")
                 csv_rows.append(f"a_c_star_{'xy'[a]},perimeter,{p},{s},{vc},{ref},"
                                 f"{vc - ref},{t_raw + rr[p]['time_mid']}")
-                if p // 2 in rr and p < f1:  # at f1 it is the reference itself
-                    vr = accuracy.richardson(rr[p // 2][f"a_star_{a}"], v)
+                c = coarser.get(p)
+                if c in rr and p < f1:  # at f1 it is the reference itself
+                    vr = accuracy.richardson(rr[c][f"a_star_{a}"], v, ratio=p / c)
                     err["richardson"].append(vr - ref)
-                    tr = t_raw + rr[p // 2]["time"]
+                    tr = t_raw + rr[c]["time"]
                     tt["richardson"].append(tr)
-                    csv_rows.append(f"a_c_star_{'xy'[a]},richardson,{p // 2}+{p},{s},{vr},"
+                    csv_rows.append(f"a_c_star_{'xy'[a]},richardson,{c}+{p},{s},{vr},"
                                     f"{ref},{vr - ref},{tr}")
         for k in variants:
             if err[k]:
@@ -229,6 +237,7 @@ def _sigma_section(d: _Resolution, fine: tuple[int, int], a_star_x: dict[int, fl
     each seed's reference a_c*(x) (``a_star_x``) where its searches bracketed one."""
     sig, ppls, seeds = d.sig, d.ppls, d.seeds
     f0, f1 = fine
+    coarser = _next_coarser(ppls)
     rows = []
     for j, target in enumerate(TARGETS):
         pts = {"raw": [], "perimeter": [], "richardson": []}
@@ -254,11 +263,12 @@ def _sigma_section(d: _Resolution, fine: tuple[int, int], a_star_x: dict[int, fl
                 ln_cor = ln_sigma_at_corrected_area(q, target, cs, a_star_x.get(s, A_STAR))
                 e["perimeter"].append(ln_cor - ref)
                 tt.append(q["time_contact"] + q["time_flow"])
-                if p // 2 in rr and p < f1 and rr[p // 2]["sigma"] > 0:
-                    ln_ri = accuracy.richardson(math.log(rr[p // 2]["sigma"]), ln_raw)
+                c = coarser.get(p)
+                if c in rr and p < f1 and rr[c]["sigma"] > 0:
+                    ln_ri = accuracy.richardson(math.log(rr[c]["sigma"]), ln_raw, ratio=p / c)
                     e["richardson"].append(ln_ri - ref)
-                    t_ri = tt[-1] + rr[p // 2]["time_contact"] + rr[p // 2]["time_flow"]
-                    csv_rows.append(f"ln_sigma_{target},richardson,{p // 2}+{p},{s},{ln_ri},"
+                    t_ri = tt[-1] + rr[c]["time_contact"] + rr[c]["time_flow"]
+                    csv_rows.append(f"ln_sigma_{target},richardson,{c}+{p},{s},{ln_ri},"
                                     f"{ref},{ln_ri - ref},{t_ri}")
                 csv_rows.append(f"ln_sigma_{target},raw,{p},{s},{ln_raw},{ref},{ln_raw - ref},"
                                 f"{tt[-1]}")
@@ -270,7 +280,8 @@ def _sigma_section(d: _Resolution, fine: tuple[int, int], a_star_x: dict[int, fl
                     rms = float(np.sqrt(np.mean(ea**2)))
                     t_k = float(np.median(tt))
                     if k == "richardson":  # both grids
-                        t_k += float(np.median([pp[1] for pp in pts["raw"] if pp[0] == p // 2]))
+                        t_k += float(np.median([pp[1] for pp in pts["raw"]
+                                                if pp[0] == coarser[p]]))
                     pts[k].append((p, t_k, rms, float(np.mean(ea))))
                     rows.append([target, k, ppl_cell(p, (f0, f1)) if k != "richardson" else p,
                                  t_k, float(np.mean(ea)), rms])
