@@ -114,3 +114,97 @@ def test_a_changed_callee_in_another_module_is_not_served_stale(tmp_path):
     out = subprocess.run([sys.executable, "-c", code], env=env, capture_output=True,
                          text=True, timeout=300)
     assert out.returncode != 0 and "edited" in out.stderr, out.stdout  # compiled afresh
+
+
+TOY = """from roughflow._jit import njit
+
+
+@njit(cache=True)
+def double(x):
+    return 2 * x
+"""
+
+
+def _toy_module(folder: Path, name: str):
+    import importlib.util
+
+    path = folder / f"{name}.py"
+    path.write_text(TOY)
+    spec = importlib.util.spec_from_file_location(name, path)
+    module = importlib.util.module_from_spec(spec)
+    spec.loader.exec_module(module)
+    return module
+
+
+def test_a_kernel_numba_would_cache_beside_its_source_is_left_uncached(tmp_path, monkeypatch):
+    # where numba cannot make the kernel's folder under the version (pruned meanwhile, a
+    # full disk), it silently fell back to a cache beside the source file: the per-file
+    # cache that served stale machine code
+    from numba.core.caching import _CacheLocator
+
+    where = tmp_path / "cache"
+    blocked = where / _CacheLocator.get_suitable_cache_subpath(str(tmp_path / "toy_a.py"))
+    blocked.parent.mkdir(parents=True)
+    blocked.write_text("a file where numba wants its folder\n")
+    monkeypatch.setattr(_jit, "cache_dir", lambda: where)
+    toy = _toy_module(tmp_path, "toy_a")
+    assert toy.double(3) == 6
+    assert not list(tmp_path.rglob("*.nbi"))  # numba's index: no cache anywhere
+
+
+def test_a_failed_save_leaves_the_kernel_uncached_not_the_computation_failed(
+        tmp_path, monkeypatch, caplog):
+    import errno
+
+    from numba.core import caching
+
+    def full(self, key, data):
+        raise OSError(errno.ENOSPC, "No space left on device")
+
+    monkeypatch.setattr(caching.IndexDataCacheFile, "save", full)
+    monkeypatch.setattr(_jit, "cache_dir", lambda: tmp_path / "cache")
+    toy = _toy_module(tmp_path, "toy_b")
+    with caplog.at_level("WARNING", logger="roughflow._jit"):
+        assert toy.double(4) == 8
+    assert "could not be cached" in caplog.text and "No space left" in caplog.text
+
+
+def test_two_processes_saving_at_once_keep_both_signatures(tmp_path):
+    # numba's save reads the index, picks the next data file and rewrites the index: two
+    # processes compiling different signatures at once lost one entry in 16 of 20 tries
+    # (and could pair one signature's index entry with the other's machine code)
+    import pickle
+
+    (tmp_path / "toy_c.py").write_text(TOY)
+    code = ("import sys, time; sys.path.insert(0, {folder!r}); import toy_c\n"
+            "time.sleep(max(0.0, {start} - time.time()))\n"
+            "print(toy_c.double({arg}))")
+    for attempt in range(2):  # without the lock the first attempt lost an entry
+        env = {**os.environ, "NUMBA_CACHE_DIR": str(tmp_path / f"numba{attempt}"),
+               "PYTHONPATH": str(PACKAGE.parent)}
+        start = time.time() + 3.0  # both have imported numba and roughflow by then
+        procs = [subprocess.Popen([sys.executable, "-c", code.format(
+            folder=str(tmp_path), start=start, arg=arg)], env=env, stdout=subprocess.PIPE,
+            stderr=subprocess.PIPE, text=True) for arg in ("1.5", "3")]
+        outs = [p.communicate(timeout=300) for p in procs]
+        assert [p.returncode for p in procs] == [0, 0], outs
+        assert [o[0].strip() for o in outs] == ["3.0", "6"]
+        [index] = (tmp_path / f"numba{attempt}").rglob("toy_c.double*.nbi")
+        with index.open("rb") as f:
+            pickle.load(f)  # numba's version
+            _, overloads = pickle.loads(f.read())
+        assert len(overloads) == 2, (attempt, overloads)
+
+
+def test_the_spare_folder_in_the_temporary_folder_must_be_private(tmp_path):
+    # its name can be guessed: a folder another user made first (or any folder others may
+    # write, or a link) could hold planted pickles, which numba loads as machine code
+    mine = tmp_path / "mine"
+    assert _jit._private(mine) and (mine.stat().st_mode & 0o777) == 0o700
+    shared = tmp_path / "shared"
+    shared.mkdir()
+    shared.chmod(0o777)
+    assert not _jit._private(shared)
+    link = tmp_path / "link"
+    link.symlink_to(mine)
+    assert not _jit._private(link)

@@ -399,3 +399,18 @@ def test_the_machine_key_changes_with_the_cpu(monkeypatch):
     finally:
         wisdom.machine_key.cache_clear()
     assert a != b
+
+
+def test_a_killed_jobs_temporary_file_is_removed_by_a_later_save(tmp_path):
+    # a job killed while writing (SIGKILL, out of memory) left its temporary file for good,
+    # one per killed job
+    file = measure_file(tmp_path)
+    stale = tmp_path / f"{file.name}abc123.tmp"
+    fresh = tmp_path / f"{file.name}def456.tmp"  # another job's, being written now
+    for tmp in (stale, fresh):
+        tmp.write_text("{")
+    old = time.time() - wisdom.STALE_TMP_S - 60
+    os.utime(stale, (old, old))
+    wisdom._save(file, (b"", b"", b""))
+    assert not stale.exists() and fresh.exists()
+    assert set(json.loads(file.read_text())) == {"double", "single", "long_double"}

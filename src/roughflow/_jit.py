@@ -10,24 +10,39 @@ cache therefore lives in a folder named after a hash of every source file of the
 (:func:`cache_dir`): a changed file compiles the kernels afresh, once (a threshold search's
 kernels take about 6 s). The versions live in ``$NUMBA_CACHE_DIR/roughflow``, else
 ``$XDG_CACHE_HOME/roughflow/numba``, else ``~/.cache/roughflow/numba``; where that cannot be
-written, in the temporary folder; where neither can, the kernels are compiled in every
-process (never cached beside their source files, numba's fallback, which is per file).
+written, in a private folder of the temporary folder; where neither can, the kernels are
+compiled in every process (never cached beside their source files, numba's fallback, which
+is per file: a kernel whose cache numba put anywhere else is left uncached).
+
+Many jobs of a sweep start at once on one cache. numba's save reads a folder's index, picks
+the next data file and rewrites the index; two processes saving at once gave two signatures
+the same data file and lost one index entry (numba issues 4807 and 10128), and a third
+process could load one signature's machine code for another's (on a cluster of several CPU
+types, code built for another CPU). Saves are therefore serialised by a lock file in the
+version's folder (flock; unlocked where the file system has none), and a save that fails (a
+full disk or quota, a folder pruned meanwhile) leaves the kernel uncached instead of failing
+the computation.
 """
 
 from __future__ import annotations
 
+import contextlib
 import functools
 import hashlib
+import logging
 import os
 import shutil
+import stat
 import tempfile
 import time
-from collections.abc import Callable
+from collections.abc import Callable, Iterator
 from pathlib import Path
 
 import numba
 
 from roughflow.files import user_cache_dir
+
+log = logging.getLogger(__name__)
 
 #: Versions of the compiled kernels kept ...
 KEEP = 4
@@ -50,11 +65,25 @@ def source_key(package: Path = _PACKAGE) -> str:
 
 
 def _parents() -> list[Path]:
-    """Where the versions may live, the preferred place first."""
+    """Where the versions may live, the preferred place first; the spare one in the shared
+    temporary folder only if it is this user's own private folder (its name can be
+    guessed: another user could make it first and plant pickled machine code in it)."""
     given = os.environ.get("NUMBA_CACHE_DIR")
     first = Path(given).expanduser() / "roughflow" if given else user_cache_dir("numba")
     spare = Path(tempfile.gettempdir()) / f"roughflow-numba-{os.getuid()}"
-    return [p for p in (first, spare) if p is not None]
+    return [p for p in (first, spare if _private(spare) else None) if p is not None]
+
+
+def _private(folder: Path) -> bool:
+    """Whether ``folder`` is (or has just been made) a real folder of this user that no
+    one else may write."""
+    try:
+        folder.mkdir(mode=0o700, exist_ok=True)
+        st = folder.lstat()  # a link is refused, not followed
+    except OSError:
+        return False
+    return (stat.S_ISDIR(st.st_mode) and st.st_uid == os.getuid()
+            and not st.st_mode & (stat.S_IWGRP | stat.S_IWOTH))
 
 
 def _writable(folder: Path) -> bool:
@@ -76,7 +105,12 @@ def _prune(parent: Path, here: Path) -> None:
         old = time.time() - PRUNE_AFTER_S
         for p in versions[KEEP:]:
             if p != here and p.stat().st_mtime < old:
-                shutil.rmtree(p, ignore_errors=True)
+                # moved aside in one step first: a process that starts on this version
+                # meanwhile finds it gone and compiles afresh, instead of loading from a
+                # folder that is being emptied
+                gone = parent / f".{p.name}.removing-{os.getpid()}"
+                p.rename(gone)
+                shutil.rmtree(gone, ignore_errors=True)
     except OSError:  # another process pruned at the same time
         pass
 
@@ -91,7 +125,8 @@ def cache_dir() -> Path | None:
     for parent in _parents():
         here = parent / key
         if _writable(here):
-            os.utime(here)  # most recently used
+            with contextlib.suppress(OSError):  # pruned by another process meanwhile
+                os.utime(here)  # most recently used
             _prune(parent, here)
             return here
     return None
@@ -112,8 +147,56 @@ def njit(**options) -> Callable[[Callable], Callable]:
         saved = numba.config.CACHE_DIR
         numba.config.CACHE_DIR = str(where)
         try:
-            return decorate(func)
+            kernel = decorate(func)
         finally:
             numba.config.CACHE_DIR = saved
+        cache = getattr(kernel, "_cache", None)
+        if cache is not None:
+            _guard(cache, where)
+        return kernel
 
     return apply
+
+
+def _guard(cache, where: Path) -> None:
+    """Keep numba's cache of one kernel in ``where`` or nowhere, and its saves locked and
+    harmless (module docstring)."""
+    if not Path(cache.cache_path).is_relative_to(where):
+        # numba could not use ``where`` when the kernel was decorated (the folder pruned
+        # or full) and fell back to a cache of its own, beside the source file: the cache
+        # that follows that file only, which this module exists to avoid
+        log.debug("%s: numba chose %s; the kernel is not cached", cache, cache.cache_path)
+        cache.disable()
+        return
+    save = cache.save_overload
+
+    def save_overload(sig, data) -> None:
+        try:
+            with _save_lock(where):
+                save(sig, data)
+        except OSError as err:
+            log.warning("a compiled kernel could not be cached in %s (%s): it is compiled "
+                        "again by the next process", where, err)
+
+    cache.save_overload = save_overload
+
+
+@contextlib.contextmanager
+def _save_lock(folder: Path) -> Iterator[None]:
+    """An exclusive lock of ``folder``'s ``.save.lock`` between processes while numba
+    updates its index there; none where the file system or the platform has no flock."""
+    try:
+        import fcntl
+    except ImportError:
+        fcntl = None
+    fd = None
+    if fcntl is not None:
+        with contextlib.suppress(OSError):
+            folder.mkdir(parents=True, exist_ok=True)
+            fd = os.open(folder / ".save.lock", os.O_RDWR | os.O_CREAT, 0o600)
+            fcntl.flock(fd, fcntl.LOCK_EX)
+    try:
+        yield
+    finally:
+        if fd is not None:
+            os.close(fd)  # releases the lock

@@ -25,6 +25,7 @@ wisdom it holds is still read, but what a run plans is not saved there.
 from __future__ import annotations
 
 import contextlib
+import glob
 import hashlib
 import json
 import logging
@@ -33,6 +34,7 @@ import platform
 import re
 import tempfile
 import threading
+import time
 from collections.abc import Iterator
 from functools import lru_cache
 from pathlib import Path
@@ -181,9 +183,20 @@ def _load(file: Path) -> tuple[bytes, ...] | None:
     return wisdom
 
 
+#: age (s) after which a temporary wisdom file is taken as left by a killed job
+STALE_TMP_S = 3600.0
+
+
 def _save(file: Path, wisdom: tuple[bytes, ...]) -> None:
     # written beside the file and renamed over it: a reader never sees half a file
     data = {k: w.decode("ascii") for k, w in zip(_PRECISIONS, wisdom, strict=True)}
+    # a job killed while writing (SIGKILL, out of memory) left its temporary file: removed
+    # here, under the lock, once it is old enough not to be another job's in progress
+    old = time.time() - STALE_TMP_S
+    for tmp in file.parent.glob(f"{glob.escape(file.name)}*.tmp"):
+        with contextlib.suppress(OSError):
+            if tmp.stat().st_mtime < old:
+                tmp.unlink()
     fd, tmp = tempfile.mkstemp(prefix=file.name, suffix=".tmp", dir=file.parent)
     try:
         with os.fdopen(fd, "w", encoding="ascii") as f:
@@ -234,8 +247,10 @@ def _locked(file: Path) -> Iterator[bool]:
                 fcntl.flock(fd, fcntl.LOCK_EX)
         except OSError as err:  # some network file systems (Lustre without flock)
             _report(f"cannot lock {file.name}.lock", err,
-                    "planning goes on unlocked: jobs may time the same shape, and each "
-                    "merges what the others saved before it saves")
+                    "planning goes on unlocked: jobs may time the same shape, and a shape "
+                    "another job saved at the same moment can be lost from the file (it is "
+                    "timed again later, and its plan, so results, may then differ in the "
+                    "last bits)")
         yield True
     finally:
         os.close(fd)  # releases the lock
