@@ -201,10 +201,72 @@ def test_the_spare_folder_in_the_temporary_folder_must_be_private(tmp_path):
     # write, or a link) could hold planted pickles, which numba loads as machine code
     mine = tmp_path / "mine"
     assert _jit._private(mine) and (mine.stat().st_mode & 0o777) == 0o700
-    shared = tmp_path / "shared"
-    shared.mkdir()
-    shared.chmod(0o777)
-    assert not _jit._private(shared)
+    # this user's own folder that others may write (made under umask 002): made private
+    loose = tmp_path / "loose"
+    loose.mkdir()
+    loose.chmod(0o777)
+    assert _jit._private(loose) and (loose.stat().st_mode & 0o777) == 0o700
     link = tmp_path / "link"
     link.symlink_to(mine)
     assert not _jit._private(link)
+    if os.getuid() == 0:  # only root can give a folder to another user
+        theirs = tmp_path / "theirs"
+        theirs.mkdir(mode=0o777)
+        os.chown(theirs, 65534, -1)
+        assert not _jit._private(theirs)
+
+
+def test_a_save_waits_for_another_process_then_gives_up(tmp_path, monkeypatch, caplog):
+    # a holder that is stopped or hung (SIGSTOP, a suspended job) blocked every other job's
+    # first save, and with it numba's compiler lock
+    import fcntl
+
+    where = tmp_path / "cache"
+    where.mkdir()
+    holder = os.open(where / ".save.lock", os.O_RDWR | os.O_CREAT)
+    fcntl.flock(holder, fcntl.LOCK_EX)  # another open file: blocks like another process
+    monkeypatch.setattr(_jit, "SAVE_LOCK_WAIT_S", 0.3)
+    monkeypatch.setattr(_jit, "cache_dir", lambda: where)
+    try:
+        toy = _toy_module(tmp_path, "toy_d")
+        with caplog.at_level("WARNING", logger="roughflow._jit"):
+            assert toy.double(5) == 10
+    finally:
+        os.close(holder)
+    assert "could not be cached" in caplog.text and "held" in caplog.text
+    assert not list(where.rglob("*.nbi"))
+
+
+def test_a_damaged_index_is_a_cache_miss_and_is_replaced(tmp_path, monkeypatch):
+    # numba does not fsync: an index cut short by a crash made every later run fail with an
+    # UnpicklingError, on load and on save
+    where = tmp_path / "cache"
+    monkeypatch.setattr(_jit, "cache_dir", lambda: where)
+    assert _toy_module(tmp_path, "toy_e").double(2) == 4
+    [index] = where.rglob("toy_e.double*.nbi")
+    index.write_bytes(index.read_bytes()[:40])
+    assert _toy_module(tmp_path, "toy_e").double(2.5) == 5.0  # loads, then saves
+    assert _toy_module(tmp_path, "toy_e").double(3) == 6
+    import pickle
+
+    with index.open("rb") as f:  # rebuilt whole
+        pickle.load(f)
+        _, overloads = pickle.loads(f.read())
+    assert len(overloads) >= 1
+
+
+def test_an_interrupted_prune_does_not_count_as_a_version(tmp_path, monkeypatch):
+    parent = tmp_path / "versions"
+    here = parent / "current"
+    for name in ("current", "v1", "v2", "v_old", ".v9.removing-123"):
+        (parent / name).mkdir(parents=True)
+    old = time.time() - 2 * 86400
+    os.utime(parent / "v_old", (old, old))
+    monkeypatch.setattr(_jit, "KEEP", 4)
+    _jit._prune(parent, here)
+    # four versions, the leftover not among them: v_old is kept (it took a slot before)
+    assert (parent / "v_old").exists()
+    stale = time.time() - 2 * _jit.STALE_S
+    os.utime(parent / ".v9.removing-123", (stale, stale))
+    _jit._prune(parent, here)
+    assert not (parent / ".v9.removing-123").exists()  # an hour old: removed

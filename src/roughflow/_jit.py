@@ -31,6 +31,7 @@ import functools
 import hashlib
 import logging
 import os
+import pickle
 import shutil
 import stat
 import tempfile
@@ -49,6 +50,12 @@ KEEP = 4
 #: ... and the time (s) a version must have gone unused before it is removed: a long job
 #: of an older checkout may still load from it.
 PRUNE_AFTER_S = 86400.0
+#: How long (s) a save waits for another process's save before it gives up (the kernel then
+#: stays uncached): a holder stopped or hung (SIGSTOP, a suspended job, a stalled network
+#: file system) must not stop every other job of this version.
+SAVE_LOCK_WAIT_S = 60.0
+#: Age (s) after which a temporary file of an interrupted save or prune is removed.
+STALE_S = 3600.0
 _PACKAGE = Path(__file__).resolve().parent
 
 
@@ -80,10 +87,14 @@ def _private(folder: Path) -> bool:
     try:
         folder.mkdir(mode=0o700, exist_ok=True)
         st = folder.lstat()  # a link is refused, not followed
+        if not stat.S_ISDIR(st.st_mode) or st.st_uid != os.getuid():
+            return False
+        if st.st_mode & (stat.S_IWGRP | stat.S_IWOTH):
+            # this user's own, made under a umask of 002 (as before this rule): made private
+            folder.chmod(0o700)
     except OSError:
         return False
-    return (stat.S_ISDIR(st.st_mode) and st.st_uid == os.getuid()
-            and not st.st_mode & (stat.S_IWGRP | stat.S_IWOTH))
+    return True
 
 
 def _writable(folder: Path) -> bool:
@@ -100,7 +111,12 @@ def _prune(parent: Path, here: Path) -> None:
     """Remove versions beyond the :data:`KEEP` most recently used ones that have gone
     unused for :data:`PRUNE_AFTER_S`."""
     try:
-        versions = sorted((p for p in parent.iterdir() if p.is_dir()),
+        entries = [p for p in parent.iterdir() if p.is_dir()]
+        # a prune interrupted mid-way left its folder moved aside (".<version>.removing-<pid>")
+        for p in entries:
+            if p.name.startswith(".") and p.stat().st_mtime < time.time() - STALE_S:
+                shutil.rmtree(p, ignore_errors=True)
+        versions = sorted((p for p in entries if not p.name.startswith(".")),
                           key=lambda p: p.stat().st_mtime, reverse=True)
         old = time.time() - PRUNE_AFTER_S
         for p in versions[KEEP:]:
@@ -138,6 +154,10 @@ def njit(**options) -> Callable[[Callable], Callable]:
     setting is made for the decoration only and the caller's own numba setting stays)."""
     if not options.get("cache"):
         return numba.njit(**options)
+    if options.get("signature_or_function") is not None:
+        # numba compiles and saves such a kernel while decorating it, before its cache can
+        # be checked and its saves locked (:func:`_guard`)
+        raise ValueError("roughflow._jit.njit(cache=True) takes no explicit signatures")
     where = cache_dir()
     if where is None:
         return numba.njit(**{**options, "cache": False})
@@ -168,35 +188,91 @@ def _guard(cache, where: Path) -> None:
         log.debug("%s: numba chose %s; the kernel is not cached", cache, cache.cache_path)
         cache.disable()
         return
-    save = cache.save_overload
+    load, save = cache.load_overload, cache.save_overload
+    folder = Path(cache.cache_path)
+
+    def load_overload(sig, target_context):
+        try:
+            return load(sig, target_context)
+        except (EOFError, pickle.UnpicklingError) as err:
+            # an index cut short (numba does not fsync: a node that crashed while writing)
+            # made every later run fail; it is a cache miss, and the save replaces it
+            log.warning("numba's cache in %s is damaged (%s): the kernel is compiled",
+                        folder, err)
+            return None
 
     def save_overload(sig, data) -> None:
         try:
-            with _save_lock(where):
-                save(sig, data)
-        except OSError as err:
+            with _save_lock(where) as locked:
+                if not locked:
+                    raise TimeoutError(f"another process held {where / '.save.lock'} for "
+                                       f"{SAVE_LOCK_WAIT_S:g} s")
+                _remove_stale(folder)
+                try:
+                    save(sig, data)
+                except (EOFError, pickle.UnpicklingError):
+                    _remove_index(cache)  # damaged (see load_overload): made afresh
+                    save(sig, data)
+        except (OSError, EOFError, pickle.UnpicklingError) as err:
             log.warning("a compiled kernel could not be cached in %s (%s): it is compiled "
                         "again by the next process", where, err)
 
-    cache.save_overload = save_overload
+    cache.load_overload, cache.save_overload = load_overload, save_overload
+
+
+def _remove_index(cache) -> None:
+    index = getattr(getattr(cache, "_cache_file", None), "_index_path", None)
+    if index is not None:
+        with contextlib.suppress(OSError):
+            os.unlink(index)
+
+
+def _remove_stale(folder: Path) -> None:
+    """numba's temporary files (``*.tmp.<id>``) left by a save that was killed."""
+    old = time.time() - STALE_S
+    with contextlib.suppress(OSError):
+        for tmp in folder.glob("*.tmp.*"):
+            with contextlib.suppress(OSError):
+                if tmp.stat().st_mtime < old:
+                    tmp.unlink()
 
 
 @contextlib.contextmanager
-def _save_lock(folder: Path) -> Iterator[None]:
+def _save_lock(folder: Path) -> Iterator[bool]:
     """An exclusive lock of ``folder``'s ``.save.lock`` between processes while numba
-    updates its index there; none where the file system or the platform has no flock."""
+    updates its index there. Yields False if another process held it for
+    :data:`SAVE_LOCK_WAIT_S`; True once held, and also where the platform or the file
+    system has no flock (the save then goes on unlocked, as numba's own does)."""
     try:
         import fcntl
     except ImportError:
-        fcntl = None
+        yield True
+        return
     fd = None
-    if fcntl is not None:
-        with contextlib.suppress(OSError):
-            folder.mkdir(parents=True, exist_ok=True)
-            fd = os.open(folder / ".save.lock", os.O_RDWR | os.O_CREAT, 0o600)
-            fcntl.flock(fd, fcntl.LOCK_EX)
     try:
-        yield
+        folder.mkdir(parents=True, exist_ok=True)
+        lock = folder / ".save.lock"
+        try:  # readable and writable by whom the umask allows: a group may share the cache
+            fd = os.open(lock, os.O_RDWR | os.O_CREAT, 0o666)
+        except PermissionError:  # another user's: flock needs no write permission
+            fd = os.open(lock, os.O_RDONLY)
+    except OSError as err:
+        log.debug("saving unlocked: cannot open a lock file in %s (%s)", folder, err)
+    try:
+        held = fd is None
+        deadline = time.monotonic() + SAVE_LOCK_WAIT_S
+        while not held:
+            try:
+                fcntl.flock(fd, fcntl.LOCK_EX | fcntl.LOCK_NB)
+                held = True
+            except BlockingIOError:
+                if time.monotonic() > deadline:
+                    break
+                time.sleep(0.05)
+            except OSError as err:  # a file system without flock
+                log.debug("saving unlocked: cannot lock %s (%s)", folder, err)
+                held = True
+        yield held
     finally:
         if fd is not None:
             os.close(fd)  # releases the lock
