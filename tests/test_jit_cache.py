@@ -12,6 +12,7 @@ from pathlib import Path
 
 import roughflow
 from roughflow import _jit
+from roughflow.files import STALE_TEMPORARY_S
 
 PACKAGE = Path(roughflow.__file__).resolve().parent
 
@@ -266,7 +267,7 @@ def test_an_interrupted_prune_does_not_count_as_a_version(tmp_path, monkeypatch)
     _jit._prune(parent, here)
     # four versions, the leftover not among them: v_old is kept (it took a slot before)
     assert (parent / "v_old").exists()
-    stale = time.time() - 2 * _jit.STALE_S
+    stale = time.time() - 2 * STALE_TEMPORARY_S
     os.utime(parent / ".v9.removing-123", (stale, stale))
     _jit._prune(parent, here)
     assert not (parent / ".v9.removing-123").exists()  # an hour old: removed

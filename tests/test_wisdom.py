@@ -15,6 +15,7 @@ import pytest
 from roughflow import fft, provenance, wisdom
 from roughflow.cli import main
 from roughflow.errors import InputError
+from roughflow.files import STALE_TEMPORARY_S
 
 SHAPE = (48, 40)  # no other test plans it, so it starts with no wisdom
 
@@ -409,7 +410,7 @@ def test_a_killed_jobs_temporary_file_is_removed_by_a_later_save(tmp_path):
     fresh = tmp_path / f"{file.name}def456.tmp"  # another job's, being written now
     for tmp in (stale, fresh):
         tmp.write_text("{")
-    old = time.time() - wisdom.STALE_TMP_S - 60
+    old = time.time() - STALE_TEMPORARY_S - 60
     os.utime(stale, (old, old))
     wisdom._save(file, (b"", b"", b""))
     assert not stale.exists() and fresh.exists()

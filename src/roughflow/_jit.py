@@ -41,7 +41,7 @@ from pathlib import Path
 
 import numba
 
-from roughflow.files import user_cache_dir
+from roughflow.files import STALE_TEMPORARY_S, open_lock_file, remove_stale, user_cache_dir
 
 log = logging.getLogger(__name__)
 
@@ -54,8 +54,6 @@ PRUNE_AFTER_S = 86400.0
 #: stays uncached): a holder stopped or hung (SIGSTOP, a suspended job, a stalled network
 #: file system) must not stop every other job of this version.
 SAVE_LOCK_WAIT_S = 60.0
-#: Age (s) after which a temporary file of an interrupted save or prune is removed.
-STALE_S = 3600.0
 _PACKAGE = Path(__file__).resolve().parent
 
 
@@ -114,7 +112,7 @@ def _prune(parent: Path, here: Path) -> None:
         entries = [p for p in parent.iterdir() if p.is_dir()]
         # a prune interrupted mid-way left its folder moved aside (".<version>.removing-<pid>")
         for p in entries:
-            if p.name.startswith(".") and p.stat().st_mtime < time.time() - STALE_S:
+            if p.name.startswith(".") and p.stat().st_mtime < time.time() - STALE_TEMPORARY_S:
                 shutil.rmtree(p, ignore_errors=True)
         versions = sorted((p for p in entries if not p.name.startswith(".")),
                           key=lambda p: p.stat().st_mtime, reverse=True)
@@ -207,7 +205,7 @@ def _guard(cache, where: Path) -> None:
                 if not locked:
                     raise TimeoutError(f"another process held {where / '.save.lock'} for "
                                        f"{SAVE_LOCK_WAIT_S:g} s")
-                _remove_stale(folder)
+                remove_stale(folder.glob("*.tmp.*"))  # numba's, of a killed save
                 try:
                     save(sig, data)
                 except (EOFError, pickle.UnpicklingError):
@@ -227,16 +225,6 @@ def _remove_index(cache) -> None:
             os.unlink(index)
 
 
-def _remove_stale(folder: Path) -> None:
-    """numba's temporary files (``*.tmp.<id>``) left by a save that was killed."""
-    old = time.time() - STALE_S
-    with contextlib.suppress(OSError):
-        for tmp in folder.glob("*.tmp.*"):
-            with contextlib.suppress(OSError):
-                if tmp.stat().st_mtime < old:
-                    tmp.unlink()
-
-
 @contextlib.contextmanager
 def _save_lock(folder: Path) -> Iterator[bool]:
     """An exclusive lock of ``folder``'s ``.save.lock`` between processes while numba
@@ -251,11 +239,7 @@ def _save_lock(folder: Path) -> Iterator[bool]:
     fd = None
     try:
         folder.mkdir(parents=True, exist_ok=True)
-        lock = folder / ".save.lock"
-        try:  # readable and writable by whom the umask allows: a group may share the cache
-            fd = os.open(lock, os.O_RDWR | os.O_CREAT, 0o666)
-        except PermissionError:  # another user's: flock needs no write permission
-            fd = os.open(lock, os.O_RDONLY)
+        fd = open_lock_file(folder / ".save.lock")  # a group may share the cache
     except OSError as err:
         log.debug("saving unlocked: cannot open a lock file in %s (%s)", folder, err)
     try:

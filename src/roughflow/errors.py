@@ -95,13 +95,18 @@ def require_int(name: str, value: int | np.integer, *, minimum: int | None = Non
 def require_seeds(name: str, seeds: Iterable[int | np.integer]) -> tuple[int, ...]:
     """A non-empty tuple of distinct seeds in [0, :data:`MAX_SEED`] (a duplicate seed would
     give a duplicate coordinate in the datasets)."""
-    out = tuple(require_int(f"{name} entry", s, minimum=0, maximum=MAX_SEED) for s in seeds)
-    if not out:
+    return require_distinct(name, tuple(
+        require_int(f"{name} entry", s, minimum=0, maximum=MAX_SEED) for s in seeds))
+
+
+def require_distinct(name: str, values: tuple) -> tuple:
+    """``values``, refused when empty or with a repeated entry (naming the repeats)."""
+    if not values:
         raise InputError(f"{name} is empty")
-    dup = sorted({s for s in out if out.count(s) > 1})
+    dup = sorted({v for v in values if values.count(v) > 1})
     if dup:
-        raise InputError(f"{name} must be distinct, got {list(out)} ({dup} repeated)")
-    return out
+        raise InputError(f"{name} must be distinct, got {list(values)} ({dup} repeated)")
+    return values
 
 
 def check_axis(axis: int | str) -> int:

@@ -9,9 +9,16 @@ read: :func:`publish` gives it 0666 less the umask first, as ``open`` would have
 
 from __future__ import annotations
 
+import contextlib
 import os
 import signal
+import time
+from collections.abc import Iterable
 from pathlib import Path
+
+#: Age (s) after which a temporary file that a cache's writer left is taken as that of a
+#: killed process (SIGKILL, out of memory), not one still being written.
+STALE_TEMPORARY_S = 3600.0
 
 #: Signals that end a command, whose default action would stop it where it stands: SIGTERM
 #: (kill, scancel, a time limit), SIGHUP (a closed terminal), SIGUSR1 and SIGUSR2 (what
@@ -45,3 +52,23 @@ def user_cache_dir(name: str) -> Path | None:
         return Path(base) / "roughflow" / name
     home = os.path.expanduser("~")
     return Path(home) / ".cache" / "roughflow" / name if os.path.isabs(home) else None
+
+
+def open_lock_file(lock: Path) -> int:
+    """A descriptor of the lock file ``lock`` (made if missing) for ``fcntl.flock``: readable
+    and writable by those the umask allows, so that a group can share the folder; another
+    user's lock file opens read-only (flock needs no write permission). Raises OSError."""
+    try:
+        return os.open(lock, os.O_RDWR | os.O_CREAT, 0o666)
+    except PermissionError:
+        return os.open(lock, os.O_RDONLY)
+
+
+def remove_stale(paths: Iterable[Path], older_than_s: float = STALE_TEMPORARY_S) -> None:
+    """Remove those of ``paths`` (temporary files a killed writer left) last modified more
+    than ``older_than_s`` ago; any that vanish meanwhile or cannot be removed are skipped."""
+    old = time.time() - older_than_s
+    for path in paths:
+        with contextlib.suppress(OSError):
+            if path.stat().st_mtime < old:
+                path.unlink()

@@ -34,13 +34,12 @@ import platform
 import re
 import tempfile
 import threading
-import time
 from collections.abc import Iterator
 from functools import lru_cache
 from pathlib import Path
 
 from roughflow.errors import InputError
-from roughflow.files import publish, user_cache_dir
+from roughflow.files import open_lock_file, publish, remove_stale, user_cache_dir
 
 log = logging.getLogger(__name__)
 
@@ -183,20 +182,12 @@ def _load(file: Path) -> tuple[bytes, ...] | None:
     return wisdom
 
 
-#: age (s) after which a temporary wisdom file is taken as left by a killed job
-STALE_TMP_S = 3600.0
-
-
 def _save(file: Path, wisdom: tuple[bytes, ...]) -> None:
     # written beside the file and renamed over it: a reader never sees half a file
     data = {k: w.decode("ascii") for k, w in zip(_PRECISIONS, wisdom, strict=True)}
     # a job killed while writing (SIGKILL, out of memory) left its temporary file: removed
     # here, under the lock, once it is old enough not to be another job's in progress
-    old = time.time() - STALE_TMP_S
-    for tmp in file.parent.glob(f"{glob.escape(file.name)}*.tmp"):
-        with contextlib.suppress(OSError):
-            if tmp.stat().st_mtime < old:
-                tmp.unlink()
+    remove_stale(file.parent.glob(f"{glob.escape(file.name)}*.tmp"))
     fd, tmp = tempfile.mkstemp(prefix=file.name, suffix=".tmp", dir=file.parent)
     try:
         with os.fdopen(fd, "w", encoding="ascii") as f:
@@ -220,10 +211,7 @@ def _open_lock(file: Path) -> int | None:
         _report(f"cannot write to {file.parent}", err, not_saved)
         return None
     try:
-        try:
-            return os.open(lock, os.O_RDWR | os.O_CREAT, 0o666)
-        except PermissionError:
-            return os.open(lock, os.O_RDONLY)
+        return open_lock_file(lock)
     except OSError as err:
         _report(f"cannot open the lock file {lock}", err, not_saved)
         return None

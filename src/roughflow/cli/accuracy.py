@@ -11,16 +11,13 @@ import argparse
 import json
 from collections.abc import Callable
 from dataclasses import Field, fields
-from pathlib import Path
 
 from roughflow.convergence.options import FIT_MIN_PPL, ResolutionOptions, ToleranceOptions
 from roughflow.convergence.records import (
-    RESOLUTION_GLOB,
     report_files,
     resolution_file,
     tolerance_file,
 )
-from roughflow.errors import InputError
 
 from ._common import add_output_folder
 
@@ -153,11 +150,7 @@ def run_tol(args: argparse.Namespace) -> None:
 
 
 def run_report(args: argparse.Namespace) -> None:
-    out = Path(args.out)
-    if not any(out.glob(RESOLUTION_GLOB)):  # before matplotlib is imported
-        raise InputError(f"--out {str(out)!r} holds no resolution records "
-                         f"({RESOLUTION_GLOB}): run `roughflow accuracy resolution` first")
     from roughflow.convergence.report import write_reports
 
-    for written in write_reports(out, fit_min_ppl=args.fit_min_ppl):
+    for written in write_reports(args.out, fit_min_ppl=args.fit_min_ppl):
         print(written.markdown)

@@ -23,7 +23,15 @@ from roughflow import accuracy
 
 from .options import FIT_MIN_PPL
 from .records import ANISOTROPIC_STEM, RESOLUTION_GLOB, load_records
-from .tables import EXTRAP_NOTE, ReportDraft, ReportFiles, md_table, ppl_cell, publish_reports
+from .tables import (
+    EXTRAP_NOTE,
+    ReportDraft,
+    ReportFiles,
+    a_star_references,
+    md_table,
+    ppl_cell,
+    publish_reports,
+)
 
 if TYPE_CHECKING:
     from matplotlib.axes import Axes
@@ -159,12 +167,7 @@ def _gamma_section(recs: list[dict], g: float, fit_min_ppl: int, rows: _Rows,
                 rows.fixed.append([g, target, ppl_cell(p, (f0, f1)),
                                    *[float(np.mean(e[k])) for k in e]])
     # a_c* per direction
-    refs = {}
-    for s in seeds:
-        rr = {q["ppl"]: q for q in thr if q["seed"] == s}
-        for ax in (0, 1):
-            refs[(s, ax)] = accuracy.richardson(rr[f0][f"a_star_{ax}"],
-                                                rr[f1][f"a_star_{ax}"], ratio=f1 / f0)
+    refs = a_star_references(thr, seeds, (f0, f1))
     for ax in (0, 1):
         d = _direction(g, ax)
         # the constant that would remove the first-order error of a_c* itself, fitted

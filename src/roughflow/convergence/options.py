@@ -10,25 +10,21 @@ from __future__ import annotations
 from collections.abc import Iterable
 from dataclasses import dataclass
 
-from roughflow.errors import InputError, require_int, require_positive, require_seeds
+from roughflow.errors import (
+    InputError,
+    require_distinct,
+    require_int,
+    require_positive,
+    require_seeds,
+)
 
 #: a_c of the sigma measurements (resolution) and of the fixed-load contact solves (tolerances)
 TARGETS = (0.2, 0.35)
 
 
-def _distinct(name: str, values: tuple) -> tuple:
-    """``values``, refused when empty or with a repeated entry (it would be measured again
-    and weigh twice in the fits)."""
-    if not values:
-        raise InputError(f"{name} is empty")
-    dup = sorted({v for v in values if values.count(v) > 1})
-    if dup:
-        raise InputError(f"{name} must be distinct, got {list(values)} ({dup} repeated)")
-    return values
-
-
 def _positive_tuple(name: str, values: Iterable[float]) -> tuple[float, ...]:
-    return _distinct(name, tuple(require_positive(f"{name} entry", v) for v in values))
+    # distinct: a repeated entry would be measured again and weigh twice in the fits
+    return require_distinct(name, tuple(require_positive(f"{name} entry", v) for v in values))
 
 
 def _area_fractions(name: str, values: Iterable[float]) -> tuple[float, ...]:
@@ -48,7 +44,7 @@ def check_resolutions(ppl: Iterable[int], *, gamma: float = 1.0,
     the grid sizes must keep that ratio; :class:`InputError` naming the value otherwise.
     (One resolution may be measured, and others added by a later run into the same file;
     the report needs two, and the workflow's schema asks for two at once.)"""
-    out = _distinct("ppl", tuple(require_int("ppl entry", p, minimum=2) for p in ppl))
+    out = require_distinct("ppl", tuple(require_int("ppl entry", p, minimum=2) for p in ppl))
     finest = max(out)
     odd = [p for p in out if finest % p]
     if odd:

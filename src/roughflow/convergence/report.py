@@ -36,6 +36,7 @@ from .tables import (
     PLOT_EXTRAP_NOTE,
     ReportDraft,
     ReportFiles,
+    a_star_references,
     md_table,
     plot_label,
     ppl_cell,
@@ -159,12 +160,7 @@ def _threshold_section(d: _Resolution, fine: tuple[int, int], md: list[str],
     thr, ppls, seeds = d.thr, d.ppls, d.seeds
     f0, f1 = fine
     rows = []
-    refs = {}
-    for s in seeds:
-        rr = {q["ppl"]: q for q in thr if q["seed"] == s}
-        for a in (0, 1):
-            refs[(s, a)] = accuracy.richardson(rr[f0][f"a_star_{a}"],
-                                               rr[f1][f"a_star_{a}"], ratio=f1 / f0)
+    refs = a_star_references(thr, seeds, fine)
     spread = np.std([refs[(s, 0)] for s in seeds] + [refs[(s, 1)] for s in seeds], ddof=1)
     coarser = _next_coarser(ppls)
     variants = {"raw": [], "perimeter": [], "richardson": []}

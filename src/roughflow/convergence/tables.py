@@ -9,6 +9,8 @@ from dataclasses import dataclass
 from pathlib import Path
 from typing import TYPE_CHECKING
 
+from roughflow import accuracy
+
 if TYPE_CHECKING:
     from matplotlib.figure import Figure
 
@@ -35,6 +37,20 @@ def md_table(header: list[str], rows: list[list]) -> str:
 def plot_label(p: int, fine: Sequence[int], variant: str) -> str:
     """Label of a plotted point: its points per lambda_s, "ref" on the reference's grids."""
     return f"{p} ref" if p in fine and variant != "richardson" else str(p)
+
+
+def a_star_references(thr: list[dict], seeds: Sequence[int], fine: tuple[int, int]
+                      ) -> dict[tuple[int, int], float]:
+    """The reference a_c* per (seed, axis): the first-order Richardson extrapolation of the
+    threshold records ``thr`` at the two finest resolutions ``fine``."""
+    f0, f1 = fine
+    refs = {}
+    for s in seeds:
+        rr = {q["ppl"]: q for q in thr if q["seed"] == s}
+        for ax in (0, 1):
+            refs[(s, ax)] = accuracy.richardson(rr[f0][f"a_star_{ax}"],
+                                                rr[f1][f"a_star_{ax}"], ratio=f1 / f0)
+    return refs
 
 
 def ppl_cell(p: int, fine: Sequence[int]) -> int | str:
