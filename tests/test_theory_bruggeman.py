@@ -325,6 +325,34 @@ def test_medium_solves_an_equation_once(monkeypatch):
         bruggeman(m, a_c_star=0.415, weights=weights)
 
 
+def test_medium_is_frozen_and_its_memo_cannot_go_stale():
+    """A Medium keeps the roots it found: were s, w or z changed afterwards, it would return
+    the roots of the old distribution. So it is a frozen dataclass with read-only arrays
+    (the caller's array stays writable), equal only to itself (eq=False) and hashable."""
+    import dataclasses
+
+    values = _continuous_sample(200)
+    m = medium(values)
+    first = bruggeman(m, a_c_star=0.415).sigma
+    for name, value in (("s", m.s * 2), ("w", m.w), ("z", 0.5)):
+        with pytest.raises(dataclasses.FrozenInstanceError):
+            setattr(m, name, value)
+    with pytest.raises(ValueError, match="read-only"):
+        m.s[0] = 1.0
+    with pytest.raises(ValueError, match="read-only"):
+        m.w[0] = 1.0
+    assert bruggeman(m, a_c_star=0.415).sigma == first
+    s, w = np.array([1.0, 4.0]), np.array([0.5, 0.5])
+    direct = effective_medium.Medium(s, w, 0)
+    # the caller's arrays stay writable, the medium's views of them do not
+    assert s.flags.writeable and w.flags.writeable
+    assert not direct.s.flags.writeable and not direct.w.flags.writeable
+    twin = medium(_continuous_sample(200))
+    assert m == m and m != twin and len({m, twin}) == 2
+    assert "_memo" not in repr(m) and isinstance(m.z, float)
+    assert bruggeman(twin, a_c_star=0.415).sigma == first
+
+
 def test_gap_theory_moves_the_thresholds_by_the_grid_bias_of_the_area():
     # With a continuum area estimate (the elastic ladders pass the perimeter-corrected a_c),
     # the Bruggeman thresholds move onto the grid by (grid fraction - estimate), so that

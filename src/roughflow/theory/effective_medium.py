@@ -27,7 +27,7 @@ Units: conductivities in whatever unit the input has (for a gap field,
 from __future__ import annotations
 
 import math
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 from typing import TYPE_CHECKING
 
 import numpy as np
@@ -421,52 +421,79 @@ def _distribution(sigma_values, weights) -> tuple[np.ndarray, np.ndarray, float]
     return s[keep], w[keep], z
 
 
+@dataclass
+class _Memo:
+    """What a :class:`Medium` has worked out about itself (a cache: never compared)."""
+
+    scaled: tuple[np.ndarray, float, float] | None = None
+    sample: Medium | None = None
+    roots: dict[tuple[float, float], tuple[float, float]] = field(default_factory=dict)
+
+
+def _read_only(a: np.ndarray) -> np.ndarray:
+    """A read-only float view of ``a`` (the caller's array stays writable): the memo holds
+    only while the values do not change (:func:`medium` passes arrays of its own)."""
+    v = np.asarray(a, dtype=np.float64).view()
+    v.flags.writeable = False
+    return v
+
+
+@dataclass(frozen=True, eq=False)
 class Medium:
     """A distribution of local conductivities for the self-consistent equations (*): the
     positive values ``s`` (units of the input), their normalised weights ``w`` and the
     weight ``z`` of the zeros (contact cells). It keeps the roots it has found, keyed by the
     equation's (A, B), so that equations shared by several forms are solved once (every
     anisotropic form at gamma~ = 1 is the isotropic one). Build it with :func:`medium`;
-    the functions of this module take one in place of ``sigma_values``."""
+    the functions of this module take one in place of ``sigma_values``.
 
-    def __init__(self, s: np.ndarray, w: np.ndarray, z: float):
-        self.s, self.w, self.z = s, w, float(z)
-        self._scaled: tuple[np.ndarray, float, float] | None = None
-        self._sample: Medium | None = None
-        self._roots: dict[tuple[float, float], tuple[float, float]] = {}
+    Frozen, with read-only arrays, so that the memo stays true; two media are equal only
+    if they are the same object (eq=False: comparing arrays cell by cell would cost a pass
+    over them and say nothing the memo could use)."""
+
+    s: np.ndarray
+    w: np.ndarray
+    z: float
+    _memo: _Memo = field(default_factory=_Memo, init=False, repr=False, compare=False)
+
+    def __post_init__(self) -> None:
+        object.__setattr__(self, "s", _read_only(self.s))
+        object.__setattr__(self, "w", _read_only(self.w))
+        object.__setattr__(self, "z", float(self.z))
 
     def scaled(self) -> tuple[np.ndarray, float, float]:
         """(s / max(s), max(s), sum w max(s) / s): values of order 1 for a relative
         tolerance, and the slope of (*) at x = 0 over A (inf where 1/s overflows)."""
-        if self._scaled is None:
+        if self._memo.scaled is None:
             smax = float(self.s.max())
             t = self.s / smax
             with np.errstate(over="ignore", divide="ignore"):
                 inverse = float(_wsum(self.w, 1.0 / t))
-            self._scaled = (t, smax, inverse)
-        return self._scaled
+            self._memo.scaled = (t, smax, inverse)
+        return self._memo.scaled
 
     def root(self, a: float, b: float, guess: float | None = None) -> tuple[float, float]:
         """(x, |H(x)|) for the root x > 0 of (*) with coefficients ``a``, ``b`` (module
         docstring; 0 where closed, inf where no finite root exists); ``guess``: a nearby
         root (e.g. of a neighbouring equation) to start from."""
         key = (float(a), float(b))
-        if key not in self._roots:
-            self._roots[key] = _solve_emt(self, a, b, guess)
-        return self._roots[key]
+        roots = self._memo.roots
+        if key not in roots:
+            roots[key] = _solve_emt(self, a, b, guess)
+        return roots[key]
 
     def sample(self) -> Medium | None:
         """A strided sample of about :data:`_SAMPLE` cells (None for smaller media): its
         roots start those of the whole medium."""
         if self.s.size <= 2 * _SAMPLE:
             return None
-        if self._sample is None:
+        if self._memo.sample is None:
             step = self.s.size // _SAMPLE
             w = self.w[::step]
             # the sample's zeros keep the medium's weight z: its positive weights are scaled
             # to 1 - z
-            self._sample = Medium(self.s[::step], w * ((1.0 - self.z) / w.sum()), self.z)
-        return self._sample
+            self._memo.sample = Medium(self.s[::step], w * ((1.0 - self.z) / w.sum()), self.z)
+        return self._memo.sample
 
 
 def medium(sigma_values: ArrayLike, weights: ArrayLike | None = None) -> Medium:
