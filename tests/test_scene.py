@@ -392,22 +392,34 @@ def test_ladder_records_the_flow_solver_and_combines_with_files_that_do_not(monk
 
 
 def test_ladders_of_different_lengths_keep_each_variable_s_dimensions():
-    """Ladders of 2 and 3 steps differ in ``step``: combine_by_coords concatenated along it
-    and gave every variable a ``step`` dimension, so a study's wall time and sigma_ref were
-    repeated per step (summing wall_time over step counted each ladder 3 times)."""
-    short = run_ladder(LadderJob(surface=TINY, model="bearing", seeds=(0,),
-                                 area_fractions=(0.1, 0.3)))
+    """Ladders of 3 and 4 steps differ in ``step``: combine_by_coords concatenates along it,
+    and with data_vars="all" gave every variable a ``step`` dimension, so a study's wall
+    time and sigma_ref were repeated per step (summing wall_time over step counted each
+    ladder 4 times). Each variable keeps its job's dimensions; a shorter ladder's missing
+    step is NaN, and each job's values are where they were."""
+    short = [run_ladder(LadderJob(surface=TINY, model="bearing", seeds=(seed,),
+                                  area_fractions=(0.1, 0.2, 0.3))) for seed in (0, 1)]
     other = SurfaceParams(gamma=2.0, l_over_lambda_r=2.0, eps_f=0.125, points_per_lambda_s=2)
     long = run_ladder(LadderJob(surface=other, model="bearing", seeds=(0,),
-                                area_fractions=(0.1, 0.2, 0.3)))
-    study = combine([short, long])
+                                area_fractions=(0.1, 0.2, 0.3, 0.35)))
+    jobs = [short[0], long, short[1]]
+    study = combine(jobs)
     for name, v in study.data_vars.items():
         assert v.dims == long[name].dims, name
-    assert study.sizes["step"] == 3
+    assert "step" not in study["wall_time"].dims and "step" not in study["sigma_ref"].dims
+    assert study.sizes["step"] == 4 and study["step"].values.tolist() == [0, 1, 2, 3]
     assert float(study["wall_time"].sum()) == pytest.approx(
-        float(short["wall_time"].sum() + long["wall_time"].sum()))
-    # the short ladder's missing step is NaN (integers: the fill value once written)
-    assert np.isnan(study["area_fraction"].sel(gamma=1.0).isel(step=2)).all()
+        sum(float(j["wall_time"].sum()) for j in jobs))
+    # the short ladders' missing step is NaN (integers: the fill value once written), and
+    # NaN nowhere else on their cells
+    for job in jobs:
+        cell = {d: job[d].values for d in ("model", "gamma", "hurst", "eps_t", "eps_f", "seed")}
+        for name in ("area_fraction", "pressure", "wall_time", "sigma_ref"):
+            got = study[name].sel(cell)
+            if "step" in got.dims:
+                assert np.isnan(got.isel(step=slice(job.sizes["step"], None))).all(), name
+                got = got.isel(step=slice(0, job.sizes["step"]))
+            np.testing.assert_array_equal(got.values, job[name].values, err_msg=name)
 
 
 def test_combine_rejects_empty():

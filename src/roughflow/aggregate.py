@@ -142,24 +142,6 @@ def _same(a, b) -> bool:
         return bool(np.array_equal(np.asarray(a), np.asarray(b)))
 
 
-def _on_common_inner_coords(datasets: Sequence[xr.Dataset]) -> list[xr.Dataset]:
-    """The job datasets reindexed (NaN where a job has no entry) to the union of each
-    dimension that is neither a parameter nor ``seed`` (a ladder's ``step``): where such a
-    coordinate differs between jobs (ladders of 3 and 4 steps), combine_by_coords
-    concatenates along it too and, with ``data_vars="all"``, gives every variable that
-    dimension: a ladder's wall time and sigma_ref were repeated over its steps (a sum over
-    ``step`` counted them 4 times)."""
-    inner = {d for ds in datasets for d in ds.dims} - {*PARAM_DIMS, "seed"}
-    union = {}
-    for d in sorted(inner):
-        values = [ds[d].values for ds in datasets if d in ds.dims]
-        if any(len(v) != len(values[0]) or not np.array_equal(v, values[0]) for v in values):
-            union[d] = np.unique(np.concatenate(values))
-    if not union:
-        return list(datasets)
-    return [ds.reindex({d: u for d, u in union.items() if d in ds.dims}) for ds in datasets]
-
-
 def combine(datasets: Sequence[xr.Dataset], sources: Sequence[str] | None = None) -> xr.Dataset:
     """Outer combination by coordinates (``xr.combine_by_coords``, falling back to merge) of
     job datasets of one scene that fill disjoint cells (:func:`check_disjoint`)."""
@@ -186,12 +168,14 @@ def combine(datasets: Sequence[xr.Dataset], sources: Sequence[str] | None = None
     elif kinds[0] == "leak_job":
         out = _concat_scans(datasets)
     else:
-        datasets = _on_common_inner_coords(datasets)
         try:
             # compat and coords as today's defaults, which xarray is about to change
             # data_vars "minimal": a variable is concatenated along a dimension only where
             # it has it; "all" gave the per-job nx, ny, ... a seed dimension wherever jobs
-            # of one setting were split into seed groups (summing nx * ny counted 10x)
+            # of one setting were split into seed groups (summing nx * ny counted 10x), and
+            # every variable a step dimension where ladders differ in length (3 and 4
+            # steps: a ladder's wall time repeated per step). join "outer" fills a shorter
+            # ladder's missing steps with NaN.
             out = xr.combine_by_coords(list(datasets), join="outer", compat="no_conflicts",
                                        coords="different", combine_attrs="drop_conflicts",
                                        data_vars="minimal")
