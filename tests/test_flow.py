@@ -720,20 +720,37 @@ def test_rectangular_cells_discretise_the_same_medium_as_square_ones():
         assert rect[0] / rect[1] == pytest.approx(square[0] / square[1], rel=0.01), block
 
 
-def test_sa_is_repeatable_and_leaves_the_global_stream_alone(heights):
-    """pyamg's smoothed aggregation draws the start vector of a spectral-radius estimate
-    from numpy's global stream: the SA solve fixes that stream while it builds and hands the
-    caller's back, so two solves agree bit for bit whatever the caller seeded, and the
-    caller's next draw is the one it would have been without the solve."""
+def test_sa_is_repeatable_and_never_touches_the_global_stream(heights, monkeypatch):
+    """pyamg's smoothed aggregation by default weights its prolongation smoother by a
+    spectral radius estimated from ``np.random.rand``, numpy's global stream: seeding it
+    around the build (saved and restored) showed another thread using the stream the seeded
+    values meanwhile. The SA solve now weights each row by its Gershgorin bound: it calls
+    no function of the global stream, and two solves agree bit for bit whatever the caller
+    seeded."""
     gap = bearing_gap(heights, 0.3)
     sigmas = []
-    for seed in (1, 2):  # the legacy global stream is what pyamg reads (NPY002)
+    for seed in (1, 2):  # the legacy global stream is what pyamg would read (NPY002)
         np.random.seed(seed)  # noqa: NPY002
         sigmas.append(conductance(gap, method="sa"))
         after = np.random.rand()  # noqa: NPY002
         np.random.seed(seed)  # noqa: NPY002
         assert after == np.random.rand(), "the solve moved the caller's global stream"  # noqa: NPY002
     assert sigmas[0] == sigmas[1]
+    calls = []
+
+    def spy(name):
+        real = getattr(np.random, name)
+
+        def called(*args, **kwargs):
+            calls.append(name)
+            return real(*args, **kwargs)
+        return called
+
+    for name in ("rand", "random", "random_sample", "randn", "seed", "get_state",
+                 "set_state", "default_rng"):
+        monkeypatch.setattr(np.random, name, spy(name))
+    assert conductance(gap, method="sa") == sigmas[0]
+    assert calls == [], f"the SA solve called np.random.{calls[0]}"
 
 
 def test_a_non_square_grid_needs_both_cell_lengths():

@@ -108,9 +108,10 @@ def test_threshold_search_in_threads_matches_serial():
 
 
 def test_sa_flow_solves_in_threads_match_serial_and_keep_the_callers_stream():
-    """The SA preconditioner builds on a fixed global random stream (pyamg reads it); two
-    threads seeding and restoring that one stream at once disturbed each other's builds
-    (sigma off at 1e-22) and the caller's stream. Builds now take turns."""
+    """SA solves in threads give the serial sigma and leave the caller's global random
+    stream alone: the SA build once seeded and restored that one stream (pyamg read it),
+    and two threads doing so at once disturbed each other's builds (sigma off at 1e-22).
+    It now reads no random numbers at all (linsolve.SA_SMOOTH)."""
     from roughflow.flow import conductance
 
     heights = [generate(SurfaceSpec.from_sweep(points_per_lambda_s=2, seed=s)).heights
