@@ -20,6 +20,7 @@ from roughflow import accuracy, contact, flow
 from roughflow.cli import main
 from roughflow.convergence import measure
 from roughflow.convergence.anisotropic import write_anisotropic_report
+from roughflow.convergence.dataset import write_records_dataset
 from roughflow.convergence.options import TARGETS, ResolutionOptions, ToleranceOptions
 from roughflow.convergence.records import load_records, resolution_file, tolerance_file
 from roughflow.convergence.report import write_report
@@ -35,8 +36,12 @@ C0 = 0.105
 
 
 def _write(path, records):
+    """The record log ``path`` and the dataset a completed run writes from it (what the
+    reports read)."""
     path.parent.mkdir(parents=True, exist_ok=True)
     path.write_text("".join(json.dumps(r) + "\n" for r in records))
+    study = "tolerance" if path.name == tolerance_file("").name else "resolution"
+    write_records_dataset(path, study=study)
 
 
 def _csv(path) -> list[list[str]]:

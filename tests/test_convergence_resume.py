@@ -13,6 +13,7 @@ from pathlib import Path
 import pytest
 
 from roughflow.convergence import measure
+from roughflow.convergence.dataset import write_records_dataset
 from roughflow.convergence.options import ResolutionOptions, ToleranceOptions
 from roughflow.convergence.records import (
     ANISOTROPIC_STEM,
@@ -162,6 +163,7 @@ def test_tolerance_lists_must_be_distinct():
 def test_report_without_a_complete_seed_is_refused(tmp_path):
     # before: "Seeds []", empty tables and exit 0 (a single resolution: an IndexError)
     _write(resolution_file(tmp_path, 1.0), [_threshold(2)])
+    write_records_dataset(resolution_file(tmp_path, 1.0), study="resolution")
     with pytest.raises(InputError, match="no seed with threshold records at two or more"):
         write_reports(tmp_path)
     assert not list(tmp_path.glob(f"{REPORT_STEM}.*"))

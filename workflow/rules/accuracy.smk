@@ -1,7 +1,12 @@
 # Accuracy budget: convergence of a_c* and sigma against grid resolution, contact
 # solver tolerance and bisection tolerance, with wall times; tables and error-vs-time plots
 # under <results>/benchmarks/ (the config's results folder). Each rule is one
-# `roughflow accuracy` call (roughflow.convergence). Not part of the default target:
+# `roughflow accuracy` call (roughflow.convergence). The two measuring jobs each write one
+# netCDF dataset of their records (convergence_resolution.nc, convergence_tol.nc: written
+# whole when the run completes), which the report reads. Their record logs (the .jsonl the
+# command appends to as it measures, and resumes from) are declared as logs: kept after a
+# failure to show what was measured, never an input, and removed before a job starts (a
+# job starts afresh, not from a killed attempt's log). Not part of the default target:
 # `snakemake --cores 1 accuracy` (about 2 minutes). Seeds and resolutions via
 # config["accuracy"] (optional):
 #   accuracy: {seeds: [0, 1, 2, 3, 4, 5], points_per_lambda_s: [2, 4, 8, 16]}
@@ -37,8 +42,8 @@ _ACC_TASK = "ladder"
 _ACC_FINEST = SurfaceSpec.from_sweep(points_per_lambda_s=max(_ACC_PPL_LIST))
 _ACC_TOL_GRID = SurfaceSpec.from_sweep(points_per_lambda_s=ToleranceOptions().ppl)
 _ACC_OUT = f"{RESULTS}/benchmarks"
-_ACC_RESOLUTION = str(resolution_file(_ACC_OUT, 1.0))
-_ACC_TOLERANCES = str(tolerance_file(_ACC_OUT))
+_ACC_RESOLUTION = str(resolution_file(_ACC_OUT, 1.0, dataset=True))
+_ACC_TOLERANCES = str(tolerance_file(_ACC_OUT, dataset=True))
 
 
 def accuracy_fits(spec: SurfaceSpec, what: str):
@@ -66,7 +71,8 @@ rule accuracy_resolution:
     output:
         _ACC_RESOLUTION,
     log:
-        f"{_ACC_OUT}/logs/convergence_resolution.log",
+        run=f"{_ACC_OUT}/logs/convergence_resolution.log",
+        records=str(resolution_file(_ACC_OUT, 1.0)),
     params:
         # params, not only the shell string: the profile reruns on params, and a run with
         # other seeds stood in for the default one ("Nothing to be done")
@@ -79,8 +85,9 @@ rule accuracy_resolution:
             _ACC_TASK, _ACC_FINEST.nx * _ACC_FINEST.ny, attempt),
         runtime=60,
     shell:
-        "rm -f {output} && ROUGHFLOW_FFT_THREADS={threads} {RF} accuracy "
-        "resolution --out {_ACC_OUT} --seeds {params.seeds} --ppl {params.ppl} > {log} 2>&1"
+        "rm -f {output} {log.records} && ROUGHFLOW_FFT_THREADS={threads} {RF} accuracy "
+        "resolution --out {_ACC_OUT} --seeds {params.seeds} --ppl {params.ppl} "
+        "> {log.run} 2>&1"
 
 
 rule accuracy_tolerances:
@@ -90,7 +97,8 @@ rule accuracy_tolerances:
     output:
         _ACC_TOLERANCES,
     log:
-        f"{_ACC_OUT}/logs/convergence_tol.log",
+        run=f"{_ACC_OUT}/logs/convergence_tol.log",
+        records=str(tolerance_file(_ACC_OUT)),
     params:
         seeds=_ACC_SEEDS,
     threads: 1
@@ -99,12 +107,13 @@ rule accuracy_tolerances:
             _ACC_TASK, _ACC_TOL_GRID.nx * _ACC_TOL_GRID.ny, attempt),
         runtime=60,
     shell:
-        "rm -f {output} && ROUGHFLOW_FFT_THREADS={threads} {RF} accuracy "
-        "tol --out {_ACC_OUT} --seeds {params.seeds} > {log} 2>&1"
+        "rm -f {output} {log.records} && ROUGHFLOW_FFT_THREADS={threads} {RF} accuracy "
+        "tol --out {_ACC_OUT} --seeds {params.seeds} > {log.run} 2>&1"
 
 
 rule accuracy:
-    """Tables (markdown, CSV) and error-versus-time (Pareto) plots of the accuracy budget."""
+    """Tables (markdown, CSV) and error-versus-time (Pareto) plots of the accuracy budget,
+    from the two record datasets."""
     input:
         _ACC_RESOLUTION,
         _ACC_TOLERANCES,

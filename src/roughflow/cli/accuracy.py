@@ -1,8 +1,10 @@
 """``roughflow accuracy``: the accuracy budget of a_c* and sigma (docs/accuracy.md).
 
-``resolution`` and ``tol`` append JSON-lines records under ``--out`` (printed as they come);
-``report`` turns them into tables, CSV and plots there. The options and their defaults are
-:mod:`roughflow.convergence.options`; the work is :mod:`roughflow.convergence`.
+``resolution`` and ``tol`` append JSON-lines records to their record log under ``--out``
+(printed as they come) and, when they complete, write the whole log as a netCDF dataset
+beside it; ``report`` turns the datasets into tables, CSV and plots there. The options and
+their defaults are :mod:`roughflow.convergence.options`; the work is
+:mod:`roughflow.convergence`.
 """
 
 from __future__ import annotations
@@ -11,9 +13,11 @@ import argparse
 import json
 from collections.abc import Callable
 from dataclasses import Field, fields
+from pathlib import Path
 
 from roughflow.convergence.options import FIT_MIN_PPL, ResolutionOptions, ToleranceOptions
 from roughflow.convergence.records import (
+    dataset_file,
     report_files,
     resolution_file,
     tolerance_file,
@@ -49,13 +53,21 @@ def _out(p: argparse.ArgumentParser, files: Callable[[argparse.Namespace], list[
     add_output_folder(p, "--out", default=OUT, files=files, help="output folder")
 
 
+def _study_files(log: Path) -> list[str]:
+    """The names of a study's record log and of the dataset written from it."""
+    return [log.name, dataset_file(log).name]
+
+
 def register(sub: argparse._SubParsersAction) -> None:
     p = sub.add_parser(
         "accuracy", help="accuracy budget: error of a_c* and sigma against wall time",
         description="Numerical error of a_c* and sigma against grid resolution, contact "
                     "tolerance and bisection tolerance, with wall times (docs/accuracy.md). "
-                    "resolution and tol append JSON-lines records under --out; report "
-                    "writes the tables (markdown, CSV) and plots there.")
+                    "resolution and tol append JSON-lines records to their record log under "
+                    "--out (convergence_*.jsonl, from which a rerun resumes) and, when they "
+                    "complete, write the whole log as a netCDF dataset beside it "
+                    "(convergence_*.nc); report writes the tables (markdown, CSV) and plots "
+                    "from the datasets there.")
     phases = p.add_subparsers(dest="phase", metavar="PHASE", required=True)
 
     r = phases.add_parser(
@@ -64,8 +76,9 @@ def register(sub: argparse._SubParsersAction) -> None:
                     "down to every coarser one (the same continuum surface): a_c* along x and "
                     "y with the contact-line faces at the threshold, and sigma_x at a_c = "
                     "0.2, 0.35 (or, with --no-sigma, the contact law's fixed loads). Records "
-                    "already in the file are not computed again.")
-    _out(r, lambda a: [resolution_file("", a.gamma).name])
+                    "already in the record log are not computed again; a completed run "
+                    "writes the log as convergence_resolution[_gGAMMA].nc.")
+    _out(r, lambda a: _study_files(resolution_file("", a.gamma)))
     _option(r, "--seeds", RES, "surface seeds", kind=int)
     _option(r, "--ppl", RES, "points per lambda_s (each divides the largest)", kind=int)
     _option(r, "--gamma", RES, "Peklenik number (the file name carries it)")
@@ -86,8 +99,10 @@ def register(sub: argparse._SubParsersAction) -> None:
         description="At one resolution: a_c, mean gap and sigma against the contact "
                     "tolerance (cold solves at fixed load), a_c* against the contact "
                     "tolerance inside the threshold search and against the bisection "
-                    "tolerance. The smallest value of each list is the reference.")
-    _out(t, lambda a: [tolerance_file("").name])
+                    "tolerance. The smallest value of each list is the reference. Records "
+                    "already in the record log are not computed again; a completed run "
+                    "writes the log as convergence_tol.nc.")
+    _out(t, lambda a: _study_files(tolerance_file("")))
     _option(t, "--seeds", TOL, "surface seeds", kind=int)
     _option(t, "--tol-ppl", TOL, "points per lambda_s of the tolerance study", name="ppl",
             kind=int)
@@ -103,9 +118,10 @@ def register(sub: argparse._SubParsersAction) -> None:
     rp = phases.add_parser(
         "report", help="tables, CSV and error-versus-time plots of the records",
         description="convergence.md, .csv and the resolution and tolerance plots from the "
-                    "isotropic records (when the gamma 1 resolution file exists), and the "
-                    "anisotropic report (convergence_anisotropic.*) from every resolution "
-                    "file with face counts.")
+                    "isotropic datasets (when the gamma 1 resolution dataset "
+                    "convergence_resolution.nc exists; convergence_tol.nc where it exists), "
+                    "and the anisotropic report (convergence_anisotropic.*) from every "
+                    "resolution dataset (convergence_resolution*.nc) with face counts.")
     _out(rp, lambda a: report_files())
     rp.add_argument("--fit-min-ppl", type=int, default=FIT_MIN_PPL,
                     help="smallest resolution used to fit the perimeter constant "
@@ -139,14 +155,14 @@ def run_resolution(args: argparse.Namespace) -> None:
     opts = resolution_options(args)  # checked before the solvers are even imported
     from roughflow.convergence.measure import measure_resolution
 
-    measure_resolution(args.out, opts, on_record=_print)
+    measure_resolution(args.out, opts, on_record=_print, provenance=args.provenance)
 
 
 def run_tol(args: argparse.Namespace) -> None:
     opts = tolerance_options(args)
     from roughflow.convergence.measure import measure_tolerances
 
-    measure_tolerances(args.out, opts, on_record=_print)
+    measure_tolerances(args.out, opts, on_record=_print, provenance=args.provenance)
 
 
 def run_report(args: argparse.Namespace) -> None:

@@ -1,7 +1,9 @@
 """The accuracy budget: numerical error of a_c* and sigma against wall time.
 
-Three steps, each a function and a ``roughflow accuracy`` subcommand; the JSON-lines records
-of the first two are the input of the third (docs/accuracy.md):
+Three steps, each a function and a ``roughflow accuracy`` subcommand; the first two append
+JSON-lines records to a record log (:mod:`~roughflow.convergence.records`), written whole as
+a netCDF dataset when a run completes (:mod:`~roughflow.convergence.dataset`), and those
+datasets are the input of the third (docs/accuracy.md):
 
 - :func:`~roughflow.convergence.measure.measure_resolution`: per seed, one surface generated
   at the finest resolution and sampled down to every coarser one (the spectrum is

@@ -21,8 +21,9 @@ import numpy as np
 
 from roughflow import accuracy
 
+from .dataset import read_records
 from .options import FIT_MIN_PPL
-from .records import ANISOTROPIC_STEM, RESOLUTION_GLOB, load_records
+from .records import ANISOTROPIC_STEM, RESOLUTION_GLOB
 from .tables import (
     EXTRAP_NOTE,
     ReportDraft,
@@ -240,13 +241,20 @@ def write_anisotropic_report(out: str | os.PathLike, *, fit_min_ppl: int = FIT_M
 
 def anisotropic_draft(out: str | os.PathLike, *, fit_min_ppl: int = FIT_MIN_PPL
                       ) -> ReportDraft | None:
-    """The anisotropic report from every resolution file under ``out`` with face counts;
+    """The anisotropic report from every resolution dataset under ``out``
+    (:func:`anisotropic_records_draft`)."""
+    files = sorted(Path(out).glob(RESOLUTION_GLOB))
+    return anisotropic_records_draft([r for f in files for r in read_records(f)],
+                                     fit_min_ppl=fit_min_ppl)
+
+
+def anisotropic_records_draft(records: list[dict], *, fit_min_ppl: int = FIT_MIN_PPL
+                              ) -> ReportDraft | None:
+    """The anisotropic report from the resolution records (of every gamma) with face counts;
     None where there is none. Draws without pyplot."""
     from matplotlib.figure import Figure
 
-    outdir = Path(out)
-    files = sorted(outdir.glob(RESOLUTION_GLOB))
-    recs = [r for f in files for r in load_records(f)]
+    recs = [dict(r) for r in records]  # the caller's records keep their fields
     for r in recs:
         r.setdefault("gamma", 1.0)
     recs = [r for r in recs if "tx_0" in r or "tx_fixed" in r]  # face counts stored

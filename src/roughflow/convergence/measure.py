@@ -1,8 +1,10 @@
 """The measurements of the accuracy study: the resolution and the tolerance phases.
 
-Each appends one JSON record per measurement to its file (:mod:`.records`) and hands it to
-``on_record`` as well (the command line prints it). Wall times are taken after
-:func:`warm_up`, and FFT plans are made before a grid size is timed.
+Each appends one JSON record per measurement to its record log (:mod:`.records`) and hands
+it to ``on_record`` as well (the command line prints it); a run that completes writes the
+whole log as a netCDF dataset beside it (:mod:`.dataset`), and a run removes that dataset
+before any work, so that one is there only where the last run completed. Wall times are
+taken after :func:`warm_up`, and FFT plans are made before a grid size is timed.
 """
 
 from __future__ import annotations
@@ -17,13 +19,21 @@ import numpy as np
 
 from roughflow import accuracy, contact, fft, flow
 from roughflow.errors import ConvergenceError, InputError
+from roughflow.provenance import Provenance
 from roughflow.search import LoadSearch, SearchOptions, threshold
 from roughflow.search import warm_up as search_warm_up
 from roughflow.surface import Surface, SurfaceSpec, generate
 
+from .dataset import write_records_dataset
 from .load_path import shifted_sigma
 from .options import TARGETS, ResolutionOptions, ToleranceOptions
-from .records import append_record, load_records, resolution_file, tolerance_file
+from .records import (
+    append_record,
+    dataset_file,
+    load_records,
+    resolution_file,
+    tolerance_file,
+)
 
 OnRecord = Callable[[dict], None]
 
@@ -189,6 +199,13 @@ def _check_same_run(path: Path, rec: dict, expected: dict) -> None:
                 "--out, or remove the file to start afresh")
 
 
+def _start(path: Path) -> None:
+    """Remove the dataset of the record log ``path`` before a run works: it is written again
+    when the run completes, and a run that fails leaves none (not an earlier run's, which
+    would look complete)."""
+    dataset_file(path).unlink(missing_ok=True)
+
+
 def _emitter(path: Path, on_record: OnRecord | None) -> OnRecord:
     def emit(rec: dict) -> None:
         append_record(path, rec)
@@ -198,16 +215,20 @@ def _emitter(path: Path, on_record: OnRecord | None) -> OnRecord:
 
 
 def measure_resolution(out: str | os.PathLike, opts: ResolutionOptions, *,
-                       on_record: OnRecord | None = None, warm: bool = True) -> Path:
-    """The resolution study into :func:`~.records.resolution_file` under ``out``; returns
-    that file. Records already in it are not computed again (a run can be resumed); records
-    of other settings (another L/lambda_r, grid or tolerance) are refused before any work.
-    ``warm``: :func:`warm_up` first (False where the caller has)."""
+                       on_record: OnRecord | None = None, warm: bool = True,
+                       provenance: Provenance | None = None) -> Path:
+    """The resolution study into the record log :func:`~.records.resolution_file` under
+    ``out``; returns that log. Records already in it are not computed again (a run can be
+    resumed); records of other settings (another L/lambda_r, grid or tolerance) are refused
+    before any work. At the end the whole log is written as a dataset beside it
+    (:func:`~.dataset.write_records_dataset`, with ``provenance``). ``warm``:
+    :func:`warm_up` first (False where the caller has)."""
+    path = resolution_file(out, opts.gamma)
+    _start(path)
     ppl_max = max(opts.ppl)
     grids = {p: SurfaceSpec.from_sweep(gamma=opts.gamma, l_over_lambda_r=opts.l_over_lambda_r,
                                        points_per_lambda_s=p) for p in opts.ppl}
     _check_fits(grids[ppl_max], "ladder" if opts.with_sigma else "threshold")
-    path = resolution_file(out, opts.gamma)
     records = load_records(path)
     for r in records:
         expected = dict(gamma=opts.gamma, l_over_lambda_r=opts.l_over_lambda_r)
@@ -254,6 +275,7 @@ def measure_resolution(out: str | os.PathLike, opts: ResolutionOptions, *,
             _sigma_targets(surf, base, missing, opts, emit)
         else:
             _fixed_loads(surf, base, missing, opts.contact_tol, emit)
+    write_records_dataset(path, study="resolution", provenance=provenance)
     return path
 
 
@@ -331,15 +353,18 @@ def _bisection_tolerances(surf: Surface, seed: int, opts: ToleranceOptions, done
 
 
 def measure_tolerances(out: str | os.PathLike, opts: ToleranceOptions, *,
-                       on_record: OnRecord | None = None, warm: bool = True) -> Path:
-    """The tolerance study into :func:`~.records.tolerance_file` under ``out``; returns that
-    file. Measurements already in it are not made again (a run can be resumed, or extended
-    by seeds and tolerances); records of other settings (resolution, the fixed tolerance of
-    a study) are refused before any work. ``warm``: :func:`warm_up` first (False where the
-    caller has)."""
+                       on_record: OnRecord | None = None, warm: bool = True,
+                       provenance: Provenance | None = None) -> Path:
+    """The tolerance study into the record log :func:`~.records.tolerance_file` under
+    ``out``; returns that log. Measurements already in it are not made again (a run can be
+    resumed, or extended by seeds and tolerances); records of other settings (resolution,
+    the fixed tolerance of a study) are refused before any work. At the end the whole log
+    is written as a dataset beside it (:func:`~.dataset.write_records_dataset`, with
+    ``provenance``). ``warm``: :func:`warm_up` first (False where the caller has)."""
+    path = tolerance_file(out)
+    _start(path)
     grid = SurfaceSpec.from_sweep(points_per_lambda_s=opts.ppl)
     _check_fits(grid, "ladder")
-    path = tolerance_file(out)
     records = load_records(path)
     for r in records:
         expected: dict = dict(ppl=opts.ppl)
@@ -365,4 +390,5 @@ def measure_tolerances(out: str | os.PathLike, opts: ToleranceOptions, *,
         _contact_tolerances(surf, seed, opts, done, emit)
         _threshold_contact_tolerances(surf, seed, opts, done, emit)
         _bisection_tolerances(surf, seed, opts, done, emit)
+    write_records_dataset(path, study="tolerance", provenance=provenance)
     return path

@@ -1,8 +1,11 @@
 """The study's files: their names, and the JSON-lines records appended and read one per
 line.
 
-Records are appended as they are measured (an interrupted run keeps what it finished, and a
-rerun into the same file computes only what is missing).
+Each study writes two files of one stem under ``--out``: the record log (``.jsonl``), to
+which records are appended as they are measured (an interrupted run keeps what it finished,
+and a rerun into the same file computes only what is missing), and, when a run completes,
+the whole log as one netCDF dataset (``.nc``, :mod:`.dataset`): the job's output, which the
+reports read.
 """
 
 from __future__ import annotations
@@ -13,10 +16,16 @@ from pathlib import Path
 
 from roughflow.errors import InputError
 
-#: the tolerance study's records
-TOLERANCE_FILE = "convergence_tol.jsonl"
-#: every resolution file (one per gamma), for the anisotropic report
-RESOLUTION_GLOB = "convergence_resolution*.jsonl"
+#: the record log (JSON lines, appended and resumed from) and the dataset written from it
+#: at the end of a run (netCDF, what the reports read): one stem, these suffixes
+LOG_SUFFIX = ".jsonl"
+DATASET_SUFFIX = ".nc"
+#: the resolution study's stem (gamma 1; other gammas append ``_g<gamma>``)
+RESOLUTION_STEM = "convergence_resolution"
+#: the tolerance study's stem
+TOLERANCE_STEM = "convergence_tol"
+#: every resolution dataset (one per gamma), for the anisotropic report
+RESOLUTION_GLOB = f"{RESOLUTION_STEM}*{DATASET_SUFFIX}"
 #: the isotropic report: STEM.md, STEM.csv and its two plots (resolution, tolerances)
 REPORT_STEM = "convergence"
 REPORT_PLOTS = ("convergence_resolution.png", "convergence_tolerances.png")
@@ -30,16 +39,25 @@ def report_files() -> list[str]:
             *(f"{ANISOTROPIC_STEM}{suffix}" for suffix in (".md", ".csv", ".png"))]
 
 
-def resolution_file(out: str | os.PathLike, gamma: float) -> Path:
-    """JSON-lines file of the resolution study for one gamma (the isotropic name is kept)."""
-    name = ("convergence_resolution.jsonl" if gamma == 1.0
-            else f"convergence_resolution_g{gamma:g}.jsonl")
-    return Path(out) / name
+def _suffix(dataset: bool) -> str:
+    return DATASET_SUFFIX if dataset else LOG_SUFFIX
 
 
-def tolerance_file(out: str | os.PathLike) -> Path:
-    """JSON-lines file of the tolerance study."""
-    return Path(out) / TOLERANCE_FILE
+def resolution_file(out: str | os.PathLike, gamma: float, *, dataset: bool = False) -> Path:
+    """The resolution study's record log for one gamma (the isotropic name is kept), or with
+    ``dataset`` the netCDF dataset written from it."""
+    stem = RESOLUTION_STEM if gamma == 1.0 else f"{RESOLUTION_STEM}_g{gamma:g}"
+    return Path(out) / (stem + _suffix(dataset))
+
+
+def tolerance_file(out: str | os.PathLike, *, dataset: bool = False) -> Path:
+    """The tolerance study's record log, or with ``dataset`` the dataset written from it."""
+    return Path(out) / (TOLERANCE_STEM + _suffix(dataset))
+
+
+def dataset_file(log: Path) -> Path:
+    """The dataset written from the record log ``log``: the same name, ``.nc``."""
+    return log.with_suffix(DATASET_SUFFIX)
 
 
 def append_record(path: Path, rec: dict) -> None:

@@ -20,13 +20,13 @@ from roughflow import accuracy
 from roughflow.errors import InputError
 
 from .anisotropic import anisotropic_draft
+from .dataset import read_records
 from .load_path import A_STAR, ln_sigma_at_corrected_area
 from .options import FIT_MIN_PPL, TARGETS
 from .records import (
     REPORT_PLOTS,
     REPORT_STEM,
     RESOLUTION_GLOB,
-    load_records,
     report_files,
     resolution_file,
     tolerance_file,
@@ -432,15 +432,26 @@ def write_report(out: str | os.PathLike, *, fit_min_ppl: int = FIT_MIN_PPL) -> R
 
 
 def report_draft(out: str | os.PathLike, *, fit_min_ppl: int = FIT_MIN_PPL) -> ReportDraft:
-    """The isotropic report from the resolution (gamma 1) and tolerance records under
-    ``out``; ``fit_min_ppl``: the smallest resolution that fits the perimeter constant.
-    Draws without pyplot (no backend is selected)."""
+    """The isotropic report from the datasets of the resolution (gamma 1) and, where there is
+    one, the tolerance records under ``out`` (:func:`records_draft`)."""
+    outdir = Path(out)
+    path = resolution_file(outdir, 1.0, dataset=True)
+    tol_path = tolerance_file(outdir, dataset=True)
+    return records_draft(read_records(path),
+                         read_records(tol_path) if tol_path.exists() else [],
+                         fit_min_ppl=fit_min_ppl, source=path)
+
+
+def records_draft(resolution: list[dict], tolerance: list[dict], *,
+                  fit_min_ppl: int = FIT_MIN_PPL, source: str | os.PathLike = "the records"
+                  ) -> ReportDraft:
+    """The isotropic report from the resolution (gamma 1) and tolerance records (read from
+    ``source``, named in messages); ``fit_min_ppl``: the smallest resolution that fits the
+    perimeter constant. Draws without pyplot (no backend is selected)."""
     from matplotlib.figure import Figure
 
-    outdir = Path(out)
-    path = resolution_file(outdir, 1.0)
-    d = _Resolution.of(load_records(path), fit_min_ppl, source=path)
-    tol = load_records(tolerance_file(outdir))
+    d = _Resolution.of(resolution, fit_min_ppl, source=Path(source))
+    tol = tolerance
     md: list[str] = [TITLE, d.summary()]
     csv_rows: list[str] = ["quantity,variant,ppl,seed,value,reference,error,time_s"]
     _fixed_load_section(d, md)
@@ -467,16 +478,18 @@ def report_draft(out: str | os.PathLike, *, fit_min_ppl: int = FIT_MIN_PPL) -> R
 
 def write_reports(out: str | os.PathLike, *, fit_min_ppl: int = FIT_MIN_PPL
                   ) -> list[ReportFiles]:
-    """Every report the records under ``out`` make, published together: the isotropic one
-    where there are gamma = 1 resolution records, the anisotropic one where a resolution
-    file has face counts. The files of a report not made this time are removed: they would
-    describe other records. :class:`InputError` where there is no resolution record."""
+    """Every report the record datasets under ``out`` make, published together: the
+    isotropic one where there are gamma = 1 resolution records, the anisotropic one where a
+    resolution dataset has face counts. The files of a report not made this time are
+    removed: they would describe other records. :class:`InputError` where there is no
+    resolution dataset."""
     outdir = Path(out)
     if not any(outdir.glob(RESOLUTION_GLOB)):
-        raise InputError(f"{str(outdir)!r} holds no resolution records ({RESOLUTION_GLOB}): "
-                         "run `roughflow accuracy resolution` first")
+        raise InputError(f"{str(outdir)!r} holds no resolution records ({RESOLUTION_GLOB}, "
+                         "written when a run completes): run `roughflow accuracy resolution` "
+                         "first (an interrupted run resumes)")
     drafts = []
-    if resolution_file(outdir, 1.0).exists():  # the isotropic tables need it
+    if resolution_file(outdir, 1.0, dataset=True).exists():  # the isotropic tables need it
         drafts.append(report_draft(outdir, fit_min_ppl=fit_min_ppl))
     aniso = anisotropic_draft(outdir, fit_min_ppl=fit_min_ppl)
     if aniso is not None:
