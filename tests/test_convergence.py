@@ -21,7 +21,12 @@ from roughflow.cli import main
 from roughflow.convergence import measure
 from roughflow.convergence.anisotropic import write_anisotropic_report
 from roughflow.convergence.dataset import write_records_dataset
-from roughflow.convergence.options import TARGETS, ResolutionOptions, ToleranceOptions
+from roughflow.convergence.options import (
+    TARGETS,
+    ResolutionOptions,
+    ToleranceOptions,
+    study_specs,
+)
 from roughflow.convergence.records import load_records, resolution_file, tolerance_file
 from roughflow.convergence.report import write_report
 from roughflow.defaults import A_C_STAR_PAPER
@@ -408,13 +413,41 @@ def test_sigma_by_default_for_gamma_one_only():
     assert ResolutionOptions(**aniso, sigma=True).with_sigma
 
 
-def test_resolutions_whose_y_grid_is_no_sampling_are_refused():
+def test_resolutions_whose_sweep_grids_do_not_nest_get_a_finest_grid_that_does():
     # gamma 2, L / lambda_r 2: x has 48 and 384 points at 2 and 16 points per lambda_s (8 x);
-    # y needs 91 and 725, rounded up to the FFT-friendly 96 and 750, not 8 x 96 = 768
+    # y needs 91 and 725, which the sweep rounds up to the FFT-friendly 96 and 750, not
+    # 8 x 96 = 768: the study's finest grid is 768 instead, and every coarser one is whole
     spec = SurfaceSpec.from_sweep(gamma=2.0, l_over_lambda_r=2.0, points_per_lambda_s=16)
     assert (spec.nx, spec.ny) == (384, 750)
-    with pytest.raises(InputError, match="FFT-friendly rounding"):
-        ResolutionOptions(gamma=2.0, l_over_lambda_r=2.0, ppl=(2, 16))
+    specs = study_specs((2, 4, 8, 16), gamma=2.0, l_over_lambda_r=2.0, seed=3)
+    assert {p: (s.nx, s.ny) for p, s in specs.items()} == {
+        2: (48, 96), 4: (96, 192), 8: (192, 384), 16: (384, 768)}
+    assert all((s.lx, s.ly, s.lambda_s, s.seed) == (spec.lx, spec.ly, spec.lambda_s, 3)
+               for s in specs.values())
+    assert ResolutionOptions(gamma=2.0, l_over_lambda_r=2.0, ppl=(2, 16)).ppl == (2, 16)
+    # ratios 3 and 2 (4, 6, 12 points): a multiple of 6 along both axes
+    specs = study_specs((4, 6, 12), gamma=2.0, l_over_lambda_r=2.0)
+    fine = specs[12]
+    assert fine.nx % 6 == 0 and fine.ny % 6 == 0
+    assert (specs[4].nx, specs[6].ny) == (fine.nx // 3, fine.ny // 2)
+
+
+@pytest.mark.parametrize(("gamma", "l_over_lambda_r"), [(1.0, None), (2.0, None), (4.0, 8.0)])
+def test_resolutions_whose_sweep_grids_nest_are_the_sweeps_own(gamma, l_over_lambda_r):
+    # the study measures the grids the sweep runs at, wherever they nest
+    specs = study_specs((2, 4, 8, 16), gamma=gamma, l_over_lambda_r=l_over_lambda_r)
+    for p, s in specs.items():
+        assert s == SurfaceSpec.from_sweep(gamma=gamma, l_over_lambda_r=l_over_lambda_r,
+                                           points_per_lambda_s=p)
+
+
+def test_grid_sizes_a_multiple_of_a_given_number():
+    # y needs 725 points: 8 x fft_friendly(ceil(725 / 8) = 91) = 8 x 96; x needs 384 = 8 x 48
+    spec = SurfaceSpec.from_sweep(gamma=2.0, l_over_lambda_r=2.0, points_per_lambda_s=16,
+                                  multiple_of=8)
+    assert (spec.nx, spec.ny) == (384, 768)
+    with pytest.raises(InputError, match="multiple_of"):
+        SurfaceSpec.from_sweep(multiple_of=0)
 
 
 # ---------------------------------------------------------------------------------------
@@ -426,7 +459,7 @@ def test_sampled_surface_is_the_finest_at_the_coarse_points():
     # with dx, dy twice the fine spacings, i.e. at the fine point (2 i, 2 j)
     fine = generate(SurfaceSpec.from_sweep(gamma=2.0, l_over_lambda_r=2.0,
                                            points_per_lambda_s=4, seed=1))
-    coarse = measure.sampled_surface(fine, 2, 4, seed=1, gamma=2.0, l_over_lambda_r=2.0)
+    coarse = measure.sampled_surface(fine, 2, 4)
     assert coarse.shape == (48, 96) and (coarse.lx, coarse.ly) == (fine.lx, fine.ly)
     i, j = np.meshgrid(np.arange(48), np.arange(96), indexing="ij")
     np.testing.assert_array_equal(coarse.heights, fine.heights[2 * i, 2 * j])

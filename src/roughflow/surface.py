@@ -135,6 +135,7 @@ class SurfaceSpec:
         seed: int = 0,
         rolloff: str = "smooth",
         area: float = 1.0,
+        multiple_of: int = 1,
     ) -> SurfaceSpec:
         """Spec from the sweep's dimensionless numbers.
 
@@ -143,7 +144,9 @@ class SurfaceSpec:
         ``4 max(sqrt(gamma), 1/sqrt(gamma))``; ``lambda_s = eps_f lambda_r``.
         The grid has at least ``points_per_lambda_s`` points per shortest wavelength
         along each axis (lambda_s sqrt(gamma) along x, lambda_s / sqrt(gamma) along y),
-        rounded up to an FFT-friendly size (2^a 3^b 5^c, even).
+        rounded up to an FFT-friendly size (2^a 3^b 5^c, even), or with ``multiple_of`` = k
+        to k times one (so that taking every k-th point, or every j-th for j dividing k,
+        gives whole grids: the accuracy study's sampled-down resolutions).
         """
         gamma = require_positive("gamma", gamma)
         area = require_positive("area", area)
@@ -162,8 +165,9 @@ class SurfaceSpec:
         lx, ly = length * math.sqrt(aspect), length / math.sqrt(aspect)
         lambda_r = length / l_over_lambda_r
         lambda_s = eps_f * lambda_r
-        nx = fft_friendly(math.ceil(ppl * lx / (lambda_s * sg) - 1e-9))
-        ny = fft_friendly(math.ceil(ppl * ly / (lambda_s / sg) - 1e-9))
+        k = require_int("multiple_of", multiple_of, minimum=1)
+        nx = k * fft_friendly(math.ceil(math.ceil(ppl * lx / (lambda_s * sg) - 1e-9) / k))
+        ny = k * fft_friendly(math.ceil(math.ceil(ppl * ly / (lambda_s / sg) - 1e-9) / k))
         return cls(
             nx=nx, ny=ny, lx=lx, ly=ly, hurst=hurst, gamma=gamma,
             lambda_r=lambda_r, lambda_s=lambda_s, seed=seed, rolloff=rolloff,

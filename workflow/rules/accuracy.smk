@@ -15,6 +15,7 @@ from roughflow.convergence.options import (  # noqa: E402
     ResolutionOptions,
     ToleranceOptions,
     check_resolutions,
+    study_specs,
 )
 from roughflow.convergence.records import (  # noqa: E402
     report_files,
@@ -39,7 +40,7 @@ _ACC_PPL = " ".join(str(p) for p in _ACC_PPL_LIST)
 # the default --tol-ppl of `roughflow accuracy tol`), sized by the library's estimate of a
 # ladder job
 _ACC_TASK = "ladder"
-_ACC_FINEST = SurfaceSpec.from_sweep(points_per_lambda_s=max(_ACC_PPL_LIST))
+_ACC_FINEST = study_specs(_ACC_PPL_LIST)[max(_ACC_PPL_LIST)]
 _ACC_TOL_GRID = SurfaceSpec.from_sweep(points_per_lambda_s=ToleranceOptions().ppl)
 _ACC_OUT = f"{RESULTS}/benchmarks"
 _ACC_RESOLUTION = str(resolution_file(_ACC_OUT, 1.0, dataset=True))

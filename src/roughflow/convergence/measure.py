@@ -12,7 +12,7 @@ from __future__ import annotations
 import os
 import time
 from collections.abc import Callable
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 from pathlib import Path
 
 import numpy as np
@@ -26,7 +26,7 @@ from roughflow.surface import Surface, SurfaceSpec, generate
 
 from .dataset import write_records_dataset
 from .load_path import shifted_sigma
-from .options import TARGETS, ResolutionOptions, ToleranceOptions
+from .options import TARGETS, ResolutionOptions, ToleranceOptions, study_specs
 from .records import (
     append_record,
     dataset_file,
@@ -61,19 +61,15 @@ def _faces(contact_mask: np.ndarray) -> dict:
     return {"tx": fx / n, "ty": fy / n}
 
 
-def sampled_surface(finest: Surface, ppl: int, ppl_max: int, *, seed: int, gamma: float = 1.0,
-                    l_over_lambda_r: float | None = None) -> Surface:
-    """``finest`` (the seed's surface generated at ``ppl_max``) sampled down to ``ppl``
-    points per lambda_s: the same physical surface on the coarser grid (for gamma != 1 the
-    grid has ``ppl`` points per shortest wavelength along each axis, so both axes are
-    sampled by the same factor). The resolutions are those of
-    :func:`~.options.check_resolutions`."""
+def sampled_surface(finest: Surface, ppl: int, ppl_max: int) -> Surface:
+    """``finest`` (the seed's surface generated at ``ppl_max``, :func:`~.options.study_specs`)
+    sampled down to ``ppl`` points per lambda_s: the same physical surface on the coarser
+    grid (for gamma != 1 the grid has ``ppl`` points per shortest wavelength along each axis,
+    so both axes are sampled by the same factor)."""
     k = ppl_max // ppl
-    coarse = SurfaceSpec.from_sweep(gamma=gamma, l_over_lambda_r=l_over_lambda_r,
-                                    points_per_lambda_s=ppl, seed=seed)
-    if k * ppl != ppl_max or (coarse.nx * k, coarse.ny * k) != finest.shape:
-        raise InputError(f"grid {finest.shape} at ppl {ppl_max} is not {k} x the grid "
-                         f"({coarse.nx}, {coarse.ny}) at ppl {ppl}")
+    if k * ppl != ppl_max or finest.shape[0] % k or finest.shape[1] % k:
+        raise InputError(f"grid {finest.shape} at ppl {ppl_max} cannot be sampled down to "
+                         f"ppl {ppl}")
     return Surface.from_array(np.ascontiguousarray(finest.heights[::k, ::k]),
                               lx=finest.lx, ly=finest.ly)
 
@@ -226,8 +222,7 @@ def measure_resolution(out: str | os.PathLike, opts: ResolutionOptions, *,
     path = resolution_file(out, opts.gamma)
     _start(path)
     ppl_max = max(opts.ppl)
-    grids = {p: SurfaceSpec.from_sweep(gamma=opts.gamma, l_over_lambda_r=opts.l_over_lambda_r,
-                                       points_per_lambda_s=p) for p in opts.ppl}
+    grids = study_specs(opts.ppl, gamma=opts.gamma, l_over_lambda_r=opts.l_over_lambda_r)
     _check_fits(grids[ppl_max], "ladder" if opts.with_sigma else "threshold")
     records = load_records(path)
     for r in records:
@@ -257,11 +252,8 @@ def measure_resolution(out: str | os.PathLike, opts: ResolutionOptions, *,
     for seed, ppl, has_threshold, missing in todo:
         if seed not in finest:
             finest.clear()
-            finest[seed] = generate(SurfaceSpec.from_sweep(
-                gamma=opts.gamma, l_over_lambda_r=opts.l_over_lambda_r,
-                points_per_lambda_s=ppl_max, seed=seed))
-        surf = sampled_surface(finest[seed], ppl, ppl_max, seed=seed, gamma=opts.gamma,
-                               l_over_lambda_r=opts.l_over_lambda_r)
+            finest[seed] = generate(replace(grids[ppl_max], seed=seed))
+        surf = sampled_surface(finest[seed], ppl, ppl_max)
         _plan(surf.shape)
         base = dict(seed=seed, ppl=ppl, n=surf.shape[0], ny=surf.shape[1],
                     gamma=opts.gamma, l_over_lambda_r=opts.l_over_lambda_r,

@@ -1,14 +1,16 @@
 """The accuracy study's settings: frozen option sets, checked when they are made.
 
 Only the standard library and :mod:`roughflow.errors` are imported here (the command line
-reads its defaults from these classes to build its parser); the grid check of
-:class:`ResolutionOptions` imports :mod:`roughflow.surface` when it runs.
+reads its defaults from these classes to build its parser); :func:`study_specs` imports
+:mod:`roughflow.surface` when it runs.
 """
 
 from __future__ import annotations
 
+import math
 from collections.abc import Iterable
 from dataclasses import dataclass
+from typing import TYPE_CHECKING
 
 from roughflow.errors import (
     InputError,
@@ -17,6 +19,9 @@ from roughflow.errors import (
     require_positive,
     require_seeds,
 )
+
+if TYPE_CHECKING:
+    from roughflow.surface import SurfaceSpec
 
 #: a_c of the sigma measurements (resolution) and of the fixed-load contact solves (tolerances)
 TARGETS = (0.2, 0.35)
@@ -37,13 +42,12 @@ def _area_fractions(name: str, values: Iterable[float]) -> tuple[float, ...]:
     return out
 
 
-def check_resolutions(ppl: Iterable[int], *, gamma: float = 1.0,
-                      l_over_lambda_r: float | None = None) -> tuple[int, ...]:
+def check_resolutions(ppl: Iterable[int]) -> tuple[int, ...]:
     """``ppl`` (points per lambda_s) as a tuple of distinct integers >= 2 whose grids are the
-    finest one sampled down: each must divide the largest, and the FFT-friendly rounding of
-    the grid sizes must keep that ratio; :class:`InputError` naming the value otherwise.
-    (One resolution may be measured, and others added by a later run into the same file;
-    the report needs two, and the workflow's schema asks for two at once.)"""
+    finest one sampled down (:func:`study_specs`): each must divide the largest;
+    :class:`InputError` naming the value otherwise. (One resolution may be measured, and
+    others added by a later run into the same file; the report needs two, and the
+    workflow's schema asks for two at once.)"""
     out = require_distinct("ppl", tuple(require_int("ppl entry", p, minimum=2) for p in ppl))
     finest = max(out)
     odd = [p for p in out if finest % p]
@@ -51,19 +55,38 @@ def check_resolutions(ppl: Iterable[int], *, gamma: float = 1.0,
         raise InputError(f"ppl {', '.join(map(str, odd))} "
                          f"{'does' if len(odd) == 1 else 'do'} not divide the largest, "
                          f"{finest}: the finest grid is sampled down to the coarser ones")
+    return out
+
+
+def study_specs(ppl: Iterable[int], *, gamma: float = 1.0,
+                l_over_lambda_r: float | None = None, seed: int = 0) -> dict[int, SurfaceSpec]:
+    """The surface of each resolution of :func:`check_resolutions`' ``ppl``: the grid at p
+    points per lambda_s is the finest one taken at every (max(ppl) / p)-th point. These are
+    the sweep's own grids (``SurfaceSpec.from_sweep``) where those nest; where their
+    FFT-friendly rounding does not (gamma 2, L/lambda_r 2: 96 and 750 points along y at 2
+    and 16 points per lambda_s), the finest grid is rounded up to a multiple of every ratio
+    instead (768), so that each coarser grid is whole and still has at least p points per
+    lambda_s."""
+    from dataclasses import replace
+
     from roughflow.surface import SurfaceSpec
 
-    fine = SurfaceSpec.from_sweep(gamma=gamma, l_over_lambda_r=l_over_lambda_r,
-                                  points_per_lambda_s=finest)
-    for p in out:
-        k = finest // p
-        coarse = SurfaceSpec.from_sweep(gamma=gamma, l_over_lambda_r=l_over_lambda_r,
-                                        points_per_lambda_s=p)
-        if (coarse.nx * k, coarse.ny * k) != (fine.nx, fine.ny):
-            raise InputError(f"ppl {p}: the grid ({coarse.nx}, {coarse.ny}) "
-                             f"is not 1/{k} of the grid ({fine.nx}, {fine.ny}) at "
-                             f"{finest} (FFT-friendly rounding broke the ratio)")
-    return out
+    out = check_resolutions(ppl)
+    finest = max(out)
+
+    def sweep(p: int, multiple_of: int = 1) -> SurfaceSpec:
+        return SurfaceSpec.from_sweep(gamma=gamma, l_over_lambda_r=l_over_lambda_r,
+                                      points_per_lambda_s=p, seed=seed,
+                                      multiple_of=multiple_of)
+
+    specs = {p: sweep(p) for p in out}
+    fine = specs[finest]
+    if all((s.nx * (finest // p), s.ny * (finest // p)) == (fine.nx, fine.ny)
+           for p, s in specs.items()):
+        return specs
+    fine = sweep(finest, math.lcm(*(finest // p for p in out)))
+    return {p: replace(fine, nx=fine.nx // (finest // p), ny=fine.ny // (finest // p))
+            for p in out}
 
 
 @dataclass(frozen=True)
@@ -94,8 +117,7 @@ class ResolutionOptions:
                            _area_fractions("fixed_targets", self.fixed_targets))
         for name in ("bisect_tol", "threshold_contact_tol", "contact_tol", "area_tol"):
             require_positive(name, getattr(self, name))
-        object.__setattr__(self, "ppl", check_resolutions(
-            self.ppl, gamma=self.gamma, l_over_lambda_r=self.l_over_lambda_r))
+        object.__setattr__(self, "ppl", check_resolutions(self.ppl))
 
     @property
     def with_sigma(self) -> bool:
