@@ -199,6 +199,41 @@ def test_bearing_mask_and_gap_agree_at_the_threshold():
     assert full == pytest.approx(h.min() - h.mean()) and full <= almost
 
 
+def _quantized(levels: int = 8) -> Surface:
+    """A surface rounded to ``levels`` heights (a quantized scan): tie groups of thousands of
+    cells."""
+    s = generate(SurfaceSpec.from_sweep(hurst=0.8, eps_f=1 / 8, points_per_lambda_s=4,
+                                        l_over_lambda_r=4, seed=1))
+    h = s.heights
+    return Surface.from_array(np.round((h - h.min()) / np.ptp(h) * (levels - 1)))
+
+
+def test_bearing_plane_through_a_tie_group_takes_it_whole(caplog):
+    # The plane at the k-th highest height touches every cell of that height: picking k of
+    # them (argpartition) chose 3086 of 6074 tied cells, biased in space (mean x 90 of 128),
+    # and left the others open with gap 0, so the fluid percolated where the flow saw none.
+    from roughflow import flow, percolation
+
+    s = _quantized()
+    h = s.heights
+    tied = h == 4.0
+    with caplog.at_level("WARNING", logger="roughflow.contact.bearing"):
+        r = solve(s, model="bearing", area_fraction=0.45)
+    # the whole tie group and everything above it, nothing below
+    assert np.array_equal(r.contact, h >= 4.0) and tied.sum() == 6074
+    assert r.area_fraction == np.count_nonzero(h >= 4.0) / h.size > 0.45
+    assert np.array_equal(r.gap == 0, r.contact) and r.gap[~r.contact].min() == 0.5
+    for axis in (0, 1):
+        assert percolation.percolates(~r.contact, axis) == (flow.conductance(r.gap, axis) > 0)
+    assert "6074 cells share the height 4.0" in caplog.text  # the area is not the target
+    # a target met by whole levels has no tie to cut: no warning, that area exactly
+    caplog.clear()
+    a = np.count_nonzero(h >= 5.0) / h.size
+    with caplog.at_level("WARNING", logger="roughflow.contact.bearing"):
+        assert solve(s, model="bearing", area_fraction=a).area_fraction == a
+    assert not caplog.text
+
+
 def test_result_is_frozen(rough):
     r = solve(rough, model="bearing", area_fraction=0.5)
     assert isinstance(r, ContactResult)

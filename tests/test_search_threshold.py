@@ -3,6 +3,7 @@
 
 from __future__ import annotations
 
+import dataclasses
 import os
 
 import numpy as np
@@ -275,6 +276,36 @@ def test_bearing_ties_give_an_honest_bracket():
     level_lo = np.sort(h, axis=None)[int(round((1 - t.a_hi) * h.size))]
     assert not percolates(h < level_lo, 0)
     assert percolates(h <= level_lo, 0)
+
+
+def test_bearing_ties_refused_alike_by_the_sweep_and_the_bisection():
+    # The area bisection (exact_bearing=False) returned bracketed=True with a_c* 0.44 / 0.59
+    # on 8 height levels, an artefact of contact.solve's tie-breaking, where the exact sweep
+    # refuses; both must refuse with the same message and bracket. a_c_star_corrected is
+    # a_c_star for the bearing model on both paths (it was NaN on the bisection's).
+    s = generate(SurfaceSpec.from_sweep(hurst=0.8, eps_f=1 / 8, points_per_lambda_s=4,
+                                        l_over_lambda_r=4, seed=1))
+    h = s.heights
+    q = Surface.from_array(np.round((h - h.min()) / np.ptp(h) * 7))
+    exact = threshold(q, model="bearing", options=SearchOptions(on_unbracketed="nan"))
+    for strategy in ("predict", "bisect"):
+        opts = SearchOptions(exact_bearing=False, strategy=strategy)
+        with pytest.raises(ThresholdNotBracketed, match="6074 cells share the critical height "
+                           "4.0: the threshold along x is only known to lie in "
+                           r"\[0.261658, 0.632385\]"):
+            threshold(q, model="bearing", options=opts)
+        res = threshold(q, model="bearing",
+                        options=dataclasses.replace(opts, on_unbracketed="nan"))
+        for ax in (0, 1):
+            t, e = res[ax], exact[ax]
+            assert not t.bracketed and np.isnan(t.a_c_star)
+            assert (t.a_lo, t.a_hi) == (e.a_lo, e.a_hi)
+            assert t.message.startswith(e.message)
+    # without ties both paths give a number, and the corrected one equals it
+    s = _surface(seed=4)
+    for opts in (SearchOptions(), SearchOptions(exact_bearing=False)):
+        for t in threshold(s, model="bearing", options=opts).values():
+            assert t.bracketed and t.a_c_star_corrected == t.a_c_star
 
 
 # ---- elastic -------------------------------------------------------------------------

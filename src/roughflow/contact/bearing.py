@@ -2,23 +2,29 @@
 
 from __future__ import annotations
 
+import logging
+
 import numpy as np
 
 from ._result import ContactResult
 
+log = logging.getLogger(__name__)
+
 
 def solve_bearing(heights: np.ndarray, area_fraction: float) -> ContactResult:
     """Flat plane at height d such that the top ``area_fraction`` of the grid points are in
-    contact (h >= d); gap = max(d - h, 0). a_c = round(a N)/N exactly.
+    contact (h >= d); gap = max(d - h, 0). a_c = round(a N)/N exactly on heights without ties.
 
     d lies halfway between the lowest contact height and the highest non-contact one, so
-    the contact points are exactly the k highest (ties broken by order), their gap is 0 and
-    every other point's gap is positive (unless it ties with a contact height): the mask
-    and the gap agree on what is open, for percolation and flow alike (a plane on the
-    highest non-contact height would give that point gap 0 without contact; at a threshold
-    state it is the critical point, and the flow would see no path where the fluid
-    percolates). At full contact d is the lowest height; without contact the plane touches
-    the highest point.
+    the contact points are exactly the k highest, their gap is 0 and every other point's
+    gap is positive: the mask and the gap agree on what is open, for percolation and flow
+    alike (a plane on the highest non-contact height would give that point gap 0 without
+    contact; at a threshold state it is the critical point, and the flow would see no path
+    where the fluid percolates). Where the k-th highest height is shared by cells beyond
+    the k-th (a quantized scan), no plane separates them: the whole tie group is in contact
+    and a_c is the area it then has, above round(a N)/N (logged as a warning), never a
+    choice among equal heights. At full contact d is the lowest height; without contact
+    the plane touches the highest point.
     """
     h = heights
     n = h.size
@@ -33,8 +39,21 @@ def solve_bearing(heights: np.ndarray, area_fraction: float) -> ContactResult:
     else:
         # positions k - 1 and k sorted: the lowest contact and highest non-contact heights
         order = np.argpartition(-flat, (k - 1, k))
-        contact[order[:k]] = True
-        d = 0.5 * (float(flat[order[k - 1]]) + float(flat[order[k]]))
+        low, high = float(flat[order[k - 1]]), float(flat[order[k]])
+        if high < low:
+            contact[order[:k]] = True
+            d = 0.5 * (low + high)
+        else:  # the plane cuts a tie group: all of it touches
+            contact = flat >= low
+            below = flat[~contact]
+            if below.size:
+                d = 0.5 * (low + float(below.max()))
+            else:
+                d = low
+            log.warning("bearing contact at area_fraction=%.6g: %d cells share the height "
+                        "%r, which the plane cuts; all are in contact, a_c = %.6g",
+                        area_fraction, int(np.count_nonzero(flat == low)), low,
+                        np.count_nonzero(contact) / n)
     gap = np.maximum(d - h, 0.0)
     mask = contact.reshape(h.shape)
     gap[mask] = 0.0

@@ -460,7 +460,8 @@ def _assemble(samples: list[_Sample], history: list[_Sample], axes, unbracketed:
         out[ax] = Threshold(
             axis=ax, a_c_star=a, a_lo=lo.area, a_hi=hi.area,
             p_lo=pressure(lo), p_hi=pressure(hi), n_solves=n, model=model, tol=tol,
-            solves=records, a_c_star_corrected=corrected if model == "elastic" else nan)
+            solves=records, a_c_star_corrected=(corrected if model == "elastic" else
+                                                a if model == "bearing" else nan))
     return out
 
 
@@ -468,7 +469,12 @@ def _refine(evaluate: Callable[[float, ContactResult | None, bool], _Sample], ax
             tol: float, first: float, load_range: tuple[float, float], law: ContactLaw,
             options: SearchOptions, model: str, loads_are_pressures: bool,
             compliance: float | None = None, scouts: bool = False,
-            start_out: tuple[np.ndarray, np.ndarray, np.ndarray] | None = None):
+            start_out: tuple[np.ndarray, np.ndarray, np.ndarray] | None = None,
+            tie: Callable[[_Sample, _Sample], tuple[int, float] | None] | None = None):
+    """Refine brackets until each is at most ``tol`` wide (the loop: module docstring).
+    ``tie(lo, hi)``: (count, height) where nothing but one group of cells of equal height
+    lies between two states, so no load can split their bracket (the bearing model); such
+    an axis is reported as unbracketed, as the exact sweep reports it."""
     samples: list[_Sample] = []  # the current states (a re-solved scout replaces its own)
     history: list[_Sample] = []  # every solve in order
     misses = dict.fromkeys(axes, 0)  # consecutive solves that missed the intended side
@@ -496,6 +502,13 @@ def _refine(evaluate: Callable[[float, ContactResult | None, bool], _Sample], ax
                 samples[i] = evaluate(samples[i].load, own, False)
                 history.append(samples[i])
         todo = _pending(samples, axes, tol, load_range, options.strategy, unbracketed)
+        if tie is not None:
+            for w in todo:
+                if w.lo is not None and w.hi is not None \
+                        and (group := tie(w.lo, w.hi)) is not None:
+                    unbracketed[w.axis] = (w.lo, w.hi, _tie_message(
+                        *group, w.axis, w.lo.area, w.hi.area, tol))
+            todo = [w for w in todo if w.axis not in unbracketed]
         if not todo:
             break
         if len(history) >= options.max_solves:
@@ -536,6 +549,28 @@ def _refine(evaluate: Callable[[float, ContactResult | None, bool], _Sample], ax
 # public entry point
 # -------------------------------------------------------------------------------------------
 
+def _tie_message(tied: int, height: float, ax: int, a_lo: float, a_hi: float,
+                 tol: float) -> str:
+    """Why a bearing threshold has no number: a tie group spans its bracket."""
+    return (f"{tied} cells share the critical height {height!r}: the threshold along "
+            f"{AXIS_NAMES[ax]} is only known to lie in [{a_lo:.6g}, {a_hi:.6g}], wider than "
+            f"tol={tol:g}")
+
+
+def _bearing_tie(heights: np.ndarray) -> Callable[[_Sample, _Sample], tuple[int, float] | None]:
+    """The ``tie`` of :func:`_refine` for bearing states of ``heights``: the cells in contact
+    at ``hi`` but not at ``lo``, where they are two or more of one height."""
+    flat = heights.ravel()
+
+    def tie(lo: _Sample, hi: _Sample) -> tuple[int, float] | None:
+        between = flat[(hi.state.contact & ~lo.state.contact).ravel()]
+        if between.size > 1 and between.min() == between.max():
+            return between.size, float(between[0])
+        return None
+
+    return tie
+
+
 def _bearing_exact(heights: np.ndarray, axes, tol: float, on_unbracketed: str):
     out = {}
     for ax in axes:
@@ -543,9 +578,7 @@ def _bearing_exact(heights: np.ndarray, axes, tol: float, on_unbracketed: str):
         ok = b.tied == 1 or b.a_hi - b.a_lo <= tol  # one cell: exact at grid resolution
         msg = ""
         if not ok:
-            msg = (f"{b.tied} cells share the critical height {b.height!r}: the threshold "
-                   f"along {AXIS_NAMES[ax]} is only known to lie in [{b.a_lo:.6g}, {b.a_hi:.6g}], "
-                   f"wider than tol={tol:g}")
+            msg = _tie_message(b.tied, b.height, ax, b.a_lo, b.a_hi, tol)
             if on_unbracketed == "raise":
                 raise ThresholdNotBracketed(msg)
         a = 0.5 * (b.a_lo + b.a_hi) if ok else float("nan")
@@ -674,7 +707,7 @@ def threshold(
 
         res = _refine(evaluate_bearing, axes, tol=tol, first=0.5, load_range=law.bounds,
                       law=law, options=dataclasses.replace(opts, warm_start=False),
-                      model=model, loads_are_pressures=False)
+                      model=model, loads_are_pressures=False, tie=_bearing_tie(heights))
         return res if axis is None else res[axes[0]]
 
     kwargs = {"model": model, "method": opts.method, "adhesion": adhesion, "threads": threads,
