@@ -234,6 +234,16 @@ def test_bearing_plane_through_a_tie_group_takes_it_whole(caplog):
     assert not caplog.text
 
 
+def test_heights_whose_squares_leave_the_float_range_are_refused(rough):
+    # the same check as surface.rms_gradient's: the contact residual's unit would be inf,
+    # or 0 (a solve stopped at once with a_c = 1)
+    for scale, flow in ((1e200, "overflow"), (1e-200, "underflow")):
+        s = Surface.from_array(rough.heights * scale)
+        with pytest.raises(InputError, match=f"surface heights out of range: their squares "
+                           f"{flow}"):
+            solve(s, 0.1)
+
+
 def test_result_is_frozen(rough):
     r = solve(rough, model="bearing", area_fraction=0.5)
     assert isinstance(r, ContactResult)

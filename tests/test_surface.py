@@ -93,6 +93,20 @@ def test_rms_gradient_normalised():
         assert full == pytest.approx(s.rms_slope, rel=1e-12)
 
 
+@pytest.mark.parametrize("periodic", [True, False])
+def test_rms_gradient_refuses_heights_whose_squares_leave_the_float_range(periodic):
+    # |h| ~ 1e200 gave nan (with RuntimeWarnings) and 1e-200 gave 0: the same check as
+    # contact.solve's (errors.require_squares_in_range), naming the heights' size
+    h = np.random.default_rng(0).standard_normal((16, 16))
+    for scale, flow in ((1e200, "overflow"), (1e-200, "underflow")):
+        with pytest.raises(InputError, match=f"heights out of range: their squares {flow} "
+                           r"\(largest \|h\| 3.11e[+-]200"):
+            rms_gradient(h * scale, 1.0, 1.0, periodic=periodic)
+    assert rms_gradient(h * 1e150, 1.0, 1.0, periodic=periodic) == pytest.approx(
+        rms_gradient(h, 1.0, 1.0, periodic=periodic) * 1e150, rel=1e-12)
+    assert rms_gradient(np.full((8, 8), 3.0), 1.0, 1.0, periodic=periodic) == 0.0  # flat
+
+
 @pytest.mark.parametrize("gamma", [0.25, 1.0, 4.0])
 def test_phases_inside_the_cutoff_ellipse_are_random(gamma):
     """Every mode inside the ellipse has a phase of its own: were the phase box smaller than

@@ -184,6 +184,19 @@ def require_finite_values(name: str, a: np.ndarray) -> np.ndarray:
     return a
 
 
+def require_squares_in_range(name: str, value: float, heights) -> float:
+    """``value``, a sum of squares of the heights ``heights`` (numpy or CuPy) or a quantity
+    made from one (their rms, their rms gradient), unchanged; :class:`InputError` naming
+    the largest |h| where it overflowed (not finite) or underflowed (0 for heights that are
+    not all equal). The one check of every such quantity: finite heights of 1e200 (in
+    units of L) made them inf or nan, and heights of 1e-170 made them 0."""
+    if math.isfinite(value) and (value != 0 or not heights.max() > heights.min()):
+        return value  # 0 for equal heights is the true value
+    flow = "overflow" if not math.isfinite(value) else "underflow"
+    raise InputError(f"{name} out of range: their squares {flow} (largest |h| "
+                     f"{float(abs(heights).max()):.3g}; heights in units of L)")
+
+
 def require_field(name: str, array: ArrayLike, *, ndim: int = 2) -> np.ndarray:
     """Return ``array`` as a float64 numpy array, or raise if it has the wrong rank or
     non-finite values (or masked values, or xarray dims in the order (y, x))."""

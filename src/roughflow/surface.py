@@ -35,6 +35,7 @@ from roughflow.errors import (
     require_finite,
     require_int,
     require_positive,
+    require_squares_in_range,
 )
 from roughflow.gpu import array_module
 
@@ -307,17 +308,21 @@ def peklenik_wavenumber(qx: np.ndarray, qy: np.ndarray, gamma: float) -> np.ndar
 def rms_gradient(heights: np.ndarray, lx: float, ly: float, *, periodic: bool = True) -> float:
     """Rms gradient sqrt(<|grad h|^2>) of a height map: spectral for a periodic map, from
     forward differences inside the map for a non-periodic one (a scan's wrap-around step
-    would dominate the spectral value)."""
+    would dominate the spectral value). Heights whose squares overflow or underflow raise
+    :class:`InputError` (:func:`roughflow.errors.require_squares_in_range`), not a nan or 0."""
     heights = require_field("heights", heights)  # an unsigned dtype wrapped in np.diff
     nx, ny = heights.shape
-    if not periodic:
-        if min(nx, ny) < 2:
-            raise InputError(f"a non-periodic rms gradient needs 2 points along each axis, "
-                             f"got a {nx} x {ny} grid")
-        gx = np.diff(heights, axis=0) * (nx / lx)
-        gy = np.diff(heights, axis=1) * (ny / ly)
-        return float(np.sqrt(np.mean(gx * gx) + np.mean(gy * gy)))
-    return spectral_rms_gradient(fft.rfft2(heights), (nx, ny), lx, ly)
+    if not periodic and min(nx, ny) < 2:
+        raise InputError(f"a non-periodic rms gradient needs 2 points along each axis, "
+                         f"got a {nx} x {ny} grid")
+    with np.errstate(over="ignore", under="ignore", invalid="ignore"):  # checked below
+        if periodic:
+            g = spectral_rms_gradient(fft.rfft2(heights), (nx, ny), lx, ly)
+        else:
+            gx = np.diff(heights, axis=0) * (nx / lx)
+            gy = np.diff(heights, axis=1) * (ny / ly)
+            g = float(np.sqrt(np.mean(gx * gx) + np.mean(gy * gy)))
+    return require_squares_in_range("heights", g, heights)
 
 
 def spectral_rms_gradient(spectrum: np.ndarray, shape: tuple[int, int], lx: float,

@@ -7,7 +7,7 @@ import math
 
 import numpy as np
 
-from roughflow.errors import InputError
+from roughflow.errors import require_squares_in_range
 
 
 def dot(a: np.ndarray, b: np.ndarray) -> float:
@@ -18,16 +18,10 @@ def dot(a: np.ndarray, b: np.ndarray) -> float:
 def height_scale(h, xp=np) -> float:
     """rms of the centred heights ``h`` (flat; ``xp``: its array module), the unit of every
     contact residual; 1 for a flat surface. Heights whose squares overflow or underflow
-    raise :class:`InputError`: the residual would be infinite, or absolute and below any
-    tolerance at the start (heights x 1e-200 would stop a solve at once with a_c = 1)."""
+    raise :class:`InputError` (:func:`roughflow.errors.require_squares_in_range`): the
+    residual would be infinite, or absolute and below any tolerance at the start (heights x
+    1e-200 would stop a solve at once with a_c = 1)."""
     mean_square = (dot(h, h) if xp is np else float(xp.dot(h, h))) / h.size
-    if not math.isfinite(mean_square):
-        raise InputError("surface heights out of range: their squares overflow (heights in "
-                         "units of L)")
-    if mean_square > 0:
+    if require_squares_in_range("surface heights", mean_square, h) > 0:
         return math.sqrt(mean_square)
-    largest = float(xp.abs(h).max())
-    if largest > 0:
-        raise InputError(f"surface heights out of range: their squares underflow (largest "
-                         f"|h - mean| {largest:.3g}; heights in units of L)")
     return 1.0
