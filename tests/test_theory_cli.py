@@ -75,6 +75,20 @@ def test_gap_file_conductivity_peklenik(tmp_path):
         assert np.all(np.abs(ds["peklenik"].values / 2.0 - 1) < 0.3)
 
 
+def test_conductivity_peklenik_of_a_full_contact_file_names_file_and_cause(tmp_path, capsys):
+    # exit 2 said only "field is constant: its autocorrelation is undefined"
+    path = tmp_path / "full.nc"
+    write_dataset(xr.Dataset({"gap": (("x", "y"), np.zeros((8, 8)), {"units": "L",
+                                                                   "long_name": "gap"})}),
+                  path)
+    with pytest.raises(SystemExit) as exc:
+        main(["theory", str(path), "--peklenik", "conductivity"])
+    assert exc.value.code == 2
+    err = capsys.readouterr().err
+    assert f"--peklenik conductivity of {path} ('gap')" in err
+    assert "every cell is in contact" in err
+
+
 def test_spec_form(tmp_path, capsys):
     out = tmp_path / "p.nc"
     main(["theory", "--points-per-lambda-s", "2", "--pressures", "0.01,0.1", "-o", str(out)])

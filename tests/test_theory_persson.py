@@ -251,6 +251,18 @@ def test_peklenik_bad_input():
         conductivity_peklenik(-np.ones((8, 8)))
 
 
+def test_a_constant_field_is_named_constant_with_its_cause():
+    # 0.1 - mean(0.1s) is round-off, not 0: such a field passed the constancy test and was
+    # refused as "stays above 0.368 ... use a larger cell", the wrong cause
+    with pytest.raises(InputError, match=r"field is constant \(0.1 in every cell\)"):
+        peklenik_number(np.full((8, 8), 0.1))
+    with pytest.raises(InputError, match=r"conductivity gap\^3 / \(12 eta\) is constant "
+                       r"\(0 in every cell: every cell is in contact\)"):
+        conductivity_peklenik(np.full((8, 8), 0.1), contact=np.ones((8, 8), dtype=bool))
+    with pytest.raises(InputError, match="the gap is the same in every cell"):
+        conductivity_peklenik(np.full((8, 8), 0.1))
+
+
 def test_default_energy_factor_is_the_papers():
     # gamma_P of the elastic energy, the literature value docs/theory.md cites (Yang & Persson
     # 2008), pinned here because every test above uses the default on both sides; every call

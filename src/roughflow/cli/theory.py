@@ -275,13 +275,26 @@ def _columns(t) -> dict[str, float]:
     }
 
 
+def _conductivity_peklenik(args: argparse.Namespace, gap, lx: float, ly: float, mask,
+                           index: int | None) -> float:
+    """:func:`roughflow.theory.conductivity_peklenik` of one gap field, its refusal naming
+    the file and the field (``index`` among several, else None)."""
+    from roughflow.theory import conductivity_peklenik
+
+    try:
+        return conductivity_peklenik(gap, lx, ly, contact=mask, eta=args.eta)
+    except InputError as e:
+        which = "'gap'" if index is None else f"'gap' field {index}"
+        raise InputError(f"--peklenik conductivity of {args.file} ({which}): {e}") from None
+
+
 def _run_gap(args: argparse.Namespace, ds) -> None:
     import numpy as np
     import xarray as xr
 
     from roughflow.datasets.units import DIMENSIONLESS, LENGTH_UNITS, SIGMA_UNITS
     from roughflow.io import write_dataset
-    from roughflow.theory import conductivity_peklenik, effective_dimension, gap_theory
+    from roughflow.theory import effective_dimension, gap_theory
 
     gap = ds["gap"]
     if gap.ndim < 2 or gap.ndim > 3:
@@ -303,7 +316,7 @@ def _run_gap(args: argparse.Namespace, ds) -> None:
     cols: dict[str, list[float]] = {k: [] for k in _GAP_COLUMNS}
     for i, u in enumerate(fields):
         mask = None if masks is None else masks[i]
-        g = (conductivity_peklenik(u, lx, ly, contact=mask, eta=args.eta)
+        g = (_conductivity_peklenik(args, u, lx, ly, mask, i if len(fields) > 1 else None)
              if args.peklenik == "conductivity" else gamma)
         t = gap_theory(u, a_c_star=a_star, contact=mask, gamma=g, kind=kind, eta=args.eta,
                        noncontact=True)

@@ -31,14 +31,26 @@ if TYPE_CHECKING:
     from numpy.typing import ArrayLike
 
 
+def _require_varying(name: str, f: np.ndarray, cause: str = "") -> None:
+    """:class:`InputError` where every value of ``f`` is the same (``cause``: why, for the
+    message): tested on the values, not on the fluctuations, whose round-off (0.1 - mean
+    of 0.1s is not 0) passed for a field and ended in "use a larger cell"."""
+    if f.max() == f.min():
+        raise InputError(f"{name} is constant ({float(f.flat[0]):.6g} in every cell"
+                         f"{cause}): its autocorrelation, and any correlation length or "
+                         "Peklenik number of it, is undefined")
+
+
 def autocorrelation(field: ArrayLike) -> np.ndarray:
     """Normalised periodic autocorrelation C[ix, iy] of the fluctuations of ``field`` (C[0,0]=1)."""
     f = require_field("field", field)
+    _require_varying("field", f)
     df = f - f.mean()
     c = fft.rfft2(df)
     acf = fft.irfft2(np.abs(c) ** 2, f.shape)
     if not acf[0, 0] > 0:
-        raise InputError("field is constant: its autocorrelation is undefined")
+        raise InputError(f"field out of range: the squares of its fluctuations underflow "
+                         f"(largest |f - mean| {float(np.abs(df).max()):.3g})")
     return acf / acf[0, 0]
 
 
@@ -89,7 +101,11 @@ def conductivity_peklenik(
 ) -> float:
     """Conductivity Peklenik number: :func:`peklenik_number` of sigma = gap^3/(12 eta).
 
-    Contact cells (gap = 0, or ``contact`` mask) have sigma = 0. Dimensionless.
+    Contact cells (gap = 0, or ``contact`` mask) have sigma = 0. Dimensionless. A constant
+    sigma (every cell in contact, or one gap everywhere) has none: :class:`InputError`.
     """
     sigma = local_conductivity(require_field("gap", gap), eta, contact=contact)
+    _require_varying("the local conductivity gap^3 / (12 eta)", sigma,
+                     ": every cell is in contact" if sigma.flat[0] == 0 else
+                     ": the gap is the same in every cell")
     return peklenik_number(sigma, lx, ly, level=level)
