@@ -405,10 +405,32 @@ def test_anisotropic_bruggeman_converges_just_below_the_threshold(gamma, delta):
     assert (closed.sigma_x, closed.sigma_y) == (0.0, 0.0)
 
 
+@pytest.mark.parametrize(("gamma", "delta"), [(256.0, 5e-6), (1 / 256, 5e-6), (1e3, 1e-4)])
+def test_large_gamma_is_closed_only_where_the_ratio_is_lost(gamma, delta):
+    """The closed margin grew as (gamma/64)^4: at gamma 256 it was 2.6e-5 of a_c*, at 1000
+    1e-3, though the ratio is exact to 1 % down to 3e-8 and 5e-7 there; sigma_x of up to
+    1e-3 of the open medium's came out as 0. It grows as (gamma/64)^2 now, as the distance
+    where the ratio is lost does (1.6e-6 and 2.4e-5)."""
+    from roughflow.theory import bruggeman_anisotropic
+
+    a_star = 0.415
+    z = a_star * (1 - delta)
+    r = bruggeman_anisotropic(np.array([0.0, 1 / 12]), weights=[z, 1 - z], a_c_star=a_star,
+                              gamma=gamma)
+    # linear in delta: 2e-3 covers 1e-4 at gamma 1000 (measured 3e-4 at 640)
+    assert r.sigma_x / r.sigma_y == pytest.approx(gamma**2, rel=2e-3)
+    assert r.residual < 1e-6
+    near = a_star * (1 - 1e-7 * (max(gamma, 1 / gamma) / 64) ** 2 / 2)  # inside the margin
+    closed = bruggeman_anisotropic(np.array([0.0, 1 / 12]), weights=[near, 1 - near],
+                                   a_c_star=a_star, gamma=gamma)
+    assert (closed.sigma_x, closed.sigma_y) == (0.0, 0.0)
+
+
 @pytest.mark.parametrize("gamma", [1e3, 1e4, 1e-4])
 def test_very_large_gamma_is_not_closed_far_from_the_threshold(gamma):
     """The margin within which both directions count as closed grew as gamma^4 beyond 64
-    without a bound: from gamma about 3600 every contact area gave sigma = 0."""
+    without a bound: from gamma about 3600 every contact area gave sigma = 0 (capped at
+    1e-3 since)."""
     from roughflow.theory import bruggeman_anisotropic
 
     r = bruggeman_anisotropic(np.array([0.0, 1 / 12]), weights=[0.3, 0.7], a_c_star=0.415,

@@ -72,10 +72,13 @@ _AT_THRESHOLD = 1e-12
 # directions' solutions keep too few digits to set sigma_x/sigma_y (measured at gamma = 64:
 # the ratio 0.35 % off gamma^2 at 3e-9 of a_c* from the threshold, 52 % off at 1e-9; gamma
 # 8 and 16 exact to 3e-10), while sigma itself is below 1e-7 of the open medium's. Scaled
-# by (gamma / 64)^4 beyond gamma = 64 (or below 1/64).
+# by (gamma / 64)^2 beyond gamma = 64 (or below 1/64): the distance at which the ratio is
+# first 1 % off gamma^2 grows so (2e-9 (gamma / 64)^2 for gamma 64 - 3600 and 1/256, both
+# forms, a_c* 0.4 and 0.5, three media), so the margin stays 50-80 times it; (gamma/64)^4
+# before closed 800 times too far at gamma 256 (sigma_x 2e-5 of the open medium's set to 0).
 _AT_THRESHOLD_ANISOTROPIC = 1e-7
-# ... and at most this near: unbounded, the scaling closed every contact area from gamma
-# about 3600 on
+# ... and at most this near: unbounded, the scaling closed every contact area from a large
+# enough gamma on (from about 3600 with the fourth power)
 _AT_THRESHOLD_ANISOTROPIC_MAX = 1e-3
 
 
@@ -216,6 +219,14 @@ def bruggeman_anisotropic(
     equations is a bracketed 1D solve for given gamma~; the outer equation
     log(sigma_x(r)/sigma_y(r)) = log r is strictly monotone in log r and is solved by
     Brent's method from an explicit bracket.
+
+    Closed at and just below a_c*: for a_c >= a_c* (1 - near) both conductances are
+    returned as exactly 0 (gamma_tilde 1, residual 0), where near = 1e-7 max(1, (g/64)^2),
+    g = max(gamma, 1/gamma), at most 1e-3 (from g = 6400): closer to a_c* the two
+    directions keep too few digits to set sigma_x/sigma_y (the ratio 1 % off gamma^2 at
+    about a fiftieth of near). The clamp is not flagged; just outside it the larger
+    conductance is at most about 2 near times the mean of the open cells' (measured on
+    binary and log-normal media).
     """
     a_c_star = _check_a_c_star(a_c_star)
     gamma = require_positive("gamma", gamma)
@@ -249,7 +260,7 @@ def bruggeman_anisotropic(
             a_c=z, a_c_star=a_c_star, dimension=d,
         )
 
-    near = min(_AT_THRESHOLD_ANISOTROPIC * max(1.0, (max(gamma, 1.0 / gamma) / 64.0) ** 4),
+    near = min(_AT_THRESHOLD_ANISOTROPIC * max(1.0, (max(gamma, 1.0 / gamma) / 64.0) ** 2),
                _AT_THRESHOLD_ANISOTROPIC_MAX)
     if m.s.size == 0 or z >= a_c_star * (1.0 - near):
         # Both directions closed: the x and y thresholds coincide only at gamma~ = 1.
