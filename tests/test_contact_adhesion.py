@@ -65,10 +65,14 @@ def test_bad_adhesion(gs, rho):
 def test_adhesive_solve_pulls_surfaces_together(repulsion):
     # At equal load, attraction can only add contact and shrink the gap; the load is still
     # carried (mean contact pressure = load up to the solver tolerance on the mean force).
+    # The calibrated adhesion (the paper's nominal tabor=2.0, gamma_over_v_full=0.203 spans
+    # 0.05 grid spacings here and is refused: test_an_unresolved_adhesive_zone_is_refused).
     from roughflow.contact import solve
+    from roughflow.defaults import ADHESION_RANGE_OVER_LAMBDA_S
 
     s = generate(SurfaceSpec.from_sweep(points_per_lambda_s=2, seed=3))
-    ad = adhesion_for(s.heights, s.lx, s.ly, tabor=2.0, gamma_over_v_full=0.203,
+    ad = adhesion_for(s.heights, s.lx, s.ly, gamma_over_v_full=0.1,
+                      range=ADHESION_RANGE_OVER_LAMBDA_S[repulsion] * s.spec.lambda_s,
                       repulsion=repulsion)
     rep = solve(s, 0.05)
     adh = solve(s, 0.05, model="adhesive", adhesion=ad, max_iter=5000)
@@ -105,6 +109,156 @@ def test_adhesion_for_takes_a_range_or_a_tabor_parameter():
             adhesion_for(s.heights, s.lx, s.ly, gamma_over_v_full=0.1, **kw)
     with pytest.raises(InputError, match="range"):
         adhesion_for(s.heights, s.lx, s.ly, gamma_over_v_full=0.1, range=-1.0)
+
+
+def _audit_surface():
+    """H 0.8, eps_f 1/8, 4 points per lambda_s, L/lambda_r 4 (128 x 128): the surface on which
+    the checks below were found missing."""
+    s = generate(SurfaceSpec.from_sweep(hurst=0.8, eps_f=1 / 8, points_per_lambda_s=4,
+                                        l_over_lambda_r=4, seed=1))
+    return s, full_contact_energy(s.heights, s.lx, s.ly), s.spec.lambda_s
+
+
+def _no_solver(monkeypatch):
+    """Make any solver work fail the test: the refusals come before it."""
+    from roughflow.contact import gfmd
+
+    def refuse(*args, **kwargs):
+        raise AssertionError("the solver ran")
+
+    monkeypatch.setattr(gfmd, "gfmd", refuse)
+
+
+def test_a_harmonic_wall_too_soft_for_the_load_is_refused(monkeypatch):
+    """kappa = pi^2 gamma_s / (2 rho^2) falls with gamma_s: at p = 0.01 (elastic a_c 0.027)
+    gamma_s = 1e-6, 1e-4, 1e-2 and 0.1 v_ela^full gave a_c 1.00, 1.00, 0.64 and 0.24, the
+    body sinking through the soft wall (weaker adhesion, more contact). The overlapping cells'
+    mean overlap is at least load / kappa: above one range the solve is refused before it
+    starts, and a solved state whose overlap exceeds one range is refused after it."""
+    from roughflow.contact import solve
+    from roughflow.contact.adhesion import HARMONIC_MAX_OVERLAP
+
+    s, vf, lam = _audit_surface()
+
+    def harmonic(ratio):
+        return Adhesion(ratio * vf, 0.42 * lam, repulsion="harmonic")
+
+    kept = solve(s, 0.01, model="adhesive", adhesion=harmonic(0.1))
+    assert kept.area_fraction == pytest.approx(0.241, abs=0.002)
+    ad = harmonic(0.1)
+    # the bound behind the early refusal: mean overlap >= (load + tension) / kappa
+    assert ad.mean_overlap(kept.contact_pressure) >= 0.01 / ad.kappa
+    assert ad.mean_overlap(kept.contact_pressure) < HARMONIC_MAX_OVERLAP * ad.range
+    # 1.25 ranges on average (a_c 0.64): known only after the solve
+    with pytest.raises(InputError, match=r"sank into the harmonic wall .* by 1\.2\d ranges"):
+        solve(s, 0.01, model="adhesive", adhesion=harmonic(1e-2))
+    # the hard wall (the default) has no such limit: with contact on the wall only it
+    # tends to the elastic contact as gamma_s -> 0
+    weak = solve(s, 0.01, model="adhesive",
+                 adhesion=Adhesion(1e-6 * vf, 0.42 * lam, contact_within=0.0))
+    assert weak.area_fraction == pytest.approx(solve(s, 0.01).area_fraction, abs=2e-4)
+    _no_solver(monkeypatch)
+    for ratio, depth in ((1e-6, "7.5e\\+03"), (1e-4, "75")):
+        with pytest.raises(InputError, match=f"cannot hold the load 0.01: .* load / kappa = "
+                                             f"{depth} ranges.*repulsion='hard'"):
+            solve(s, 0.01, model="adhesive", adhesion=harmonic(ratio))
+
+
+def test_an_unresolved_adhesive_zone_is_refused(monkeypatch):
+    """The adhesive zone 4 E* rho^2 / (pi^2 gamma_s) under 1.5 grid spacings pins the contact
+    line to the grid: at gamma_s = 0.1 v_ela^full a_c(p = 0) was 0.0132 at rho = 0.05 lambda_s
+    (0.36 spacings) against 0.0078 at 0.2 lambda_s (5.7), more contact for less range, and a
+    range of 1e-9 ran 50000 FIRE steps into a ConvergenceError (harmonic: a detached state
+    reported as converged). The paper's nominal Tabor parameter with our R_c (0.05 spacings at
+    2 points per lambda_s) falls here too: the contact it adds grew 2.4x from 2 to 8 points."""
+    from roughflow.contact import solve
+
+    s, vf, lam = _audit_surface()
+    assert Adhesion(0.1 * vf, 0.05 * lam).zone / s.dx == pytest.approx(0.357, abs=0.001)
+    nominal_surface = generate(SurfaceSpec.from_sweep(points_per_lambda_s=2, seed=3))
+    nominal = adhesion_for(nominal_surface.heights, nominal_surface.lx, nominal_surface.ly,
+                           tabor=2.0, gamma_over_v_full=0.203)
+    _no_solver(monkeypatch)
+    for repulsion in ("hard", "harmonic"):
+        with pytest.raises(InputError, match=r"spans 0\.357 grid spacings .* range of at "
+                                             r"least 0\.0032"):
+            solve(s, 0.0, model="adhesive", adhesion=Adhesion(0.1 * vf, 0.05 * lam, repulsion))
+        with pytest.raises(InputError, match="grid spacings"):
+            solve(s, 0.0, model="adhesive", adhesion=Adhesion(0.1 * vf, 1e-9, repulsion))
+    with pytest.raises(InputError, match=r"spans 0\.046\d grid spacings"):
+        solve(nominal_surface, 0.05, model="adhesive", adhesion=nominal)
+
+
+def test_an_under_resolved_adhesive_zone_warns_once_per_cold_solve(caplog):
+    # 1.5 to 9 spacings: solved, with a warning on the cold solve (a search or ladder warm-
+    # starts the rest); the calibrated range (91 spacings here) is silent
+    import logging
+
+    from roughflow.contact import solve
+
+    s, vf, lam = _audit_surface()
+    ad = Adhesion(0.1 * vf, 0.2 * lam)  # 5.7 spacings
+    with caplog.at_level(logging.WARNING, logger="roughflow.contact.adhesion"):
+        cold = solve(s, 0.0, model="adhesive", adhesion=ad)
+        assert [r.message for r in caplog.records if "adhesive zone" in r.message] == [
+            f"the adhesive zone 4 rho^2 / (pi^2 gamma_s) = {ad.zone:.3g} (surface energy "
+            f"{ad.surface_energy:.4g}, range {ad.range:.4g}) spans 5.71 grid spacings, under "
+            "the 9 that converge the contact area to 0.001 (at 2.3 spacings it is about 0.015 "
+            "too large): use a larger range or a finer grid"]
+        caplog.clear()
+        solve(s, 0.01, model="adhesive", adhesion=ad, init=cold)
+        solve(s, 0.01, model="adhesive", adhesion=Adhesion(0.1 * vf, 0.8 * lam))
+    assert not [r for r in caplog.records if "adhesive zone" in r.message]
+
+
+@pytest.mark.parametrize(("repulsion", "hurst", "eps_f", "ppl", "gamma", "spacings"), [
+    # the paper's adhesive case as the configs run it (config.yaml: 2 points per lambda_s,
+    # paper.yaml: 8) and the harmonic calibration at 2 points; the zone in spacings depends on
+    # the spectrum and the resolution only, not on L/lambda_r, so the cell is L/lambda_r = 4
+    ("hard", 0.8, 1 / 16, 2, 1, 32.9),
+    ("hard", 0.8, 1 / 16, 8, 1, 131.6),
+    ("harmonic", 0.8, 1 / 16, 2, 1, 9.05),
+    ("hard", 0.7, 1 / 8, 2, 3, 41.8),  # docs' "other surfaces" (the coarser spacing, dx)
+    ("harmonic", 0.7, 1 / 8, 2, 3, 11.5),
+])
+def test_the_papers_adhesive_cases_pass_the_checks_silently(caplog, repulsion, hurst, eps_f,
+                                                             ppl, gamma, spacings):
+    import logging
+
+    from roughflow.contact.adhesion import ZONE_RESOLVED, check_setup
+    from roughflow.defaults import ADHESION_RANGE_OVER_LAMBDA_S, ADHESION_SURFACE_ENERGY_RATIO
+
+    s = generate(SurfaceSpec.from_sweep(hurst=hurst, eps_f=eps_f, points_per_lambda_s=ppl,
+                                        gamma=gamma, l_over_lambda_r=4, seed=0))
+    ad = adhesion_for(s.heights, s.lx, s.ly, gamma_over_v_full=ADHESION_SURFACE_ENERGY_RATIO,
+                      range=ADHESION_RANGE_OVER_LAMBDA_S[repulsion] * s.spec.lambda_s,
+                      repulsion=repulsion)
+    spacing = max(s.lx / s.shape[0], s.ly / s.shape[1])
+    assert ad.zone / spacing == pytest.approx(spacings, rel=2e-3)
+    assert ad.zone / spacing >= ZONE_RESOLVED
+    with caplog.at_level(logging.WARNING, logger="roughflow.contact.adhesion"):
+        # the harmonic wall's loads up to p40/4 of the calibration (0.046; 0.25 kappa rho)
+        check_setup(ad, s.heights, s.lx, s.ly, 0.046)
+    assert not caplog.records
+
+
+def test_a_range_beyond_the_height_range_is_refused(monkeypatch):
+    # 10 L (500 rms heights) gave a_c = 1: the contact criterion (gap below rho / 2) counted
+    # every cell. Refused where contact_within x rho reaches the height range; contact on
+    # the wall only (contact_within = 0) has no such limit.
+    from roughflow.contact import solve
+    from roughflow.contact.adhesion import check_setup
+
+    s, vf, lam = _audit_surface()
+    ptp = float(np.ptp(s.heights))
+    _no_solver(monkeypatch)
+    with pytest.raises(InputError, match=r"contact_within x range = 5 .* height range "
+                                         r"0\.127\d.*range below 0\.25"):
+        solve(s, 0.01, model="adhesive", adhesion=Adhesion(1e-4, 10.0))
+    with pytest.raises(InputError, match="height range"):
+        check_setup(Adhesion(1e-4, 2 * ptp), s.heights, s.lx, s.ly, 0.01)
+    check_setup(Adhesion(1e-4, 1.99 * ptp), s.heights, s.lx, s.ly, 0.01)
+    check_setup(Adhesion(1e-4, 10.0, contact_within=0.0), s.heights, s.lx, s.ly, 0.01)
 
 
 def _papers_adhesive_case(repulsion: str, seed: int = 0):
@@ -367,7 +521,7 @@ def _johnson_area(p_over_pstar: float, alpha: float) -> float:
 
 
 def test_johnson_wavy_surface_under_tension_and_the_unloading_hysteresis():
-    """alpha = 0.3 and a range of 0.1 h0 (Tabor parameter 1.7; the adhesive zone about 9
+    """alpha = 0.3 and a range of 0.1 h0 (Tabor parameter 1.7; the adhesive zone about 37
     grid spacings wide): FIRE's steps of up to 1/omega of the elastic modes overshot the
     attraction's stiffness (kappa = 220, against k_min = pi), so a cold solve at -0.04 p*
     failed as "beyond the pull-off force" (Johnson's pull-off: -0.096 p*), and full contact

@@ -59,6 +59,19 @@ def test_cli_bearing(surface_file, tmp_path):
         (["--pressure", "0.1", "--max-iter", "2"], 3, "did not converge"),
         (["--pressure", "0.1", "--repulsion", "harmonic"], 2,
          "--repulsion are only for --model adhesive"),
+        # refused before any work (adhesion.check_setup): it ran 50000 FIRE steps and exited
+        # 3, with --repulsion harmonic it returned a detached state as converged
+        (["--model", "adhesive", "--pressure", "0", "--surface-energy", "1e-4",
+          "--adhesion-range", "1e-9"], 2, "grid spacings"),
+        (["--model", "adhesive", "--pressure", "0", "--surface-energy", "1e-4",
+          "--adhesion-range", "1e-9", "--repulsion", "harmonic"], 2, "grid spacings"),
+        # a range of 10 L (500 rms heights) gave a_c = 1
+        (["--model", "adhesive", "--pressure", "0.01", "--surface-energy", "1e-4",
+          "--adhesion-range", "10"], 2, "height range"),
+        # gamma_s = 1e-6 v_ela^full on the harmonic wall gave a_c = 1, mean gap 0, exit 0
+        (["--model", "adhesive", "--pressure", "0.01", "--surface-energy", "3.5e-9",
+          "--adhesion-range", "0.013125", "--repulsion", "harmonic"], 2,
+         "cannot hold the load"),
     ],
 )
 def test_cli_errors(surface_file, tmp_path, capsys, extra, code, message):

@@ -25,15 +25,24 @@ wall, calibrated the same way (rho = 0.42 lambda_s), gives the contact areas but
 into the soft wall. The paper's nominal mu_T = 2 and gamma_s / v_ela^full = 0.203, evaluated
 with our R_c (:func:`curvature_radius`), give a range of 0.04 lambda_s and far too little
 contact ([0.020, 0.024, 0.137] instead of [0.01, 0.10, 0.40] at 8 points per lambda_s,
-harmonic wall): the paper's definitions of R_c and of the range must differ from ours by
-factors we cannot recover from the text.
+harmonic wall; an adhesive zone of 0.19 grid spacings, the grid's areas, now refused): the
+paper's definitions of R_c and of the range must differ from ours by factors we cannot
+recover from the text.
 
 ``dataclasses.replace`` keeps a resolved ``contact_within``: replacing the repulsion alone keeps
 the old wall's criterion; give ``contact_within`` too.
+
+Where the model holds (:func:`check_setup` before a solve, :func:`check_overlap` after it;
+docs/contact.md "Adhesion", *Where the model holds*): the adhesive zone at a contact edge,
+4 E* rho^2 / (pi^2 gamma_s) (:attr:`Adhesion.zone`), must span grid spacings, the contact
+criterion's gap must stay below the surface's height range, and the harmonic wall, whose
+kappa falls with gamma_s, must hold the load without the contact cells sinking into it by
+more than the range on average.
 """
 
 from __future__ import annotations
 
+import logging
 import math
 from dataclasses import dataclass
 
@@ -43,6 +52,26 @@ from roughflow.defaults import ADHESION_CONTACT_WITHIN, ADHESION_REPULSION, ADHE
 from roughflow.errors import InputError, require_finite, require_positive
 
 from .elastic import full_contact_energy
+
+log = logging.getLogger(__name__)
+
+#: The adhesive zone (:attr:`Adhesion.zone`) in grid spacings (the coarser of dx, dy) below
+#: which the grid pins the contact line and a solve is refused, and below which a warning says
+#: the contact area is not converged. Measured on Johnson's wavy surface (alpha 0.3; ranges
+#: 0.025, 0.05 and 0.1 h0 fall on one curve in zone / dx), a_c above the converged one at zero
+#: load: +0.12 at 0.58 spacings, +0.05 at 1.2, +0.014 at 2.3, +0.0025 at 4.7, +0.0005 at 9.3;
+#: on rough surfaces the zero-load area was 3-10 times too large at 0.2-0.4 spacings, and the
+#: contact added by the paper's nominal adhesion (0.05-0.2 spacings) grew 2.4-3.6 times from 2
+#: to 8 points per lambda_s (docs/contact.md "Adhesion", *Where the model holds*).
+ZONE_PINNED = 1.5
+ZONE_RESOLVED = 9.0
+#: The harmonic wall holds a load where its overlapping cells sink into it by at most this
+#: many ranges on average. The paper's harmonic calibration stays below it (0.44, 0.56 and
+#: 0.75 rho at zero load, p10/8 and p40/4 on the Fig. 5 surface); beyond it the load sinks
+#: the body through the soft wall (a_c 0.64-1 where the elastic contact has 0.01-0.23,
+#: weaker adhesion giving more contact). The mean overlap is at least load / kappa, so a load
+#: above HARMONIC_MAX_OVERLAP kappa rho is refused before the solve.
+HARMONIC_MAX_OVERLAP = 1.0
 
 
 @dataclass(frozen=True)
@@ -89,6 +118,21 @@ class Adhesion:
     def max_tension(self) -> float:
         return math.pi * self.surface_energy / (2 * self.range)
 
+    @property
+    def zone(self) -> float:
+        """Width of the adhesive zone at a contact edge, E* gamma_s / max_tension^2 =
+        4 E* rho^2 / (pi^2 gamma_s) (E* = 1; units of L): the grid must resolve it."""
+        return 4.0 * self.range**2 / (math.pi**2 * self.surface_energy)
+
+    def mean_overlap(self, pressure: np.ndarray) -> float:
+        """Mean overlap of the cells overlapping the harmonic wall (from their pressures,
+        -g = p / kappa); 0 on the hard wall or where none overlaps."""
+        p = np.asarray(pressure, np.float64)
+        pushed = p[p > 0]
+        if self.repulsion != "harmonic" or pushed.size == 0:
+            return 0.0
+        return float(pushed.mean()) / self.kappa
+
     def energy(self, g: np.ndarray) -> np.ndarray:
         gs, rho = self.surface_energy, self.range
         x = np.clip(g, 0.0, rho)
@@ -128,6 +172,68 @@ class Adhesion:
         x = np.clip(g, 0.0, rho)
         c = 0.5 * gs * (np.pi / rho) ** 2 * np.cos(np.pi * x / rho)
         return np.where(g < 0, self.kappa, np.where(g > rho, 0.0, c))
+
+
+def check_setup(adhesion: Adhesion, heights: np.ndarray, lx: float, ly: float,
+                load: float, *, warn: bool = True) -> None:
+    """Refuse (:class:`InputError`) an adhesive solve outside the model's validity before it
+    starts, naming the value and the fix; with ``warn``, log a warning where the adhesive
+    zone is under-resolved (module constants above; docs/contact.md "Adhesion")."""
+    nx, ny = heights.shape
+    spacing = max(lx / nx, ly / ny)
+    zone = adhesion.zone / spacing
+    what = f"surface energy {adhesion.surface_energy:.4g}, range {adhesion.range:.4g}"
+    if zone < ZONE_PINNED:
+        raise InputError(
+            f"the adhesive zone 4 rho^2 / (pi^2 gamma_s) = {adhesion.zone:.3g} ({what}) spans "
+            f"{zone:.3g} grid spacings of {spacing:.3g}, below {ZONE_PINNED:g}: the grid pins "
+            f"the contact line and the contact area is the grid's; give a range of at least "
+            f"{_range_for(adhesion, ZONE_PINNED * spacing):.3g} or a grid at least "
+            f"{ZONE_PINNED / zone:.3g} times finer (about {ZONE_RESOLVED:g} spacings "
+            "converge a_c to 0.001)")
+    height_range = float(np.max(heights) - np.min(heights))
+    if adhesion.contact_gap >= height_range:
+        raise InputError(
+            f"the contact criterion counts gaps below contact_within x range = "
+            f"{adhesion.contact_gap:.4g} ({what}), at least the surface's height range "
+            f"{height_range:.4g}: wherever the surfaces touch every cell would count as "
+            f"contact (a_c = 1 whatever the load); give a range below "
+            f"{height_range / adhesion.contact_within:.4g} (short against the roughness) or "
+            "contact_within=0 (contact on the wall only)")
+    if adhesion.repulsion == "harmonic" and load > HARMONIC_MAX_OVERLAP * adhesion.kappa * \
+            adhesion.range:
+        raise InputError(
+            f"the harmonic wall (kappa = pi^2 gamma_s / (2 rho^2) = {adhesion.kappa:.4g}; "
+            f"{what}) cannot hold the load {load:.4g}: its overlapping cells would sink into it "
+            f"by at least load / kappa = {load / adhesion.kappa / adhesion.range:.3g} ranges on "
+            f"average (at most {HARMONIC_MAX_OVERLAP:g}: a soft wall, not a contact); the load "
+            f"may be at most {HARMONIC_MAX_OVERLAP * adhesion.kappa * adhesion.range:.4g}, or "
+            "use repulsion='hard' (the default), or a larger surface energy")
+    if warn and zone < ZONE_RESOLVED:
+        log.warning("the adhesive zone 4 rho^2 / (pi^2 gamma_s) = %.3g (%s) spans %.3g grid "
+                    "spacings, under the %g that converge the contact area to 0.001 (at 2.3 "
+                    "spacings it is about 0.015 too large): use a larger range or a finer grid",
+                    adhesion.zone, what, zone, ZONE_RESOLVED)
+
+
+def check_overlap(adhesion: Adhesion, load: float, pressure: np.ndarray) -> None:
+    """Refuse (:class:`InputError`) a solved harmonic-wall state whose overlapping cells sank
+    into the wall by more than ``HARMONIC_MAX_OVERLAP`` ranges on average (see
+    :func:`check_setup`; measured after the solve, where the load alone did not show it)."""
+    overlap = adhesion.mean_overlap(pressure) / adhesion.range
+    if overlap > HARMONIC_MAX_OVERLAP:
+        raise InputError(
+            f"at the load {load:.4g} the cells in contact sank into the harmonic wall (kappa = "
+            f"{adhesion.kappa:.4g}; surface energy {adhesion.surface_energy:.4g}, range "
+            f"{adhesion.range:.4g}) by {overlap:.3g} ranges on average, more than "
+            f"{HARMONIC_MAX_OVERLAP:g}: the wall is too soft for the load (kappa falls with "
+            "the surface energy) and the contact area is the overlap's, not a contact's; use "
+            "repulsion='hard' (the default), a larger surface energy or a smaller load")
+
+
+def _range_for(adhesion: Adhesion, zone: float) -> float:
+    """The range whose adhesive zone is ``zone`` at this surface energy."""
+    return math.pi * math.sqrt(zone * adhesion.surface_energy) / 2.0
 
 
 def curvature_radius(heights: np.ndarray, lx: float, ly: float) -> float:

@@ -29,7 +29,7 @@ from roughflow.resources import check_memory
 from roughflow.surface import Surface
 
 from ._result import ContactResult
-from .adhesion import Adhesion
+from .adhesion import Adhesion, check_overlap, check_setup
 from .bearing import solve_bearing
 
 if TYPE_CHECKING:  # gfmd (numba) is imported on first use: the CLI starts faster
@@ -70,7 +70,10 @@ def solve(
 
     model:
       ``"elastic"`` (hard-wall repulsion), ``"adhesive"`` (``adhesion=Adhesion(...)``,
-      docs/physics.md Sect. 3.3; ``pressure`` may be 0 or negative) or ``"bearing"`` (overlap model,
+      docs/physics.md Sect. 3.3; ``pressure`` may be 0 or negative; refused with an
+      :class:`InputError` where the model does not hold: an adhesive zone under 1.5 grid
+      spacings, a contact gap beyond the height range, a harmonic wall too soft for the load,
+      the last also after the solve, see ``adhesion.check_setup``) or ``"bearing"`` (overlap model,
       ``area_fraction=a``: contact at the top fraction a of heights, gap = max(d - h, 0),
       no elasticity; ``pressure`` is ignored; ``method`` and ``tol``, unused, are still
       checked).
@@ -166,6 +169,11 @@ def solve(
         require_field("init.contact_pressure", init.contact_pressure)
 
     lx, ly = float(surface.lx), float(surface.ly)
+    if model == "adhesive":
+        # the adhesion's validity on this grid and at this load (adhesion.check_setup); the
+        # warning of an under-resolved zone comes with cold solves only, so that a search or
+        # a ladder, which warm-starts all but its first solve, warns once
+        check_setup(adhesion, heights, lx, ly, load, warn=init is None)
     if setup is not None:
         from .gfmd import HardWallSetup
 
@@ -241,6 +249,8 @@ def solve(
             f"max_iter={max_iter}{why}", residual=float(out.residual),
             iterations=int(out.iterations),
         )
+    if model == "adhesive":
+        check_overlap(adhesion, load, out.pressure)
     return ContactResult(
         gap=out.gap,
         contact_pressure=out.pressure,
