@@ -73,6 +73,18 @@ def test_sinusoid_full_contact_beyond_p_star(method):
     assert below.area_fraction < 1.0
 
 
+@pytest.mark.parametrize("method", ["gfmd", "cg"])
+@pytest.mark.parametrize("level", [0.0, 0.3])  # 0.3: centred, 6e-17 of round-off is left
+def test_flat_surface_is_in_full_contact_at_any_load(method, level):
+    # a rigid flat pressed on an elastic flat: every cell in contact at the applied
+    # pressure, the gap zero (the residual's unit, the rms height, is 0 there: 1 instead)
+    s = Surface.from_array(np.full((16, 24), level))
+    for p in (1e-6, 0.1):
+        r = solve(s, p, method=method)
+        assert r.area_fraction == 1.0 and r.mean_gap == 0.0 and r.converged
+        np.testing.assert_allclose(r.contact_pressure, p, rtol=1e-12)
+
+
 def test_hertz_contact_radius_and_pressure():
     # paraboloid of radius R in a periodic cell; a/L = 0.1 keeps the periodic images' effect
     # on a small (their displacement is nearly uniform across the contact).

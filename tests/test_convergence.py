@@ -425,11 +425,11 @@ def test_resolutions_whose_sweep_grids_do_not_nest_get_a_finest_grid_that_does()
     assert all((s.lx, s.ly, s.lambda_s, s.seed) == (spec.lx, spec.ly, spec.lambda_s, 3)
                for s in specs.values())
     assert ResolutionOptions(gamma=2.0, l_over_lambda_r=2.0, ppl=(2, 16)).ppl == (2, 16)
-    # ratios 3 and 2 (4, 6, 12 points): a multiple of 6 along both axes
-    specs = study_specs((4, 6, 12), gamma=2.0, l_over_lambda_r=2.0)
-    fine = specs[12]
-    assert fine.nx % 6 == 0 and fine.ny % 6 == 0
-    assert (specs[4].nx, specs[6].ny) == (fine.nx // 3, fine.ny // 2)
+    # ratios 3 and 2 (2, 3, 6 points), gamma 3, L / lambda_r 3: the sweep's y grids are
+    # 180, 250 and 500 (500 is 2 x 250 but not 3 x 180); the finest is a multiple of 6
+    specs = study_specs((2, 3, 6), gamma=3.0, l_over_lambda_r=3.0)
+    assert {p: (s.nx, s.ny) for p, s in specs.items()} == {
+        2: (60, 180), 3: (90, 270), 6: (180, 540)}
 
 
 @pytest.mark.parametrize(("gamma", "l_over_lambda_r"), [(1.0, None), (2.0, None), (4.0, 8.0)])

@@ -27,7 +27,7 @@ from roughflow.convergence.dataset import (
     records_to_dataset,
     write_records_dataset,
 )
-from roughflow.convergence.options import ResolutionOptions
+from roughflow.convergence.options import ResolutionOptions, ToleranceOptions
 from roughflow.convergence.records import (
     load_records,
     resolution_file,
@@ -93,6 +93,17 @@ def test_hand_built_records_round_trip_exactly(tmp_path):
     assert back[0]["l_over_lambda_r"] is None and "gamma" not in back[3]
     assert math.isnan(back[0]["a_mid_0"]) and back[6]["error"] == ""
     assert [type(r["seed"]) for r in back] == [int] * len(HAND_BUILT)
+
+
+def test_large_integers_in_every_record_come_back_exactly(tmp_path):
+    # seeds go up to 2^63 - 1: a column xarray decodes through a fill value as float64
+    # rounded 2^53 + 1 to 2^53, and two seeds became one in the report
+    recs = [dict(kind="fixed", seed=2**53 + 1, ppl=2), dict(kind="fixed", seed=2**63 - 1,
+                                                            ppl=4)]
+    write_dataset(records_to_dataset(recs, study="resolution"), tmp_path / "r.nc")
+    ds = read_dataset(tmp_path / "r.nc")
+    assert ds["seed"].dtype == "int64" and ds["ppl"].dtype == "int64"
+    assert records_from_dataset(ds) == recs
 
 
 def test_integers_and_floats_of_one_field_and_unknown_fields(tmp_path):
@@ -197,13 +208,27 @@ def test_a_failed_run_removes_the_stale_dataset_and_writes_none(tmp_path, monkey
         measure.measure_resolution(tmp_path, opts, warm=False)
     assert not stale.exists()
     assert [r["kind"] for r in load_records(log)] == ["threshold"]  # kept to resume from
-    # refused before any work (records of another run): no dataset either
-    _stale_dataset(log)
-    _log(log, [dict(kind="threshold", seed=0, ppl=2, l_over_lambda_r=2.0)])
-    with pytest.raises(InputError, match="another run"):
-        measure.measure_resolution(tmp_path, opts, warm=False)
-    assert not stale.exists()
     assert not list(tmp_path.glob("*.part"))
+
+
+@pytest.mark.parametrize("study", ["resolution", "tolerance"])
+def test_a_refused_run_leaves_the_log_and_its_dataset_as_they_were(tmp_path, study):
+    # records of another run: refused before any work, and the earlier run's files (a
+    # complete log and its dataset) stay a consistent pair
+    if study == "resolution":
+        log, run = resolution_file(tmp_path, 1.0), measure.measure_resolution
+        opts = ResolutionOptions(seeds=(0,), ppl=(2, 4), l_over_lambda_r=1.0)
+        other = dict(kind="threshold", seed=0, ppl=2, l_over_lambda_r=2.0)
+    else:
+        log, run = tolerance_file(tmp_path), measure.measure_tolerances
+        opts = ToleranceOptions(seeds=(0,))
+        other = dict(kind="contact_tol", seed=0, ppl=8)
+    _log(log, [other])
+    dataset = write_records_dataset(log, study=study)
+    before = dataset.read_bytes()
+    with pytest.raises(InputError, match="another run"):
+        run(tmp_path, opts, warm=False)
+    assert dataset.read_bytes() == before and load_records(log) == [other]
 
 
 @pytest.mark.parametrize("signum", [signal.SIGTERM, signal.SIGKILL])

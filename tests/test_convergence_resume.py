@@ -10,6 +10,7 @@ from __future__ import annotations
 import json
 from pathlib import Path
 
+import numpy as np
 import pytest
 
 from roughflow.convergence import measure
@@ -182,3 +183,45 @@ def test_reports_replace_every_file_of_an_earlier_report(tmp_path):
     assert {p.name for p in written[0].paths} == {
         f"{ANISOTROPIC_STEM}{s}" for s in (".md", ".csv", ".png")}
     assert not any(p.exists() for p in stale)
+
+
+def test_each_seed_measures_its_own_surface(tmp_path, monkeypatch):
+    # every resolution of a seed is that seed's finest surface sampled down; a run that
+    # generated one seed's surface for all measured seed scatter of zero
+    generated, measured = [], []
+    real = measure.generate
+
+    def spy(spec):
+        generated.append(spec.seed)
+        return real(spec)
+
+    def record(surf, **kwargs):
+        measured.append(surf.heights.copy())
+        return {"a_star_0": 0.4, "a_star_1": 0.4}
+
+    monkeypatch.setattr(measure, "generate", spy)
+    monkeypatch.setattr(measure, "threshold_record", record)
+    monkeypatch.setattr(measure, "_sigma_targets", lambda *a, **k: None)
+    measure.measure_resolution(tmp_path, ResolutionOptions(**{**TINY, "seeds": (0, 3)}),
+                               warm=False)
+    assert generated == [0, 3]
+    # seed by seed, coarse first: seed 0 at 2 and 4 points per lambda_s, then seed 3
+    assert [h.shape for h in measured] == [_grid(2), _grid(4)] * 2
+    np.testing.assert_array_equal(measured[0], measured[1][::2, ::2])
+    np.testing.assert_array_equal(measured[2], measured[3][::2, ::2])
+    assert not np.array_equal(measured[1], measured[3])
+
+
+def test_a_failed_tolerance_run_removes_the_stale_dataset(tmp_path, monkeypatch):
+    log = tolerance_file(tmp_path)
+    _write(log, [])
+    stale = write_records_dataset(log, study="tolerance")
+
+    def fail(*args, **kwargs):
+        raise RuntimeError("a solve failed")
+
+    monkeypatch.setattr(measure, "_contact_tolerances", fail)
+    with pytest.raises(RuntimeError):
+        measure.measure_tolerances(tmp_path, ToleranceOptions(seeds=(0,), ppl=2),
+                                   warm=False)
+    assert not stale.exists()

@@ -426,6 +426,20 @@ def test_large_gamma_is_closed_only_where_the_ratio_is_lost(gamma, delta):
     assert (closed.sigma_x, closed.sigma_y) == (0.0, 0.0)
 
 
+@pytest.mark.parametrize("gamma", [1e4, 1e-4])
+def test_the_closed_margin_is_capped_at_a_thousandth(gamma):
+    """(gamma/64)^2 x 1e-7 is 2.4e-3 at gamma 1e4; the margin stops at 1e-3 of a_c*, where
+    the ratio is lost only within about 5e-5 (2e-9 (gamma/64)^2)."""
+    from roughflow.theory import bruggeman_anisotropic
+
+    a_star = 0.415
+    for delta, closed in ((1.5e-3, False), (0.9e-3, True)):
+        z = a_star * (1 - delta)
+        r = bruggeman_anisotropic(np.array([0.0, 1 / 12]), weights=[z, 1 - z],
+                                  a_c_star=a_star, gamma=gamma)
+        assert ((r.sigma_x, r.sigma_y) == (0.0, 0.0)) is closed, (delta, r)
+
+
 @pytest.mark.parametrize("gamma", [1e3, 1e4, 1e-4])
 def test_very_large_gamma_is_not_closed_far_from_the_threshold(gamma):
     """The margin within which both directions count as closed grew as gamma^4 beyond 64

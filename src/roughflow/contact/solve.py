@@ -96,8 +96,9 @@ def solve(
       height, at most ``CONTACT_TOL_MAX``. The default 1e-6 converges a_c and the mean
       gap to about 1e-7 relative (docs/contact.md). The load holds to it as well: gfmd
       counts the imbalance |mean(contact_pressure) - pressure| in its residual, relative
-      to ``pressure`` on the hard wall (up to 6e-3 at tol 1e-2), relative to k_min rms(h)
-      with adhesion; the result's ``pressure`` is the applied load, not that mean.
+      to ``pressure`` on the hard wall (measured up to 9.4e-3 at tol 1e-2), relative to
+      k_min rms(h) with adhesion; the result's ``pressure`` is the applied load, not that
+      mean.
     max_iter:
       iteration cap; if it is reached first a :class:`ConvergenceError` carrying the
       residual is raised.

@@ -7,8 +7,10 @@ atomically); the reports read the datasets (:func:`read_records`).
 Layout: the dimension ``record`` (the records in the log's order) and one variable per field
 of the records over it, named as the field (``kind``, ``seed``, ``a_star_0``, ...), with
 ``units`` (numbers) and ``long_name`` (:data:`FIELDS`, :data:`AXIS_FIELDS`): integers as
-int64 (fill value ``INT_FILL``), other numbers as float64 (fill NaN), text as strings (fill
-""). The fields that set a measurement up (seed, grid, target, tolerances) are coordinates.
+int64 (with the fill value ``INT_FILL`` only where some record lacks the value: xarray reads
+such a column as float64, exact up to 2^53; the seeds and grids are in every record), other
+numbers as float64 (fill NaN), text as strings (fill ""). The fields that set a
+measurement up (seed, grid, target, tolerances) are coordinates.
 Not every record has every field: the coordinate ``field`` names the fields, and the flag
 variable ``field_state`` (record, field) says for each record whether it has the field
 (absent, a value, NaN included, or null: JSON null, Python None). :func:`records_from_dataset`
@@ -165,7 +167,10 @@ def _column(name: str, values: list) -> xr.Variable:
     if given and all(isinstance(v, numbers.Integral) for v in given) and INT_FILL not in given:
         v = xr.Variable(RECORD, np.array([INT_FILL if v is None else int(v) for v in values],
                                          dtype=np.int64), attrs)
-        v.encoding = {"_FillValue": np.int64(INT_FILL), "dtype": "int64"}
+        # a fill value only where a record lacks the value: xarray reads an integer
+        # variable with one as float64, which rounds integers beyond 2^53 (a seed)
+        v.encoding = {"_FillValue": np.int64(INT_FILL) if None in values else None,
+                      "dtype": "int64"}
         return v
     return xr.Variable(RECORD, np.array([np.nan if v is None else float(v) for v in values],
                                         dtype=np.float64), attrs)

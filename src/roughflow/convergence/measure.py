@@ -189,16 +189,22 @@ def _check_same_run(path: Path, rec: dict, expected: dict) -> None:
     would mix two runs."""
     for field, value in expected.items():
         if field in rec and rec[field] != value:
+            # where the sweep's grids do not nest, the study's grids depend on the whole
+            # set of resolutions (options.study_specs)
+            grids = (" (the grids depend on the whole set of --ppl where the sweep's own "
+                     "do not nest: measure every resolution in one run)"
+                     if field in ("n", "ny") else "")
             raise InputError(
                 f"{path} holds records of another run: {field} {rec[field]!r} there, "
-                f"{value!r} here (record {rec['kind']}, seed {rec['seed']}): give another "
-                "--out, or remove the file to start afresh")
+                f"{value!r} here (record {rec['kind']}, seed {rec['seed']}){grids}: give "
+                "another --out, or remove the file to start afresh")
 
 
 def _start(path: Path) -> None:
-    """Remove the dataset of the record log ``path`` before a run works: it is written again
-    when the run completes, and a run that fails leaves none (not an earlier run's, which
-    would look complete)."""
+    """Remove the dataset of the record log ``path`` once a run passed its checks, before it
+    works: it is written again when the run completes, and a run that fails leaves none (not
+    an earlier run's, which would look complete). A refused run leaves the log and its
+    dataset as they were."""
     dataset_file(path).unlink(missing_ok=True)
 
 
@@ -220,7 +226,6 @@ def measure_resolution(out: str | os.PathLike, opts: ResolutionOptions, *,
     (:func:`~.dataset.write_records_dataset`, with ``provenance``). ``warm``:
     :func:`warm_up` first (False where the caller has)."""
     path = resolution_file(out, opts.gamma)
-    _start(path)
     ppl_max = max(opts.ppl)
     grids = study_specs(opts.ppl, gamma=opts.gamma, l_over_lambda_r=opts.l_over_lambda_r)
     _check_fits(grids[ppl_max], "ladder" if opts.with_sigma else "threshold")
@@ -234,6 +239,7 @@ def measure_resolution(out: str | os.PathLike, opts: ResolutionOptions, *,
         else:
             expected.update(contact_tol=opts.contact_tol, area_tol=opts.area_tol)
         _check_same_run(path, r, expected)
+    _start(path)
     done = {(r["kind"], r["seed"], r["ppl"], r.get("target")) for r in records}
     todo = []
     for seed, ppl in ((s, p) for s in opts.seeds for p in sorted(opts.ppl)):
@@ -354,7 +360,6 @@ def measure_tolerances(out: str | os.PathLike, opts: ToleranceOptions, *,
     is written as a dataset beside it (:func:`~.dataset.write_records_dataset`, with
     ``provenance``). ``warm``: :func:`warm_up` first (False where the caller has)."""
     path = tolerance_file(out)
-    _start(path)
     grid = SurfaceSpec.from_sweep(points_per_lambda_s=opts.ppl)
     _check_fits(grid, "ladder")
     records = load_records(path)
@@ -365,6 +370,7 @@ def measure_tolerances(out: str | os.PathLike, opts: ToleranceOptions, *,
         elif r["kind"].startswith("bisect_tol"):
             expected.update(contact_tol=opts.threshold_contact_tol)
         _check_same_run(path, r, expected)
+    _start(path)
     done = {_tolerance_key(r) for r in records}
     wanted = {("contact_tol", s, t, c) for s in opts.seeds for t in TARGETS
               for c in opts.contact_tols}

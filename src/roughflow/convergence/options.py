@@ -46,8 +46,8 @@ def check_resolutions(ppl: Iterable[int]) -> tuple[int, ...]:
     """``ppl`` (points per lambda_s) as a tuple of distinct integers >= 2 whose grids are the
     finest one sampled down (:func:`study_specs`): each must divide the largest;
     :class:`InputError` naming the value otherwise. (One resolution may be measured, and
-    others added by a later run into the same file; the report needs two, and the
-    workflow's schema asks for two at once.)"""
+    others added by a later run into the same file where the grids are the sweep's own; the
+    report needs two, and the workflow's schema asks for two at once.)"""
     out = require_distinct("ppl", tuple(require_int("ppl entry", p, minimum=2) for p in ppl))
     finest = max(out)
     odd = [p for p in out if finest % p]
@@ -118,6 +118,9 @@ class ResolutionOptions:
         for name in ("bisect_tol", "threshold_contact_tol", "contact_tol", "area_tol"):
             require_positive(name, getattr(self, name))
         object.__setattr__(self, "ppl", check_resolutions(self.ppl))
+        # the surfaces themselves (a lambda_r longer than the cell): refused here, before
+        # a run touches its files
+        study_specs(self.ppl, gamma=self.gamma, l_over_lambda_r=self.l_over_lambda_r)
 
     @property
     def with_sigma(self) -> bool:
