@@ -184,7 +184,7 @@ def require_finite_values(name: str, a: np.ndarray) -> np.ndarray:
     return a
 
 
-def require_squares_in_range(name: str, value: float, heights) -> float:
+def require_squares_in_range(name: str, value: float, heights: np.ndarray) -> float:
     """``value``, a sum of squares of the heights ``heights`` (numpy or CuPy) or a quantity
     made from one (their rms, their rms gradient), unchanged; :class:`InputError` naming
     the largest |h| where it overflowed (not finite) or underflowed (0 for heights that are
