@@ -159,3 +159,18 @@ def test_cli_eta_reaches_the_solver(tmp_path, gap):
             sigma[eta] = float(ds["sigma_x"])
     assert sigma["1"] > 0
     assert sigma["2"] == pytest.approx(sigma["1"] / 2, rel=1e-10)
+
+
+@pytest.mark.parametrize("method", ["cg", "rs", "sa", "auto"])
+def test_cli_refuses_a_sigma_it_cannot_certify(tmp_path, capsys, method):
+    """Stripes across the flow whose u^3 alternates between 1 and 1e-15: float64 cannot
+    resolve the series flow, and no solve can prove its sigma. The command exits 3 naming the
+    bound and writes nothing; with ``--method cg`` it wrote sigma_y 8 times the exact one and
+    exited 0 (rs 1.6 times, sa 1e8 times; a warning only)."""
+    col = np.where(np.arange(32) % 2 == 0, 1.0, 1e-5)  # u^3 1 and 1e-15
+    src, out = tmp_path / "c.nc", tmp_path / "f.nc"
+    write_contact(src, np.tile(col, (32, 1)))
+    with pytest.raises(SystemExit) as exc:
+        main(["flow", str(src), "--axis", "y", "--method", method, "-o", str(out)])
+    assert exc.value.code == 3 and "error bound" in capsys.readouterr().err
+    assert not out.exists()

@@ -8,7 +8,7 @@ import xarray as xr
 
 from roughflow.aggregate import aggregate, combine, load
 from roughflow.cli import build_parser, main
-from roughflow.defaults import FLOW_IMBALANCE_MAX, FLOW_SIGMA_TOL, FLOW_TOL
+from roughflow.defaults import FLOW_SIGMA_TOL, FLOW_TOL
 from roughflow.errors import InputError
 from roughflow.io import write_dataset
 from roughflow.scenes import (
@@ -350,9 +350,8 @@ def test_ladder_records_the_flow_solver_and_combines_with_files_that_do_not(monk
     # the flux imbalance of each solve (a check the sigma from the dissipation does not make):
     # direct solves are balanced to the flow tolerance; AMG solves stop once sigma is
     # proven accurate to FLOW_SIGMA_TOL, their fluxes then balanced to 1e-7 - 2e-5 on such
-    # states (benchmarks/bench_sigma_tol.py), well inside FLOW_IMBALANCE_MAX; 0 where no
-    # solve ran
-    for ds, most in ((direct, FLOW_TOL), (amg, FLOW_IMBALANCE_MAX)):
+    # states (benchmarks/bench_sigma_tol.py), well inside 1e-2; 0 where no solve ran
+    for ds, most in ((direct, FLOW_TOL), (amg, 1e-2)):
         imbalance = ds["flow_imbalance"].values
         assert np.isfinite(imbalance).all() and (imbalance <= most).all()
         assert (imbalance[ds["percolating"].values == 0] == 0).all()
