@@ -47,6 +47,29 @@ def test_uniform_gap_gives_u0_cubed_over_12(method, shape, lx, ly):
         np.testing.assert_allclose(across, 0.0, atol=1e-9 * u0**3)
 
 
+@pytest.mark.parametrize("method", ["auto", "direct", "rs", "sa", "cg"])
+def test_sigma_is_scale_free(heights, method):
+    """The solve runs in units of a power of two of the largest u^3 / (12 eta), so sigma
+    scales as u^3 / eta over float64's range. Uniform gaps of 1e-80 and 1e80 (u^3 1e-240
+    and 1e240) and eta 1e-300 failed before ("float64 cannot resolve this gap's flow" from
+    u 1e-60, a nan residual with overflow warnings from 1e60): they give u^3 / (12 eta) to
+    1e-12 (round-off and the solver tolerance, as above). A gap scaled by 2^k is the same
+    system in those units, so its sigma is 2^3k times the unscaled one bit for bit (k = 200:
+    u^3 2^600 = 4e180 times)."""
+    for u, eta in ((1e-80, 1.0), (1e80, 1.0), (1.0, 1e-300)):
+        r = solve(np.full((16, 16), u), 0, eta=eta, method=method)
+        assert r.sigma == pytest.approx(u**3 / (12.0 * eta), rel=1e-12)
+        assert r.sigma_flux == pytest.approx(r.sigma, rel=1e-6)
+        assert np.mean(r.flux_x) == pytest.approx(r.sigma, rel=1e-6)
+    gap = bearing_gap(heights[:32, :32], 0.2)
+    base = solve(gap, 1, method=method)
+    for k in (-200, 200):
+        scaled = solve(np.ldexp(gap, k), 1, method=method)
+        assert scaled.sigma == np.ldexp(base.sigma, 3 * k)
+        assert scaled.iterations == base.iterations
+        np.testing.assert_array_equal(scaled.flux_y, np.ldexp(base.flux_y, 3 * k))
+
+
 # --- layered media -----------------------------------------------------------------------
 
 def test_stripes_arithmetic_along_harmonic_across():
@@ -705,6 +728,10 @@ def test_amg_solve_at_round_off_is_certified_by_its_bound(caplog, monkeypatch):
         (np.ones((4, 4)), {"tol": 0.0}, "tol"),
         (np.ones((4, 4)), {"method": "magic"}, "magic"),
         (np.ones((4, 4)), {"axis": 2}, "axis"),
+        (np.ones((4, 4), bool), {}, "boolean array"),  # a contact mask passed as the gap
+        (np.full((4, 4), 1e-97), {}, "underflows"),  # u^3 / 12 below SMALLEST_TOP
+        (np.full((4, 4), 1e-110), {}, "underflows"),  # u^3 underflows to 0
+        (np.ones((4, 4)), {"eta": 1e-320}, "overflows"),
     ],
 )
 def test_bad_input(gap, kwargs, match):

@@ -33,6 +33,7 @@ from roughflow.errors import (
     ConvergenceError,
     InputError,
     check_axis,
+    plain_array,
     require_cell,
     require_field,
     require_positive,
@@ -214,9 +215,19 @@ def reynolds_system(sigma_local: np.ndarray, active: np.ndarray, axis: int, *, l
                           l_across)
 
 
+#: the smallest largest local conductivity a flow solve takes: the floor
+#: (``FLOW_CLOSED_BELOW`` of it) is then a normal float64 number, so are the cells above it
+SMALLEST_TOP = float(np.finfo(np.float64).tiny) / FLOW_CLOSED_BELOW
+
+
 def check_gap(gap: ArrayLike) -> np.ndarray:
-    """Return ``gap`` as a float64 2D array, or raise :class:`InputError`."""
-    g = require_field("gap", gap)
+    """Return ``gap`` as a float64 2D array, or raise :class:`InputError` (a boolean array
+    too: a contact mask passed as the gap flowed as a uniform gap of 1, sigma = 1/12)."""
+    raw = plain_array("gap", gap)
+    if raw.dtype.kind == "b":
+        raise InputError("gap must hold gap heights, got a boolean array (a contact mask?): "
+                         "pass the contact state's gap, closed (0) where in contact")
+    g = require_field("gap", raw)
     if (g < 0).any():
         idx = tuple(int(i) for i in np.argwhere(g < 0)[0])
         raise InputError(f"gap must be >= 0, got {g[idx]!r} at {idx}")
@@ -628,9 +639,15 @@ def solve(
     ordering afresh (the next state of a load ladder: 0.3-0.75 of the factorisation's time;
     it falls back to a fresh order where cells the old one never saw would make it costlier
     than the factorisation it came from). sigma is the same to round-off either way.
-    Raises ``InputError`` for bad input and ``ConvergenceError`` if the solver misses
-    ``tol``, or where sigma's error is not certified to ``FLOW_SIGMA_RTOL`` (after a direct
-    solve, for ``auto``, where its factorisation fits).
+    The solve runs in units of a power of two of the largest u^3 / (12 eta): scale-free
+    (uniform gaps of 1e-96 - 1e100 give u^3 / (12 eta) to 2e-15), and, the scaling being
+    exact, the same bit for bit as an unscaled solve wherever that neither under- nor
+    overflowed.
+    Raises ``InputError`` for bad input (a boolean gap, a contact mask passed by mistake,
+    included; and a largest u^3 / (12 eta) that overflows float64 or lies below
+    :data:`SMALLEST_TOP`) and ``ConvergenceError`` if the solver misses ``tol``, or where
+    sigma's error is not certified to ``FLOW_SIGMA_RTOL`` (after a direct solve, for
+    ``auto``, where its factorisation fits).
     """
     g = check_gap(gap)
     ax = check_axis(axis)
@@ -649,10 +666,23 @@ def solve(
     check_memory("flow", g.shape, what="a Reynolds flow solve")
 
     sigma_local = cubic_law(g, eta)
+    top = float(sigma_local.max())
     # an infinite cell would close every other one below the floor (sigma 0, measured)
-    if not np.isfinite(sigma_local.max()):
+    if not np.isfinite(top):
         raise InputError(f"the local conductivity u^3 / (12 eta) overflows float64: largest "
                          f"gap {float(g.max())!r} (units of L), eta {eta!r}")
+    if top < SMALLEST_TOP and g.max() > 0:  # not all contact, or u^3 underflows to 0
+        raise InputError(
+            f"the local conductivity u^3 / (12 eta) underflows float64: largest gap "
+            f"{float(g.max())!r} (units of L) and eta {eta!r} give at most {top:.3g}, below "
+            f"{SMALLEST_TOP:.3g}, where cells down to {FLOW_CLOSED_BELOW:g} of it are no "
+            f"normal float64 numbers (give the gap in larger units)")
+    # solve in units of a power of two of the largest conductivity: scale-free (squares of
+    # u^3 ~ 1e-180 underflowed, of 1e180 overflowed: uniform gaps of 1e-60 and 1e60 failed),
+    # and exact, so that every number of a solve is the same as unscaled where that did not
+    # under- or overflow
+    unit = int(np.frexp(top)[1])
+    sigma_local = np.ldexp(sigma_local, -unit, out=sigma_local)
     active = flowing_cells(sigma_local, ax, periodic=periodic)
 
     nan = np.full(g.shape, np.nan)
@@ -677,13 +707,13 @@ def solve(
     q_out = float(np.sum(faces.t_out * q[-1]))
     q_mean = 0.5 * (q_in + q_out)
     scale = system.l_flow / system.l_across
-    j_along, j_across = _cell_fluxes(faces, p, h_flow, h_across)
+    j_along, j_across = (np.ldexp(j, unit) for j in _cell_fluxes(faces, p, h_flow, h_across))
     if ax == 0:
         pressure, fx, fy = p, j_along, j_across
     else:
         pressure, fx, fy = p.T.copy(), j_across.T.copy(), j_along.T.copy()
     return FlowResult(
-        sigma=float(dissipation * scale),
+        sigma=float(np.ldexp(dissipation * scale, unit)),
         pressure=pressure,
         flux_x=fx,
         flux_y=fy,
@@ -693,7 +723,7 @@ def solve(
         percolating=True,
         axis=ax,
         method=sol.method,
-        sigma_flux=q_mean * scale,
+        sigma_flux=float(np.ldexp(q_mean * scale, unit)),
         n_active=int(cells.size),
         imbalance_floor=balanced.floor,
         sigma_error=balanced.sigma_error,
