@@ -35,6 +35,28 @@ def test_integer_contact_mask_is_refused_by_the_gap_theory(state):
         theory.local_conductivity(state.gap, contact=state.contact.astype(int))
 
 
+@pytest.mark.parametrize("call", [
+    lambda m: flow.solve(m, 0),
+    lambda m: theory.conductivity_peklenik(m),
+    lambda m: theory.local_conductivity(m),
+    lambda m: theory.bruggeman(m, a_c_star=0.415),
+    lambda m: Surface.from_array(m),
+    lambda m: rms_gradient(m, 1.0, 1.0),
+], ids=["flow", "peklenik", "local_conductivity", "bruggeman", "surface", "rms_gradient"])
+def test_a_mask_passed_where_numbers_belong_is_refused(state, call):
+    # a contact mask where a gap or heights belong read as a field of ones and zeros: the
+    # flow gave sigma 1/12 of an all-open mask, the Peklenik estimate a number
+    with pytest.raises(InputError, match="boolean array"):
+        call(state.contact)
+
+
+def test_the_peklenik_number_of_a_contact_mask_is_its_pattern_s(surface, state):
+    # a mask is a field of its own there (the contact pattern's anisotropy), read as 0 / 1
+    cell = (surface.lx, surface.ly)
+    assert theory.peklenik_number(state.contact, *cell) == theory.peklenik_number(
+        state.contact.astype(float), *cell)
+
+
 def test_nan_heights_are_refused_wherever_they_enter(surface):
     h = surface.heights.copy()
     h[3, 3] = np.nan

@@ -184,6 +184,14 @@ def require_finite_values(name: str, a: np.ndarray) -> np.ndarray:
     return a
 
 
+def require_numbers(name: str, raw: np.ndarray, hint: str = "") -> np.ndarray:
+    """``raw`` unchanged; :class:`InputError` where it is a boolean array: a mask passed
+    where numbers belong (a contact mask as the gap flowed as a gap of 1 everywhere)."""
+    if raw.dtype.kind == "b":
+        raise InputError(f"{name} must hold numbers, got a boolean array (a mask?){hint}")
+    return raw
+
+
 def require_squares_in_range(name: str, value: float, heights: np.ndarray) -> float:
     """``value``, a sum of squares of the heights ``heights`` (numpy or CuPy) or a quantity
     made from one (their rms, their rms gradient), unchanged; :class:`InputError` naming
@@ -199,10 +207,10 @@ def require_squares_in_range(name: str, value: float, heights: np.ndarray) -> fl
 
 def require_field(name: str, array: ArrayLike, *, ndim: int = 2) -> np.ndarray:
     """Return ``array`` as a float64 numpy array, or raise if it has the wrong rank or
-    non-finite values (or masked values, or xarray dims in the order (y, x))."""
+    non-finite values (or masked values, or xarray dims in the order (y, x), or booleans)."""
     import numpy as np
 
-    raw = plain_array(name, array)
+    raw = require_numbers(name, plain_array(name, array))
     if raw.dtype.kind == "c":  # a cast to float64 would drop the imaginary part silently
         raise InputError(f"{name} must be real, got complex values")
     try:

@@ -36,6 +36,7 @@ from roughflow.errors import (
     plain_array,
     require_cell,
     require_field,
+    require_numbers,
     require_positive,
 )
 from roughflow.percolation import spanning_cells
@@ -223,10 +224,8 @@ SMALLEST_TOP = float(np.finfo(np.float64).tiny) / FLOW_CLOSED_BELOW
 def check_gap(gap: ArrayLike) -> np.ndarray:
     """Return ``gap`` as a float64 2D array, or raise :class:`InputError` (a boolean array
     too: a contact mask passed as the gap flowed as a uniform gap of 1, sigma = 1/12)."""
-    raw = plain_array("gap", gap)
-    if raw.dtype.kind == "b":
-        raise InputError("gap must hold gap heights, got a boolean array (a contact mask?): "
-                         "pass the contact state's gap, closed (0) where in contact")
+    raw = require_numbers("gap", plain_array("gap", gap),
+                          ": pass the contact state's gap, closed (0) where in contact")
     g = require_field("gap", raw)
     if (g < 0).any():
         idx = tuple(int(i) for i in np.argwhere(g < 0)[0])

@@ -41,6 +41,7 @@ from roughflow.errors import (
     require_finite,
     require_finite_values,
     require_mask,
+    require_numbers,
     require_positive,
 )
 from roughflow.reynolds import cubic_law
@@ -390,7 +391,7 @@ def _check_a_c_star(a_c_star: float) -> float:
 
 
 def _check_nonnegative(name: str, values) -> np.ndarray:
-    raw = plain_array(name, values)
+    raw = require_numbers(name, plain_array(name, values))
     if raw.dtype.kind == "c":
         raise InputError(f"{name} must be real, got complex values")
     try:

@@ -23,7 +23,7 @@ from typing import TYPE_CHECKING
 import numpy as np
 
 from roughflow import fft
-from roughflow.errors import InputError, require_cell, require_field
+from roughflow.errors import InputError, plain_array, require_cell, require_field
 
 from .effective_medium import local_conductivity
 
@@ -42,8 +42,10 @@ def _require_varying(name: str, f: np.ndarray, cause: str = "") -> None:
 
 
 def autocorrelation(field: ArrayLike) -> np.ndarray:
-    """Normalised periodic autocorrelation C[ix, iy] of the fluctuations of ``field`` (C[0,0]=1)."""
-    f = require_field("field", field)
+    """Normalised periodic autocorrelation C[ix, iy] of the fluctuations of ``field`` (C[0,0]=1);
+    a boolean field (a contact mask: the pattern's own anisotropy) counts as 0 and 1."""
+    raw = plain_array("field", field)
+    f = require_field("field", raw.astype(np.float64) if raw.dtype.kind == "b" else raw)
     _require_varying("field", f)
     df = f - f.mean()
     c = fft.rfft2(df)
