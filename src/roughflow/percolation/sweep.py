@@ -370,16 +370,27 @@ def bearing_bracket(heights: np.ndarray, axis: int | str) -> BearingBracket:
     the first cell whose opening makes the fluid span fixes the threshold. Cells of equal
     height open together, so the bracket widens over their tie group.
     """
+    return bearing_brackets(heights, (axis,))[check_axis(axis)]
+
+
+def bearing_brackets(heights: np.ndarray,
+                     axes: tuple[int | str, ...] = (0, 1)) -> dict[int, BearingBracket]:
+    """:func:`bearing_bracket` along each of ``axes`` (keyed 0 / 1) from one sort of the
+    heights: the sort is most of the work, and only the sweep after it depends on the
+    axis."""
     heights = require_field("heights", heights)  # argsort puts nan last: never opened
     flat = heights.ravel()
     n = flat.size
     order = np.argsort(flat, kind="stable")
     hs = flat[order]
-    k = critical_open_count(order, heights.shape, axis)
-    i0 = int(np.searchsorted(hs, hs[k - 1], side="left"))
-    i1 = int(np.searchsorted(hs, hs[k - 1], side="right"))
-    return BearingBracket(a_lo=1.0 - i1 / n, a_hi=1.0 - i0 / n, tied=i1 - i0,
-                          height=float(hs[k - 1]))
+    out = {}
+    for axis in axes:
+        k = critical_open_count(order, heights.shape, axis)
+        i0 = int(np.searchsorted(hs, hs[k - 1], side="left"))
+        i1 = int(np.searchsorted(hs, hs[k - 1], side="right"))
+        out[check_axis(axis)] = BearingBracket(a_lo=1.0 - i1 / n, a_hi=1.0 - i0 / n,
+                                               tied=i1 - i0, height=float(hs[k - 1]))
+    return out
 
 
 def _grid(shape) -> tuple[int, int]:

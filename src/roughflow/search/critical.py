@@ -65,7 +65,7 @@ from roughflow.errors import (
 from roughflow.gpu import check_backend
 from roughflow.gpu import check_memory as gpu_check_memory
 from roughflow.percolation import (
-    bearing_bracket,
+    bearing_brackets,
     check_axis,
     openness,
     percolates_along,
@@ -573,8 +573,7 @@ def _bearing_tie(heights: np.ndarray) -> Callable[[_Sample, _Sample], tuple[int,
 
 def _bearing_exact(heights: np.ndarray, axes, tol: float, on_unbracketed: str):
     out = {}
-    for ax in axes:
-        b = bearing_bracket(heights, ax)
+    for ax, b in bearing_brackets(heights, tuple(axes)).items():
         ok = b.tied == 1 or b.a_hi - b.a_lo <= tol  # one cell: exact at grid resolution
         msg = ""
         if not ok:
