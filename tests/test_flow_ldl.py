@@ -9,7 +9,7 @@ import qdldl
 import scipy.sparse as sp
 
 import roughflow.flow.core as flow_core
-from roughflow.errors import InputError
+from roughflow.errors import ConvergenceError, InputError
 from roughflow.flow import CellOrdering, ldl, linsolve, solve
 from roughflow.flow.core import flowing_cells, reynolds_system
 from roughflow.surface import SurfaceSpec, generate
@@ -208,3 +208,12 @@ def test_the_ladder_scene_and_leak_curve_chain_each_axis_order(monkeypatch):
                                               points_per_lambda_s=4))
     leak_curve(surface, [0.02, 0.05, 0.1], sealing=False)
     assert_chained(calls, 3)
+
+
+def test_a_pivot_lost_to_rounding_is_named_as_such():
+    # a 4 x 1 strip, every third row at u^3 1e-16 of the others: the matrix is positive
+    # definite, but a pivot rounds to zero; the message said "not positive definite"
+    col = np.where(np.arange(4) % 3 != 0, 1.0, 1e-16 ** (1 / 3))
+    with pytest.raises(ConvergenceError, match="zero pivot: the matrix is singular to "
+                                               "working precision"):
+        solve(col[:, None], 0, lx=1.0, ly=0.25, method="direct")

@@ -99,9 +99,12 @@ def test_rms_gradient_refuses_heights_whose_squares_leave_the_float_range(period
     # contact.solve's (errors.require_squares_in_range), naming the heights' size
     h = np.random.default_rng(0).standard_normal((16, 16))
     for scale, flow in ((1e200, "overflow"), (1e-200, "underflow")):
-        with pytest.raises(InputError, match=f"heights out of range: their squares {flow} "
-                           r"\(largest \|h\| 3.11e[+-]200"):
+        with pytest.raises(InputError, match=f"gradients on the 1 x 1 cell out of range: "
+                           rf"their squares {flow} \(largest \|h\| 3.11e[+-]200"):
             rms_gradient(h * scale, 1.0, 1.0, periodic=periodic)
+    # ordinary heights on a tiny cell: the message names the cell, not only the heights
+    with pytest.raises(InputError, match="gradients on the 1e-300 x 1 cell out of range"):
+        rms_gradient(h, 1e-300, 1.0, periodic=periodic)
     assert rms_gradient(h * 1e150, 1.0, 1.0, periodic=periodic) == pytest.approx(
         rms_gradient(h, 1.0, 1.0, periodic=periodic) * 1e150, rel=1e-12)
     assert rms_gradient(np.full((8, 8), 3.0), 1.0, 1.0, periodic=periodic) == 0.0  # flat

@@ -322,7 +322,9 @@ def rms_gradient(heights: np.ndarray, lx: float, ly: float, *, periodic: bool = 
             gx = np.diff(heights, axis=0) * (nx / lx)
             gy = np.diff(heights, axis=1) * (ny / ly)
             g = float(np.sqrt(np.mean(gx * gx) + np.mean(gy * gy)))
-    return require_squares_in_range("heights", g, heights)
+    # the cell's size enters too: on a 1e-300 wide cell ordinary heights overflow
+    return require_squares_in_range(f"heights' gradients on the {lx:g} x {ly:g} cell", g,
+                                    heights)
 
 
 def spectral_rms_gradient(spectrum: np.ndarray, shape: tuple[int, int], lx: float,

@@ -110,7 +110,7 @@ def factor(a: sp.spmatrix, order: np.ndarray | None = None, *,
     permutation of its rows; None: AMD's, :func:`amd_order`). With ``max_flops``, an
     ``order`` whose factorisation would take more floating point operations is replaced by
     AMD's (its symbolic pass, which counts them, costs 2-5 % of a factorisation). Raises
-    :class:`ConvergenceError` on a zero pivot (``a`` not positive definite)."""
+    :class:`ConvergenceError` on a zero pivot (``a`` singular to working precision)."""
     lib = _require()
     if order is not None:
         perm = np.asarray(order, dtype=np.int64)
@@ -178,8 +178,12 @@ def _numeric(lib: ctypes.CDLL, s: _Symbolic, perm: np.ndarray, *, amd: bool) -> 
         _ptr(s.etree), _ptr(np.empty(n, np.uint8), _P_BOOL), _ptr(np.empty(3 * n, np.int64)),
         _ptr(np.empty(n), _P_FLOAT))
     if status < 0:
-        raise ConvergenceError("LDL^T factorisation met a zero pivot: the matrix is not "
-                               "positive definite", residual=float("inf"), iterations=0)
+        # the flow's matrices are positive definite by construction: a zero pivot is one
+        # lost to rounding, where the conductances span more than float64 resolves
+        raise ConvergenceError("LDL^T factorisation met a zero pivot: the matrix is singular "
+                               "to working precision (the local conductances span more than "
+                               "float64 resolves; docs/flow.md \"Unresolved gaps\")",
+                               residual=float("inf"), iterations=0)
     return LDLFactor(perm, lp, li, lx, dinv, s.flops, amd, lib)
 
 
