@@ -225,3 +225,40 @@ def test_a_failed_tolerance_run_removes_the_stale_dataset(tmp_path, monkeypatch)
         measure.measure_tolerances(tmp_path, ToleranceOptions(seeds=(0,), ppl=2),
                                    warm=False)
     assert not stale.exists()
+
+
+def test_a_second_run_on_the_same_log_is_refused(tmp_path, monkeypatch):
+    # two runs on one log (a rerun while an orphaned run lives on) interleaved their
+    # records; the first run now holds the log, and the second is refused before any work
+    from roughflow.convergence.records import RecordLog
+
+    path = resolution_file(tmp_path, 1.0)
+    _write(path, [_threshold(2)])
+    _no_solves(monkeypatch)
+    with RecordLog(path), pytest.raises(InputError, match="being written by another run"):
+        measure.measure_resolution(tmp_path, ResolutionOptions(**TINY))
+    with RecordLog(tolerance_file(tmp_path)), \
+            pytest.raises(InputError, match="being written by another run"):
+        measure.measure_tolerances(tmp_path, ToleranceOptions(seeds=(0,), ppl=2))
+    assert load_records(path) == [_threshold(2)]
+
+
+def test_a_run_whose_log_was_replaced_writes_neither_log_nor_dataset(tmp_path, monkeypatch):
+    # a run that lives on after its job was ended (its shell wrapper killed) while the
+    # rerun removed the log and started a new one: before, the old run appended to the
+    # new log by name and, at its end, wrote a dataset from it that looked complete
+    path = resolution_file(tmp_path, 1.0)
+    rerun = [_threshold(2, seed=7)]
+
+    def record(surf, **kwargs):
+        if surf.shape == _grid(2):  # the rerun replaces the log after the first record
+            path.unlink(missing_ok=True)
+            _write(path, rerun)
+        return {"a_star_0": 0.4, "a_star_1": 0.4}
+
+    monkeypatch.setattr(measure, "threshold_record", record)
+    monkeypatch.setattr(measure, "_sigma_targets", lambda *a, **k: None)
+    with pytest.raises(InputError, match="removed or replaced while this run wrote it"):
+        measure.measure_resolution(tmp_path, ResolutionOptions(**TINY), warm=False)
+    assert load_records(path) == rerun
+    assert not path.with_suffix(".nc").exists()

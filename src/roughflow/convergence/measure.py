@@ -28,7 +28,7 @@ from .dataset import write_records_dataset
 from .load_path import shifted_sigma
 from .options import TARGETS, ResolutionOptions, ToleranceOptions, study_specs
 from .records import (
-    append_record,
+    RecordLog,
     dataset_file,
     load_records,
     resolution_file,
@@ -208,9 +208,9 @@ def _start(path: Path) -> None:
     dataset_file(path).unlink(missing_ok=True)
 
 
-def _emitter(path: Path, on_record: OnRecord | None) -> OnRecord:
+def _emitter(log: RecordLog, on_record: OnRecord | None) -> OnRecord:
     def emit(rec: dict) -> None:
-        append_record(path, rec)
+        log.append(rec)
         if on_record is not None:
             on_record(rec)
     return emit
@@ -226,9 +226,20 @@ def measure_resolution(out: str | os.PathLike, opts: ResolutionOptions, *,
     (:func:`~.dataset.write_records_dataset`, with ``provenance``). ``warm``:
     :func:`warm_up` first (False where the caller has)."""
     path = resolution_file(out, opts.gamma)
-    ppl_max = max(opts.ppl)
     grids = study_specs(opts.ppl, gamma=opts.gamma, l_over_lambda_r=opts.l_over_lambda_r)
-    _check_fits(grids[ppl_max], "ladder" if opts.with_sigma else "threshold")
+    _check_fits(grids[max(opts.ppl)], "ladder" if opts.with_sigma else "threshold")
+    with RecordLog(path) as log:
+        _resolution_run(log, opts, grids, on_record, warm)
+        log.require_current()
+        write_records_dataset(path, study="resolution", provenance=provenance)
+    return path
+
+
+def _resolution_run(log: RecordLog, opts: ResolutionOptions, grids: dict[int, SurfaceSpec],
+                    on_record: OnRecord | None, warm: bool) -> None:
+    """:func:`measure_resolution`'s checks and measurements, into ``log``."""
+    path = log.path
+    ppl_max = max(opts.ppl)
     records = load_records(path)
     for r in records:
         expected = dict(gamma=opts.gamma, l_over_lambda_r=opts.l_over_lambda_r)
@@ -251,7 +262,7 @@ def measure_resolution(out: str | os.PathLike, opts: ResolutionOptions, *,
             todo.append((seed, ppl, has_threshold, missing))
     if warm and todo:
         warm_up()
-    emit = _emitter(path, on_record)
+    emit = _emitter(log, on_record)
     finest: dict[int, Surface] = {}
     # seed by seed (every resolution of a seed before the next seed): an interrupted run
     # leaves complete seeds, and only one finest surface is held in memory
@@ -273,8 +284,6 @@ def measure_resolution(out: str | os.PathLike, opts: ResolutionOptions, *,
             _sigma_targets(surf, base, missing, opts, emit)
         else:
             _fixed_loads(surf, base, missing, opts.contact_tol, emit)
-    write_records_dataset(path, study="resolution", provenance=provenance)
-    return path
 
 
 def _tolerance_key(rec: dict) -> tuple:
@@ -360,8 +369,18 @@ def measure_tolerances(out: str | os.PathLike, opts: ToleranceOptions, *,
     is written as a dataset beside it (:func:`~.dataset.write_records_dataset`, with
     ``provenance``). ``warm``: :func:`warm_up` first (False where the caller has)."""
     path = tolerance_file(out)
-    grid = SurfaceSpec.from_sweep(points_per_lambda_s=opts.ppl)
-    _check_fits(grid, "ladder")
+    _check_fits(SurfaceSpec.from_sweep(points_per_lambda_s=opts.ppl), "ladder")
+    with RecordLog(path) as log:
+        _tolerance_run(log, opts, on_record, warm)
+        log.require_current()
+        write_records_dataset(path, study="tolerance", provenance=provenance)
+    return path
+
+
+def _tolerance_run(log: RecordLog, opts: ToleranceOptions, on_record: OnRecord | None,
+                   warm: bool) -> None:
+    """:func:`measure_tolerances`' checks and measurements, into ``log``."""
+    path = log.path
     records = load_records(path)
     for r in records:
         expected: dict = dict(ppl=opts.ppl)
@@ -379,7 +398,7 @@ def measure_tolerances(out: str | os.PathLike, opts: ToleranceOptions, *,
     wanted |= {("bisect_tol", s, b) for s in opts.seeds for b in opts.bisect_tols}
     if warm and wanted - done:
         warm_up()
-    emit = _emitter(path, on_record)
+    emit = _emitter(log, on_record)
     for seed in opts.seeds:
         if not any(key[1] == seed for key in wanted - done):
             continue
@@ -388,5 +407,3 @@ def measure_tolerances(out: str | os.PathLike, opts: ToleranceOptions, *,
         _contact_tolerances(surf, seed, opts, done, emit)
         _threshold_contact_tolerances(surf, seed, opts, done, emit)
         _bisection_tolerances(surf, seed, opts, done, emit)
-    write_records_dataset(path, study="tolerance", provenance=provenance)
-    return path

@@ -5,16 +5,19 @@ Each study writes two files of one stem under ``--out``: the record log (``.json
 which records are appended as they are measured (an interrupted run keeps what it finished,
 and a rerun into the same file computes only what is missing), and, when a run completes,
 the whole log as one netCDF dataset (``.nc``, :mod:`.dataset`): the job's output, which the
-reports read.
+reports read. A run writes its log through :class:`RecordLog`, one run at a time.
 """
 
 from __future__ import annotations
 
 import json
+import logging
 import os
 from pathlib import Path
 
 from roughflow.errors import InputError
+
+log = logging.getLogger(__name__)
 
 #: the record log (JSON lines, appended and resumed from) and the dataset written from it
 #: at the end of a run (netCDF, what the reports read): one stem, these suffixes
@@ -60,11 +63,66 @@ def dataset_file(log: Path) -> Path:
     return log.with_suffix(DATASET_SUFFIX)
 
 
-def append_record(path: Path, rec: dict) -> None:
-    """Append ``rec`` as one JSON line to ``path`` (folders created)."""
-    path.parent.mkdir(parents=True, exist_ok=True)
-    with path.open("a") as f:
-        f.write(json.dumps(rec) + "\n")
+class RecordLog:
+    """The record log ``path`` held open by one run from before it reads the log until it
+    ends (a context manager).
+
+    Its records go to the file this run opened, not to whatever ``path`` names later: a run
+    that lives on after its job was ended (a killed shell wrapper leaves its Python child
+    running) and whose log the rerun removed appends to the removed file, not into the
+    rerun's log, and :meth:`require_current` keeps it from writing a dataset. An exclusive
+    ``flock`` refuses a second run on the same log while the first holds it (where the file
+    system has no flock, the run goes on unlocked, with a warning).
+    """
+
+    def __init__(self, path: Path):
+        path.parent.mkdir(parents=True, exist_ok=True)
+        self.path = path
+        self._file = path.open("a")
+        try:
+            import fcntl
+        except ImportError:  # not POSIX: no lock
+            return
+        try:
+            fcntl.flock(self._file.fileno(), fcntl.LOCK_EX | fcntl.LOCK_NB)
+        except BlockingIOError:
+            self._file.close()
+            raise InputError(
+                f"{path} is being written by another run of the study (one still running, or "
+                "one whose job was ended while its process lives on): wait for it or stop "
+                "it, or give another --out") from None
+        except OSError as err:  # some network file systems (Lustre without flock)
+            log.warning("cannot lock %s (%s): the run goes on unlocked, and a second run on "
+                        "the same log would not be refused", path, err)
+
+    def append(self, rec: dict) -> None:
+        """Append ``rec`` as one JSON line, flushed (a run killed later keeps it)."""
+        self._file.write(json.dumps(rec) + "\n")
+        self._file.flush()
+
+    def require_current(self) -> None:
+        """:class:`InputError` where ``path`` no longer names the file this run appended
+        to: the log was removed or replaced under the run (by a rerun), whose records and
+        dataset are not this run's to write."""
+        mine = os.fstat(self._file.fileno())
+        try:
+            now = os.stat(self.path)
+        except FileNotFoundError:
+            now = None
+        if now is None or (now.st_dev, now.st_ino) != (mine.st_dev, mine.st_ino):
+            raise InputError(
+                f"{self.path} was removed or replaced while this run wrote it (a rerun of "
+                "the job started meanwhile?): this run's records went to the old file, and "
+                "it writes no dataset")
+
+    def close(self) -> None:
+        self._file.close()  # releases the lock
+
+    def __enter__(self) -> RecordLog:
+        return self
+
+    def __exit__(self, *exc) -> None:
+        self.close()
 
 
 def load_records(path: Path) -> list[dict]:
