@@ -211,6 +211,34 @@ def test_an_under_resolved_adhesive_zone_warns_once_per_cold_solve(caplog):
     assert not [r for r in caplog.records if "adhesive zone" in r.message]
 
 
+def test_the_zero_load_re_solve_of_a_warm_start_does_not_warn_again(caplog):
+    # a warm solve at zero load that ends out of the attraction's range is solved again
+    # from the cold start; that re-solve called solve() cold, which warned of the
+    # under-resolved zone a second time in a ladder (once on its own cold solve)
+    import dataclasses
+    import logging
+
+    from roughflow.contact import solve
+
+    s, vf, lam = _audit_surface()
+    ad = Adhesion(0.1 * vf, 0.2 * lam)  # 5.7 spacings: the cold solve warns
+    with caplog.at_level(logging.INFO, logger="roughflow.contact"):
+        cold = solve(s, 0.0, model="adhesive", adhesion=ad)
+        caplog.clear()
+        # a start out of the attraction's range everywhere, also once the body is flat
+        # again: an equilibrium at zero load
+        lift = float(np.ptp(s.heights)) + 2 * ad.range
+        detached = dataclasses.replace(
+            cold, gap=cold.gap + lift, contact=np.zeros_like(cold.contact),
+            contact_pressure=np.zeros_like(cold.contact_pressure))
+        again = solve(s, 0.0, model="adhesive", adhesion=ad, init=detached)
+    messages = [r.message for r in caplog.records]
+    assert any("solving again from the cold start" in m for m in messages)
+    assert not [m for m in messages if "adhesive zone" in m]
+    np.testing.assert_array_equal(again.contact, cold.contact)
+    assert again.iterations > cold.iterations  # the detached attempt is counted
+
+
 @pytest.mark.parametrize(("repulsion", "hurst", "eps_f", "ppl", "gamma", "spacings"), [
     # the paper's adhesive case as the configs run it (config.yaml: 2 points per lambda_s,
     # paper.yaml: 8) and the harmonic calibration at 2 points; the zone in spacings depends on

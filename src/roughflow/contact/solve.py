@@ -229,13 +229,17 @@ def solve(
             # a warm start from a higher load flew off to it (released, its q = 0 mode
             # overshoots the range: a_c 0.67 at p = 3e-3, then 0 at p = 0, gamma = 16);
             # the attached state, which the cold start reaches from repulsive contact, has
-            # the lower energy
+            # the lower energy. Solved here, not by a cold call of solve, whose checks
+            # this call made and whose zone warning a warm solve does not repeat.
             log.info("adhesive solve at zero load left the attraction's range from its "
                      "warm start; solving again from the cold start")
-            again = solve(surface, 0.0, model=model, adhesion=adhesion, method=method,
-                          tol=tol, max_iter=max_iter, threads=threads, setup=setup,
-                          work=work, backend=backend)
-            return dataclasses.replace(again, iterations=again.iterations + int(out.iterations))
+            spent = int(out.iterations)
+            start = solve(surface, _ADHESIVE_START_LOAD, method="gfmd",
+                          tol=_ADHESIVE_START_TOL, threads=threads)
+            out = gfmd(heights, lx, ly, load, tol=tol, max_iter=int(max_iter),
+                       u0=heights + start.gap, adhesion=adhesion, threads=threads,
+                       backend=backend)
+            out = dataclasses.replace(out, iterations=int(out.iterations) + spent)
     if not out.converged:
         why = ""
         if model == "adhesive" and load < 0:
