@@ -11,7 +11,8 @@ from ._result import ContactResult
 log = logging.getLogger(__name__)
 
 
-def solve_bearing(heights: np.ndarray, area_fraction: float) -> ContactResult:
+def solve_bearing(heights: np.ndarray, area_fraction: float, *,
+                  warn_ties: bool = True) -> ContactResult:
     """Flat plane at height d such that the top ``area_fraction`` of the grid points are in
     contact (h >= d); gap = max(d - h, 0). a_c = round(a N)/N exactly on heights without ties.
 
@@ -24,7 +25,8 @@ def solve_bearing(heights: np.ndarray, area_fraction: float) -> ContactResult:
     the k-th (a quantized scan), no plane separates them: the whole tie group is in contact
     and a_c is the area it then has, above round(a N)/N (logged as a warning), never a
     choice among equal heights. At full contact d is the lowest height; without contact
-    the plane touches the highest point.
+    the plane touches the highest point. ``warn_ties=False`` leaves the warning out (a
+    threshold search, which judges the tie groups inside its brackets itself).
     """
     h = heights
     n = h.size
@@ -50,10 +52,11 @@ def solve_bearing(heights: np.ndarray, area_fraction: float) -> ContactResult:
                 d = 0.5 * (low + float(below.max()))
             else:
                 d = low
-            log.warning("bearing contact at area_fraction=%.6g: %d cells share the height "
-                        "%r, which the plane cuts; all are in contact, a_c = %.6g",
-                        area_fraction, int(np.count_nonzero(flat == low)), low,
-                        np.count_nonzero(contact) / n)
+            if warn_ties:
+                log.warning("bearing contact at area_fraction=%.6g: %d cells share the height "
+                            "%r, which the plane cuts; all are in contact, a_c = %.6g",
+                            area_fraction, int(np.count_nonzero(flat == low)), low,
+                            np.count_nonzero(contact) / n)
     gap = np.maximum(d - h, 0.0)
     mask = contact.reshape(h.shape)
     gap[mask] = 0.0

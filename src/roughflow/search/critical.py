@@ -40,6 +40,7 @@ import numpy as np
 
 from roughflow.accuracy import PERIMETER_C, perimeter_term
 from roughflow.contact import ContactResult, prepare, solve, workspace
+from roughflow.contact.bearing import solve_bearing
 from roughflow.contact.law import ContactLaw
 from roughflow.defaults import (
     A_C_STAR_PAPER,
@@ -702,7 +703,9 @@ def threshold(
             return res if axis is None else res[axes[0]]
 
         def evaluate_bearing(a: float, init, scout: bool) -> _Sample:
-            return sample(solve(surface, model="bearing", area_fraction=a), a, -heights, None)
+            # ties: a cut tie group is taken whole, and only one inside a bracket of the
+            # end matters (the ``tie`` hook below), not a warning at every solve
+            return sample(solve_bearing(heights, a, warn_ties=False), a, -heights, None)
 
         res = _refine(evaluate_bearing, axes, tol=tol, first=0.5, load_range=law.bounds,
                       law=law, options=dataclasses.replace(opts, warm_start=False),
