@@ -19,7 +19,9 @@ from roughflow.units import Scales, parse_quantity, parse_range, registry
     ("1 MPa", "pressure", 1e6),
     ("30psi", "pressure", 30 * 6894.757293168361),  # 1 psi = 6894.757... Pa (exact def.)
     ("2 bar", "pressure", 2e5),
-    ("1mPa.s", "viscosity", 1e-3),
+    ("1mPa.s", "viscosity", 1e-3),  # the SI dot product, refused by pint >= 0.26 itself
+    ("1.5 mPa.s", "viscosity", 1.5e-3),
+    ("2e-3 N.s/m^2", "viscosity", 2e-3),
     ("1 mPa s", "viscosity", 1e-3),
     ("1cP", "viscosity", 1e-3),  # centipoise
     ("2mm", "length", 2e-3),

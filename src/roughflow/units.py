@@ -127,6 +127,12 @@ def canonical(value: float) -> float:
     return float(f"{value:.{SI_DIGITS}g}")
 
 
+#: A dot between unit names ("mPa.s", "N.s/m^2", "kg.m"), the product in SI notation, as
+#: opposed to a decimal point (a digit on either side). pint < 0.26 skipped the unknown
+#: operator, reading the implicit product; pint 0.26 (Python >= 3.12) raises on it.
+_UNIT_DOT = re.compile(r"(?<=[^\W\d]|[)])\s*\.\s*(?=[^\W\d]|[(])")
+
+
 def parse_quantity(text: str | float, kind: str, name: str) -> float:
     """SI value of ``text`` ("200GPa", "1 mPa s", "2mm", or a number already in SI units),
     which must be a positive quantity of ``kind`` (:data:`DIMENSIONS`), to
@@ -140,7 +146,7 @@ def parse_quantity(text: str | float, kind: str, name: str) -> float:
         ureg = _base_registry()
         s = str(text).strip()
         try:
-            q = ureg.Quantity(s)
+            q = ureg.Quantity(_UNIT_DOT.sub("*", s))
         except (pint.errors.PintError, ValueError, TypeError, AttributeError,
                 SyntaxError) as exc:
             raise InputError(f"{name}: cannot parse {text!r} as a {kind} ({exc})") from None
