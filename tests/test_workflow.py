@@ -326,6 +326,27 @@ def test_only_requested_targets_run(tmp_path):
         assert int(minutes) == requested_runtime_min(jobs[job_id])
 
 
+def test_a_local_run_shares_the_machines_memory_among_its_jobs(tmp_path):
+    # Snakemake starts as many local jobs as --cores allows, whatever their mem_mb, unless
+    # the run has a global mem_mb: the workflow gives it this machine's memory (16 cores had
+    # started 16 jobs of the paper's sizes at once); a user's --resources mem_mb stands
+    from roughflow.resources import total_bytes
+
+    wd = copy_workflow(tmp_path)
+    target = "results/measured/surfaces/afm.nc"  # one import job of a few seconds
+
+    def provided(*args: str) -> int:
+        run = snakemake(wd, target, "--configfile", "config/test.yaml", "--cores", "1", *args,
+                        "--forcerun", "import_scan")
+        assert run.returncode == 0, run.stderr[-2000:]
+        [line] = [ln for ln in (run.stdout + run.stderr).splitlines()
+                  if ln.startswith("Provided resources")]
+        return int(re.search(r"mem_mb\D*(\d+)", line).group(1))
+
+    assert provided() == total_bytes() // 10**6
+    assert provided("--resources", "mem_mb=12345") == 12345
+
+
 def test_paper_config_dry_run_job_counts(tmp_path):
     wd = copy_workflow(tmp_path)
     dry = snakemake(wd, "--configfile", "config/paper.yaml", "-n", timeout=300)

@@ -90,6 +90,24 @@ if config.get("max_mem_mb") is not None:
 else:
     _MEM_LIMIT = (total_bytes(), "the memory of this machine; set max_mem_mb in the config "
                                  "for a cluster")
+# A local run starts as many jobs as --cores allows, whatever their mem_mb, unless the run
+# has a global mem_mb: give it this machine's memory (a --resources mem_mb=N of the user's
+# stands), so that large jobs wait for each other instead of meeting the out-of-memory killer
+# (before, 16 cores started 16 jobs of the paper's sizes at once). A cluster run, and the
+# job inside an allocation, leave memory to the cluster.
+LOCAL_MEM_MB = None
+if (workflow.is_main_process and workflow.local_exec and total_bytes() is not None
+        and "mem_mb" not in workflow.global_resources):
+    LOCAL_MEM_MB = total_bytes() // 10**6
+    workflow.register_resource("mem_mb", LOCAL_MEM_MB)
+
+
+def local_mem_mb(mb):
+    """A job's mem_mb: at most the local run's LOCAL_MEM_MB (a job that needs the whole
+    machine runs alone; above it Snakemake would refuse to schedule it), else as given."""
+    return mb if LOCAL_MEM_MB is None else min(mb, LOCAL_MEM_MB)
+
+
 try:
     JOBS = {name: expand_study(name, block) for name, block in STUDIES.items()}
     if _MEM_LIMIT[0] is not None:
@@ -160,7 +178,7 @@ def mem_mb(wildcards, attempt=1):
     # the library's memory estimate of the job (roughflow.resources, calibrated by
     # benchmarks/bench_memory.py; also the limit of the refusals) plus the Snakemake
     # process that wraps it on a cluster node
-    return requested_mem_mb(job_of(wildcards), attempt)
+    return local_mem_mb(requested_mem_mb(job_of(wildcards), attempt))
 
 
 def jobs_of(study):

@@ -35,7 +35,8 @@ rule channels:
         f"{RESULTS}/benchmarks/workflow/channels/channels.tsv"
     threads: 1
     resources:
-        mem_mb=lambda wc, attempt: requested_mem_mb(JOBS["channels"]["channels"], attempt),
+        mem_mb=lambda wc, attempt: local_mem_mb(
+            requested_mem_mb(JOBS["channels"]["channels"], attempt)),
         runtime=10,
     shell:
         "ROUGHFLOW_FFT_THREADS={threads} {RF} -v scene {params.args} "
