@@ -93,7 +93,7 @@ else:
 # A local run starts as many jobs as --cores allows, whatever their mem_mb, unless the run
 # has a global mem_mb: give it this machine's memory (a --resources mem_mb=N of the user's
 # stands), so that large jobs wait for each other instead of meeting the out-of-memory killer
-# (before, 16 cores started 16 jobs of the paper's sizes at once). A cluster run, and the
+# (16 cores would start 16 jobs of the paper's sizes at once). A cluster run, and the
 # job inside an allocation, leave memory to the cluster.
 LOCAL_MEM_MB = None
 if (workflow.is_main_process and workflow.local_exec and total_bytes() is not None
