@@ -147,6 +147,35 @@ def test_threshold_search_checks_the_model_of_its_states(monkeypatch):
         threshold(surface)
 
 
+@pytest.mark.parametrize(("cgroup", "files", "limit"), [
+    # a SLURM job's allocation (cgroup v1): its own cgroup below the root, which read
+    # alone (unlimited) had given the node's memory, not the job's
+    ("4:memory:/slurm/uid_0/job_7/step_batch\n1:cpu:/slurm/uid_0/job_7",
+     {"memory/slurm/uid_0/job_7/memory.limit_in_bytes": "3000000000",
+      "memory/slurm/uid_0/job_7/step_batch/memory.limit_in_bytes": "9223372036854771712",
+      "memory/memory.limit_in_bytes": "9223372036854771712"}, 3_000_000_000),
+    # cgroup v2 (systemd's scope of a SLURM step): the lowest of the own and ancestors' limits
+    ("0::/system.slice/slurmstepd.scope/job_9/step_0/user",
+     {"system.slice/slurmstepd.scope/job_9/memory.max": "2000000000",
+      "system.slice/slurmstepd.scope/job_9/step_0/user/memory.max": "max",
+      "system.slice/slurmstepd.scope/job_9/step_0/memory.max": "5000000000"}, 2_000_000_000),
+    # a container's namespace shows its cgroup as the root
+    ("0::/", {"memory.max": "4000000000"}, 4_000_000_000),
+    ("0::/", {"memory.max": "max"}, None),
+])
+def test_the_memory_limit_is_that_of_the_own_cgroup(tmp_path, monkeypatch, cgroup, files,
+                                                     limit):
+    (tmp_path / "cgroup").write_text(cgroup + "\n")
+    for name, text in files.items():
+        (tmp_path / "fs" / name).parent.mkdir(parents=True, exist_ok=True)
+        (tmp_path / "fs" / name).write_text(text + "\n")
+    monkeypatch.setattr(resources, "PROC_CGROUP", tmp_path / "cgroup")
+    monkeypatch.setattr(resources, "CGROUP_ROOT", tmp_path / "fs")
+    assert resources._cgroup_limit() == limit
+    monkeypatch.setattr(resources, "_meminfo", lambda key: 24 * 10**9)
+    assert resources.total_bytes() == (limit or 24 * 10**9)
+
+
 def test_check_memory_refuses_with_grid_and_sizes():
     with pytest.raises(ResourceError, match=r"60000 x 60000 grid.*GB.*limit is 1 GB"):
         resources.check_memory("surface", (60000, 60000), limit=10**9)

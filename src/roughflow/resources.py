@@ -81,16 +81,50 @@ def _meminfo(key: str) -> int | None:
     return None
 
 
-def _cgroup_limit() -> int | None:
-    """The memory limit of this process's cgroup (v2 or v1), None if unlimited/unknown."""
-    for path in ("/sys/fs/cgroup/memory.max", "/sys/fs/cgroup/memory/memory.limit_in_bytes"):
-        try:
-            raw = Path(path).read_text().strip()
-        except OSError:
+#: Where the kernel lists this process's cgroups, and where cgroup file systems are mounted
+#: (module constants so that tests can point them at a tree of their own).
+PROC_CGROUP = Path("/proc/self/cgroup")
+CGROUP_ROOT = Path("/sys/fs/cgroup")
+
+
+def _cgroup_dirs() -> list[Path]:
+    """The folders of this process's memory cgroup and of all its ancestors: the v2 one
+    (``0::/path``, under :data:`CGROUP_ROOT`) and the v1 ``memory`` controller's (under
+    ``memory/``). A SLURM job's allocation is such a cgroup below the root (``/slurm/
+    uid_0/job_7/...``), which only /proc/self/cgroup names; a container's namespace shows
+    its own cgroup as ``/``."""
+    try:
+        lines = PROC_CGROUP.read_text().splitlines()
+    except OSError:
+        lines = []
+    dirs = []
+    for line in lines:
+        hierarchy, controllers, path = (line.split(":", 2) + ["", ""])[:3]
+        if hierarchy == "0" and not controllers:
+            base = CGROUP_ROOT
+        elif "memory" in controllers.split(","):
+            base = CGROUP_ROOT / "memory"
+        else:
             continue
-        if raw.isdigit() and int(raw) < 2**60:
-            return int(raw)
-    return None
+        own = Path(path.lstrip("/"))
+        dirs += [base / d for d in (own, *own.parents)]
+    return dirs or [CGROUP_ROOT, CGROUP_ROOT / "memory"]
+
+
+def _cgroup_limit() -> int | None:
+    """The lowest memory limit of this process's cgroup and its ancestors (v2 ``memory.max``
+    or v1 ``memory.limit_in_bytes``; each applies to everything below it), None if
+    unlimited or unknown."""
+    limits = []
+    for folder in _cgroup_dirs():
+        for name in ("memory.max", "memory.limit_in_bytes"):
+            try:
+                raw = (folder / name).read_text().strip()
+            except OSError:
+                continue
+            if raw.isdigit() and int(raw) < 2**60:
+                limits.append(int(raw))
+    return min(limits) if limits else None
 
 
 def _own_rss() -> int:
