@@ -85,10 +85,11 @@ def study_config_text(study):
     return f"config {files}; studies.{study}: {json.dumps(STUDIES[study], sort_keys=True)}"
 # The memory a job may need: the config's max_mem_mb (the nodes of a cluster), else the
 # memory of this machine. A job above it is refused at planning, before any job runs.
+_machine_bytes = total_bytes()
 if config.get("max_mem_mb") is not None:
     _MEM_LIMIT = (int(config["max_mem_mb"]) * 10**6, f"max_mem_mb = {config['max_mem_mb']}")
 else:
-    _MEM_LIMIT = (total_bytes(), "the memory of this machine; set max_mem_mb in the config "
+    _MEM_LIMIT = (_machine_bytes, "the memory of this machine; set max_mem_mb in the config "
                                  "for a cluster")
 # A local run starts as many jobs as --cores allows, whatever their mem_mb, unless the run
 # has a global mem_mb: give it this machine's memory (a --resources mem_mb=N of the user's
@@ -96,9 +97,9 @@ else:
 # (16 cores would start 16 jobs of the paper's sizes at once). A cluster run, and the
 # job inside an allocation, leave memory to the cluster.
 LOCAL_MEM_MB = None
-if (workflow.is_main_process and workflow.local_exec and total_bytes() is not None
+if (workflow.is_main_process and workflow.local_exec and _machine_bytes is not None
         and "mem_mb" not in workflow.global_resources):
-    LOCAL_MEM_MB = total_bytes() // 10**6
+    LOCAL_MEM_MB = _machine_bytes // 10**6
     workflow.register_resource("mem_mb", LOCAL_MEM_MB)
 
 

@@ -208,10 +208,7 @@ def solve(
         # result's contact cells, whose gaps were set to zero, from their pressures)
         warm = init is not None
         if init is None and model == "adhesive":
-            # start from the repulsive contact (at least a small load) so that the attraction
-            # acts from the first step; a flat start floats at zero load
-            init = solve(surface, max(load, _ADHESIVE_START_LOAD), method="gfmd",
-                         tol=_ADHESIVE_START_TOL, threads=threads)
+            init = _adhesive_cold_start(surface, load, threads)
         u0 = None
         if init is not None:
             gap0 = init.gap
@@ -234,8 +231,7 @@ def solve(
             log.info("adhesive solve at zero load left the attraction's range from its "
                      "warm start; solving again from the cold start")
             spent = int(out.iterations)
-            start = solve(surface, _ADHESIVE_START_LOAD, method="gfmd",
-                          tol=_ADHESIVE_START_TOL, threads=threads)
+            start = _adhesive_cold_start(surface, load, threads)
             out = gfmd(heights, lx, ly, load, tol=tol, max_iter=int(max_iter),
                        u0=heights + start.gap, adhesion=adhesion, threads=threads,
                        backend=backend)
@@ -270,6 +266,14 @@ def solve(
         method=method,
         separation=float(out.separation),
     )
+
+
+def _adhesive_cold_start(surface: Surface, load: float, threads: int | None) -> ContactResult:
+    """Where an adhesive solve starts cold: the repulsive contact at the load (at least a
+    small one), so that the attraction acts from the first step (a flat start floats at
+    zero load)."""
+    return solve(surface, max(load, _ADHESIVE_START_LOAD), method="gfmd",
+                 tol=_ADHESIVE_START_TOL, threads=threads)
 
 
 def _check_tol(tol: float) -> float:
