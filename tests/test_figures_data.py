@@ -158,3 +158,43 @@ def test_the_hard_fit_line_has_the_hard_amplitude():
         x = np.asarray(line.get_xdata())
         np.testing.assert_allclose(line.get_ydata(), a_star + amp * x ** (1 / nu),
                                    rtol=1e-14, atol=1e-15)
+
+
+def test_sealed_steps_are_marked_not_dropped():
+    """Where the fluid no longer percolates, sigma is exactly 0, which the log axes of the
+    flow figures dropped without a word: the last step of the default run's elastic ladder
+    (a_c 0.39) simply had no point. Each sealed (seed, step) is now a triangle on the bottom
+    edge, and in the ratio panel a step sealed along y alone (chi infinite) one on the top
+    edge. A real bearing ladder (no elastic solve) closes at 90 % contact."""
+    from roughflow.aggregate import combine
+    from roughflow.datasets.sweep import area_values
+    from roughflow.figures import flow_anisotropic, flow_isotropic
+    from roughflow.scenes import LadderJob, SurfaceParams, run_ladder
+
+    surface = SurfaceParams(gamma=1.0, l_over_lambda_r=2.0, eps_f=0.125, points_per_lambda_s=2)
+    ds = combine([run_ladder(LadderJob(surface=surface, model="bearing", seeds=(0,),
+                                       area_fractions=(0.1, 0.3, 0.9)))])
+    sigma = ds["sigma"].sel(model="bearing")
+    closed = (sigma == 0).all("axis").values.ravel()
+    assert closed.sum() == 1 and (sigma > 0).all("axis").values.ravel().sum() == 2
+    a = area_values(ds.sel(model="bearing")).values.ravel()
+
+    def edge_marks(ax, marker):
+        return [line for line in ax.get_lines() if line.get_marker() == marker]
+
+    fig = flow_isotropic.draw(ds)
+    (mark,) = edge_marks(fig.axes[0], "v")
+    np.testing.assert_allclose(mark.get_xdata(), a[closed])
+    assert mark.get_label() == "sealed (sigma = 0)"
+    fig = flow_anisotropic.draw(ds)
+    marks = edge_marks(fig.axes[0], "v")
+    assert [m.get_label() for m in marks] == ["sealed along x (sigma_x = 0)",
+                                              "sealed along y (sigma_y = 0)"]
+    for m in marks:
+        np.testing.assert_allclose(m.get_xdata(), a[closed])
+    assert not edge_marks(fig.axes[-1], "^")  # sealed along both: chi undefined, no mark
+    # sealed along y alone: chi = sigma_x / 0, a top-edge mark in the ratio panel
+    ds["sigma"].loc[{"axis": "y"}] = ds["sigma"].sel(axis="y").where(area_values(ds) < 0.2, 0.0)
+    fig = flow_anisotropic.draw(ds)
+    (top,) = edge_marks(fig.axes[-1], "^")
+    np.testing.assert_allclose(top.get_xdata(), a[(a > 0.2) & ~closed])

@@ -4,6 +4,7 @@ from __future__ import annotations
 
 import numpy as np
 import xarray as xr
+from matplotlib.axes import Axes
 
 from roughflow.defaults import STUDY_ONE_VALUE
 from roughflow.errors import InputError
@@ -43,3 +44,22 @@ def points(a_c: xr.DataArray, y: xr.DataArray) -> tuple[np.ndarray, np.ndarray]:
     x, v = x.ravel(), v.ravel()
     ok = np.isfinite(x) & np.isfinite(v) & (v > 0)
     return x[ok], v[ok]
+
+
+def sealed(a_c: xr.DataArray, sigma: xr.DataArray) -> np.ndarray:
+    """The a_c of every seed and step whose conductance is exactly 0: the fluid no longer
+    percolates (the flow solver returns 0 without a solve there), which a log axis cannot
+    show."""
+    x, v = np.broadcast_arrays(a_c.values, sigma.values)
+    x, v = x.ravel(), v.ravel()
+    return x[np.isfinite(x) & (v == 0)]
+
+
+def mark_edge(ax: Axes, x: np.ndarray, *, color: str, label: str, top: bool = False) -> None:
+    """Triangles on the bottom (``top``: the top) edge of ``ax`` at ``x``: values off its
+    log scale (a conductance of 0, a ratio over 0), said in the legend instead of dropped
+    without a word."""
+    if not len(x):
+        return
+    ax.plot(x, np.full(len(x), 1.0 if top else 0.0), "^" if top else "v", color=color,
+            mfc=color, ms=5, clip_on=False, transform=ax.get_xaxis_transform(), label=label)

@@ -8,7 +8,7 @@ from matplotlib.ticker import LogFormatter
 
 from roughflow.datasets.sweep import area_values
 
-from ._flow import curve, ladder, points, sigma_ref
+from ._flow import curve, ladder, mark_edge, points, sealed, sigma_ref
 from ._style import EASY, HARD
 from .captions import CAPTIONS
 
@@ -32,6 +32,8 @@ def draw(ds: xr.Dataset, fit: xr.Dataset | None = None) -> Figure:
             x, y = points(a, sub["sigma"].sel(axis=axis) / ref)
             ax.plot(x, y, MODEL_MARKER[model], mfc="white", color=color,
                     label=f"Reynolds sigma_{axis}")
+            mark_edge(ax, sealed(a, sub["sigma"].sel(axis=axis)), color=color,
+                      label=f"sealed along {axis} (sigma_{axis} = 0)")
             x, y = curve(a, emt.sel(emt="anisotropic_corrected", axis=axis) / ref)
             ax.plot(x, y, "-", color=color, label=f"Bruggeman Eq. 9, {axis}")
             x, y = curve(a, emt.sel(emt="anisotropic_persson", axis=axis) / ref)
@@ -50,6 +52,9 @@ def draw(ds: xr.Dataset, fit: xr.Dataset | None = None) -> Figure:
         x, y = points(a, ratio)
         rax.plot(x, y, MODEL_MARKER[model], mfc="white", color="k",
                  label=f"Reynolds, {model}")
+        # sealed along y only: chi is infinite
+        mark_edge(rax, sealed(a, sy.where(sx > 0)), color="k" if model == "elastic" else "gray",
+                  label=f"sigma_y = 0 < sigma_x, {model}", top=True)
         ex = emt.sel(emt="anisotropic_corrected", axis="x")
         ey = emt.sel(emt="anisotropic_corrected", axis="y")
         x, y = curve(a, ex / ey.where(ey > 0))

@@ -10,7 +10,7 @@ from roughflow.datasets.sweep import area_values
 from roughflow.defaults import MODELS, STUDY_FIXED
 from roughflow.errors import InputError
 
-from ._flow import curve, ladder, points, sigma_ref
+from ._flow import curve, ladder, mark_edge, points, sealed, sigma_ref
 from .captions import CAPTIONS
 
 CAPTION = CAPTIONS["flow_isotropic"]
@@ -36,6 +36,7 @@ def draw(ds: xr.Dataset, fit: xr.Dataset | None = None) -> Figure:
         rey = sub["sigma"].mean("axis")
         x, y = points(a, rey / ref)
         ax.plot(x, y, "o", mfc="white", color="k", label="full Reynolds")
+        mark_edge(ax, sealed(a, rey), color="k", label="sealed (sigma = 0)")
         emt = sub["sigma_emt"]
         x, y = curve(a, emt.sel(emt="isotropic").isel(axis=0) / ref)
         ax.plot(x, y, "-", color="tab:blue", label="full Bruggeman")
