@@ -198,3 +198,43 @@ def test_sealed_steps_are_marked_not_dropped():
     fig = flow_anisotropic.draw(ds)
     (top,) = edge_marks(fig.axes[-1], "^")
     np.testing.assert_allclose(top.get_xdata(), a[(a > 0.2) & ~closed])
+
+
+def test_unbracketed_searches_are_said_not_averaged_away():
+    """A search that did not bracket a_c* stores NaN (``bracketed`` 0); the seed means and
+    fits left it out and the figures drew the mean of the remaining seeds as any other
+    point. The figures now say how many searches are missing, as does the aggregation."""
+    from roughflow.figures import threshold_vs_hurst
+
+    ds = study([1.0, 2.0], eps_t=(0.125, 0.25))
+    ds["bracketed"] = xr.ones_like(ds["a_c_star"])
+    for fig in (threshold_vs_gamma.draw(ds.isel(eps_t=[0])), threshold_vs_size.draw(ds)):
+        assert fig._suptitle is None
+    ds["a_c_star"][0, 1, 0, 1, 0, 2, 1] = np.nan
+    ds["bracketed"][0, 1, 0, 1, 0, 2, 1] = 0
+    ds["bracketed"][0, 0, 0, 1, 0, :, :] = np.nan  # not run: not counted
+    for fig in (threshold_vs_gamma.draw(ds.isel(eps_t=[1])), threshold_vs_size.draw(ds),
+                threshold_vs_hurst.draw(ds.isel(eps_t=[1]))):
+        assert fig._suptitle.get_text().startswith("1 of ")
+    assert "1 of 18 threshold searches" in threshold_vs_size.draw(ds)._suptitle.get_text()
+
+
+def test_aggregation_warns_of_unbracketed_searches(tmp_path, caplog):
+    import logging
+
+    from roughflow.aggregate import aggregate
+    from roughflow.scenes import SurfaceParams, ThresholdJob, run_threshold
+
+    surface = SurfaceParams(gamma=1.0, l_over_lambda_r=2.0, eps_f=0.125, points_per_lambda_s=2)
+    job = run_threshold(ThresholdJob(surface=surface, model="bearing", seeds=(0, 1)))
+    with caplog.at_level(logging.WARNING, logger="roughflow.aggregate"):
+        aggregate([job], tmp_path / "study.nc")
+    assert "did not bracket" not in caplog.text
+    # as run_threshold stores a search that did not bracket (on_unbracketed="nan")
+    one = {"seed": 1, "axis": "x"}
+    for name in ("a_c_star", "a_lo", "a_hi", "a_c_star_corrected"):
+        job[name].loc[one] = np.nan
+    job["bracketed"].loc[one] = 0
+    with caplog.at_level(logging.WARNING, logger="roughflow.aggregate"):
+        aggregate([job], tmp_path / "study2.nc")
+    assert "1 of 4 threshold searches" in caplog.text

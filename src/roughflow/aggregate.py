@@ -32,7 +32,7 @@ import xarray as xr
 from roughflow.datasets.kinds import check_kind
 from roughflow.datasets.leak import with_scan_variables
 from roughflow.datasets.results import ADHESION_FIELDS, ADHESION_REPULSION_FIELD
-from roughflow.datasets.sweep import INT_FILL, PARAM_DIMS
+from roughflow.datasets.sweep import INT_FILL, PARAM_DIMS, unbracketed_searches
 from roughflow.defaults import JOB_KINDS
 from roughflow.errors import InputError
 from roughflow.io import default_provenance, read_dataset, write_dataset
@@ -223,6 +223,11 @@ def aggregate(inputs: Sequence[str | os.PathLike | xr.Dataset], output: str | os
         if str(value).startswith("mixed"):  # e.g. jobs run before and after a code change
             log.warning("the jobs of %s differ in %s (%s): rerun the older ones for one "
                         "consistent study (snakemake --forcerun)", output, key, value)
+    failed, ran = unbracketed_searches(out)
+    if failed:
+        log.warning("%d of %d threshold searches (seed and axis) in %s did not bracket a_c* "
+                    "(NaN, left out of the seed means and fits): their job logs say why",
+                    failed, ran, output)
     write_dataset(out, output, provenance=replace(provenance, from_inputs=inherited))
     log.info("aggregated %d datasets into %s (%s)", len(datasets), output,
              dict(out.sizes))

@@ -168,3 +168,13 @@ def area_values(ds: xr.Dataset) -> xr.DataArray:
         return raw
     corrected = ds["area_fraction_corrected"]
     return xr.where(corrected.notnull(), corrected, raw).transpose(*raw.dims)
+
+
+def unbracketed_searches(ds: xr.Dataset) -> tuple[int, int]:
+    """(searches that did not bracket a_c*, searches run) of a threshold dataset, a search
+    being one seed and axis: an unbracketed one has a NaN a_c*, which the seed means and
+    fits leave out, so they stand on the seeds that remain. (0, 0) without ``bracketed``."""
+    if "bracketed" not in ds:
+        return 0, 0
+    flag = ds["bracketed"]
+    return int((flag == 0).sum()), int(flag.notnull().sum())

@@ -2,9 +2,13 @@
 
 from __future__ import annotations
 
+import textwrap
+
 import numpy as np
 import xarray as xr
+from matplotlib.figure import Figure
 
+from roughflow.datasets.sweep import unbracketed_searches
 from roughflow.defaults import A_C_STAR_PAPER
 from roughflow.errors import InputError
 from roughflow.fits import direction_names
@@ -67,6 +71,18 @@ def no_data(ax, what: str = "no finite a_c* in the data") -> None:
     """Say on an empty panel that it is empty (an empty axis read as a drawing error)."""
     ax.text(0.5, 0.5, what, transform=ax.transAxes, ha="center", va="center", fontsize=9,
             color="gray")
+
+
+def note_unbracketed(fig: Figure, ds: xr.Dataset) -> None:
+    """Say above the panels how many searches of ``ds`` did not bracket a_c*: their seeds
+    are missing from the means (and the fits), which is drawn as any other point."""
+    failed, ran = unbracketed_searches(ds)
+    if failed:
+        text = (f"{failed} of {ran} threshold searches (seed and axis) did not bracket a_c* "
+                "and are left out of the seed means and fits (the job logs say why)")
+        # wrapped to the figure's width (about 14 characters an inch at 8 points)
+        fig.suptitle(textwrap.fill(text, int(14 * fig.get_figwidth())), color="tab:red",
+                     fontsize=8)
 
 
 def format_gamma_axis(ax, gammas) -> None:

@@ -10,7 +10,13 @@ from roughflow.datasets.sweep import single_setting, threshold_values
 from roughflow.defaults import STUDY_ONE_VALUE
 
 from ._style import setting_text
-from ._threshold import format_gamma_axis, no_data, one_size, plot_vs_gamma
+from ._threshold import (
+    format_gamma_axis,
+    no_data,
+    note_unbracketed,
+    one_size,
+    plot_vs_gamma,
+)
 from .captions import CAPTIONS
 
 CAPTION = CAPTIONS["threshold_vs_hurst"]
@@ -34,4 +40,5 @@ def draw(ds: xr.Dataset, fit: xr.Dataset | None = None) -> Figure:
     format_gamma_axis(ax, a["gamma"].values)
     ax.set_title(setting_text(a), fontsize=9)
     ax.legend(fontsize=7)
+    note_unbracketed(fig, ds)
     return fig

@@ -14,7 +14,7 @@ from roughflow.errors import InputError
 from roughflow.fits import direction_names, fitted_setting, main_gamma, scaling
 
 from ._style import EASY, HARD, seed_stats, setting_text
-from ._threshold import no_data
+from ._threshold import no_data, note_unbracketed
 from .captions import CAPTIONS
 
 CAPTION = CAPTIONS["threshold_vs_size"]
@@ -138,4 +138,5 @@ def draw(ds: xr.Dataset, fit: xr.Dataset | None = None) -> Figure:
     ax.grid(alpha=0.3)
     if ax.get_legend_handles_labels()[0]:
         ax.legend(fontsize=7, loc="upper left")
+    note_unbracketed(fig, ds)
     return fig
