@@ -8,6 +8,7 @@ in tests/test_adversarial.py, the workflow side in tests/test_workflow.py.
 from __future__ import annotations
 
 import math
+import os
 
 import numpy as np
 import pytest
@@ -174,6 +175,60 @@ def test_the_memory_limit_is_that_of_the_own_cgroup(tmp_path, monkeypatch, cgrou
     assert resources._cgroup_limit() == limit
     monkeypatch.setattr(resources, "_meminfo", lambda key: 24 * 10**9)
     assert resources.total_bytes() == (limit or 24 * 10**9)
+
+
+@pytest.mark.parametrize(("cgroup", "files"), [
+    # cgroup v1 (a SLURM allocation): usage counts the page cache, whose inactive part
+    # (memory.stat's total_inactive_file) the kernel reclaims before it kills
+    ("4:memory:/slurm/uid_0/job_7/step_batch",
+     {"memory/slurm/uid_0/job_7/memory.limit_in_bytes": "3000000000",
+      "memory/slurm/uid_0/job_7/memory.usage_in_bytes": "2300000000",
+      "memory/slurm/uid_0/job_7/memory.stat": "cache 500000000\ninactive_file 0\n"
+                                               "total_inactive_file 300000000",
+      "memory/slurm/uid_0/job_7/step_batch/memory.limit_in_bytes": "9223372036854771712",
+      "memory/slurm/uid_0/job_7/step_batch/memory.usage_in_bytes": "2300000000"}),
+    # cgroup v2
+    ("0::/system.slice/slurmstepd.scope/job_9",
+     {"system.slice/slurmstepd.scope/job_9/memory.max": "3000000000",
+      "system.slice/slurmstepd.scope/job_9/memory.current": "2300000000",
+      "system.slice/slurmstepd.scope/job_9/memory.stat": "anon 1800000000\n"
+                                                          "inactive_file 300000000"}),
+])
+def test_available_memory_leaves_out_what_the_cgroups_other_processes_hold(
+        tmp_path, monkeypatch, cgroup, files):
+    # two roughflow processes in one 2 GB cgroup each saw the whole limit: the second
+    # passed its check and the kernel killed the first (2026-12-06)
+    (tmp_path / "cgroup").write_text(cgroup + "\n")
+    for name, text in files.items():
+        (tmp_path / "fs" / name).parent.mkdir(parents=True, exist_ok=True)
+        (tmp_path / "fs" / name).write_text(text + "\n")
+    # /proc: this process (started by a shell, pid 40, itself started by pid 1) holds
+    # 0.2 GB; the shell is in another cgroup until the second part of the test
+    proc = tmp_path / "proc"
+    for pid, parent, rss in (("self", 40, 200_000_000), ("40", 1, 500_000_000)):
+        (proc / pid).mkdir(parents=True)
+        (proc / pid / "stat").write_text(f"{pid} (a (b) c) S {parent} 1 1 0\n")
+        (proc / pid / "statm").write_text(f"1 {rss // os.sysconf('SC_PAGE_SIZE')} 0\n")
+    (proc / "40" / "cgroup").write_text("0::/elsewhere\n")
+    monkeypatch.setattr(resources, "PROC_CGROUP", tmp_path / "cgroup")
+    monkeypatch.setattr(resources, "CGROUP_ROOT", tmp_path / "fs")
+    monkeypatch.setattr(resources, "PROC", proc)
+    monkeypatch.setattr(resources, "_meminfo", lambda key: 24 * 10**9)
+    monkeypatch.setattr(resources, "_own_rss", lambda: 200_000_000)
+    # 2.0 GB held in the cgroup (2.3 less 0.3 of inactive cache), 0.2 of it by this
+    # process: 1.8 GB by others, so this one can reach 3.0 - 1.8 = 1.2 GB
+    assert resources.total_bytes() == 3_000_000_000
+    assert resources.available_bytes() == 1_200_000_000
+    assert resources.headroom_bytes() == 1_000_000_000
+    resources.check_memory("contact", (2048, 2048))  # 0.97 GB
+    with pytest.raises(ResourceError, match=r"1.66 GB .* can reach 1.2 GB \(the memory limit "
+                       r"of its cgroup.* is 3 GB, other processes in it hold 1.8 GB\)"):
+        resources.check_memory("threshold", (2048, 2048))
+    # the process that started this one (Snakemake, locally or in a cluster job) is covered
+    # by the job's request: its 0.5 GB (rounded to pages) is not counted against it
+    (proc / "40" / "cgroup").write_text(cgroup + "\n")
+    assert abs(resources.available_bytes() - 1_700_000_000) < 10**5
+    resources.check_memory("threshold", (2048, 2048))
 
 
 def test_check_memory_refuses_with_grid_and_sizes():

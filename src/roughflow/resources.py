@@ -22,9 +22,10 @@ the peak of CuPy's memory pool, 184-256 B per point from 1024^2 to 16384^2 on an
 docs/contact.md "GPU backend"; checked against the GPU's free memory,
 ``roughflow.gpu.available_bytes``).
 
-What there is: the memory the kernel reports available (``MemAvailable``) within the
-process's cgroup limit (a SLURM job's allocation), plus what this process already holds,
-since the estimate counts the whole process. This module imports nothing heavy.
+What there is: the memory the kernel reports available (``MemAvailable``), within what the
+process's cgroups leave (a SLURM job's allocation: its limit less what the other processes
+in it hold), plus what this process already holds, since the estimate counts the whole
+process. This module imports nothing heavy.
 """
 
 from __future__ import annotations
@@ -81,10 +82,11 @@ def _meminfo(key: str) -> int | None:
     return None
 
 
-#: Where the kernel lists this process's cgroups, and where cgroup file systems are mounted
-#: (module constants so that tests can point them at a tree of their own).
+#: Where the kernel lists this process's cgroups, where cgroup file systems are mounted, and
+#: the processes (module constants so that tests can point them at a tree of their own).
 PROC_CGROUP = Path("/proc/self/cgroup")
 CGROUP_ROOT = Path("/sys/fs/cgroup")
+PROC = Path("/proc")
 
 
 def _cgroup_dirs() -> list[Path]:
@@ -111,20 +113,81 @@ def _cgroup_dirs() -> list[Path]:
     return dirs or [CGROUP_ROOT, CGROUP_ROOT / "memory"]
 
 
-def _cgroup_limit() -> int | None:
-    """The lowest memory limit of this process's cgroup and its ancestors (v2 ``memory.max``
-    or v1 ``memory.limit_in_bytes``; each applies to everything below it), None if
-    unlimited or unknown."""
-    limits = []
+#: The files of a memory cgroup: its limit, what its processes use (page cache included),
+#: and the key of ``memory.stat`` that gives the inactive page cache within that use, which
+#: the kernel reclaims before it kills (v2, then v1; v1's ``total_`` keys count the cgroups
+#: below too, as its usage does).
+_CGROUP_FILES = (("memory.max", "memory.current", "inactive_file"),
+                 ("memory.limit_in_bytes", "memory.usage_in_bytes", "total_inactive_file"))
+
+
+def _read_int(path: Path) -> int | None:
+    try:
+        raw = path.read_text().strip()
+    except OSError:
+        return None
+    return int(raw) if raw.isdigit() else None
+
+
+def _stat(path: Path, key: str) -> int:
+    try:
+        for line in path.read_text().splitlines():
+            name, _, value = line.partition(" ")
+            if name == key:
+                return int(value)
+    except (OSError, ValueError):
+        pass
+    return 0
+
+
+def _cgroup_limits() -> list[tuple[int, int | None]]:
+    """(limit, used) of each of this process's memory cgroups and their ancestors that has a
+    limit (v2 ``memory.max`` or v1 ``memory.limit_in_bytes``; each applies to everything
+    below it). ``used`` is what all the processes of that cgroup hold, less its inactive
+    page cache; None if unknown."""
+    out = []
     for folder in _cgroup_dirs():
-        for name in ("memory.max", "memory.limit_in_bytes"):
-            try:
-                raw = (folder / name).read_text().strip()
-            except OSError:
+        for limit_name, usage_name, inactive in _CGROUP_FILES:
+            limit = _read_int(folder / limit_name)
+            if limit is None or limit >= 2**60:
                 continue
-            if raw.isdigit() and int(raw) < 2**60:
-                limits.append(int(raw))
+            usage = _read_int(folder / usage_name)
+            used = None if usage is None else max(
+                usage - _stat(folder / "memory.stat", inactive), 0)
+            out.append((limit, used))
+    return out
+
+
+def _cgroup_limit() -> int | None:
+    """The lowest memory limit of this process's cgroup and its ancestors, None if
+    unlimited or unknown."""
+    limits = [limit for limit, _ in _cgroup_limits()]
     return min(limits) if limits else None
+
+
+def _parent(stat: Path) -> int:
+    # /proc/PID/stat: "pid (name) state ppid ...", the name may hold spaces and brackets
+    return int(stat.read_text().rsplit(")", 1)[1].split()[1])
+
+
+def _launchers_rss() -> int:
+    """Resident memory of the processes that started this one and share its cgroups (the
+    Snakemake process that runs a job, locally or inside a cluster allocation, and its
+    shell): a job's request (``mem_mb``) and the local run's budget cover them, so a job is
+    not refused for the memory of its own Snakemake."""
+    page = os.sysconf("SC_PAGE_SIZE")
+    total = 0
+    try:
+        own = PROC_CGROUP.read_text()
+        pid = _parent(PROC / "self" / "stat")
+        for _ in range(64):
+            if pid <= 1 or (PROC / str(pid) / "cgroup").read_text() != own:
+                break
+            total += int((PROC / str(pid) / "statm").read_text().split()[1]) * page
+            pid = _parent(PROC / str(pid) / "stat")
+    except (OSError, ValueError, IndexError):
+        pass
+    return total
 
 
 def _own_rss() -> int:
@@ -142,14 +205,21 @@ def total_bytes() -> int | None:
 
 
 def available_bytes() -> int | None:
-    """Memory this process can reach: what it holds plus what the machine has available
-    (within the cgroup limit); None if unknown (then nothing is refused)."""
+    """Memory this process can reach: what it holds plus what the machine has available,
+    within what each of its cgroups leaves: its limit less what the cgroup's other processes
+    hold (another job of the same SLURM allocation or local run), those that started it
+    excepted (:func:`_launchers_rss`). None if unknown (then nothing is refused)."""
     avail = _meminfo("MemAvailable")
     if avail is None:
         return None
-    have = avail + _own_rss()
-    limit = _cgroup_limit()
-    return min(have, limit) if limit is not None else have
+    own = _own_rss()
+    have = avail + own
+    limits = _cgroup_limits()
+    ours = own + (_launchers_rss() if limits else 0)
+    for limit, used in limits:
+        others = 0 if used is None else max(used - ours, 0)
+        have = min(have, limit - others)
+    return have
 
 
 def headroom_bytes() -> int | None:
@@ -192,6 +262,14 @@ def check_memory(task: str, shape: tuple[int, ...] | int, *, limit: int | None =
             source = f"the limit is {describe(have)}"
         else:
             source = f"this machine has {describe(have)} available"
+            cgroup = _cgroup_limit()
+            if cgroup is not None and cgroup < (_meminfo("MemTotal") or cgroup + 1):
+                # in a SLURM allocation "this machine" would point at the node's memory
+                held = (f", other processes in it hold {describe(cgroup - have)}"
+                        if cgroup - have > SMALL else "")
+                source = (f"this process can reach {describe(have)} (the memory limit of its "
+                          f"cgroup, a SLURM allocation or container, is {describe(cgroup)}"
+                          f"{held})")
         raise ResourceError(
             f"{what or f'a {task} computation'} on a {grid} needs about {describe(need)} of "
             f"{'GPU ' if on_gpu else ''}memory, but {source}; use a coarser grid (fewer points "
