@@ -175,16 +175,22 @@ def test_the_memory_limit_is_that_of_the_own_cgroup(tmp_path, monkeypatch, cgrou
     assert resources._cgroup_limit() == limit
     monkeypatch.setattr(resources, "_meminfo", lambda key: 24 * 10**9)
     assert resources.total_bytes() == (limit or 24 * 10**9)
+    # the workflow's plan check names it: "the memory of this machine" pointed at the
+    # node's 24 GB where a job's allocation was the limit
+    assert ("cgroup" in resources.total_source()) == (limit is not None)
 
 
 @pytest.mark.parametrize(("cgroup", "files"), [
-    # cgroup v1 (a SLURM allocation): usage counts the page cache, whose inactive part
-    # (memory.stat's total_inactive_file) the kernel reclaims before it kills
+    # cgroup v1 (a SLURM allocation): usage counts the page cache, whose file part
+    # (memory.stat's total_active_file and total_inactive_file, the cgroups below included)
+    # the kernel reclaims before it kills; shared memory (tmpfs) is not reclaimed
     ("4:memory:/slurm/uid_0/job_7/step_batch",
      {"memory/slurm/uid_0/job_7/memory.limit_in_bytes": "3000000000",
       "memory/slurm/uid_0/job_7/memory.usage_in_bytes": "2300000000",
-      "memory/slurm/uid_0/job_7/memory.stat": "cache 500000000\ninactive_file 0\n"
-                                               "total_inactive_file 300000000",
+      "memory/slurm/uid_0/job_7/memory.stat": "cache 500000000\nshmem 200000000\n"
+                                               "inactive_file 0\nactive_file 0\n"
+                                               "total_inactive_file 100000000\n"
+                                               "total_active_file 200000000",
       "memory/slurm/uid_0/job_7/step_batch/memory.limit_in_bytes": "9223372036854771712",
       "memory/slurm/uid_0/job_7/step_batch/memory.usage_in_bytes": "2300000000"}),
     # cgroup v2
@@ -192,7 +198,10 @@ def test_the_memory_limit_is_that_of_the_own_cgroup(tmp_path, monkeypatch, cgrou
      {"system.slice/slurmstepd.scope/job_9/memory.max": "3000000000",
       "system.slice/slurmstepd.scope/job_9/memory.current": "2300000000",
       "system.slice/slurmstepd.scope/job_9/memory.stat": "anon 1800000000\n"
-                                                          "inactive_file 300000000"}),
+                                                          "file 500000000\n"
+                                                          "shmem 200000000\n"
+                                                          "active_file 200000000\n"
+                                                          "inactive_file 100000000"}),
 ])
 def test_available_memory_leaves_out_what_the_cgroups_other_processes_hold(
         tmp_path, monkeypatch, cgroup, files):
@@ -215,7 +224,7 @@ def test_available_memory_leaves_out_what_the_cgroups_other_processes_hold(
     monkeypatch.setattr(resources, "PROC", proc)
     monkeypatch.setattr(resources, "_meminfo", lambda key: 24 * 10**9)
     monkeypatch.setattr(resources, "_own_rss", lambda: 200_000_000)
-    # 2.0 GB held in the cgroup (2.3 less 0.3 of inactive cache), 0.2 of it by this
+    # 2.0 GB held in the cgroup (2.3 less 0.3 of file cache), 0.2 of it by this
     # process: 1.8 GB by others, so this one can reach 3.0 - 1.8 = 1.2 GB
     assert resources.total_bytes() == 3_000_000_000
     assert resources.available_bytes() == 1_200_000_000

@@ -114,11 +114,13 @@ def _cgroup_dirs() -> list[Path]:
 
 
 #: The files of a memory cgroup: its limit, what its processes use (page cache included),
-#: and the key of ``memory.stat`` that gives the inactive page cache within that use, which
-#: the kernel reclaims before it kills (v2, then v1; v1's ``total_`` keys count the cgroups
-#: below too, as its usage does).
-_CGROUP_FILES = (("memory.max", "memory.current", "inactive_file"),
-                 ("memory.limit_in_bytes", "memory.usage_in_bytes", "total_inactive_file"))
+#: and the keys of ``memory.stat`` that give the file page cache within that use, which the
+#: kernel reclaims before it kills, as ``MemAvailable`` counts it for a machine (v2, then
+#: v1; v1's ``total_`` keys count the cgroups below too, as its usage does; tmpfs and
+#: shared memory are not among them: they cannot be dropped, only swapped).
+_CGROUP_FILES = (("memory.max", "memory.current", ("active_file", "inactive_file")),
+                 ("memory.limit_in_bytes", "memory.usage_in_bytes",
+                  ("total_active_file", "total_inactive_file")))
 
 
 def _read_int(path: Path) -> int | None:
@@ -129,31 +131,33 @@ def _read_int(path: Path) -> int | None:
     return int(raw) if raw.isdigit() else None
 
 
-def _stat(path: Path, key: str) -> int:
+def _stat(path: Path, keys: tuple[str, ...]) -> int:
+    """The sum of ``keys`` in the ``memory.stat`` file ``path`` (0 for those missing)."""
+    total = 0
     try:
         for line in path.read_text().splitlines():
             name, _, value = line.partition(" ")
-            if name == key:
-                return int(value)
+            if name in keys:
+                total += int(value)
     except (OSError, ValueError):
-        pass
-    return 0
+        return 0
+    return total
 
 
 def _cgroup_limits() -> list[tuple[int, int | None]]:
     """(limit, used) of each of this process's memory cgroups and their ancestors that has a
     limit (v2 ``memory.max`` or v1 ``memory.limit_in_bytes``; each applies to everything
-    below it). ``used`` is what all the processes of that cgroup hold, less its inactive
-    page cache; None if unknown."""
+    below it). ``used`` is what all the processes of that cgroup hold, less its file page
+    cache; None if unknown."""
     out = []
     for folder in _cgroup_dirs():
-        for limit_name, usage_name, inactive in _CGROUP_FILES:
+        for limit_name, usage_name, cache in _CGROUP_FILES:
             limit = _read_int(folder / limit_name)
             if limit is None or limit >= 2**60:
                 continue
             usage = _read_int(folder / usage_name)
             used = None if usage is None else max(
-                usage - _stat(folder / "memory.stat", inactive), 0)
+                usage - _stat(folder / "memory.stat", cache), 0)
             out.append((limit, used))
     return out
 
@@ -202,6 +206,21 @@ def total_bytes() -> int | None:
     """Physical memory of the machine (within the cgroup limit); None if unknown."""
     values = [v for v in (_meminfo("MemTotal"), _cgroup_limit()) if v is not None]
     return min(values) if values else None
+
+
+def _limited_by_cgroup() -> int | None:
+    """The cgroup limit where it is below the machine's memory (a SLURM allocation, a
+    container), else None: there "this machine" would name the node's memory."""
+    cgroup = _cgroup_limit()
+    return cgroup if cgroup is not None and cgroup < (_meminfo("MemTotal") or cgroup + 1) \
+        else None
+
+
+def total_source() -> str:
+    """What :func:`total_bytes` is, for messages."""
+    if _limited_by_cgroup() is not None:
+        return "the memory limit of this process's cgroup (a SLURM allocation or container)"
+    return "the memory of this machine"
 
 
 def available_bytes() -> int | None:
@@ -262,9 +281,8 @@ def check_memory(task: str, shape: tuple[int, ...] | int, *, limit: int | None =
             source = f"the limit is {describe(have)}"
         else:
             source = f"this machine has {describe(have)} available"
-            cgroup = _cgroup_limit()
-            if cgroup is not None and cgroup < (_meminfo("MemTotal") or cgroup + 1):
-                # in a SLURM allocation "this machine" would point at the node's memory
+            cgroup = _limited_by_cgroup()
+            if cgroup is not None:
                 held = (f", other processes in it hold {describe(cgroup - have)}"
                         if cgroup - have > SMALL else "")
                 source = (f"this process can reach {describe(have)} (the memory limit of its "

@@ -61,7 +61,7 @@ except InputError as exc:
 
 from roughflow.defaults import FLOW_STUDIES, MEASURED_STUDY, THRESHOLD_STUDIES  # noqa: E402
 from roughflow.figures import caption as figure_caption  # noqa: E402
-from roughflow.resources import total_bytes  # noqa: E402
+from roughflow.resources import total_bytes, total_source  # noqa: E402
 from roughflow.scenes import expand_study, study_defaults  # noqa: E402
 from roughflow.scenes.jobs import aggregated_config  # noqa: E402
 from roughflow.scenes.requests import (  # noqa: E402
@@ -89,8 +89,8 @@ _machine_bytes = total_bytes()
 if config.get("max_mem_mb") is not None:
     _MEM_LIMIT = (int(config["max_mem_mb"]) * 10**6, f"max_mem_mb = {config['max_mem_mb']}")
 else:
-    _MEM_LIMIT = (_machine_bytes, "the memory of this machine; set max_mem_mb in the config "
-                                 "for a cluster")
+    _MEM_LIMIT = (_machine_bytes, f"{total_source()}; set max_mem_mb in the config for a "
+                                 "cluster")
 # A local run starts as many jobs as --cores allows, whatever their mem_mb, unless the run
 # has a global mem_mb: give it this machine's memory (a --resources mem_mb=N of the user's
 # stands), so that large jobs wait for each other instead of meeting the out-of-memory killer
