@@ -64,6 +64,19 @@ def open_lock_file(lock: Path) -> int:
         return os.open(lock, os.O_RDONLY)
 
 
+def denied(exc: PermissionError) -> str:
+    """Why ``exc`` refused a path, for a message: the user it refused, who may not be the
+    one who made the file (a lab's shared results, a cluster's software tree)."""
+    try:
+        import pwd
+
+        user = pwd.getpwuid(os.geteuid()).pw_name
+    except (ImportError, KeyError):  # not POSIX, or a user id the password database lacks
+        user = f"uid {os.geteuid()}" if hasattr(os, "geteuid") else "this user"
+    return (f"{exc.strerror or 'permission denied'} for user {user} (check the permissions of "
+            f"the file and of each folder above it)")
+
+
 def remove_stale(paths: Iterable[Path], older_than_s: float = STALE_TEMPORARY_S) -> None:
     """Remove those of ``paths`` (temporary files a killed writer left) last modified more
     than ``older_than_s`` ago; any that vanish meanwhile or cannot be removed are skipped."""

@@ -26,7 +26,7 @@ import xarray as xr
 from roughflow.datasets.results import spec_attrs
 from roughflow.datasets.units import LENGTH_UNITS, grid_coords
 from roughflow.errors import InputError, OutputError, require_field, require_positive
-from roughflow.files import TERMINATING_SIGNALS, publish
+from roughflow.files import TERMINATING_SIGNALS, denied, publish
 from roughflow.provenance import PROVENANCE_ATTRS, Provenance
 from roughflow.surface import ScanInfo, Surface, SurfaceSpec
 
@@ -60,16 +60,19 @@ def check_output(path: str | os.PathLike, *, option: str = "--output",
     if not path.strip():
         raise InputError(f"{option} is empty; give a file name")
     p = Path(path)
-    if p.is_dir():
-        raise InputError(f"{option} {path!r} is a directory; give a file name")
-    if suffixes and p.suffix.lower() not in suffixes:
-        raise InputError(f"{option} {path!r}: the file name must end in "
-                         f"{' or '.join(suffixes)}")
-    parent = p.absolute().parent
-    while not parent.exists():
-        parent = parent.parent
-    if not parent.is_dir():
-        raise InputError(f"{option} {path!r}: {str(parent)!r} is a file, not a directory")
+    try:
+        if p.is_dir():
+            raise InputError(f"{option} {path!r} is a directory; give a file name")
+        if suffixes and p.suffix.lower() not in suffixes:
+            raise InputError(f"{option} {path!r}: the file name must end in "
+                             f"{' or '.join(suffixes)}")
+        parent = p.absolute().parent
+        while not parent.exists():
+            parent = parent.parent
+        if not parent.is_dir():
+            raise InputError(f"{option} {path!r}: {str(parent)!r} is a file, not a directory")
+    except PermissionError as exc:  # a folder on the way that this user may not enter
+        raise InputError(f"{option} {path!r} cannot be written: {denied(exc)}") from None
     try:
         fd, tmp = tempfile.mkstemp(prefix=".roughflow-probe-", dir=parent)
     except OSError as exc:
@@ -242,14 +245,17 @@ def read_dataset(path: str | os.PathLike, kinds: str | tuple[str, ...] | None = 
 
     path = Path(path)
     source = f"{what} {str(path)!r}"
-    if not path.exists():
-        raise InputError(f"{source} does not exist")
-    if path.is_dir():
-        raise InputError(f"{source} is a directory, not a netCDF file")
-    if path.stat().st_size == 0:
-        raise InputError(f"{source} is empty (0 bytes)")
-    with open(path, "rb") as fh:
-        head = fh.read(8)
+    try:
+        if not path.exists():
+            raise InputError(f"{source} does not exist")
+        if path.is_dir():
+            raise InputError(f"{source} is a directory, not a netCDF file")
+        if path.stat().st_size == 0:
+            raise InputError(f"{source} is empty (0 bytes)")
+        with open(path, "rb") as fh:
+            head = fh.read(8)
+    except PermissionError as exc:  # another user's file or folder, not readable by this one
+        raise InputError(f"{source} cannot be read: {denied(exc)}") from None
     if not head.startswith(NETCDF_MAGIC):
         hint = ("; a measured scan is read with `roughflow import`"
                 if "surface" in ((kinds,) if isinstance(kinds, str) else kinds or ()) else "")

@@ -39,6 +39,7 @@ from roughflow.defaults import (
     SCAN_PIXEL_ASPECT_WARN,
 )
 from roughflow.errors import InputError, check_axis
+from roughflow.files import denied
 from roughflow.surface import ScanInfo, Surface, rms_gradient
 
 if TYPE_CHECKING:
@@ -556,8 +557,13 @@ def read_scan(path: str | os.PathLike, *,
     :class:`InputError` naming the value.
     """
     path = Path(path)
-    if not path.is_file():
-        raise InputError(f"scan file {str(path)!r} does not exist")
+    try:
+        if not path.is_file():
+            raise InputError(f"scan file {str(path)!r} does not exist")
+        with path.open("rb"):  # the readers would report a refusal as an unknown format
+            pass
+    except PermissionError as exc:  # another user's file or folder
+        raise InputError(f"scan file {str(path)!r} cannot be read: {denied(exc)}") from None
     if detrend_mode not in DETREND_MODES:
         raise InputError(f"detrend must be one of {DETREND_MODES}, got {detrend_mode!r}")
     if fill not in FILL_METHODS:

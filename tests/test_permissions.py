@@ -1,0 +1,87 @@
+"""What a user who is not root meets: files and folders of another user, shared caches and
+locks held by another user's process. CI runs as root, for whom the permission bits do not
+hold: there the checks run with the effective user 'nobody' (:func:`unprivileged`)."""
+
+from __future__ import annotations
+
+import contextlib
+import os
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+from roughflow.errors import InputError
+
+NOBODY = 65534
+
+
+@contextlib.contextmanager
+def unprivileged():
+    """Inside the block the permission bits hold for this process: as root, its effective
+    user and group are 'nobody' (what it imports there must be imported before: root's own
+    folders are closed to nobody); as any other user nothing changes."""
+    if os.geteuid() != 0:
+        yield
+        return
+    os.setegid(NOBODY)
+    os.seteuid(NOBODY)
+    try:
+        yield
+    finally:
+        os.seteuid(0)
+        os.setegid(0)
+
+
+@pytest.fixture
+def closed(tmp_path) -> Path:
+    """A folder that no one but root may enter, holding a file ``s.nc`` that no one but root
+    may read."""
+    from roughflow.io import surface_to_dataset, write_dataset
+    from roughflow.surface import SurfaceSpec, generate
+
+    folder = tmp_path / "closed"
+    folder.mkdir()
+    spec = SurfaceSpec(nx=16, ny=16, lx=1.0, ly=1.0, hurst=0.8, gamma=1.0, lambda_r=0.5,
+                       lambda_s=0.125, seed=1)
+    surface = generate(spec)
+    write_dataset(surface_to_dataset(surface), folder / "s.nc")
+    (folder / "s.nc").chmod(0)
+    folder.chmod(0)
+    yield folder
+    folder.chmod(0o700)
+
+
+def test_an_input_another_user_may_not_read_is_an_input_error(closed):
+    # a traceback (PermissionError, exit 1) before: the file of a colleague made under a
+    # private umask, or one in a folder this user may not enter
+    import roughflow.datasets.kinds  # noqa: F401  (imported by read_dataset)
+    from roughflow.io import read_dataset
+
+    with unprivileged(), pytest.raises(InputError) as err:
+        read_dataset(closed / "s.nc", "surface")
+    assert str(closed / "s.nc") in str(err.value) and "cannot be read" in str(err.value)
+    assert "Permission denied" in str(err.value)
+    closed.chmod(0o700)  # the folder may be entered, the file not read
+    with unprivileged(), pytest.raises(InputError, match="cannot be read"):
+        read_dataset(closed / "s.nc", "surface")
+
+
+def test_an_output_in_a_folder_this_user_may_not_enter_is_an_input_error(closed):
+    from roughflow.io import check_output
+
+    with unprivileged(), pytest.raises(InputError) as err:
+        check_output(closed / "sub" / "out.nc", option="--output")
+    assert "--output" in str(err.value) and "cannot be written" in str(err.value)
+
+
+def test_a_scan_another_user_may_not_read_is_an_input_error(tmp_path):
+    # SurfaceTopography's readers turned the refusal into "not a topography it can read"
+    from roughflow.scan import read_scan
+
+    scan = tmp_path / "scan.npy"
+    np.save(scan, np.zeros((8, 8)))
+    scan.chmod(0)
+    with unprivileged(), pytest.raises(InputError) as err:
+        read_scan(scan, size="1um")
+    assert "cannot be read" in str(err.value) and "Permission denied" in str(err.value)
