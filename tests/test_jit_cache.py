@@ -10,6 +10,8 @@ import sys
 import time
 from pathlib import Path
 
+import numpy as np
+
 import roughflow
 from roughflow import _jit
 from roughflow.files import STALE_TEMPORARY_S
@@ -236,6 +238,38 @@ def test_a_save_waits_for_another_process_then_gives_up(tmp_path, monkeypatch, c
         os.close(holder)
     assert "could not be cached" in caplog.text and "held" in caplog.text
     assert not list(where.rglob("*.nbi"))
+
+
+def test_after_one_vain_wait_the_later_saves_do_not_wait(tmp_path, monkeypatch, caplog):
+    # every kernel's save waited SAVE_LOCK_WAIT_S behind a stopped holder (a suspended job,
+    # perhaps another user's, which this one cannot end): a threshold search that takes 10 s
+    # had not finished after 5 minutes (4 kernels, a minute each)
+    import fcntl
+
+    where = tmp_path / "cache"
+    where.mkdir()
+    holder = os.open(where / ".save.lock", os.O_RDWR | os.O_CREAT)
+    fcntl.flock(holder, fcntl.LOCK_EX)
+    monkeypatch.setattr(_jit, "SAVE_LOCK_WAIT_S", 0.5)
+    monkeypatch.setattr(_jit, "cache_dir", lambda: where)
+    monkeypatch.setattr(_jit, "_WAITED_IN_VAIN", set(), raising=False)
+    naps = []
+    real_sleep = time.sleep
+    monkeypatch.setattr(_jit.time, "sleep", lambda s: (naps.append(s), real_sleep(s)))
+    toy = _toy_module(tmp_path, "toy_g")
+    try:
+        with caplog.at_level("WARNING", logger="roughflow._jit"):
+            assert toy.double(5) == 10  # waits for the lock in vain
+            first = len(naps)
+            assert toy.double(2.5) == 5.0  # another signature, another save: no wait
+            assert toy.double(np.float32(1.5)) == 3.0
+        assert first > 0 and len(naps) == first
+        assert caplog.text.count("could not be cached") == 1  # one warning, not one a kernel
+    finally:
+        os.close(holder)
+    assert toy.double(True) == 2  # the lock is free again: this save takes it and caches
+    assert _jit._WAITED_IN_VAIN == set()
+    assert list(where.rglob("*.nbi"))
 
 
 def test_a_damaged_index_is_a_cache_miss_and_is_replaced(tmp_path, monkeypatch):

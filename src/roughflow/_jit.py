@@ -21,7 +21,9 @@ process could load one signature's machine code for another's (on a cluster of s
 types, code built for another CPU). Saves are therefore serialised by a lock file in the
 version's folder (flock; unlocked where the file system has none), and a save that fails (a
 full disk or quota, a folder pruned meanwhile) leaves the kernel uncached instead of failing
-the computation.
+the computation. A save that found the lock held for :data:`SAVE_LOCK_WAIT_S` (its holder
+stopped, perhaps another user's job of a shared cache) leaves the process's later kernels
+uncached at once, without waiting again, until the lock is free.
 """
 
 from __future__ import annotations
@@ -54,6 +56,10 @@ PRUNE_AFTER_S = 86400.0
 #: stays uncached): a holder stopped or hung (SIGSTOP, a suspended job, a stalled network
 #: file system) must not stop every other job of this version.
 SAVE_LOCK_WAIT_S = 60.0
+#: Cache folders whose lock this process waited for in vain: their later saves try the
+#: lock once instead of waiting again (every kernel of a search waited its full minute
+#: behind a stopped holder, which may be another user's job that this one cannot end).
+_WAITED_IN_VAIN: set[Path] = set()
 _PACKAGE = Path(__file__).resolve().parent
 
 
@@ -201,10 +207,16 @@ def _guard(cache, where: Path) -> None:
 
     def save_overload(sig, data) -> None:
         try:
+            waited = where not in _WAITED_IN_VAIN
             with _save_lock(where) as locked:
+                if not locked and not waited:  # said once, for the first kernel
+                    log.debug("%s: %s is still held; the kernel is not cached", cache,
+                              where / ".save.lock")
+                    return
                 if not locked:
                     raise TimeoutError(f"another process held {where / '.save.lock'} for "
-                                       f"{SAVE_LOCK_WAIT_S:g} s")
+                                       f"{SAVE_LOCK_WAIT_S:g} s; this process's later "
+                                       "kernels are not cached while it holds it")
                 remove_stale(folder.glob("*.tmp.*"))  # numba's, of a killed save
                 try:
                     save(sig, data)
@@ -229,8 +241,9 @@ def _remove_index(cache) -> None:
 def _save_lock(folder: Path) -> Iterator[bool]:
     """An exclusive lock of ``folder``'s ``.save.lock`` between processes while numba
     updates its index there. Yields False if another process held it for
-    :data:`SAVE_LOCK_WAIT_S`; True once held, and also where the platform or the file
-    system has no flock (the save then goes on unlocked, as numba's own does)."""
+    :data:`SAVE_LOCK_WAIT_S` (at once, once this process has waited for it in vain); True
+    once held, and also where the platform or the file system has no flock (the save then
+    goes on unlocked, as numba's own does)."""
     try:
         import fcntl
     except ImportError:
@@ -244,13 +257,16 @@ def _save_lock(folder: Path) -> Iterator[bool]:
         log.debug("saving unlocked: cannot open a lock file in %s (%s)", folder, err)
     try:
         held = fd is None
-        deadline = time.monotonic() + SAVE_LOCK_WAIT_S
+        wait = 0.0 if folder in _WAITED_IN_VAIN else SAVE_LOCK_WAIT_S
+        deadline = time.monotonic() + wait
         while not held:
             try:
                 fcntl.flock(fd, fcntl.LOCK_EX | fcntl.LOCK_NB)
                 held = True
+                _WAITED_IN_VAIN.discard(folder)  # the holder went on: wait again next time
             except BlockingIOError:
-                if time.monotonic() > deadline:
+                if time.monotonic() >= deadline:
+                    _WAITED_IN_VAIN.add(folder)
                     break
                 time.sleep(0.05)
             except OSError as err:  # a file system without flock
