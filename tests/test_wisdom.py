@@ -137,6 +137,27 @@ def test_a_second_process_waits_for_the_first_to_finish_timing(tmp_path):
     assert "exact True" in out
 
 
+def test_a_lock_held_too_long_costs_a_warning_not_the_run(tmp_path):
+    """A holder that never lets go (stopped with SIGSTOP, a suspended job: in a directory
+    a group shares, perhaps another user's, which this one cannot end) held every later
+    process for good. After LOCK_WAIT_S a process reads the file and plans without it."""
+    env = {wisdom.ENV: str(tmp_path), "ROUGHFLOW_FFTW_EFFORT": "FFTW_MEASURE"}
+    file = measure_file(tmp_path)
+    code = "from roughflow import wisdom\nwisdom.LOCK_WAIT_S = 1.0\n" + PLAN
+    with wisdom._locked(file) as usable:
+        assert usable
+        proc = subprocess.Popen([sys.executable, "-c", code], env={**os.environ, **env},
+                                stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
+        try:
+            out, err = proc.communicate(timeout=120)
+        finally:
+            proc.kill()
+    assert proc.returncode == 0, err[-2000:]
+    assert "exact True" in out and "timed" in out
+    assert out.count("FFTW wisdom:") == 1 and f"another process holds {file}.lock" in out
+    assert not file.exists()  # nothing saved without the lock
+
+
 @pytest.mark.parametrize("raw", ["", "  "])
 def test_an_empty_directory_name_is_refused(raw, monkeypatch):
     monkeypatch.setenv(wisdom.ENV, raw)

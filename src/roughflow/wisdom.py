@@ -19,7 +19,9 @@ run). Within a process, each effort plans from its own wisdom too. ``ROUGHFLOW_F
 keeps it in the process. The files are readable, and the lock files usable, by whoever may
 read the directory, so a group can share one. The file can only ever cost speed: one that
 cannot be read is replaced, and a directory that cannot be written is reported once: the
-wisdom it holds is still read, but what a run plans is not saved there.
+wisdom it holds is still read, but what a run plans is not saved there. A process waits
+:data:`LOCK_WAIT_S` at most for another's lock (a stopped holder, perhaps another user's
+job, held every later process for good), then plans without it and saves nothing.
 """
 
 from __future__ import annotations
@@ -34,6 +36,7 @@ import platform
 import re
 import tempfile
 import threading
+import time
 from collections.abc import Iterator
 from functools import lru_cache
 from pathlib import Path
@@ -46,10 +49,17 @@ log = logging.getLogger(__name__)
 #: The environment variable naming the wisdom directory ("off": no file).
 ENV = "ROUGHFLOW_FFTW_WISDOM"
 
+#: How long (s) a process waits for another's lock on the file before it plans without it
+#: (reading the file, saving nothing): the holder times at most one pair of plans, 1-18 s
+#: with FFTW_MEASURE here, but one stopped or hung (SIGSTOP, a suspended job, perhaps another
+#: user's that this one cannot end) held every later process of the machine for good.
+LOCK_WAIT_S = 300.0
+
 #: pyFFTW's wisdom is a triple (double, single, long double); the file keeps the names.
 _PRECISIONS = ("double", "single", "long_double")
 
 _reported: set[str] = set()  # problems already logged, so a sweep's log says each once
+_waited_in_vain: set[Path] = set()  # lock files held for LOCK_WAIT_S: tried, not waited for
 
 # FFTW's planner and its wisdom are one per process: threads plan in turn
 _PROCESS_LOCK = threading.Lock()
@@ -220,7 +230,8 @@ def _open_lock(file: Path) -> int | None:
 @contextlib.contextmanager
 def _locked(file: Path) -> Iterator[bool]:
     """Hold an exclusive lock on ``file``'s lock file; yields False where there is no lock
-    file (nothing is saved then)."""
+    file, or another process held it for :data:`LOCK_WAIT_S` (nothing is saved then; once
+    that happened, this process tries the lock once instead of waiting again)."""
     fd = _open_lock(file)
     if fd is None:
         yield False
@@ -229,19 +240,43 @@ def _locked(file: Path) -> Iterator[bool]:
         import fcntl
     except ImportError:  # not POSIX: no lock, so two processes may time the same shape
         fcntl = None
+    lock = file.with_name(file.name + ".lock")
     try:
+        taken = True
         try:
-            if fcntl is not None:
-                fcntl.flock(fd, fcntl.LOCK_EX)
+            taken = fcntl is None or _lock(fcntl, fd, lock)
         except OSError as err:  # some network file systems (Lustre without flock)
             _report(f"cannot lock {file.name}.lock", err,
                     "planning goes on unlocked: jobs may time the same shape, and a shape "
                     "another job saved at the same moment can be lost from the file (it is "
                     "timed again later, and its plan, so results, may then differ in the "
                     "last bits)")
-        yield True
+        if not taken:
+            _report(f"another process holds {lock}", f"for {LOCK_WAIT_S:g} s: stopped, or "
+                    "timing a shape at a high planner effort",
+                    "this process reads the file but plans without waiting for the lock and "
+                    "saves nothing: it may time a shape that process times, and its results "
+                    "may then differ from that process's in the last bits")
+        yield taken
     finally:
         os.close(fd)  # releases the lock
+
+
+def _lock(fcntl, fd: int, lock: Path) -> bool:
+    """Take the exclusive flock of ``fd`` (of the file ``lock``), trying for
+    :data:`LOCK_WAIT_S`, or once where this process has waited for it in vain before;
+    whether it was taken."""
+    deadline = time.monotonic() + (0.0 if lock in _waited_in_vain else LOCK_WAIT_S)
+    while True:
+        try:
+            fcntl.flock(fd, fcntl.LOCK_EX | fcntl.LOCK_NB)
+            _waited_in_vain.discard(lock)
+            return True
+        except BlockingIOError:
+            if time.monotonic() >= deadline:
+                _waited_in_vain.add(lock)
+                return False
+            time.sleep(0.05)
 
 
 @contextlib.contextmanager
