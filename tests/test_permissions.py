@@ -85,3 +85,32 @@ def test_a_scan_another_user_may_not_read_is_an_input_error(tmp_path):
     with unprivileged(), pytest.raises(InputError) as err:
         read_scan(scan, size="1um")
     assert "cannot be read" in str(err.value) and "Permission denied" in str(err.value)
+
+
+def test_a_checkout_git_refuses_as_another_users_is_reported(tmp_path, monkeypatch, caplog):
+    # a lab's shared checkout, owned by its maintainer: git refuses it to everyone else
+    # ("dubious ownership"), and the results lost their roughflow_commit without a word
+    import shutil
+    import subprocess
+
+    from roughflow.provenance import source_commit
+
+    if shutil.which("git") is None:
+        pytest.skip("git is not installed")
+    pkg = tmp_path / "repo" / "src" / "pkg"
+    pkg.mkdir(parents=True)
+    (pkg / "__init__.py").write_text("x = 1\n")
+    for args in (["init", "-q"], ["add", "."],
+                 ["-c", "user.name=t", "-c", "user.email=t@t", "commit", "-qm", "c"]):
+        subprocess.run(["git", *args], cwd=tmp_path / "repo", check=True, capture_output=True)
+    # git's own switch for its ownership check (no second user needed), and no safe.directory
+    # of this machine's configuration
+    monkeypatch.setenv("GIT_TEST_ASSUME_DIFFERENT_OWNER", "1")
+    monkeypatch.setenv("GIT_CONFIG_GLOBAL", os.devnull)
+    monkeypatch.setenv("GIT_CONFIG_NOSYSTEM", "1")
+    if subprocess.run(["git", "-C", str(pkg), "rev-parse", "HEAD"],
+                      capture_output=True).returncode == 0:
+        pytest.skip("this git does not check the owner of a repository (before 2.35.2)")
+    with caplog.at_level("WARNING", logger="roughflow.provenance"):
+        assert source_commit.__wrapped__(pkg) == ""
+    assert "belongs to another user" in caplog.text and "safe.directory" in caplog.text

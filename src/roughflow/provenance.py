@@ -5,7 +5,8 @@
 
 - ``roughflow_version``, ``roughflow_commit`` (:func:`source_commit`: the git commit of the
   source that ran, ``-dirty`` where the package differs from it; absent for an installed
-  release, whose version says it all), ``python_version``, ``backend`` ("cpu", or the
+  release, whose version says it all, and for a checkout git refuses to read because
+  another user owns it, with a warning), ``python_version``, ``backend`` ("cpu", or the
   CuPy version and GPU model of ``--backend cupy``), ``fft_threads``,
   ``fftw_effort`` (FFTW's planner effort: its algorithms set the round-off);
 - ``command``: the command line (``roughflow contact s.nc ...``) or, for the Python API,
@@ -29,6 +30,7 @@ computation; comparisons of datasets ignore them (and ``wall_time``).
 from __future__ import annotations
 
 import functools
+import logging
 import platform
 import shlex
 import subprocess
@@ -47,6 +49,8 @@ PROVENANCE_ATTRS = ("roughflow_version", "roughflow_commit", "python_version", "
 #: How a file's numbers were computed; a file that only combines others records theirs.
 COMPUTE_ATTRS = ("backend", "fft_threads", "fftw_effort")
 
+
+log = logging.getLogger(__name__)
 
 #: the package directory whose source :func:`source_commit` describes
 PACKAGE_DIR = Path(__file__).resolve().parent
@@ -71,6 +75,15 @@ def source_commit(package_dir: Path = PACKAGE_DIR) -> str:
         git("ls-files", "--error-unmatch", "__init__.py")
         commit = git("rev-parse", "HEAD")
         changed = git("status", "--porcelain", "--untracked-files=no", "--", ".")
+    except subprocess.CalledProcessError as err:
+        if "dubious ownership" in (err.stderr or ""):
+            # a checkout another user owns (a lab's shared one): git >= 2.35.2 refuses it,
+            # since its configuration could run commands as this user; whether to trust
+            # it is the user's decision, not roughflow's, but not one to take silently
+            log.warning("the results do not record roughflow's git commit: git refuses the "
+                        "checkout of %s, which belongs to another user (`git config --global "
+                        "--add safe.directory <its top folder>` trusts it)", package_dir)
+        return ""
     except (OSError, subprocess.SubprocessError):
         return ""
     return commit + ("-dirty" if changed else "")
