@@ -114,3 +114,19 @@ def test_a_checkout_git_refuses_as_another_users_is_reported(tmp_path, monkeypat
     with caplog.at_level("WARNING", logger="roughflow.provenance"):
         assert source_commit.__wrapped__(pkg) == ""
     assert "belongs to another user" in caplog.text and "safe.directory" in caplog.text
+
+
+def test_a_scan_another_user_may_not_read_stops_the_plan(tmp_path, monkeypatch):
+    # it passed planning and failed in the import job, after the other studies' jobs ran
+    from roughflow.scenes.jobs import expand_study
+
+    np.save(tmp_path / "scan.npy", np.zeros((8, 8)))
+    (tmp_path / "scan.npy").chmod(0)
+    monkeypatch.chdir(tmp_path)
+    block = {"modulus": "1GPa", "pressures": "1MPa:10MPa:3", "fluid_pressure": "1MPa",
+             "viscosity": "1mPa.s", "seal_width": "2mm", "seal_length": "60mm",
+             "scans": [{"file": "scan.npy", "size": "500nm", "unit": "nm"}]}
+    expand_study("measured", {**block, "scans": []})  # imports what the check needs
+    with unprivileged(), pytest.raises(InputError) as err:
+        expand_study("measured", block)
+    assert "scan 'scan'" in str(err.value) and "cannot be read" in str(err.value)

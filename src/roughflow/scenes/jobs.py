@@ -32,6 +32,7 @@ from roughflow.defaults import (
     THRESHOLD_STUDIES,
 )
 from roughflow.errors import InputError, check_nu, require_positive, require_seeds
+from roughflow.files import denied
 from roughflow.surface import SurfaceSpec, paper_l_over_lambda_r
 
 if TYPE_CHECKING:
@@ -727,9 +728,16 @@ def _expand_measured(block: dict) -> dict[str, Job]:
         args = {**shared, **entry}
         name = args.get("name") or Path(str(args["file"])).stem
         args["name"] = name
-        if not Path(str(args["file"])).is_file():
+        try:
+            if not Path(str(args["file"])).is_file():
+                raise InputError(f"config studies.{study}, scan {name!r}: file "
+                                 f"{args['file']!r} does not exist (paths are relative to "
+                                 f"{Path.cwd()})")
+            with open(str(args["file"]), "rb"):  # the import job would fail on it
+                pass
+        except PermissionError as exc:  # another user's scan, or a folder above it
             raise InputError(f"config studies.{study}, scan {name!r}: file {args['file']!r} "
-                             f"does not exist (paths are relative to {Path.cwd()})")
+                             f"cannot be read: {denied(exc)}") from None
         if name in jobs:
             raise InputError(f"config studies.{study}: two scans are named {name!r}")
         try:
