@@ -92,6 +92,32 @@ def test_an_unwritable_cache_falls_back_to_the_temporary_folder(tmp_path):
     assert kernel.is_relative_to(here)
 
 
+def test_a_cache_that_cannot_be_used_is_reported_and_the_spare_made_only_then(tmp_path):
+    # bob's NUMBA_CACHE_DIR, a group's folder whose version folder alice made under umask
+    # 022, was passed over for /tmp without a word; and every process made its spare
+    # folder in /tmp, used or not
+    code = ("from roughflow._jit import cache_dir; from roughflow.percolation import "
+            "spanning; print(cache_dir())")
+    spare = tmp_path / "tmp"
+    spare.mkdir()
+    env = {**os.environ, "NUMBA_CACHE_DIR": str(tmp_path / "numba"), "TMPDIR": str(spare)}
+    out = subprocess.run([sys.executable, "-c", code], env=env, capture_output=True,
+                         text=True, timeout=300)
+    assert out.returncode == 0, out.stderr
+    assert Path(out.stdout.strip()).is_relative_to(tmp_path / "numba")
+    assert "compiled kernels" not in out.stderr and not list(spare.iterdir())
+    blocker = tmp_path / "file"
+    blocker.write_text("")
+    env["NUMBA_CACHE_DIR"] = str(blocker / "sub")
+    out = subprocess.run([sys.executable, "-c", code], env=env, capture_output=True,
+                         text=True, timeout=300)
+    assert out.returncode == 0, out.stderr
+    here = Path(out.stdout.strip())
+    assert here.is_relative_to(spare)
+    [warning] = [line for line in out.stderr.splitlines() if "compiled kernels" in line]
+    assert str(blocker / "sub") in warning and f"cached in {here}" in warning
+
+
 def test_a_changed_callee_in_another_module_is_not_served_stale(tmp_path):
     # percolation.spanning's kernels call percolation.sweep's union-find. numba checks a
     # cached kernel against its own file only: with the cache in one place (numba's

@@ -10,9 +10,11 @@ cache therefore lives in a folder named after a hash of every source file of the
 (:func:`cache_dir`): a changed file compiles the kernels afresh, once (a threshold search's
 kernels take about 6 s). The versions live in ``$NUMBA_CACHE_DIR/roughflow``, else
 ``$XDG_CACHE_HOME/roughflow/numba``, else ``~/.cache/roughflow/numba``; where that cannot be
-written, in a private folder of the temporary folder; where neither can, the kernels are
-compiled in every process (never cached beside their source files, numba's fallback, which
-is per file: a kernel whose cache numba put anywhere else is left uncached).
+written, in a private folder of the temporary folder (with a warning: a group's shared cache
+whose folders another user made under umask 022 is passed over); where neither can, the
+kernels are compiled in every process, with a warning too (never cached beside their source
+files, numba's fallback, which is per file: a kernel whose cache numba put anywhere else is
+left uncached).
 
 Many jobs of a sweep start at once on one cache. numba's save reads a folder's index, picks
 the next data file and rewrites the index; two processes saving at once gave two signatures
@@ -75,14 +77,18 @@ def source_key(package: Path = _PACKAGE) -> str:
     return digest.hexdigest()[:16]
 
 
-def _parents() -> list[Path]:
+def _parents() -> Iterator[Path]:
     """Where the versions may live, the preferred place first; the spare one in the shared
     temporary folder only if it is this user's own private folder (its name can be
-    guessed: another user could make it first and plant pickled machine code in it)."""
+    guessed: another user could make it first and plant pickled machine code in it), and
+    made only when it is asked for (every process made it, used or not)."""
     given = os.environ.get("NUMBA_CACHE_DIR")
     first = Path(given).expanduser() / "roughflow" if given else user_cache_dir("numba")
+    if first is not None:
+        yield first
     spare = Path(tempfile.gettempdir()) / f"roughflow-numba-{os.getuid()}"
-    return [p for p in (first, spare if _private(spare) else None) if p is not None]
+    if _private(spare):
+        yield spare
 
 
 def _private(folder: Path) -> bool:
@@ -101,14 +107,15 @@ def _private(folder: Path) -> bool:
     return True
 
 
-def _writable(folder: Path) -> bool:
+def _unwritable(folder: Path) -> OSError | None:
+    """Why no file can be made in ``folder`` (made if missing); None where one can."""
     try:
         folder.mkdir(parents=True, exist_ok=True)
         with tempfile.NamedTemporaryFile(dir=folder):
             pass
-    except OSError:
-        return False
-    return True
+    except OSError as err:
+        return err
+    return None
 
 
 def _prune(parent: Path, here: Path) -> None:
@@ -142,13 +149,22 @@ def cache_dir() -> Path | None:
         key = source_key()
     except OSError:
         return None
+    refused = []
     for parent in _parents():
         here = parent / key
-        if _writable(here):
-            with contextlib.suppress(OSError):  # pruned by another process meanwhile
-                os.utime(here)  # most recently used
-            _prune(parent, here)
-            return here
+        err = _unwritable(here)
+        if err is not None:
+            refused.append(f"{here} ({err.strerror or err})")
+            continue
+        if refused:  # a cache the user set up (a group's NUMBA_CACHE_DIR) is not in use
+            log.warning("compiled kernels: cannot write %s; they are cached in %s",
+                        "; ".join(refused), here)
+        with contextlib.suppress(OSError):  # pruned by another process meanwhile
+            os.utime(here)  # most recently used
+        _prune(parent, here)
+        return here
+    log.warning("compiled kernels: cannot write %s; they are compiled in every process",
+                "; ".join(refused) or "any cache folder")
     return None
 
 
