@@ -130,3 +130,25 @@ def test_a_scan_another_user_may_not_read_stops_the_plan(tmp_path, monkeypatch):
     with unprivileged(), pytest.raises(InputError) as err:
         expand_study("measured", block)
     assert "scan 'scan'" in str(err.value) and "cannot be read" in str(err.value)
+
+
+def test_another_users_output_in_a_sticky_folder_is_refused_before_the_work(tmp_path,
+                                                                            monkeypatch):
+    # /tmp or a shared scratch folder: the rename that publishes the output is refused for
+    # another user's file there (EPERM), which came after the work (exit 5): a threshold
+    # search's result was lost. A user id that owns neither the file nor the folder stands
+    # in for the other user (no second user needed).
+    from roughflow.io import check_output
+
+    scratch = tmp_path / "scratch"
+    scratch.mkdir()
+    scratch.chmod(0o1777)
+    (scratch / "t.nc").write_bytes(b"")
+    check_output(scratch / "t.nc")  # one's own file: replaced
+    monkeypatch.setattr(os, "geteuid", lambda: 4242)
+    with pytest.raises(InputError) as err:
+        check_output(scratch / "t.nc", option="-o")
+    assert "sticky" in str(err.value) and "give another name" in str(err.value)
+    check_output(scratch / "new.nc")  # a new file there is fine
+    scratch.chmod(0o777)  # without the sticky bit anyone who may write the folder replaces it
+    check_output(scratch / "t.nc")

@@ -14,6 +14,7 @@ import math
 import os
 import shutil
 import signal
+import stat
 import tempfile
 from collections.abc import Callable, Sequence
 from dataclasses import MISSING, fields
@@ -54,8 +55,9 @@ NETCDF_MAGIC = (b"CDF\x01", b"CDF\x02", b"CDF\x05", b"\x89HDF\r\n\x1a\n")
 def check_output(path: str | os.PathLike, *, option: str = "--output",
                  suffixes: tuple[str, ...] = (".nc",)) -> None:
     """Refuse an output path that cannot be written, before any work: a wrong suffix, an
-    existing directory, a parent that is a file, or a folder where no file can be created
-    (probed by creating and removing a temporary file, which also works for root)."""
+    existing directory, a parent that is a file, a folder where no file can be created
+    (probed by creating and removing a temporary file, which also works for root), or a
+    file that this user may not replace (:func:`_check_replaceable`)."""
     path = str(path)
     if not path.strip():
         raise InputError(f"{option} is empty; give a file name")
@@ -80,6 +82,28 @@ def check_output(path: str | os.PathLike, *, option: str = "--output",
                          f"({exc.strerror})") from None
     os.close(fd)
     os.unlink(tmp)
+    _check_replaceable(p, parent, option)
+
+
+def _check_replaceable(path: Path, parent: Path, option: str) -> None:
+    """Refuse an existing ``path`` that the rename publishing the new one would be refused:
+    another user's file in a folder with the sticky bit (/tmp, a shared scratch folder),
+    which only its owner, the folder's owner or root may replace or remove. The refusal
+    came after the work, whatever the command had computed."""
+    try:
+        st, folder = path.lstat(), parent.stat()
+    except OSError:  # no such file: nothing to replace
+        return
+    if folder.st_mode & stat.S_ISVTX and os.geteuid() not in (0, st.st_uid, folder.st_uid):
+        try:
+            import pwd
+
+            owner = pwd.getpwuid(st.st_uid).pw_name
+        except KeyError:
+            owner = f"uid {st.st_uid}"
+        raise InputError(f"{option} {str(path)!r} belongs to {owner}, in {str(parent)!r}, a "
+                         "folder with the sticky bit: only its owner may replace it; give "
+                         "another name")
 
 
 Writer = tuple[Path, Callable[[str], object]]
