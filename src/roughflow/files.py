@@ -64,17 +64,25 @@ def open_lock_file(lock: Path) -> int:
         return os.open(lock, os.O_RDONLY)
 
 
-def denied(exc: PermissionError) -> str:
-    """Why ``exc`` refused a path, for a message: the user it refused, who may not be the
-    one who made the file (a lab's shared results, a cluster's software tree)."""
+def user_name(uid: int | None = None) -> str:
+    """The name of user ``uid`` (default: this process's effective user), for messages."""
+    if uid is None:
+        if not hasattr(os, "geteuid"):
+            return "this user"
+        uid = os.geteuid()
     try:
         import pwd
 
-        user = pwd.getpwuid(os.geteuid()).pw_name
+        return pwd.getpwuid(uid).pw_name
     except (ImportError, KeyError):  # not POSIX, or a user id the password database lacks
-        user = f"uid {os.geteuid()}" if hasattr(os, "geteuid") else "this user"
-    return (f"{exc.strerror or 'permission denied'} for user {user} (check the permissions of "
-            f"the file and of each folder above it)")
+        return f"uid {uid}"
+
+
+def denied(exc: PermissionError) -> str:
+    """Why ``exc`` refused a path, for a message: the user it refused, who may not be the
+    one who made the file (a lab's shared results, a cluster's software tree)."""
+    return (f"{exc.strerror or 'permission denied'} for user {user_name()} (check the "
+            "permissions of the file and of each folder above it)")
 
 
 def remove_stale(paths: Iterable[Path], older_than_s: float = STALE_TEMPORARY_S) -> None:

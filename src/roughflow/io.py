@@ -27,7 +27,7 @@ import xarray as xr
 from roughflow.datasets.results import spec_attrs
 from roughflow.datasets.units import LENGTH_UNITS, grid_coords
 from roughflow.errors import InputError, OutputError, require_field, require_positive
-from roughflow.files import TERMINATING_SIGNALS, denied, publish
+from roughflow.files import TERMINATING_SIGNALS, denied, publish, user_name
 from roughflow.provenance import PROVENANCE_ATTRS, Provenance
 from roughflow.surface import ScanInfo, Surface, SurfaceSpec
 
@@ -95,15 +95,9 @@ def _check_replaceable(path: Path, parent: Path, option: str) -> None:
     except OSError:  # no such file: nothing to replace
         return
     if folder.st_mode & stat.S_ISVTX and os.geteuid() not in (0, st.st_uid, folder.st_uid):
-        try:
-            import pwd
-
-            owner = pwd.getpwuid(st.st_uid).pw_name
-        except KeyError:
-            owner = f"uid {st.st_uid}"
-        raise InputError(f"{option} {str(path)!r} belongs to {owner}, in {str(parent)!r}, a "
-                         "folder with the sticky bit: only its owner may replace it; give "
-                         "another name")
+        raise InputError(f"{option} {str(path)!r} belongs to {user_name(st.st_uid)}, in "
+                         f"{str(parent)!r}, a folder with the sticky bit: only its owner may "
+                         "replace it; give another name")
 
 
 Writer = tuple[Path, Callable[[str], object]]
