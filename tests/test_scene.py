@@ -579,6 +579,31 @@ def test_measured_scan_units_are_checked_at_planning(tmp_path, monkeypatch, key)
         expand_study("measured", block)
 
 
+def test_a_measured_study_without_the_scan_reader_stops_the_plan(tmp_path, monkeypatch):
+    """Without SurfaceTopography (a plain `pip install -e .`, as the README's main command
+    does) a config with scans passed planning; its import jobs failed ("reading scans needs
+    SurfaceTopography") after the other studies' jobs had run. The plan now stops first,
+    and reading a scan says the same."""
+    import importlib.util
+
+    from roughflow.scan import read_scan
+
+    np.save(tmp_path / "scan.npy", np.zeros((8, 8)))
+    monkeypatch.chdir(tmp_path)
+    block = {"modulus": "1GPa", "pressures": "1MPa:10MPa:3", "fluid_pressure": "1MPa",
+             "viscosity": "1mPa.s", "seal_width": "2mm", "seal_length": "60mm",
+             "scans": [{"file": "scan.npy", "size": "500nm", "unit": "nm"}]}
+    assert expand_study("measured", block)
+    found = importlib.util.find_spec
+    monkeypatch.setattr(importlib.util, "find_spec",
+                        lambda name, *a: None if name == "SurfaceTopography" else found(name, *a))
+    message = r"reading scans needs SurfaceTopography, .*pip install 'roughflow\[topography\]'"
+    with pytest.raises(InputError, match=r"^config studies.measured: " + message):
+        expand_study("measured", block)
+    with pytest.raises(InputError, match=message):
+        read_scan(tmp_path / "scan.npy", size=(5e-7, 5e-7))
+
+
 def test_a_study_records_how_its_jobs_computed(tmp_path, monkeypatch, caplog):
     """A study dataset computes nothing: it recorded the FFT settings of the aggregating
     process (threads 2, MEASURE) while its jobs ran with others (1, ESTIMATE). It records

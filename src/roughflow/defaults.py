@@ -148,6 +148,8 @@ FLOW_METHODS = ("auto", "rs", "sa", "direct", "cg")
 #: line (AFM): each line along x (lines-x) or along y (lines-y) loses its own mean and tilt.
 DETREND_MODES = ("none", "plane", "curvature", "lines-x", "lines-y")
 SCAN_DETREND = "plane"
+#: The package that reads every scan format, and the extra of roughflow that installs it.
+SCAN_READER, SCAN_READER_EXTRA = "SurfaceTopography", "topography"
 #: Missing points of a scan: refuse the scan (none), Laplace interpolation from the defined
 #: neighbours (harmonic), or the lowest defined height (min: open, so conservative for leaks).
 FILL_METHODS = ("none", "harmonic", "min")

@@ -74,6 +74,16 @@ def require_cell(lx: float, ly: float | None, shape: tuple[int, ...]) -> tuple[f
     return x, x
 
 
+def require_installed(module: str, purpose: str, extra: str) -> None:
+    """:class:`InputError` unless ``module`` (an optional dependency) is installed; found,
+    not imported, so that a plan can check it without the import's cost."""
+    import importlib.util
+
+    if importlib.util.find_spec(module) is None:
+        raise InputError(f"{purpose} needs {module}, which is not installed: pip install "
+                         f"'roughflow[{extra}]'")
+
+
 #: Largest seed: seeds are stored as 64-bit integers in the netCDF files.
 MAX_SEED = 2**63 - 1
 

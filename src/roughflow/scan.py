@@ -37,8 +37,10 @@ from roughflow.defaults import (
     SCAN_FLAT_RELATIVE,
     SCAN_GRADIENT_WARN,
     SCAN_PIXEL_ASPECT_WARN,
+    SCAN_READER,
+    SCAN_READER_EXTRA,
 )
-from roughflow.errors import InputError, check_axis
+from roughflow.errors import InputError, check_axis, require_installed
 from roughflow.files import denied
 from roughflow.surface import ScanInfo, Surface, rms_gradient
 
@@ -391,11 +393,12 @@ def _open(path: Path):
         raise InputError(f"{str(path)!r} is empty")
     if path.suffix.lower() == ".npy":
         _check_npy_complete(path)
+    require_installed(SCAN_READER, "reading scans", SCAN_READER_EXTRA)
     try:
         from SurfaceTopography import open_topography
-    except ImportError:
-        raise InputError("reading scans needs SurfaceTopography: pip install "
-                         "'roughflow[topography]'") from None
+    except ImportError as exc:  # installed, but broken (a missing library of its own)
+        raise InputError(f"reading scans needs {SCAN_READER}, which fails to import: "
+                         f"{exc}") from None
     try:
         reader = open_topography(str(path))
     except Exception as exc:  # the readers raise many types for files they cannot read

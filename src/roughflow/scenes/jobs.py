@@ -31,7 +31,13 @@ from roughflow.defaults import (
     STUDY_ONE_VALUE,
     THRESHOLD_STUDIES,
 )
-from roughflow.errors import InputError, check_nu, require_positive, require_seeds
+from roughflow.errors import (
+    InputError,
+    check_nu,
+    require_installed,
+    require_positive,
+    require_seeds,
+)
 from roughflow.files import denied
 from roughflow.surface import SurfaceSpec, paper_l_over_lambda_r
 
@@ -724,6 +730,11 @@ def _expand_measured(block: dict) -> dict[str, Job]:
     except InputError as exc:
         raise InputError(f"config studies.{study}: {exc}") from None
     jobs: dict[str, Job] = {}
+    if block["scans"]:  # the import jobs would fail on it, after the other studies' jobs
+        try:
+            require_installed(defaults.SCAN_READER, "reading scans", defaults.SCAN_READER_EXTRA)
+        except InputError as exc:
+            raise InputError(f"config studies.{study}: {exc}") from None
     for entry in block["scans"]:
         args = {**shared, **entry}
         name = args.get("name") or Path(str(args["file"])).stem
