@@ -436,3 +436,31 @@ def test_a_killed_jobs_temporary_file_is_removed_by_a_later_save(tmp_path):
     wisdom._save(file, (b"", b"", b""))
     assert not stale.exists() and fresh.exists()
     assert set(json.loads(file.read_text())) == {"double", "single", "long_double"}
+
+
+def test_a_sticky_shared_folder_is_named_when_the_save_is_refused(tmp_path, monkeypatch,
+                                                                  caplog):
+    """A group's wisdom folder with the sticky bit (like /tmp): only a file's owner may
+    replace it, so a second user's save failed with 'Operation not permitted' and no hint
+    of why. The warning now names the owner and the setgid folder that works. The other
+    user is a user id that owns neither the file nor the folder (as root, the rename itself
+    would pass: it is refused as the kernel refuses it to that user)."""
+    import errno
+
+    folder = tmp_path / "fftw"
+    folder.mkdir()
+    folder.chmod(0o1777)
+    monkeypatch.setenv(wisdom.ENV, str(folder))
+    monkeypatch.setenv("ROUGHFLOW_FFTW_EFFORT", "FFTW_MEASURE")
+    fft.RealFFT2((26, 22), 1)  # the first user's save: the file is theirs
+    assert wisdom.path("FFTW_MEASURE").exists()
+    monkeypatch.setattr(os, "geteuid", lambda: 4242)
+
+    def refused(*_):
+        raise PermissionError(errno.EPERM, "Operation not permitted")
+
+    monkeypatch.setattr(wisdom, "_save", refused)
+    with caplog.at_level("WARNING", logger="roughflow.wisdom"):
+        fft.RealFFT2((34, 38), 1)  # a shape the file lacks: a save
+    assert "Operation not permitted" in caplog.text
+    assert "sticky bit" in caplog.text and "setgid folder" in caplog.text

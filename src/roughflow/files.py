@@ -12,6 +12,7 @@ from __future__ import annotations
 import contextlib
 import os
 import signal
+import stat
 import time
 from collections.abc import Iterable
 from pathlib import Path
@@ -62,6 +63,20 @@ def open_lock_file(lock: Path) -> int:
         return os.open(lock, os.O_RDWR | os.O_CREAT, 0o666)
     except PermissionError:
         return os.open(lock, os.O_RDONLY)
+
+
+def sticky_owner(path: Path) -> int | None:
+    """The owner of an existing ``path`` that this user may not replace because its folder
+    has the sticky bit (/tmp, a shared scratch folder: only the file's owner, the folder's
+    owner or root may replace or remove a file there); None where a rename over it is not
+    refused for that reason."""
+    try:
+        st, folder = path.lstat(), path.parent.stat()
+    except OSError:  # no such file: nothing to replace
+        return None
+    if folder.st_mode & stat.S_ISVTX and os.geteuid() not in (0, st.st_uid, folder.st_uid):
+        return st.st_uid
+    return None
 
 
 def user_name(uid: int | None = None) -> str:

@@ -14,7 +14,6 @@ import math
 import os
 import shutil
 import signal
-import stat
 import tempfile
 from collections.abc import Callable, Sequence
 from dataclasses import MISSING, fields
@@ -27,7 +26,7 @@ import xarray as xr
 from roughflow.datasets.results import spec_attrs
 from roughflow.datasets.units import LENGTH_UNITS, grid_coords
 from roughflow.errors import InputError, OutputError, require_field, require_positive
-from roughflow.files import TERMINATING_SIGNALS, denied, publish, user_name
+from roughflow.files import TERMINATING_SIGNALS, denied, publish, sticky_owner, user_name
 from roughflow.provenance import PROVENANCE_ATTRS, Provenance
 from roughflow.surface import ScanInfo, Surface, SurfaceSpec
 
@@ -86,16 +85,12 @@ def check_output(path: str | os.PathLike, *, option: str = "--output",
 
 
 def _check_replaceable(path: Path, parent: Path, option: str) -> None:
-    """Refuse an existing ``path`` that the rename publishing the new one would be refused:
-    another user's file in a folder with the sticky bit (/tmp, a shared scratch folder),
-    which only its owner, the folder's owner or root may replace or remove. The refusal
-    came after the work, whatever the command had computed."""
-    try:
-        st, folder = path.lstat(), parent.stat()
-    except OSError:  # no such file: nothing to replace
-        return
-    if folder.st_mode & stat.S_ISVTX and os.geteuid() not in (0, st.st_uid, folder.st_uid):
-        raise InputError(f"{option} {str(path)!r} belongs to {user_name(st.st_uid)}, in "
+    """Refuse an existing ``path`` that the rename publishing the new one would be refused
+    (:func:`roughflow.files.sticky_owner`): the refusal came after the work, whatever the
+    command had computed."""
+    owner = sticky_owner(parent / path.name)
+    if owner is not None:
+        raise InputError(f"{option} {str(path)!r} belongs to {user_name(owner)}, in "
                          f"{str(parent)!r}, a folder with the sticky bit: only its owner may "
                          "replace it; give another name")
 

@@ -42,7 +42,14 @@ from functools import lru_cache
 from pathlib import Path
 
 from roughflow.errors import InputError
-from roughflow.files import open_lock_file, publish, remove_stale, user_cache_dir
+from roughflow.files import (
+    open_lock_file,
+    publish,
+    remove_stale,
+    sticky_owner,
+    user_cache_dir,
+    user_name,
+)
 
 log = logging.getLogger(__name__)
 
@@ -313,7 +320,11 @@ def shared(effort: str) -> Iterator[None]:
                     _load(file)  # what others saved meanwhile (a file system without locks)
                     _save(file, pyfftw.export_wisdom())
                 except OSError as err:
-                    _report(f"cannot write {file}", err)
+                    owner = sticky_owner(file)
+                    _report(f"cannot write {file}", err, "planning goes on without the file" + (
+                        f"; it belongs to {user_name(owner)} in a folder with the sticky bit, "
+                        "where only its owner may replace it: a group shares wisdom through "
+                        "a setgid folder (chmod 2775) instead" if owner is not None else ""))
 
 
 def _lacks(saved: tuple[bytes, ...] | None, held: tuple[bytes, ...]) -> bool:
