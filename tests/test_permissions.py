@@ -150,5 +150,7 @@ def test_another_users_output_in_a_sticky_folder_is_refused_before_the_work(tmp_
         check_output(scratch / "t.nc", option="-o")
     assert "sticky" in str(err.value) and "give another name" in str(err.value)
     check_output(scratch / "new.nc")  # a new file there is fine
+    # a file of that name in the nearest folder that exists is not the output's
+    check_output(scratch / "sub" / "t.nc")
     scratch.chmod(0o777)  # without the sticky bit anyone who may write the folder replaces it
     check_output(scratch / "t.nc")

@@ -81,18 +81,18 @@ def check_output(path: str | os.PathLike, *, option: str = "--output",
                          f"({exc.strerror})") from None
     os.close(fd)
     os.unlink(tmp)
-    _check_replaceable(p, parent, option)
+    _check_replaceable(p, option)
 
 
-def _check_replaceable(path: Path, parent: Path, option: str) -> None:
+def _check_replaceable(path: Path, option: str) -> None:
     """Refuse an existing ``path`` that the rename publishing the new one would be refused
     (:func:`roughflow.files.sticky_owner`): the refusal came after the work, whatever the
     command had computed."""
-    owner = sticky_owner(parent / path.name)
+    owner = sticky_owner(path.absolute())
     if owner is not None:
         raise InputError(f"{option} {str(path)!r} belongs to {user_name(owner)}, in "
-                         f"{str(parent)!r}, a folder with the sticky bit: only its owner may "
-                         "replace it; give another name")
+                         f"{str(path.absolute().parent)!r}, a folder with the sticky bit: "
+                         "only its owner may replace it; give another name")
 
 
 Writer = tuple[Path, Callable[[str], object]]
