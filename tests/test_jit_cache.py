@@ -13,7 +13,7 @@ from pathlib import Path
 import numpy as np
 
 import roughflow
-from roughflow import _jit
+from roughflow import _jit, files
 from roughflow.files import STALE_TEMPORARY_S
 
 PACKAGE = Path(roughflow.__file__).resolve().parent
@@ -278,7 +278,7 @@ def test_after_one_vain_wait_the_later_saves_do_not_wait(tmp_path, monkeypatch, 
     fcntl.flock(holder, fcntl.LOCK_EX)
     monkeypatch.setattr(_jit, "SAVE_LOCK_WAIT_S", 0.5)
     monkeypatch.setattr(_jit, "cache_dir", lambda: where)
-    monkeypatch.setattr(_jit, "_WAITED_IN_VAIN", set(), raising=False)
+    monkeypatch.setattr(files, "_WAITED_IN_VAIN", set())
     naps = []
     real_sleep = time.sleep
     monkeypatch.setattr(_jit.time, "sleep", lambda s: (naps.append(s), real_sleep(s)))
@@ -294,7 +294,7 @@ def test_after_one_vain_wait_the_later_saves_do_not_wait(tmp_path, monkeypatch, 
     finally:
         os.close(holder)
     assert toy.double(True) == 2  # the lock is free again: this save takes it and caches
-    assert _jit._WAITED_IN_VAIN == set()
+    assert files._WAITED_IN_VAIN == set()
     assert list(where.rglob("*.nbi"))
 
 

@@ -45,7 +45,14 @@ from pathlib import Path
 
 import numba
 
-from roughflow.files import STALE_TEMPORARY_S, open_lock_file, remove_stale, user_cache_dir
+from roughflow.files import (
+    STALE_TEMPORARY_S,
+    flock_within,
+    open_lock_file,
+    remove_stale,
+    user_cache_dir,
+    waited_in_vain,
+)
 
 log = logging.getLogger(__name__)
 
@@ -58,10 +65,8 @@ PRUNE_AFTER_S = 86400.0
 #: stays uncached): a holder stopped or hung (SIGSTOP, a suspended job, a stalled network
 #: file system) must not stop every other job of this version.
 SAVE_LOCK_WAIT_S = 60.0
-#: Cache folders whose lock this process waited for in vain: their later saves try the
-#: lock once instead of waiting again (every kernel of a search waited its full minute
-#: behind a stopped holder, which may be another user's job that this one cannot end).
-_WAITED_IN_VAIN: set[Path] = set()
+#: The lock file of a version's folder that serialises saves.
+_SAVE_LOCK = ".save.lock"
 _PACKAGE = Path(__file__).resolve().parent
 
 
@@ -223,14 +228,16 @@ def _guard(cache, where: Path) -> None:
 
     def save_overload(sig, data) -> None:
         try:
-            waited = where not in _WAITED_IN_VAIN
+            # after one vain wait, every kernel of a search waited its full minute behind a
+            # stopped holder: later saves try the lock once (files.flock_within)
+            tried_before = waited_in_vain(where / _SAVE_LOCK)
             with _save_lock(where) as locked:
-                if not locked and not waited:  # said once, for the first kernel
+                if not locked and tried_before:  # said once, for the first kernel
                     log.debug("%s: %s is still held; the kernel is not cached", cache,
-                              where / ".save.lock")
+                              where / _SAVE_LOCK)
                     return
                 if not locked:
-                    raise TimeoutError(f"another process held {where / '.save.lock'} for "
+                    raise TimeoutError(f"another process held {where / _SAVE_LOCK} for "
                                        f"{SAVE_LOCK_WAIT_S:g} s; this process's later "
                                        "kernels are not cached while it holds it")
                 remove_stale(folder.glob("*.tmp.*"))  # numba's, of a killed save
@@ -261,30 +268,21 @@ def _save_lock(folder: Path) -> Iterator[bool]:
     once held, and also where the platform or the file system has no flock (the save then
     goes on unlocked, as numba's own does)."""
     try:
-        import fcntl
+        import fcntl  # noqa: F401  (flock_within's)
     except ImportError:
         yield True
         return
     fd = None
     try:
         folder.mkdir(parents=True, exist_ok=True)
-        fd = open_lock_file(folder / ".save.lock")  # a group may share the cache
+        fd = open_lock_file(folder / _SAVE_LOCK)  # a group may share the cache
     except OSError as err:
         log.debug("saving unlocked: cannot open a lock file in %s (%s)", folder, err)
     try:
         held = fd is None
-        wait = 0.0 if folder in _WAITED_IN_VAIN else SAVE_LOCK_WAIT_S
-        deadline = time.monotonic() + wait
-        while not held:
+        if not held:
             try:
-                fcntl.flock(fd, fcntl.LOCK_EX | fcntl.LOCK_NB)
-                held = True
-                _WAITED_IN_VAIN.discard(folder)  # the holder went on: wait again next time
-            except BlockingIOError:
-                if time.monotonic() >= deadline:
-                    _WAITED_IN_VAIN.add(folder)
-                    break
-                time.sleep(0.05)
+                held = flock_within(fd, folder / _SAVE_LOCK, SAVE_LOCK_WAIT_S)
             except OSError as err:  # a file system without flock
                 log.debug("saving unlocked: cannot lock %s (%s)", folder, err)
                 held = True

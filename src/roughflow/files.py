@@ -65,6 +65,37 @@ def open_lock_file(lock: Path) -> int:
         return os.open(lock, os.O_RDONLY)
 
 
+#: Lock files that another process held for a whole wait of this one: later waits on them
+#: try once, without waiting again, until the lock is taken (its holder may be stopped, a
+#: suspended job or another user's, which this process cannot end).
+_WAITED_IN_VAIN: set[Path] = set()
+
+
+def waited_in_vain(lock: Path) -> bool:
+    """Whether this process waited for ``lock`` in vain and has not taken it since."""
+    return lock in _WAITED_IN_VAIN
+
+
+def flock_within(fd: int, lock: Path, wait_s: float) -> bool:
+    """Take the exclusive flock of ``fd``, open on the lock file ``lock``, trying for
+    ``wait_s`` (once, where :func:`waited_in_vain`); whether it was taken. Raises OSError
+    where the file system has no flock (the callers go on unlocked)."""
+    import fcntl
+
+    deadline = time.monotonic() + (0.0 if lock in _WAITED_IN_VAIN else wait_s)
+    while True:
+        try:
+            fcntl.flock(fd, fcntl.LOCK_EX | fcntl.LOCK_NB)
+        except BlockingIOError:
+            if time.monotonic() >= deadline:
+                _WAITED_IN_VAIN.add(lock)
+                return False
+            time.sleep(0.05)
+        else:
+            _WAITED_IN_VAIN.discard(lock)  # the holder went on: wait again next time
+            return True
+
+
 def sticky_owner(path: Path) -> int | None:
     """The owner of an existing ``path`` that this user may not replace because its folder
     has the sticky bit (/tmp, a shared scratch folder: only the file's owner, the folder's

@@ -36,13 +36,13 @@ import platform
 import re
 import tempfile
 import threading
-import time
 from collections.abc import Iterator
 from functools import lru_cache
 from pathlib import Path
 
 from roughflow.errors import InputError
 from roughflow.files import (
+    flock_within,
     open_lock_file,
     publish,
     remove_stale,
@@ -66,7 +66,6 @@ LOCK_WAIT_S = 300.0
 _PRECISIONS = ("double", "single", "long_double")
 
 _reported: set[str] = set()  # problems already logged, so a sweep's log says each once
-_waited_in_vain: set[Path] = set()  # lock files held for LOCK_WAIT_S: tried, not waited for
 
 # FFTW's planner and its wisdom are one per process: threads plan in turn
 _PROCESS_LOCK = threading.Lock()
@@ -251,7 +250,7 @@ def _locked(file: Path) -> Iterator[bool]:
     try:
         taken = True
         try:
-            taken = fcntl is None or _lock(fcntl, fd, lock)
+            taken = fcntl is None or flock_within(fd, lock, LOCK_WAIT_S)
         except OSError as err:  # some network file systems (Lustre without flock)
             _report(f"cannot lock {file.name}.lock", err,
                     "planning goes on unlocked: jobs may time the same shape, and a shape "
@@ -267,23 +266,6 @@ def _locked(file: Path) -> Iterator[bool]:
         yield taken
     finally:
         os.close(fd)  # releases the lock
-
-
-def _lock(fcntl, fd: int, lock: Path) -> bool:
-    """Take the exclusive flock of ``fd`` (of the file ``lock``), trying for
-    :data:`LOCK_WAIT_S`, or once where this process has waited for it in vain before;
-    whether it was taken."""
-    deadline = time.monotonic() + (0.0 if lock in _waited_in_vain else LOCK_WAIT_S)
-    while True:
-        try:
-            fcntl.flock(fd, fcntl.LOCK_EX | fcntl.LOCK_NB)
-            _waited_in_vain.discard(lock)
-            return True
-        except BlockingIOError:
-            if time.monotonic() >= deadline:
-                _waited_in_vain.add(lock)
-                return False
-            time.sleep(0.05)
 
 
 @contextlib.contextmanager
