@@ -17,6 +17,8 @@ import time
 from collections.abc import Iterable
 from pathlib import Path
 
+from roughflow.errors import InputError
+
 #: Age (s) after which a temporary file that a cache's writer left is taken as that of a
 #: killed process (SIGKILL, out of memory), not one still being written.
 STALE_TEMPORARY_S = 3600.0
@@ -94,6 +96,22 @@ def flock_within(fd: int, lock: Path, wait_s: float) -> bool:
         else:
             _WAITED_IN_VAIN.discard(lock)  # the holder went on: wait again next time
             return True
+
+
+def require_readable(path: Path, source: str, *, missing: str = "") -> None:
+    """:class:`InputError` naming ``source`` (the role and name of ``path``) unless it is a
+    file this user may read: missing (``missing`` appended: a hint), a directory, or refused
+    (another user's file, or a folder above it that this user may not enter). The readers
+    behind it reported a refusal as a traceback or as a file of an unknown format."""
+    try:
+        if not path.exists():
+            raise InputError(f"{source} does not exist{missing}")
+        if path.is_dir():
+            raise InputError(f"{source} is a directory, not a file")
+        with path.open("rb"):
+            pass
+    except PermissionError as exc:
+        raise InputError(f"{source} cannot be read: {denied(exc)}") from None
 
 
 def sticky_owner(path: Path) -> int | None:

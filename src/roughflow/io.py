@@ -26,7 +26,14 @@ import xarray as xr
 from roughflow.datasets.results import spec_attrs
 from roughflow.datasets.units import LENGTH_UNITS, grid_coords
 from roughflow.errors import InputError, OutputError, require_field, require_positive
-from roughflow.files import TERMINATING_SIGNALS, denied, publish, sticky_owner, user_name
+from roughflow.files import (
+    TERMINATING_SIGNALS,
+    denied,
+    publish,
+    require_readable,
+    sticky_owner,
+    user_name,
+)
 from roughflow.provenance import PROVENANCE_ATTRS, Provenance
 from roughflow.surface import ScanInfo, Surface, SurfaceSpec
 
@@ -258,17 +265,11 @@ def read_dataset(path: str | os.PathLike, kinds: str | tuple[str, ...] | None = 
 
     path = Path(path)
     source = f"{what} {str(path)!r}"
-    try:
-        if not path.exists():
-            raise InputError(f"{source} does not exist")
-        if path.is_dir():
-            raise InputError(f"{source} is a directory, not a netCDF file")
-        if path.stat().st_size == 0:
-            raise InputError(f"{source} is empty (0 bytes)")
-        with open(path, "rb") as fh:
-            head = fh.read(8)
-    except PermissionError as exc:  # another user's file or folder, not readable by this one
-        raise InputError(f"{source} cannot be read: {denied(exc)}") from None
+    require_readable(path, source)
+    if path.stat().st_size == 0:
+        raise InputError(f"{source} is empty (0 bytes)")
+    with open(path, "rb") as fh:
+        head = fh.read(8)
     if not head.startswith(NETCDF_MAGIC):
         hint = ("; a measured scan is read with `roughflow import`"
                 if "surface" in ((kinds,) if isinstance(kinds, str) else kinds or ()) else "")

@@ -41,7 +41,7 @@ from roughflow.defaults import (
     SCAN_READER_EXTRA,
 )
 from roughflow.errors import InputError, check_axis, require_installed
-from roughflow.files import denied
+from roughflow.files import require_readable
 from roughflow.surface import ScanInfo, Surface, rms_gradient
 
 if TYPE_CHECKING:
@@ -560,13 +560,7 @@ def read_scan(path: str | os.PathLike, *,
     :class:`InputError` naming the value.
     """
     path = Path(path)
-    try:
-        if not path.is_file():
-            raise InputError(f"scan file {str(path)!r} does not exist")
-        with path.open("rb"):  # the readers would report a refusal as an unknown format
-            pass
-    except PermissionError as exc:  # another user's file or folder
-        raise InputError(f"scan file {str(path)!r} cannot be read: {denied(exc)}") from None
+    require_readable(path, f"scan file {str(path)!r}")
     if detrend_mode not in DETREND_MODES:
         raise InputError(f"detrend must be one of {DETREND_MODES}, got {detrend_mode!r}")
     if fill not in FILL_METHODS:

@@ -38,7 +38,7 @@ from roughflow.errors import (
     require_positive,
     require_seeds,
 )
-from roughflow.files import denied
+from roughflow.files import require_readable
 from roughflow.surface import SurfaceSpec, paper_l_over_lambda_r
 
 if TYPE_CHECKING:
@@ -739,16 +739,10 @@ def _expand_measured(block: dict) -> dict[str, Job]:
         args = {**shared, **entry}
         name = args.get("name") or Path(str(args["file"])).stem
         args["name"] = name
-        try:
-            if not Path(str(args["file"])).is_file():
-                raise InputError(f"config studies.{study}, scan {name!r}: file "
-                                 f"{args['file']!r} does not exist (paths are relative to "
-                                 f"{Path.cwd()})")
-            with open(str(args["file"]), "rb"):  # the import job would fail on it
-                pass
-        except PermissionError as exc:  # another user's scan, or a folder above it
-            raise InputError(f"config studies.{study}, scan {name!r}: file {args['file']!r} "
-                             f"cannot be read: {denied(exc)}") from None
+        # the import job would fail on it, after the other studies' jobs
+        require_readable(Path(str(args["file"])),
+                         f"config studies.{study}, scan {name!r}: file {args['file']!r}",
+                         missing=f" (paths are relative to {Path.cwd()})")
         if name in jobs:
             raise InputError(f"config studies.{study}: two scans are named {name!r}")
         try:
