@@ -35,6 +35,7 @@ import yaml
 from workflow_copy import copy_workflow
 
 from roughflow import provenance
+from roughflow.scenes.requests import WRAPPER_MB
 
 ROOT = Path(__file__).resolve().parents[1]
 SCRIPT = ROOT / "tests" / "cluster" / "local_slurm.sh"
@@ -278,6 +279,38 @@ def test_aggregation_fits_and_figures_run_locally(runs):
                 if re.match(r"rule_(aggregate|fit|figure|all|import_scan)\b", row["Comment"])]
     for study in ("channels", "threshold_vs_gamma", "flow_isotropic"):
         assert (runs["slurm"] / "results" / study / "figure.png").stat().st_size > 5000
+
+
+def test_jobs_of_different_sizes_each_run_once_in_their_allocation(cluster, tmp_path):
+    """Each job's Snakemake parses the Snakefile again inside its allocation, where the cgroup
+    limit is that job's memory: a plan check there refused every job smaller than the plan's
+    largest, and only the retry at twice the memory ran it (config/test.yaml's jobs are all
+    too small to be checked, so the runs above could not show it)."""
+    if not (cluster.state / "etc" / "cgroup.conf").exists():
+        pytest.skip("this test cluster does not enforce memory with cgroups (no writable "
+                    "cgroup v1 memory hierarchy)")
+    wd = copy_workflow(tmp_path)
+    profile = write_overlay(wd)
+    cfg = yaml.safe_load((wd / "config" / "test.yaml").read_text())
+    studies = {name: cfg["studies"][name] for name in ("channels", "flow_isotropic")}
+    # both at 512^2: channels about 400 MB, the flow ladder about 734 MB, a few s each
+    studies["channels"]["points_per_lambda_s"] = 16
+    studies["flow_isotropic"].update(points_per_lambda_s=16, area_fraction=[0.3],
+                                     series=[{"model": ["elastic"]}])
+    (wd / "config" / "sizes.yaml").write_text(yaml.safe_dump({"studies": studies}))
+    res = run_snakemake(wd, cluster.env, *profile, "--configfile", "config/sizes.yaml")
+    log = res.stdout + res.stderr
+    assert res.returncode == 0, log[-5000:]
+    remote = [b for b in job_blocks(log).values() if not b["local"]]
+    assert {b["rule"] for b in remote} == {"channels", "scene"}
+    # the test can fail: the smaller job's allocation (MiB) is below the larger one's estimate
+    smaller, larger = sorted(b["mem_mb"] for b in remote)
+    assert smaller * 2**20 < (larger - WRAPPER_MB) * 10**6
+    assert "Error in rule" not in log, log[-5000:]
+    for b in remote:
+        assert len(b.get("slurm", [])) == 1, b  # no retry
+        (row,) = cluster.sacct("--jobs", b["slurm"][0])
+        assert row["State"] == "COMPLETED" and megabytes(row["ReqMem"]) == b["mem_mb"], row
 
 
 def _same_attrs(a: dict, b: dict) -> bool:

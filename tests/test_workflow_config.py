@@ -252,3 +252,27 @@ def test_accuracy_grid_above_max_mem_mb_is_refused_only_for_its_target(tmp_path)
     write_case(wd, max_mem_mb=4000, accuracy={"points_per_lambda_s": [4, 16]})
     res = dry_run(wd, "accuracy")
     assert res.returncode == 0, (res.stdout + res.stderr)[-2000:]
+
+
+# (i) only the Snakemake that plans a run checks the plan's memory. The one that runs a job
+# inside a cluster allocation (--mode remote in the batch script, --mode subprocess under its
+# srun) parses the Snakefile again in a cgroup sized for that one job, where checking the
+# plan refused every job smaller than the plan's largest (tests/test_slurm.py runs it on a
+# cluster). max_mem_mb stands in for that job's allocation here.
+@pytest.mark.parametrize("mode", ["remote", "subprocess"])
+def test_a_job_inside_an_allocation_is_not_refused_for_the_plans_larger_jobs(tmp_path, mode):
+    wd = copy_workflow(tmp_path)
+    write_case(wd, studies=("channels", "flow_isotropic"), max_mem_mb=700)
+    cfg = yaml.safe_load((wd / "config" / "case.yaml").read_text())
+    # both at 512^2: channels about 400 MB, the flow ladder about 734 MB (over 700)
+    cfg["studies"]["channels"]["points_per_lambda_s"] = 16
+    cfg["studies"]["flow_isotropic"].update(points_per_lambda_s=16, area_fraction=[0.3],
+                                            series=[{"model": ["elastic"]}])
+    (wd / "config" / "case.yaml").write_text(yaml.safe_dump(cfg))
+    plan = dry_run(wd)
+    out = plan.stdout + plan.stderr
+    assert plan.returncode != 0 and "max_mem_mb = 700" in out, out[-2000:]
+    assert "the ladder job" in out, out[-2000:]
+    job = dry_run(wd, "--mode", mode, "--target-jobs", "channels:", "--allowed-rules",
+                  "channels")
+    assert job.returncode == 0, (job.stdout + job.stderr)[-2000:]

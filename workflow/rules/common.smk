@@ -84,9 +84,15 @@ def study_config_text(study):
     files = ", ".join(os.path.relpath(f) for f in workflow.configfiles) or "config/config.yaml"
     return f"config {files}; studies.{study}: {json.dumps(STUDIES[study], sort_keys=True)}"
 # The memory a job may need: the config's max_mem_mb (the nodes of a cluster), else the
-# memory of this machine. A job above it is refused at planning, before any job runs.
+# memory of this machine. A job above it is refused at planning, before any job runs. Only
+# the Snakemake that plans the run checks the plan: the one that runs a job inside a SLURM
+# allocation (--mode remote, and under its srun --mode subprocess) parses this file again in
+# a cgroup sized for that one job, where the plan's larger jobs would refuse it (each job's
+# roughflow checks its own memory before allocating).
 _machine_bytes = total_bytes()
-if config.get("max_mem_mb") is not None:
+if not workflow.is_main_process:
+    _MEM_LIMIT = (None, "")
+elif config.get("max_mem_mb") is not None:
     _MEM_LIMIT = (int(config["max_mem_mb"]) * 10**6, f"max_mem_mb = {config['max_mem_mb']}")
 else:
     _MEM_LIMIT = (_machine_bytes, f"{total_source()}; set max_mem_mb in the config for a "
