@@ -154,3 +154,36 @@ def test_another_users_output_in_a_sticky_folder_is_refused_before_the_work(tmp_
     check_output(scratch / "sub" / "t.nc")
     scratch.chmod(0o777)  # without the sticky bit anyone who may write the folder replaces it
     check_output(scratch / "t.nc")
+
+
+def test_a_prune_leaves_another_users_kernel_version_it_may_not_empty(monkeypatch):
+    # A group's shared kernel cache: its folder is writable by the group, a version made by
+    # another user under umask 022 is not. Moving that version aside succeeded and emptying
+    # it failed, so it stayed behind as ".<version>.removing-<pid>" (and its owner's next
+    # process compiled afresh). Root's folders stand in for the other user's.
+    import shutil
+    import tempfile
+    import time
+
+    from roughflow import _jit
+
+    if os.geteuid() != 0:
+        pytest.skip("root's folders stand in for another user's")
+    shared = Path(tempfile.mkdtemp(dir="/tmp"))  # nobody can reach it, unlike tmp_path
+    try:
+        shared.chmod(0o777)
+        old = time.time() - 2 * _jit.PRUNE_AFTER_S
+        (shared / "theirs").mkdir(mode=0o755)
+        (shared / "theirs" / "kernel.nbi").write_bytes(b"")
+        os.utime(shared / "theirs", (old, old))
+        monkeypatch.setattr(_jit, "KEEP", 1)
+        with unprivileged():
+            for name in ("here", "mine"):
+                (shared / name).mkdir()
+                (shared / name / "kernel.nbi").write_bytes(b"")
+            os.utime(shared / "mine", (old, old))
+            _jit._prune(shared, shared / "here")
+        assert sorted(p.name for p in shared.iterdir()) == ["here", "theirs"]
+        assert (shared / "theirs" / "kernel.nbi").exists()
+    finally:
+        shutil.rmtree(shared)

@@ -136,7 +136,11 @@ def _prune(parent: Path, here: Path) -> None:
                           key=lambda p: p.stat().st_mtime, reverse=True)
         old = time.time() - PRUNE_AFTER_S
         for p in versions[KEEP:]:
-            if p != here and p.stat().st_mtime < old:
+            # another user's version that this one may not empty (made under umask 022 in
+            # a group's shared cache) is left to its owner: moved aside, it would stay
+            # behind as a ".removing" folder
+            if (p != here and p.stat().st_mtime < old
+                    and os.access(p, os.W_OK | os.X_OK, effective_ids=True)):
                 # moved aside in one step first: a process that starts on this version
                 # meanwhile finds it gone and compiles afresh, instead of loading from a
                 # folder that is being emptied
