@@ -24,6 +24,15 @@ from roughflow.units import Scales, parse_quantity, parse_range, registry
     ("2e-3 N.s/m^2", "viscosity", 2e-3),
     ("1 mPa s", "viscosity", 1e-3),
     ("1cP", "viscosity", 1e-3),  # centipoise
+    # a power after a unit name, SI notation that pint reads as an unknown unit "m2"; not a
+    # number's exponent ("2e-3", "1.5E+3")
+    ("1N.s/m2", "viscosity", 1.0),
+    ("1kg.m-1.s-1", "viscosity", 1.0),
+    ("1 m2.s-1 kg.m-3", "viscosity", 1.0),  # kinematic viscosity times density
+    ("1.5E+3 mPa.s", "viscosity", 1.5),
+    ("1e5 N.m-2", "pressure", 1e5),
+    ("1 N/mm2", "pressure", 1e6),
+    ("1mm2/m", "length", 1e-6),
     ("2mm", "length", 2e-3),
     ("500 nm", "length", 500e-9),
     ("3um", "length", 3e-6),

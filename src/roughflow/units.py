@@ -133,6 +133,18 @@ def canonical(value: float) -> float:
 _UNIT_DOT = re.compile(r"(?<=[^\W\d]|[)])\s*\.\s*(?=[^\W\d]|[(])")
 
 
+#: A power written after a unit name without an operator ("m2", "s-1": "N.s/m2", "kg.m-3"),
+#: SI notation that pint reads as an unknown unit name; not the exponent of a number ("1e-3",
+#: "2E6"). Parenthesised, so that a dot after it reads as a product too ("m2.s").
+_UNIT_POWER = re.compile(r"(?P<before>[\d.]?)(?P<unit>[^\W\d_]+)(?P<power>[+-]?\d+)")
+
+
+def _unit_power(match: re.Match) -> str:
+    if match["before"] and match["unit"] in ("e", "E"):
+        return match[0]  # a number's exponent
+    return f"{match['before']}({match['unit']}**{match['power']})"
+
+
 def parse_quantity(text: str | float, kind: str, name: str) -> float:
     """SI value of ``text`` ("200GPa", "1 mPa s", "2mm", or a number already in SI units),
     which must be a positive quantity of ``kind`` (:data:`DIMENSIONS`), to
@@ -146,7 +158,7 @@ def parse_quantity(text: str | float, kind: str, name: str) -> float:
         ureg = _base_registry()
         s = str(text).strip()
         try:
-            q = ureg.Quantity(_UNIT_DOT.sub("*", s))
+            q = ureg.Quantity(_UNIT_DOT.sub("*", _UNIT_POWER.sub(_unit_power, s)))
         except (pint.errors.PintError, ValueError, TypeError, AttributeError,
                 SyntaxError) as exc:
             raise InputError(f"{name}: cannot parse {text!r} as a {kind} ({exc})") from None
