@@ -313,6 +313,45 @@ def test_jobs_of_different_sizes_each_run_once_in_their_allocation(cluster, tmp_
         assert row["State"] == "COMPLETED" and megabytes(row["ReqMem"]) == b["mem_mb"], row
 
 
+def test_a_login_node_with_little_memory_leaves_the_requests_alone(cluster, tmp_path):
+    """Snakemake on a login node with a per-user memory limit (a 1 GiB cgroup here) and
+    max_mem_mb set to the compute nodes' memory, as the README says. The Snakefile gives a
+    local run the memory of its machine as a global mem_mb, and Snakemake lowers each job's
+    request to it, also under the SLURM executor: this 2048^2 threshold job asked for 1073 MB
+    instead of 1857 MB at both attempts and was refused in its allocation. profiles/slurm
+    now gives the run a global mem_mb of its own."""
+    memory = Path("/sys/fs/cgroup/memory")
+    if not (cluster.state / "etc" / "cgroup.conf").exists() or not os.access(memory, os.W_OK):
+        pytest.skip("no writable cgroup v1 memory hierarchy for a login node's limit")
+    wd = copy_workflow(tmp_path)
+    profile = write_overlay(wd)
+    cfg = {"max_mem_mb": 4000, "studies": {"threshold_vs_gamma": {
+        "gamma": [1], "l_over_lambda_r": [4], "eps_f": [0.0625], "seeds": [0],
+        "seeds_per_job": 1, "points_per_lambda_s": 32, "tol": 0.01}}}
+    (wd / "config" / "login.yaml").write_text(yaml.safe_dump(cfg))
+    login = memory / f"rftest-login-{os.getpid()}"
+    login.mkdir()
+    limit = 2**30
+    (login / "memory.limit_in_bytes").write_text(str(limit))
+
+    def enter():  # in the child, before snakemake starts
+        (login / "cgroup.procs").write_text(str(os.getpid()))
+
+    try:
+        res = subprocess.run([str(SNAKEMAKE), *profile, "--configfile", "config/login.yaml"],
+                             cwd=wd, env=cluster.env, capture_output=True, text=True,
+                             timeout=900, preexec_fn=enter)
+    finally:
+        login.rmdir()
+    log = res.stdout + res.stderr
+    assert res.returncode == 0, log[-5000:]
+    (job,) = [b for b in job_blocks(log).values() if not b["local"]]
+    assert job["mem_mb"] * 10**6 > limit  # the request the login node's memory capped
+    assert len(job["slurm"]) == 1, job
+    (row,) = cluster.sacct("--jobs", job["slurm"][0])
+    assert row["State"] == "COMPLETED" and megabytes(row["ReqMem"]) == job["mem_mb"], row
+
+
 def _same_attrs(a: dict, b: dict) -> bool:
     return a.keys() == b.keys() and all(np.array_equal(a[k], b[k]) for k in a)
 

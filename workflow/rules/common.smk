@@ -100,19 +100,36 @@ else:
 # A local run starts as many jobs as --cores allows, whatever their mem_mb, unless the run
 # has a global mem_mb: give it this machine's memory (a --resources mem_mb=N of the user's
 # stands), so that large jobs wait for each other instead of meeting the out-of-memory killer
-# (16 cores would start 16 jobs of the paper's sizes at once). A cluster run, and the
-# job inside an allocation, leave memory to the cluster.
+# (16 cores would start 16 jobs of the paper's sizes at once). The job inside a cluster
+# allocation needs none. A cluster run must not get it either: Snakemake lowers every job's
+# mem_mb to the global one, so each job would ask the cluster for at most the login node's
+# memory, at every attempt. But Snakemake names the executor only after it has read this
+# file (workflow.local_exec is still True here under --executor slurm), so profiles/slurm
+# gives the run a global mem_mb of its own that never binds, and a cluster run without it
+# is warned about once its executor is known (local_mem_mb).
 LOCAL_MEM_MB = None
-if (workflow.is_main_process and workflow.local_exec and _machine_bytes is not None
+if (workflow.is_main_process and _machine_bytes is not None
         and "mem_mb" not in workflow.global_resources):
     LOCAL_MEM_MB = _machine_bytes // 10**6
     workflow.register_resource("mem_mb", LOCAL_MEM_MB)
+_BUDGET_WARNED = []
 
 
 def local_mem_mb(mb):
     """A job's mem_mb: at most the local run's LOCAL_MEM_MB (a job that needs the whole
     machine runs alone; above it Snakemake would refuse to schedule it), else as given."""
-    return mb if LOCAL_MEM_MB is None else min(mb, LOCAL_MEM_MB)
+    if LOCAL_MEM_MB is None:
+        return mb
+    if not workflow.local_exec and not _BUDGET_WARNED:
+        from snakemake.logging import logger
+
+        _BUDGET_WARNED.append(True)
+        logger.warning(
+            f"a cluster run without profiles/slurm: Snakemake lowers every job's mem_mb to "
+            f"the memory of this machine ({LOCAL_MEM_MB} MB), and a job that needs more is "
+            "refused in its allocation at every attempt; run with --profile profiles/slurm, "
+            "or give --resources mem_mb=1000000000")
+    return min(mb, LOCAL_MEM_MB)
 
 
 try:
