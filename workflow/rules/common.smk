@@ -128,7 +128,7 @@ def local_mem_mb(mb):
             f"a cluster run without profiles/slurm: Snakemake lowers every job's mem_mb to "
             f"the memory of this machine ({LOCAL_MEM_MB} MB), and a job that needs more is "
             "refused in its allocation at every attempt; run with --profile profiles/slurm, "
-            "or give --resources mem_mb=1000000000")
+            "or give a global --resources mem_mb above any job's, as that profile does")
     return min(mb, LOCAL_MEM_MB)
 
 
