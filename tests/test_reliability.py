@@ -282,6 +282,25 @@ def test_job_memory_is_the_snakemake_request():
     assert task_mem_mb("threshold", 32 * 32) == mb and task_mem_mb("threshold", 1024, 2) == 2 * mb
 
 
+def test_largest_slurm_node_of_a_partition(tmp_path, monkeypatch):
+    # the memory a cluster run's plan is held to (workflow/rules/common.smk), from a fake
+    # sinfo: per-node rows "partition|memory MiB", the default partition marked with "*"
+    sinfo = tmp_path / "sinfo"
+    sinfo.write_text("#!/bin/sh\nprintf 'big*|512000\\nsmall|1000\\nsmall|3000\\n"
+                     "small|2000\\nodd|n/a\\n'\n")
+    sinfo.chmod(0o755)
+    monkeypatch.setenv("PATH", f"{tmp_path}{os.pathsep}{os.environ['PATH']}")
+    assert resources.slurm_largest_node("small") == resources.SlurmNode("small", 3000)
+    assert resources.slurm_largest_node() == resources.SlurmNode("big", 512000)
+    assert resources.slurm_largest_node("odd") is None  # no memory listed
+    assert resources.slurm_largest_node("missing") is None
+    sinfo.write_text("#!/bin/sh\necho 'slurm_load_partitions: Unable to contact' >&2\n"
+                     "exit 1\n")
+    assert resources.slurm_largest_node("small") is None  # not a SLURM login node
+    monkeypatch.setenv("PATH", str(tmp_path / "empty"))
+    assert resources.slurm_largest_node("small") is None  # no sinfo at all
+
+
 def test_threads_must_be_positive():
     # item 10: --threads -3 raised OverflowError inside FFTW, 0 was accepted
     for bad in (0, -3, 2.5, True):

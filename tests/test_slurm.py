@@ -319,18 +319,19 @@ def test_jobs_of_different_sizes_each_run_once_in_their_allocation(cluster, tmp_
 
 
 def test_a_login_node_with_little_memory_leaves_the_requests_alone(cluster, tmp_path):
-    """Snakemake on a login node with a per-user memory limit (a 1 GiB cgroup here) and
-    max_mem_mb set to the compute nodes' memory, as the README says. The Snakefile gives a
-    local run the memory of its machine as a global mem_mb, and Snakemake lowers each job's
-    request to it, also under the SLURM executor: this 2048^2 threshold job asked for 1073 MB
-    instead of 1857 MB at both attempts and was refused in its allocation. profiles/slurm
-    now gives the run a global mem_mb of its own."""
+    """Snakemake on a login node with a per-user memory limit (a 1 GiB cgroup here). The
+    Snakefile gives a local run the memory of its machine as a global mem_mb, and Snakemake
+    lowers each job's request to it, also under the SLURM executor: this 2048^2 threshold job
+    asked for 1073 MB instead of 1857 MB at both attempts and was refused in its allocation.
+    profiles/slurm now gives the run a global mem_mb of its own. Without max_mem_mb in the
+    config the plan was refused, checked against the login session's 1 GiB; it is now held
+    to the partition's largest node (sinfo)."""
     memory = Path("/sys/fs/cgroup/memory")
     if not cluster.enforces_memory or not os.access(memory, os.W_OK):
         pytest.skip("no writable cgroup v1 memory hierarchy for a login node's limit")
     wd = copy_workflow(tmp_path)
     profile = write_overlay(wd)
-    cfg = {"max_mem_mb": 4000, "studies": {"threshold_vs_gamma": {
+    cfg = {"studies": {"threshold_vs_gamma": {
         "gamma": [1], "l_over_lambda_r": [4], "eps_f": [0.0625], "seeds": [0],
         "seeds_per_job": 1, "points_per_lambda_s": 32, "tol": 0.01}}}
     (wd / "config" / "login.yaml").write_text(yaml.safe_dump(cfg))

@@ -276,3 +276,57 @@ def test_a_job_inside_an_allocation_is_not_refused_for_the_plans_larger_jobs(tmp
     job = dry_run(wd, "--mode", mode, "--target-jobs", "channels:", "--allowed-rules",
                   "channels")
     assert job.returncode == 0, (job.stdout + job.stderr)[-2000:]
+
+
+# (j) a run through profiles/slurm (its global mem_mb above this machine's memory) holds the
+# plan to the largest node of the profile's partition, as `sinfo` lists it, less the 200 MB of
+# the job's Snakemake, and caps every cluster job's request at that node's memory (a retry's
+# doubled request above it would be refused by sbatch). A fake `sinfo` stands in for the cluster.
+def _fake_sinfo(tmp_path: Path, rows: str) -> dict:
+    bin_dir = tmp_path / "bin"
+    bin_dir.mkdir()
+    sinfo = bin_dir / "sinfo"
+    sinfo.write_text(f"#!/bin/sh\nprintf '{rows}'\n")
+    sinfo.chmod(0o755)
+    return {"PATH": f"{bin_dir}{os.pathsep}{os.environ['PATH']}"}
+
+
+def _mem_requests(output: str) -> list[int]:
+    return [int(word.split("=")[1].rstrip(","))
+            for line in output.splitlines() if line.strip().startswith("resources:")
+            for word in line.split() if word.startswith("mem_mb=")
+            and word.split("=")[1].rstrip(",").isdigit()]  # "<TBD>" before an input exists
+
+
+def test_a_cluster_run_plans_against_the_largest_node_of_its_partition(tmp_path,
+                                                                        monkeypatch):
+    wd = copy_workflow(tmp_path)
+    write_case(wd, studies=("flow_isotropic",))
+    cfg = yaml.safe_load((wd / "config" / "case.yaml").read_text())
+    # 512^2: the flow ladder's estimate is 734 MB, its request 935 MB
+    cfg["studies"]["flow_isotropic"].update(points_per_lambda_s=16, area_fraction=[0.3],
+                                            series=[{"model": ["elastic"]}])
+    (wd / "config" / "case.yaml").write_text(yaml.safe_dump(cfg))
+    cluster = ("--resources", "mem_mb=1000000000", "--default-resources",
+               "slurm_partition=part")
+    # partition part's largest node has 800 MB: 600 MB for the job itself
+    for key, value in _fake_sinfo(tmp_path, "other*|64000\\npart|700\\npart|800\\n").items():
+        monkeypatch.setenv(key, value)
+    plan = dry_run(wd, *cluster)
+    out = plan.stdout + plan.stderr
+    assert plan.returncode != 0, out[-2000:]
+    assert "the ladder job" in out and "the limit is 600 MB" in out, out[-2000:]
+    assert "SLURM partition part has 800 MB (sinfo)" in out, out[-2000:]
+    # a local run on the same machine plans against this machine's memory, not the cluster's
+    local = dry_run(wd)
+    assert local.returncode == 0, (local.stdout + local.stderr)[-2000:]
+    assert 935 in _mem_requests(local.stdout)
+    # the config's max_mem_mb overrides the node; the request is still capped at the node
+    write_case(wd, studies=("flow_isotropic",), max_mem_mb=4000)
+    cfg_max = yaml.safe_load((wd / "config" / "case.yaml").read_text())
+    cfg_max["studies"] = cfg["studies"]
+    (wd / "config" / "case.yaml").write_text(yaml.safe_dump(cfg_max))
+    capped = dry_run(wd, *cluster)
+    assert capped.returncode == 0, (capped.stdout + capped.stderr)[-2000:]
+    requests = _mem_requests(capped.stdout)
+    assert 935 not in requests and 800 in requests, requests  # the ladder's

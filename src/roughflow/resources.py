@@ -31,6 +31,8 @@ process. This module imports nothing heavy.
 from __future__ import annotations
 
 import os
+import subprocess
+from dataclasses import dataclass
 from pathlib import Path
 
 from roughflow.errors import ResourceError
@@ -221,6 +223,39 @@ def total_source() -> str:
     if _limited_by_cgroup() is not None:
         return "the memory limit of this process's cgroup (a SLURM allocation or container)"
     return "the memory of this machine"
+
+
+@dataclass(frozen=True)
+class SlurmNode:
+    """The largest node of a SLURM partition: its name and its memory in MiB (SLURM's "MB",
+    the unit of ``sbatch --mem``)."""
+
+    partition: str
+    mem_mib: int
+
+
+def slurm_largest_node(partition: str | None = None) -> SlurmNode | None:
+    """The node with the most memory in SLURM partition ``partition`` (None: the cluster's
+    default partition), from ``sinfo``; None where ``sinfo`` is missing or does not answer
+    within 30 s (not a SLURM login node) or lists no such partition."""
+    try:
+        out = subprocess.run(["sinfo", "--noheader", "--Node", "--format=%P|%m"],
+                             capture_output=True, text=True, timeout=30, check=True).stdout
+    except (OSError, subprocess.SubprocessError):
+        return None
+    largest: dict[str, int] = {}
+    default = None
+    for line in out.splitlines():
+        name, _, mem = line.strip().partition("|")
+        if name.endswith("*"):  # sinfo marks the default partition
+            name = default = name[:-1]
+        try:
+            mib = int(mem)
+        except ValueError:
+            continue
+        largest[name] = max(largest.get(name, 0), mib)
+    name = partition if partition is not None else default
+    return SlurmNode(name, largest[name]) if name in largest else None
 
 
 def available_bytes() -> int | None:

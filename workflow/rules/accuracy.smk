@@ -82,7 +82,7 @@ rule accuracy_resolution:
     threads: 1
     resources:
         # the default 16 points per lambda_s: 1024^2, 1.9 GB; the six seeds take a minute
-        mem_mb=lambda wc, attempt: local_mem_mb(task_mem_mb(
+        mem_mb=lambda wc, attempt: job_mem_mb(task_mem_mb(
             _ACC_TASK, _ACC_FINEST.nx * _ACC_FINEST.ny, attempt)),
         runtime=60,
     shell:
@@ -104,7 +104,7 @@ rule accuracy_tolerances:
         seeds=_ACC_SEEDS,
     threads: 1
     resources:
-        mem_mb=lambda wc, attempt: local_mem_mb(task_mem_mb(
+        mem_mb=lambda wc, attempt: job_mem_mb(task_mem_mb(
             _ACC_TASK, _ACC_TOL_GRID.nx * _ACC_TOL_GRID.ny, attempt)),
         runtime=60,
     shell:

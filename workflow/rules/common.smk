@@ -61,11 +61,12 @@ except InputError as exc:
 
 from roughflow.defaults import FLOW_STUDIES, MEASURED_STUDY, THRESHOLD_STUDIES  # noqa: E402
 from roughflow.figures import caption as figure_caption  # noqa: E402
-from roughflow.resources import total_bytes, total_source  # noqa: E402
+from roughflow.resources import slurm_largest_node, total_bytes, total_source  # noqa: E402
 from roughflow.scenes import expand_study, study_defaults  # noqa: E402
 from roughflow.scenes.jobs import aggregated_config  # noqa: E402
 from roughflow.scenes.requests import (  # noqa: E402
     KEEP_FAILED_LOG,
+    WRAPPER_MB,
     check_plan_memory,
     requested_mem_mb,
     requested_runtime_min,
@@ -83,17 +84,45 @@ def study_config_text(study):
     report of the test config looked like one of the paper's)."""
     files = ", ".join(os.path.relpath(f) for f in workflow.configfiles) or "config/config.yaml"
     return f"config {files}; studies.{study}: {json.dumps(STUDIES[study], sort_keys=True)}"
-# The memory a job may need: the config's max_mem_mb (the nodes of a cluster), else the
-# memory of this machine. A job above it is refused at planning, before any job runs. Only
-# the Snakemake that plans the run checks the plan: the one that runs a job inside a SLURM
-# allocation (--mode remote, and under its srun --mode subprocess) parses this file again in
-# a cgroup sized for that one job, where the plan's larger jobs would refuse it (each job's
-# roughflow checks its own memory before allocating).
+# A run whose jobs go to a SLURM cluster. Snakemake names the executor only after it has read
+# this file (workflow.local_exec is still True here under --executor slurm), so such a run
+# is told by the global mem_mb that profiles/slurm gives it, above this machine's memory:
+# its jobs do not run here. Its partition is the profile's default slurm_partition.
 _machine_bytes = total_bytes()
+_global_mem_mb = getattr(workflow.global_resources.get("mem_mb"), "value", None)
+RUNS_ON_CLUSTER = (workflow.is_main_process and _machine_bytes is not None
+                   and isinstance(_global_mem_mb, int)
+                   and _global_mem_mb * 10**6 > _machine_bytes)
+
+
+def _default_resource(name):
+    """A --default-resources value as given (a profile's default-resources), else None."""
+    settings = getattr(workflow.resource_settings, "default_resources", None)
+    for arg in getattr(settings, "args", None) or []:
+        key, _, value = str(arg).partition("=")
+        if key.strip() == name:
+            return value.strip().strip("'\"")
+    return None
+
+
+SLURM_NODE = slurm_largest_node(_default_resource("slurm_partition")) if RUNS_ON_CLUSTER \
+    else None
+# The memory a job may need, checked at planning before any job runs: the config's
+# max_mem_mb; on a SLURM cluster the largest node of the partition less the job's Snakemake
+# (WRAPPER_MB), so that sbatch accepts every planned request; else the memory of this
+# machine. Only the Snakemake that plans the run checks the plan: the one that runs a job
+# inside a SLURM allocation (--mode remote, and under its srun --mode subprocess) parses
+# this file again in a cgroup sized for that one job, where the plan's larger jobs would
+# refuse it (each job's roughflow checks its own memory before allocating).
 if not workflow.is_main_process:
     _MEM_LIMIT = (None, "")
 elif config.get("max_mem_mb") is not None:
     _MEM_LIMIT = (int(config["max_mem_mb"]) * 10**6, f"max_mem_mb = {config['max_mem_mb']}")
+elif SLURM_NODE is not None:
+    _MEM_LIMIT = ((SLURM_NODE.mem_mib - WRAPPER_MB) * 10**6,
+                  f"the largest node of SLURM partition {SLURM_NODE.partition} has "
+                  f"{SLURM_NODE.mem_mib} MB (sinfo), less {WRAPPER_MB} MB for the job's "
+                  "Snakemake; max_mem_mb in the config sets another limit")
 else:
     _MEM_LIMIT = (_machine_bytes, f"{total_source()}; set max_mem_mb in the config for a "
                                  "cluster")
@@ -103,10 +132,8 @@ else:
 # (16 cores would start 16 jobs of the paper's sizes at once). The job inside a cluster
 # allocation needs none. A cluster run must not get it either: Snakemake lowers every job's
 # mem_mb to the global one, so each job would ask the cluster for at most the login node's
-# memory, at every attempt. But Snakemake names the executor only after it has read this
-# file (workflow.local_exec is still True here under --executor slurm), so profiles/slurm
-# gives the run a global mem_mb of its own that never binds, and a cluster run without it
-# is warned about once its executor is known (local_mem_mb).
+# memory, at every attempt. profiles/slurm gives the run a global mem_mb of its own that
+# never binds, and a cluster run without it is warned about once its executor is known.
 LOCAL_MEM_MB = None
 if (workflow.is_main_process and _machine_bytes is not None
         and "mem_mb" not in workflow.global_resources):
@@ -115,9 +142,13 @@ if (workflow.is_main_process and _machine_bytes is not None
 _BUDGET_WARNED = []
 
 
-def local_mem_mb(mb):
+def job_mem_mb(mb):
     """A job's mem_mb: at most the local run's LOCAL_MEM_MB (a job that needs the whole
-    machine runs alone; above it Snakemake would refuse to schedule it), else as given."""
+    machine runs alone; above it Snakemake would refuse to schedule it); on a SLURM cluster
+    at most its largest node's memory (a retry's doubled request above it would be refused
+    by sbatch; the plan's check keeps the first attempt's below it); else as given."""
+    if SLURM_NODE is not None:
+        return min(mb, SLURM_NODE.mem_mib)
     if LOCAL_MEM_MB is None:
         return mb
     if not workflow.local_exec and not _BUDGET_WARNED:
@@ -202,7 +233,7 @@ def mem_mb(wildcards, attempt=1):
     # the library's memory estimate of the job (roughflow.resources, calibrated by
     # benchmarks/bench_memory.py; also the limit of the refusals) plus the Snakemake
     # process that wraps it on a cluster node
-    return local_mem_mb(requested_mem_mb(job_of(wildcards), attempt))
+    return job_mem_mb(requested_mem_mb(job_of(wildcards), attempt))
 
 
 def jobs_of(study):

@@ -25,7 +25,7 @@ rule import_scan:
         f"{RESULTS}/logs/measured/import_{{scan}}.log",
     threads: 1
     resources:
-        mem_mb=local_mem_mb(2000),
+        mem_mb=job_mem_mb(2000),
         runtime=10,
     shell:
         # the scan is a user-given path (spaces, shell characters): quoted, as are the
@@ -49,7 +49,7 @@ rule leak:
     threads: 1
     resources:
         # the imported scan's grid (the library's estimate; before the import, a default)
-        mem_mb=lambda wc, input, attempt: local_mem_mb(
+        mem_mb=lambda wc, input, attempt: job_mem_mb(
             leak_mem_mb(measured_job(wc), input[0], attempt)),
         runtime=120,
     shell:

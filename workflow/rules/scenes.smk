@@ -35,7 +35,7 @@ rule channels:
         f"{RESULTS}/benchmarks/workflow/channels/channels.tsv"
     threads: 1
     resources:
-        mem_mb=lambda wc, attempt: local_mem_mb(
+        mem_mb=lambda wc, attempt: job_mem_mb(
             requested_mem_mb(JOBS["channels"]["channels"], attempt)),
         runtime=10,
     shell:
