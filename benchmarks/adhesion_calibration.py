@@ -77,7 +77,7 @@ def measure(surface, adhesion, p10: float, p40: float, gaps: dict) -> dict:
     return row
 
 
-def main() -> None:
+def build_parser() -> argparse.ArgumentParser:
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--ratios", type=float, nargs="+", default=[0.1],
                     help="gamma_s / v_ela^full values")
@@ -94,7 +94,11 @@ def main() -> None:
     ap.add_argument("--contact-within", type=float, default=None,
                     help="count gaps below this fraction of rho as contact (default: the "
                          "repulsion's)")
-    args = ap.parse_args()
+    return ap
+
+
+def main() -> None:
+    args = build_parser().parse_args()
     if args.ranges is None:
         args.ranges = [ADHESION_RANGE_OVER_LAMBDA_S[args.repulsion]]
     OUT.mkdir(parents=True, exist_ok=True)

@@ -87,14 +87,18 @@ def rows_for(n: int, loads: list[float], tol: float, repeats: int) -> list[dict]
     return rows
 
 
-def main() -> None:
+def build_parser() -> argparse.ArgumentParser:
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--sizes", type=int, nargs="+", default=[256, 512, 1024])
     ap.add_argument("--loads", type=float, nargs="+", default=[0.0, 0.02, 0.05, 0.11])
     ap.add_argument("--tol", type=float, default=1e-4)
     ap.add_argument("--repeats", type=int, default=3)
     ap.add_argument("--tag", default="")
-    args = ap.parse_args()
+    return ap
+
+
+def main() -> None:
+    args = build_parser().parse_args()
     warm_up()
     rows = [r for n in args.sizes for r in rows_for(n, args.loads, args.tol, args.repeats)]
     write_table(f"adhesive_minimizer{args.tag}", rows)

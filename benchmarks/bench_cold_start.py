@@ -51,12 +51,16 @@ def timed(heights: np.ndarray, load: float, tol: float, u0: np.ndarray | None):
     return out, time.perf_counter() - t0
 
 
-def main() -> None:
+def build_parser() -> argparse.ArgumentParser:
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--sizes", type=int, nargs="*", default=[512])
     ap.add_argument("--seed", type=int, default=2)
     ap.add_argument("--tols", type=float, nargs="*", default=[1e-4, 1e-6])
-    args = ap.parse_args()
+    return ap
+
+
+def main() -> None:
+    args = build_parser().parse_args()
     law = ContactLaw("elastic")
     rows = []
     for n in args.sizes:

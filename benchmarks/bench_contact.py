@@ -278,7 +278,7 @@ def plot(rows: list[dict], name: str) -> None:
     fig.savefig(OUT / name, dpi=120)
 
 
-def main() -> None:
+def build_parser() -> argparse.ArgumentParser:
     ap = argparse.ArgumentParser(description=__doc__,
                                  formatter_class=argparse.RawDescriptionHelpFormatter)
     # every grid holds lambda_s = L/64, which needs >= 2 points: n >= 128 for every size below
@@ -291,7 +291,11 @@ def main() -> None:
     ap.add_argument("--memory-n", type=int, default=2048, help="grid of the memory run, >= 128")
     ap.add_argument("--skip", nargs="*", default=[], choices=["time", "ladder", "memory"])
     ap.add_argument("--tag", default="", help="suffix of the time/error output files")
-    args = ap.parse_args()
+    return ap
+
+
+def main() -> None:
+    args = build_parser().parse_args()
     OUT.mkdir(parents=True, exist_ok=True)
     try:
         import tamaas as tm

@@ -63,14 +63,18 @@ def run(job, directory: str) -> tuple[float, float, int]:
     return usage.ru_utime + usage.ru_stime, wall, usage.ru_maxrss * 1024
 
 
-def main() -> None:
+def build_parser() -> argparse.ArgumentParser:
     ap = argparse.ArgumentParser(description=__doc__,
                                  formatter_class=argparse.RawDescriptionHelpFormatter)
     ap.add_argument("config", nargs="?", default="config/paper.yaml")
     ap.add_argument("--max-points", type=int, default=4_200_000)
     ap.add_argument("--jobs", nargs="*", default=None, help="job ids instead of one per class")
     ap.add_argument("--tag", default="")
-    args = ap.parse_args()
+    return ap
+
+
+def main() -> None:
+    args = build_parser().parse_args()
     jobs = {k: j for k, j in expand_studies(yaml.safe_load(open(args.config))["studies"]).items()
             if j.kind != "leak"}  # a leak job's grid is its scan's
     if args.jobs:

@@ -133,6 +133,16 @@ def solves(sizes: list[int], seeds: int, reps: int) -> list[dict]:
     return rows
 
 
+def build_parser() -> argparse.ArgumentParser:
+    ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    ap.add_argument("--shapes", nargs="*",
+                    default=["512x512", "1024x1024", "2048x2048", "4096x4096", "2048x16384"])
+    ap.add_argument("--sizes", type=int, nargs="*", default=[1024, 2048])
+    ap.add_argument("--seeds", type=int, default=4)
+    ap.add_argument("--reps", type=int, default=2)
+    return ap
+
+
 def main() -> None:
     if len(sys.argv) > 1 and sys.argv[1] == "--worker":
         kind, *args = sys.argv[2:]
@@ -140,13 +150,7 @@ def main() -> None:
             solves_worker(*map(int, args))
         print(json.dumps(r))
         return
-    ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
-    ap.add_argument("--shapes", nargs="*",
-                    default=["512x512", "1024x1024", "2048x2048", "4096x4096", "2048x16384"])
-    ap.add_argument("--sizes", type=int, nargs="*", default=[1024, 2048])
-    ap.add_argument("--seeds", type=int, default=4)
-    ap.add_argument("--reps", type=int, default=2)
-    args = ap.parse_args()
+    args = build_parser().parse_args()
     if args.shapes:
         write_table("fft_effort_transforms", transforms(args.shapes))
     if args.sizes:

@@ -118,7 +118,7 @@ def threshold_row(s, tol: float, repeats: int, **kwargs) -> dict:
             "a_y": round(runs[-1]["a_y"], 6)}
 
 
-def main() -> None:
+def build_parser() -> argparse.ArgumentParser:
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--sizes", type=int, nargs="+", default=[1024, 2048, 4096, 8192, 16384])
     ap.add_argument("--repeats", type=int, default=3)
@@ -128,7 +128,11 @@ def main() -> None:
     ap.add_argument("--threshold-sizes", type=int, nargs="*", default=[])
     ap.add_argument("--threshold-cpu-max-n", type=int, default=2048)
     ap.add_argument("--threshold-tol", type=float, default=2e-3)
-    args = ap.parse_args()
+    return ap
+
+
+def main() -> None:
+    args = build_parser().parse_args()
     cp = gpu.cupy()
     pool = cp.get_default_memory_pool()
     warm_up()

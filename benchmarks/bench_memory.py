@@ -99,14 +99,18 @@ def base_mb() -> float:
     return _mb(usage)
 
 
-def main() -> None:
+def build_parser() -> argparse.ArgumentParser:
     ap = argparse.ArgumentParser(description=__doc__.split("\n")[0])
     ap.add_argument("--sizes", type=int, nargs="*", default=[256, 512, 1024])
     ap.add_argument("--job-sizes", type=int, nargs="*", default=[128, 256, 512])
     ap.add_argument("--tasks", nargs="+", default=[
         "surface", "contact", "contact_cg", "bearing", "flow", "theory_gap", "theory_spec",
         "threshold", "threshold_adhesive", "scene_threshold", "scene_ladder"])
-    args = ap.parse_args()
+    return ap
+
+
+def main() -> None:
+    args = build_parser().parse_args()
     heavy = {"threshold", "threshold_adhesive", "scene_threshold", "scene_ladder"}
     base = base_mb()
     print(f"base (imports + 64^2 case): {base:.0f} MB", flush=True)

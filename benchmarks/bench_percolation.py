@@ -137,7 +137,7 @@ def _write(rows: list[dict], stem: str, fmt: dict) -> str:
     return text
 
 
-def main() -> None:
+def build_parser() -> argparse.ArgumentParser:
     ap = argparse.ArgumentParser(description=__doc__,
                                  formatter_class=argparse.RawDescriptionHelpFormatter)
     ap.add_argument("--label-sizes", type=int, nargs="+", default=[512, 1024, 2048, 4096, 8192])
@@ -151,7 +151,11 @@ def main() -> None:
     ap.add_argument("--large", type=int, default=2048,
                     help="from this n on, use --large-seeds seeds")
     ap.add_argument("--large-seeds", type=int, default=1)
-    args = ap.parse_args()
+    return ap
+
+
+def main() -> None:
+    args = build_parser().parse_args()
     OUT.mkdir(parents=True, exist_ok=True)
     warm_up()  # on a fresh install the first timed solve and search would include compiling
 

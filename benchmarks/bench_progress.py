@@ -57,14 +57,18 @@ def run(src: str | None, level: str, n: int, repeats: int) -> dict:
     return json.loads(res.stdout.strip().splitlines()[-1])
 
 
-def main() -> None:
+def build_parser() -> argparse.ArgumentParser:
     ap = argparse.ArgumentParser(description=__doc__.split("\n")[0])
     ap.add_argument("--n", type=int, default=512,
                     help="grid size, >= 128 (lambda_s = L/64 needs 2 points)")
     ap.add_argument("--repeats", type=int, default=7)
     ap.add_argument("--rounds", type=int, default=3, help="interleaved rounds of processes")
     ap.add_argument("--before-src", default=None)
-    args = ap.parse_args()
+    return ap
+
+
+def main() -> None:
+    args = build_parser().parse_args()
     configs = [("this, WARNING", None, "WARNING"), ("this, DEBUG", None, "DEBUG")]
     if args.before_src:
         configs.insert(0, ("before, WARNING", args.before_src, "WARNING"))

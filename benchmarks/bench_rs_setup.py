@@ -56,14 +56,18 @@ class Timed:
         return out
 
 
-def main() -> None:
+def build_parser() -> argparse.ArgumentParser:
     ap = argparse.ArgumentParser(description=__doc__.split("\n")[0])
     ap.add_argument("--sizes", type=int, nargs="+", default=[512, 1024],
                     help="grid sizes n, each >= 128 (n / 64 points per lambda_s, at least 2)")
     ap.add_argument("--ac", type=float, nargs="+", default=[0.05, 0.2, 0.35])
     ap.add_argument("--repeats", type=int, default=5)
     ap.add_argument("--tag", default="")
-    args = ap.parse_args()
+    return ap
+
+
+def main() -> None:
+    args = build_parser().parse_args()
     ours_kernel = amg._classical_weights
     h0 = generate(SurfaceSpec.from_sweep(points_per_lambda_s=2, seed=1)).heights
     s0 = cubic_law(np.maximum(np.quantile(h0, 0.8) - h0, 0.0))

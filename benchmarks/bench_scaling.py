@@ -344,7 +344,7 @@ def plot(rows: list[dict], path: Path) -> None:
     fig.savefig(path, dpi=110)
 
 
-def main() -> None:
+def build_parser() -> argparse.ArgumentParser:
     ap = argparse.ArgumentParser(description=__doc__,
                                  formatter_class=argparse.RawDescriptionHelpFormatter)
     ap.add_argument("--sizes", type=int, nargs="*", default=[512, 1024, 2048, 4096, 8192])
@@ -371,6 +371,11 @@ def main() -> None:
                     help="only the accuracy table for these cases n/L_over_lambda_r "
                     "(L_over_lambda_r 0: bench_contact.py's surface), e.g. 256/0 512/0 1024/1")
     ap.add_argument("--tag", default="")
+    return ap
+
+
+def main() -> None:
+    ap = build_parser()
     args = ap.parse_args()
     if args.repeats < 1:
         ap.error(f"--repeats must be >= 1, got {args.repeats}")

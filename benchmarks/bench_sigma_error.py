@@ -94,13 +94,17 @@ def rows_for(n: int, areas: list[float], repeats: int) -> list[dict]:
     return rows
 
 
-def main() -> None:
+def build_parser() -> argparse.ArgumentParser:
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--sizes", type=int, nargs="+", default=[512, 1024])
     ap.add_argument("--areas", type=float, nargs="+", default=[0.1, 0.3, 0.4])
     ap.add_argument("--repeats", type=int, default=3)
     ap.add_argument("--tag", default="")
-    args = ap.parse_args()
+    return ap
+
+
+def main() -> None:
+    args = build_parser().parse_args()
     warm_up()
     rows = [r for n in args.sizes for r in rows_for(n, args.areas, args.repeats)]
     write_table("sigma_error" + (f"_{args.tag}" if args.tag else ""), rows)

@@ -39,7 +39,7 @@ OUT = Path(__file__).resolve().parents[1] / "results" / "benchmarks"
 PRESSURES = (0.0045, 0.0135, 0.0225, 0.045, 0.068, 0.09, 0.113, 0.136, 0.163, 0.181)
 
 
-def main() -> None:
+def build_parser() -> argparse.ArgumentParser:
     ap = argparse.ArgumentParser(description=__doc__.split("\n")[0])
     ap.add_argument("--sizes", type=int, nargs="+", default=[512, 1024])
     ap.add_argument("--pressures", type=float, nargs="+", default=list(PRESSURES))
@@ -47,7 +47,11 @@ def main() -> None:
     ap.add_argument("--method", default="auto", choices=("auto", "rs", "sa"))
     ap.add_argument("--repeats", type=int, default=3)
     ap.add_argument("--tag", default="")
-    args = ap.parse_args()
+    return ap
+
+
+def main() -> None:
+    args = build_parser().parse_args()
     logging.disable(logging.WARNING)
     OUT.mkdir(parents=True, exist_ok=True)
     variants = {"tol": None, "sigma_tol": args.sigma_tol}

@@ -35,11 +35,15 @@ def measure(n: int, repeats: int) -> dict:
             "peak_MiB": peak / 2**20, "bytes_per_point": peak / n**2}
 
 
-def main() -> None:
+def build_parser() -> argparse.ArgumentParser:
     ap = argparse.ArgumentParser(description=__doc__)
     ap.add_argument("--sizes", type=int, nargs="+", default=[1024, 2048, 4096, 8192])
     ap.add_argument("--repeats", type=int, default=3)
-    args = ap.parse_args()
+    return ap
+
+
+def main() -> None:
+    args = build_parser().parse_args()
     rows = [measure(n, args.repeats) for n in args.sizes]
     OUT.mkdir(parents=True, exist_ok=True)
     keys = list(rows[0])

@@ -58,7 +58,7 @@ def time_state(state, gamma: float, repeats: int) -> dict:
                 sigma_y_persson=t.persson.sigma_y, residual=t.residual)
 
 
-def main() -> None:
+def build_parser() -> argparse.ArgumentParser:
     ap = argparse.ArgumentParser(description=__doc__.split("\n")[0])
     ap.add_argument("--sizes", type=int, nargs="+", default=[512, 1024],
                     help="grid sizes n, each >= 128 (L/lambda_r = n/128 must be >= 1)")
@@ -67,7 +67,11 @@ def main() -> None:
     ap.add_argument("--seed", type=int, default=9)
     ap.add_argument("--repeats", type=int, default=3)
     ap.add_argument("--tag", default="")
-    args = ap.parse_args()
+    return ap
+
+
+def main() -> None:
+    args = build_parser().parse_args()
     logging.disable(logging.WARNING)
     rows = []
     for gamma in args.gammas:

@@ -82,7 +82,7 @@ def _dev(a: float, b: float) -> float:
     return a / b - 1.0 if b > 0 else math.nan
 
 
-def main() -> None:
+def build_parser() -> argparse.ArgumentParser:
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--l-over-lambda-r", type=float, default=8.0)
     ap.add_argument("--points-per-lambda-s", type=float, default=2.0)
@@ -92,7 +92,11 @@ def main() -> None:
     ap.add_argument("--out", default="results/benchmarks")
     ap.add_argument("--from-csv", default=None,
                     help="redo table and plot from a CSV of an earlier run (no simulations)")
-    args = ap.parse_args()
+    return ap
+
+
+def main() -> None:
+    args = build_parser().parse_args()
     pressures = np.array([float(v) for v in args.pressures.split(",")])
     out = Path(args.out)
     out.mkdir(parents=True, exist_ok=True)

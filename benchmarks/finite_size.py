@@ -450,7 +450,7 @@ def report(args) -> None:
     print("\n".join(md))
 
 
-def main(argv=None) -> int:
+def build_parser() -> argparse.ArgumentParser:
     ap = argparse.ArgumentParser(description=__doc__.split("\n")[0])
     ap.add_argument("phase", choices=("run", "report"))
     ap.add_argument("--out", default="results/benchmarks", help="output folder")
@@ -471,7 +471,11 @@ def main(argv=None) -> int:
     ap.add_argument("--fields", nargs="+", default=["ac", "geometric", "a"],
                     choices=list(FIELDS), help="elastic a_c* variants to report (first: "
                     "per-size table and figure)")
-    args = ap.parse_args(argv)
+    return ap
+
+
+def main(argv=None) -> int:
+    args = build_parser().parse_args(argv)
     if args.phase == "run":
         phase_run(args)
     else:

@@ -39,7 +39,7 @@ from bench_contact import OUT  # noqa: E402
 DELAYS = (5, 10, 20)
 
 
-def main() -> None:
+def build_parser() -> argparse.ArgumentParser:
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("gap", type=Path)
     ap.add_argument("--iterations", type=int, default=220)
@@ -47,7 +47,11 @@ def main() -> None:
                     help="cell length along x (default: GAP.json's, else 1)")
     ap.add_argument("--ly", type=float, default=None,
                     help="cell length along y (default: GAP.json's, else 1)")
-    args = ap.parse_args()
+    return ap
+
+
+def main() -> None:
+    args = build_parser().parse_args()
     gap = np.load(args.gap)
     axis = 1 if args.gap.stem.endswith("_y") else 0
     # the cell's lengths set the faces' conductances: the grid's shape alone does not give

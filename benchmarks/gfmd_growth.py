@@ -201,12 +201,16 @@ def case(n: int, l_over_lambda_r: float) -> dict:
     return row
 
 
-def main() -> None:
+def build_parser() -> argparse.ArgumentParser:
     ap = argparse.ArgumentParser(description=__doc__,
                                  formatter_class=argparse.RawDescriptionHelpFormatter)
     ap.add_argument("--cases", nargs="*", default=["512/4", "1024/4", "1024/1", "2048/4"],
                     help="n/L_over_lambda_r")
-    args = ap.parse_args()
+    return ap
+
+
+def main() -> None:
+    args = build_parser().parse_args()
     OUT.mkdir(parents=True, exist_ok=True)
     rows = [case(int(c.split("/")[0]), float(c.split("/")[1])) for c in args.cases]
     write_table("gfmd_growth", rows)

@@ -79,7 +79,7 @@ def summary(rows: list[dict], pressures: list[float]) -> str:
     return "\n".join(lines + per_p) + "\n"
 
 
-def main() -> None:
+def build_parser() -> argparse.ArgumentParser:
     ap = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
     ap.add_argument("--seeds", type=int, default=10)
     ap.add_argument("--size", type=float, default=8.0,
@@ -92,7 +92,11 @@ def main() -> None:
                     help="nominal pressures (E* gbar)")
     ap.add_argument("--methods", nargs="+", default=list(BOUNDARY_METHODS))
     ap.add_argument("--tag", default="")
-    args = ap.parse_args()
+    return ap
+
+
+def main() -> None:
+    args = build_parser().parse_args()
     OUT.mkdir(parents=True, exist_ok=True)
     out = OUT / f"nonperiodic{args.tag}.jsonl"
     p = np.array(sorted(args.pressures))

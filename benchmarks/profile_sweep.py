@@ -214,7 +214,7 @@ def compare_blas_threads(ppl: float, repeats: int = 3) -> list[tuple]:
             for k, v in times.items()]
 
 
-def main(argv=None) -> int:
+def build_parser() -> argparse.ArgumentParser:
     ap = argparse.ArgumentParser(description=__doc__.split("\n")[0])
     ap.add_argument("--out", default="results/benchmarks", help="output folder")
     ap.add_argument("--seeds", type=int, nargs="+", default=[0, 1, 2, 3],
@@ -222,7 +222,11 @@ def main(argv=None) -> int:
     ap.add_argument("--ladder-seeds", type=int, nargs="+", default=[0],
                     help="seeds of the ladder scene")
     ap.add_argument("--ppl", type=float, default=4.0, help="points per lambda_s")
-    args = ap.parse_args(argv)
+    return ap
+
+
+def main(argv=None) -> int:
+    args = build_parser().parse_args(argv)
 
     from roughflow.io import write_dataset
     from roughflow.scenes import (

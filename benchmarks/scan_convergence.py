@@ -85,7 +85,7 @@ def table(rows: list[dict], p: np.ndarray) -> str:
     return "\n".join(lines) + "\n"
 
 
-def main() -> None:
+def build_parser() -> argparse.ArgumentParser:
     ap = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
     ap.add_argument("scan")
     ap.add_argument("--size", default=None,
@@ -102,7 +102,11 @@ def main() -> None:
     ap.add_argument("--refine", type=float, nargs="*", default=[2.0])
     ap.add_argument("--tols", type=float, nargs="*", default=[1e-4, 1e-8])
     ap.add_argument("--no-sealing", action="store_true", help="skip the sealing searches")
-    args = ap.parse_args()
+    return ap
+
+
+def main() -> None:
+    args = build_parser().parse_args()
     OUT.mkdir(parents=True, exist_ok=True)
     native = from_scan(args.scan, size=args.size, unit=args.unit, fill=args.fill,
                        crop=args.crop)

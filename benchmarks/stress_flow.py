@@ -237,7 +237,7 @@ def read_rows(path: Path) -> list[dict]:
             for line in lines[1:]]
 
 
-def main() -> None:
+def build_parser() -> argparse.ArgumentParser:
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--l-over-lambda-r", type=float, default=4.0)
     ap.add_argument("--eps-f", type=float, default=0.0625)
@@ -253,7 +253,11 @@ def main() -> None:
     ap.add_argument("--summarize", type=Path, nargs="+", metavar="CSV",
                     help="only write the summary table of these csv files (e.g. of runs that "
                          "were stopped) to stress_flow[_TAG].md")
-    args = ap.parse_args()
+    return ap
+
+
+def main() -> None:
+    args = build_parser().parse_args()
     OUT.mkdir(parents=True, exist_ok=True)
     if args.summarize:
         md = OUT / ("stress_flow" + (f"_{args.tag}" if args.tag else "") + ".md")

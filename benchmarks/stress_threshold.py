@@ -63,7 +63,7 @@ def run(n: int, gamma: float, contact_tol: float, tol: float, seeds: int) -> dic
             **counts, "solves": solves, "iterations": iterations}
 
 
-def main() -> None:
+def build_parser() -> argparse.ArgumentParser:
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--sizes", type=int, nargs="+", default=[256])
     ap.add_argument("--seeds", type=int, default=30)
@@ -71,7 +71,11 @@ def main() -> None:
     ap.add_argument("--contact-tols", type=float, nargs="+", default=[1e-4, 3e-4, 1e-3])
     ap.add_argument("--tols", type=float, nargs="+", default=[2e-3, 1e-3, 5e-4, 2.5e-4])
     ap.add_argument("--tag", default="")
-    args = ap.parse_args()
+    return ap
+
+
+def main() -> None:
+    args = build_parser().parse_args()
     rows = []
     for n, gamma, ctol, tol in itertools.product(args.sizes, args.gammas, args.contact_tols,
                                                  args.tols):
