@@ -282,23 +282,34 @@ def test_job_memory_is_the_snakemake_request():
     assert task_mem_mb("threshold", 32 * 32) == mb and task_mem_mb("threshold", 1024, 2) == 2 * mb
 
 
-def test_largest_slurm_node_of_a_partition(tmp_path, monkeypatch):
-    # the memory a cluster run's plan is held to (workflow/rules/common.smk), from a fake
-    # sinfo: per-node rows "partition|memory MiB", the default partition marked with "*"
-    sinfo = tmp_path / "sinfo"
-    sinfo.write_text("#!/bin/sh\nprintf 'big*|512000\\nsmall|1000\\nsmall|3000\\n"
-                     "small|2000\\nodd|n/a\\n'\n")
-    sinfo.chmod(0o755)
+def test_what_a_slurm_partition_allows_a_job(tmp_path, monkeypatch):
+    # what a cluster run's requests are held to (workflow/rules/common.smk), from fake
+    # `scontrol show partition --oneliner` and `sinfo --Node --partition=P --format=%m`
+    def fake(scontrol: str, sinfo: str) -> None:
+        for name, body in (("scontrol", scontrol), ("sinfo", sinfo)):
+            (tmp_path / name).write_text(f"#!/bin/sh\n{body}\n")
+            (tmp_path / name).chmod(0o755)
+
     monkeypatch.setenv("PATH", f"{tmp_path}{os.pathsep}{os.environ['PATH']}")
-    assert resources.slurm_largest_node("small") == resources.SlurmNode("small", 3000)
-    assert resources.slurm_largest_node() == resources.SlurmNode("big", 512000)
-    assert resources.slurm_largest_node("odd") is None  # no memory listed
-    assert resources.slurm_largest_node("missing") is None
-    sinfo.write_text("#!/bin/sh\necho 'slurm_load_partitions: Unable to contact' >&2\n"
-                     "exit 1\n")
-    assert resources.slurm_largest_node("small") is None  # not a SLURM login node
+    fake("printf 'PartitionName=big Default=YES MaxTime=UNLIMITED MaxMemPerNode=UNLIMITED\\n"
+         "PartitionName=small Default=NO MaxTime=2-03:00:30 MaxMemPerNode=2500\\n"
+         "PartitionName=empty Default=NO MaxTime=01:30:00 MaxMemPerNode=UNLIMITED\\n'",
+         'case "$*" in *=small\\ *) printf "1000\\n3000\\n2000\\n";; *=big\\ *) '
+         'echo 512000;; esac')
+    SlurmPartition = resources.SlurmPartition
+    # the largest node (3000) within MaxMemPerNode (2500); MaxTime in whole minutes
+    assert resources.slurm_partition("small") == SlurmPartition("small", 2500, 3060)
+    assert resources.slurm_partition() == SlurmPartition("big", 512000, None)  # the default
+    assert resources.slurm_partition("empty") is None  # no node listed
+    assert resources.slurm_partition("missing") is None
+    assert [resources.slurm_minutes(t) for t in ("00:05:00", "01:30:00", "1-01:00:00",
+                                                 "00:00:30", "UNLIMITED")] == [5, 90, 1500, 1,
+                                                                               None]
+    fake("echo 'slurm_load_partitions: Unable to contact slurm controller' >&2; exit 1",
+         "exit 1")
+    assert resources.slurm_partition("small") is None  # not a SLURM login node
     monkeypatch.setenv("PATH", str(tmp_path / "empty"))
-    assert resources.slurm_largest_node("small") is None  # no sinfo at all
+    assert resources.slurm_partition("small") is None  # no SLURM commands at all
 
 
 def test_threads_must_be_positive():

@@ -87,6 +87,11 @@ class Cluster:
     def scancel(self, job_id: str) -> None:
         subprocess.run(["scancel", job_id], env=self.env, check=True, timeout=60)
 
+    def update_partition(self, **limits: str) -> None:
+        subprocess.run(["scontrol", "update", f"PartitionName={PARTITION}",
+                        *(f"{key}={value}" for key, value in limits.items())],
+                       env=self.env, check=True, timeout=60)
+
 
 def _daemon_pids(state: Path) -> dict[str, int]:
     return {p.stem: int(p.read_text().split()[0]) for p in (state / "run").glob("*.pid")
@@ -483,3 +488,69 @@ def test_cancelled_job_is_reported_retried_and_rerun(cluster, tmp_path):
         assert ds.sizes["seed"] == 6 and np.isfinite(ds["a_c_star"].values).all()
     with xr.open_dataset(wd / "results" / "threshold_vs_gamma" / "dataset.nc") as ds:
         assert np.isfinite(ds["a_c_star"].values).all()
+
+
+def test_a_retry_asks_for_no_more_than_the_partition_allows(cluster, tmp_path):
+    """A retry doubles a job's memory and time requests. Above the partition's MaxMemPerNode
+    or MaxTime, a cluster that does not check partition limits at submission
+    (EnforcePartLimits=NO, SLURM's default and the test cluster's) accepts the job and
+    leaves it pending forever ("MaxMemPerLimit", "PartitionTimeLimit"), and Snakemake waits
+    with it. The requests are now capped at what the partition allows (scontrol, sinfo)."""
+    from roughflow.scenes import expand_study
+    from roughflow.scenes.requests import requested_mem_mb, requested_runtime_min
+
+    wd = copy_workflow(tmp_path)
+    profile = write_overlay(wd)
+    block = {  # the cancel test's job: about 10 s of solves, still running after seed 0
+        "gamma": [1], "l_over_lambda_r": [8], "eps_f": [0.0625], "seeds": [0, 1, 2, 3, 4, 5],
+        "seeds_per_job": 6, "points_per_lambda_s": 4, "tol": 0.002}
+    (wd / "config" / "retry.yaml").write_text(
+        yaml.safe_dump({"studies": {"threshold_vs_gamma": block}}))
+    (job,) = expand_study("threshold_vs_gamma", block).values()
+    mem, time_min = requested_mem_mb(job), requested_runtime_min(job)
+    # room for the first attempt, not for the doubled retry
+    limits = {"MaxMemPerNode": mem + 100, "MaxTime": time_min + 1}
+    assert limits["MaxMemPerNode"] < 2 * mem and limits["MaxTime"] < 2 * time_min
+    out = wd / "snakemake.log"
+    job_logs = wd / "results" / "logs" / "jobs" / "threshold"
+
+    def submitted() -> list[str]:
+        return re.findall(r"submitted with SLURM jobid (\d+)", out.read_text())
+
+    def started(count: int):
+        # the job's log has a first seed once per attempt (a rerun rewrites the log)
+        def check():
+            logs = list(job_logs.glob("*.log")) if job_logs.exists() else []
+            return len(submitted()) >= count and any("seed 0" in p.read_text() for p in logs)
+        return check
+
+    cluster.update_partition(**limits)
+    try:
+        with out.open("w") as fh:
+            proc = subprocess.Popen([str(SNAKEMAKE), *profile, "--configfile",
+                                     "config/retry.yaml"], cwd=wd, env=cluster.env, stdout=fh,
+                                    stderr=subprocess.STDOUT, start_new_session=True)
+        try:
+            _wait(started(1), "the first attempt to start solving", proc)
+            for p in job_logs.glob("*.log"):
+                p.unlink()
+            cluster.scancel(submitted()[0])
+            # on the old code the retry waited here forever (MaxMemPerLimit)
+            _wait(started(2), "the retry to start solving", proc, timeout=120)
+            rc = proc.wait(timeout=300)
+        finally:
+            if proc.poll() is None:
+                os.killpg(proc.pid, signal.SIGKILL)
+                proc.wait()
+    finally:
+        cluster.update_partition(MaxMemPerNode=0, MaxTime="INFINITE")  # 0: unlimited
+    log = out.read_text()
+    assert rc == 0, log[-3000:]
+    first, second = submitted()
+    rows = {row["JobIDRaw"]: row for row in cluster.sacct("--jobs", f"{first},{second}")}
+    assert rows[first]["State"].startswith("CANCELLED")
+    assert megabytes(rows[first]["ReqMem"]) == mem
+    assert minutes(rows[first]["Timelimit"]) == time_min
+    assert rows[second]["State"] == "COMPLETED", rows[second]
+    assert megabytes(rows[second]["ReqMem"]) == limits["MaxMemPerNode"]
+    assert minutes(rows[second]["Timelimit"]) == limits["MaxTime"]

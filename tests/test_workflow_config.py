@@ -279,27 +279,34 @@ def test_a_job_inside_an_allocation_is_not_refused_for_the_plans_larger_jobs(tmp
 
 
 # (j) a run through profiles/slurm (its global mem_mb above this machine's memory) holds the
-# plan to the largest node of the profile's partition, as `sinfo` lists it, less the 200 MB of
-# the job's Snakemake, and caps every cluster job's request at that node's memory (a retry's
-# doubled request above it would be refused by sbatch). A fake `sinfo` stands in for the cluster.
-def _fake_sinfo(tmp_path: Path, rows: str) -> dict:
+# plan to what the profile's partition allows a job (its largest node within MaxMemPerNode)
+# less the 200 MB of the job's Snakemake, and caps every cluster job's memory and time
+# requests at the partition's limits: above them a job, a retry's doubled request included,
+# would never run (sbatch refuses it, or it waits forever: EnforcePartLimits=NO). Fake
+# `scontrol` and `sinfo` stand in for the cluster (tests/test_slurm.py runs a real one).
+def _fake_slurm(tmp_path: Path, partitions: str) -> None:
+    """``scontrol show partition`` prints ``partitions``; ``sinfo`` gives partition "part"
+    nodes of 700 and 800 MiB and any other one node of 64000."""
     bin_dir = tmp_path / "bin"
-    bin_dir.mkdir()
-    sinfo = bin_dir / "sinfo"
-    sinfo.write_text(f"#!/bin/sh\nprintf '{rows}'\n")
-    sinfo.chmod(0o755)
-    return {"PATH": f"{bin_dir}{os.pathsep}{os.environ['PATH']}"}
+    bin_dir.mkdir(exist_ok=True)
+    scripts = {"scontrol": f"printf '{partitions}'",
+               "sinfo": 'case "$*" in *--partition=part\\ *) printf "700\\n800\\n";; '
+                        '*) echo 64000;; esac'}
+    for name, body in scripts.items():
+        (bin_dir / name).write_text(f"#!/bin/sh\n{body}\n")
+        (bin_dir / name).chmod(0o755)
 
 
-def _mem_requests(output: str) -> list[int]:
+def _resources(output: str, key: str) -> list[int]:
+    """The integer values of resource ``key`` in the dry run's job blocks ("<TBD>" before an
+    input exists is left out)."""
     return [int(word.split("=")[1].rstrip(","))
             for line in output.splitlines() if line.strip().startswith("resources:")
-            for word in line.split() if word.startswith("mem_mb=")
-            and word.split("=")[1].rstrip(",").isdigit()]  # "<TBD>" before an input exists
+            for word in line.split() if word.startswith(f"{key}=")
+            and word.split("=")[1].rstrip(",").isdigit()]
 
 
-def test_a_cluster_run_plans_against_the_largest_node_of_its_partition(tmp_path,
-                                                                        monkeypatch):
+def test_a_cluster_run_plans_against_what_its_partition_allows(tmp_path, monkeypatch):
     wd = copy_workflow(tmp_path)
     write_case(wd, studies=("flow_isotropic",))
     cfg = yaml.safe_load((wd / "config" / "case.yaml").read_text())
@@ -307,26 +314,43 @@ def test_a_cluster_run_plans_against_the_largest_node_of_its_partition(tmp_path,
     cfg["studies"]["flow_isotropic"].update(points_per_lambda_s=16, area_fraction=[0.3],
                                             series=[{"model": ["elastic"]}])
     (wd / "config" / "case.yaml").write_text(yaml.safe_dump(cfg))
+    monkeypatch.setenv("PATH", f"{tmp_path / 'bin'}{os.pathsep}{os.environ['PATH']}")
     cluster = ("--resources", "mem_mb=1000000000", "--default-resources",
                "slurm_partition=part")
+    other = "PartitionName=other Default=YES MaxTime=UNLIMITED MaxMemPerNode=UNLIMITED\\n"
     # partition part's largest node has 800 MB: 600 MB for the job itself
-    for key, value in _fake_sinfo(tmp_path, "other*|64000\\npart|700\\npart|800\\n").items():
-        monkeypatch.setenv(key, value)
+    _fake_slurm(tmp_path, other + "PartitionName=part Default=NO MaxTime=1-00:00:00 "
+                "MaxMemPerNode=UNLIMITED\\n")
     plan = dry_run(wd, *cluster)
     out = plan.stdout + plan.stderr
     assert plan.returncode != 0, out[-2000:]
     assert "the ladder job" in out and "the limit is 600 MB" in out, out[-2000:]
-    assert "SLURM partition part has 800 MB (sinfo)" in out, out[-2000:]
+    assert "SLURM partition part may ask for 800 MB" in out, out[-2000:]
+    # MaxMemPerNode below the nodes' memory is the limit
+    _fake_slurm(tmp_path, other + "PartitionName=part Default=NO MaxTime=UNLIMITED "
+                "MaxMemPerNode=500\\n")
+    plan = dry_run(wd, *cluster)
+    out = plan.stdout + plan.stderr
+    assert plan.returncode != 0 and "the limit is 300 MB" in out, out[-2000:]
     # a local run on the same machine plans against this machine's memory, not the cluster's
     local = dry_run(wd)
     assert local.returncode == 0, (local.stdout + local.stderr)[-2000:]
-    assert 935 in _mem_requests(local.stdout)
-    # the config's max_mem_mb overrides the node; the request is still capped at the node
+    assert 935 in _resources(local.stdout, "mem_mb")
+    assert min(_resources(local.stdout, "runtime")) >= 2  # RUNTIME_FLOOR_MIN
+    # the config's max_mem_mb overrides the partition's limit; the requests are still
+    # capped at the partition's memory and its MaxTime of 1 minute, and the run says so
     write_case(wd, studies=("flow_isotropic",), max_mem_mb=4000)
     cfg_max = yaml.safe_load((wd / "config" / "case.yaml").read_text())
     cfg_max["studies"] = cfg["studies"]
     (wd / "config" / "case.yaml").write_text(yaml.safe_dump(cfg_max))
+    _fake_slurm(tmp_path, other + "PartitionName=part Default=NO MaxTime=00:01:00 "
+                "MaxMemPerNode=UNLIMITED\\n")
     capped = dry_run(wd, *cluster)
-    assert capped.returncode == 0, (capped.stdout + capped.stderr)[-2000:]
-    requests = _mem_requests(capped.stdout)
+    out = capped.stdout + capped.stderr
+    assert capped.returncode == 0, out[-2000:]
+    requests = _resources(capped.stdout, "mem_mb")
     assert 935 not in requests and 800 in requests, requests  # the ladder's
+    assert "1 of 1 jobs ask for more time than SLURM partition part allows" in out, out[-3000:]
+    scene = [line for line in capped.stdout.split("rule scene:")[1].splitlines()
+             if line.strip().startswith("resources:")][0]
+    assert {"runtime=1", "mem_mb=800"} <= set(scene.replace(",", " ").split()), scene

@@ -226,36 +226,66 @@ def total_source() -> str:
 
 
 @dataclass(frozen=True)
-class SlurmNode:
-    """The largest node of a SLURM partition: its name and its memory in MiB (SLURM's "MB",
-    the unit of ``sbatch --mem``)."""
+class SlurmPartition:
+    """What one job may ask of a SLURM partition. A request above it never runs: sbatch
+    refuses memory above every node ("Requested node configuration is not available"), and
+    above the partition's own limits the job waits forever ("MaxMemPerLimit",
+    "PartitionTimeLimit") where the cluster does not check them at submission
+    (``EnforcePartLimits=NO``, SLURM's default)."""
 
-    partition: str
+    name: str
+    #: memory in MiB (SLURM's "MB", the unit of ``sbatch --mem``): the partition's largest
+    #: node, within its ``MaxMemPerNode``
     mem_mib: int
+    #: the partition's ``MaxTime`` in whole minutes; None where unlimited
+    max_minutes: int | None
 
 
-def slurm_largest_node(partition: str | None = None) -> SlurmNode | None:
-    """The node with the most memory in SLURM partition ``partition`` (None: the cluster's
-    default partition), from ``sinfo``; None where ``sinfo`` is missing or does not answer
-    within 30 s (not a SLURM login node) or lists no such partition."""
+def _slurm(*argv: str) -> str | None:
     try:
-        out = subprocess.run(["sinfo", "--noheader", "--Node", "--format=%P|%m"],
-                             capture_output=True, text=True, timeout=30, check=True).stdout
+        return subprocess.run(argv, capture_output=True, text=True, timeout=30,
+                              check=True).stdout
     except (OSError, subprocess.SubprocessError):
         return None
-    largest: dict[str, int] = {}
-    default = None
-    for line in out.splitlines():
-        name, _, mem = line.strip().partition("|")
-        if name.endswith("*"):  # sinfo marks the default partition
-            name = default = name[:-1]
-        try:
-            mib = int(mem)
-        except ValueError:
-            continue
-        largest[name] = max(largest.get(name, 0), mib)
-    name = partition if partition is not None else default
-    return SlurmNode(name, largest[name]) if name in largest else None
+
+
+def slurm_minutes(text: str) -> int | None:
+    """Whole minutes of a SLURM time limit as ``scontrol`` shows it (``[D-]HH:MM:SS``);
+    None for ``UNLIMITED``."""
+    if text.upper() in ("UNLIMITED", "INFINITE"):
+        return None
+    days, _, clock = text.rpartition("-")
+    hours, minutes, seconds = (int(part) for part in clock.split(":"))
+    total = (int(days or 0) * 24 + hours) * 60 * 60 + minutes * 60 + seconds
+    return max(total // 60, 1)  # SLURM counts time limits in minutes
+
+
+def slurm_partition(name: str | None = None) -> SlurmPartition | None:
+    """The limits of SLURM partition ``name`` (None: the cluster's default partition), from
+    ``scontrol show partition`` and ``sinfo``; None where these are missing or do not
+    answer within 30 s (not a SLURM login node) or list no such partition or node."""
+    shown = _slurm("scontrol", "show", "partition", "--oneliner")
+    if shown is None:
+        return None
+    for line in shown.splitlines():
+        fields = dict(word.split("=", 1) for word in line.split() if "=" in word)
+        found = fields.get("PartitionName")
+        if found and (found == name if name is not None else fields.get("Default") == "YES"):
+            break
+    else:
+        return None
+    nodes = _slurm("sinfo", "--noheader", "--Node", f"--partition={found}", "--format=%m")
+    sizes = [int(word) for word in (nodes or "").split() if word.isdigit()]
+    if not sizes:
+        return None
+    mem = max(sizes)
+    if fields.get("MaxMemPerNode", "").isdigit():
+        mem = min(mem, int(fields["MaxMemPerNode"]))
+    try:
+        minutes = slurm_minutes(fields.get("MaxTime", "UNLIMITED"))
+    except ValueError:
+        minutes = None  # a form this parser does not know: leave time to the cluster
+    return SlurmPartition(found, mem, minutes)
 
 
 def available_bytes() -> int | None:

@@ -84,7 +84,7 @@ rule accuracy_resolution:
         # the default 16 points per lambda_s: 1024^2, 1.9 GB; the six seeds take a minute
         mem_mb=lambda wc, attempt: job_mem_mb(task_mem_mb(
             _ACC_TASK, _ACC_FINEST.nx * _ACC_FINEST.ny, attempt)),
-        runtime=60,
+        runtime=job_runtime_min(60),
     shell:
         "rm -f {output} {log.records} && ROUGHFLOW_FFT_THREADS={threads} {RF} accuracy "
         "resolution --out {_ACC_OUT} --seeds {params.seeds} --ppl {params.ppl} "
@@ -106,7 +106,7 @@ rule accuracy_tolerances:
     resources:
         mem_mb=lambda wc, attempt: job_mem_mb(task_mem_mb(
             _ACC_TASK, _ACC_TOL_GRID.nx * _ACC_TOL_GRID.ny, attempt)),
-        runtime=60,
+        runtime=job_runtime_min(60),
     shell:
         "rm -f {output} {log.records} && ROUGHFLOW_FFT_THREADS={threads} {RF} accuracy "
         "tol --out {_ACC_OUT} --seeds {params.seeds} > {log.run} 2>&1"

@@ -61,11 +61,12 @@ except InputError as exc:
 
 from roughflow.defaults import FLOW_STUDIES, MEASURED_STUDY, THRESHOLD_STUDIES  # noqa: E402
 from roughflow.figures import caption as figure_caption  # noqa: E402
-from roughflow.resources import slurm_largest_node, total_bytes, total_source  # noqa: E402
+from roughflow.resources import slurm_partition, total_bytes, total_source  # noqa: E402
 from roughflow.scenes import expand_study, study_defaults  # noqa: E402
 from roughflow.scenes.jobs import aggregated_config  # noqa: E402
 from roughflow.scenes.requests import (  # noqa: E402
     KEEP_FAILED_LOG,
+    RUNTIME_MARGIN,
     WRAPPER_MB,
     check_plan_memory,
     requested_mem_mb,
@@ -105,11 +106,13 @@ def _default_resource(name):
     return None
 
 
-SLURM_NODE = slurm_largest_node(_default_resource("slurm_partition")) if RUNS_ON_CLUSTER \
+# What a job may ask of the partition (memory, time): a request above it would never run
+# (roughflow.resources.SlurmPartition), so every cluster job's request is capped at it.
+SLURM_PARTITION = slurm_partition(_default_resource("slurm_partition")) if RUNS_ON_CLUSTER \
     else None
 # The memory a job may need, checked at planning before any job runs: the config's
-# max_mem_mb; on a SLURM cluster the largest node of the partition less the job's Snakemake
-# (WRAPPER_MB), so that sbatch accepts every planned request; else the memory of this
+# max_mem_mb; on a SLURM cluster what the partition allows less the job's Snakemake
+# (WRAPPER_MB), so that every planned first request runs; else the memory of this
 # machine. Only the Snakemake that plans the run checks the plan: the one that runs a job
 # inside a SLURM allocation (--mode remote, and under its srun --mode subprocess) parses
 # this file again in a cgroup sized for that one job, where the plan's larger jobs would
@@ -118,11 +121,12 @@ if not workflow.is_main_process:
     _MEM_LIMIT = (None, "")
 elif config.get("max_mem_mb") is not None:
     _MEM_LIMIT = (int(config["max_mem_mb"]) * 10**6, f"max_mem_mb = {config['max_mem_mb']}")
-elif SLURM_NODE is not None:
-    _MEM_LIMIT = ((SLURM_NODE.mem_mib - WRAPPER_MB) * 10**6,
-                  f"the largest node of SLURM partition {SLURM_NODE.partition} has "
-                  f"{SLURM_NODE.mem_mib} MB (sinfo), less {WRAPPER_MB} MB for the job's "
-                  "Snakemake; max_mem_mb in the config sets another limit")
+elif SLURM_PARTITION is not None:
+    _MEM_LIMIT = ((SLURM_PARTITION.mem_mib - WRAPPER_MB) * 10**6,
+                  f"a job in SLURM partition {SLURM_PARTITION.name} may ask for "
+                  f"{SLURM_PARTITION.mem_mib} MB (its largest node, within its MaxMemPerNode), "
+                  f"less {WRAPPER_MB} MB for the job's Snakemake; max_mem_mb in the config "
+                  "sets another limit")
 else:
     _MEM_LIMIT = (_machine_bytes, f"{total_source()}; set max_mem_mb in the config for a "
                                  "cluster")
@@ -145,10 +149,10 @@ _BUDGET_WARNED = []
 def job_mem_mb(mb):
     """A job's mem_mb: at most the local run's LOCAL_MEM_MB (a job that needs the whole
     machine runs alone; above it Snakemake would refuse to schedule it); on a SLURM cluster
-    at most its largest node's memory (a retry's doubled request above it would be refused
-    by sbatch; the plan's check keeps the first attempt's below it); else as given."""
-    if SLURM_NODE is not None:
-        return min(mb, SLURM_NODE.mem_mib)
+    at most what the partition allows (a retry's doubled request above it would never run;
+    the plan's check keeps the first attempt's below it); else as given."""
+    if SLURM_PARTITION is not None:
+        return min(mb, SLURM_PARTITION.mem_mib)
     if LOCAL_MEM_MB is None:
         return mb
     if not workflow.local_exec and not _BUDGET_WARNED:
@@ -178,6 +182,23 @@ for _study, _jobs in JOBS.items():
         if _job.kind in POOL:
             if POOL[_job.kind].setdefault(_id, _job) != _job:
                 raise WorkflowError(f"two different jobs share the id {_id!r}")
+
+# A sweep job whose request exceeds the partition's MaxTime asks for MaxTime instead
+# (job_runtime_min); say so before anything runs, since such a job may end TIMEOUT.
+if SLURM_PARTITION is not None and SLURM_PARTITION.max_minutes is not None:
+    _capped = sorted((requested_runtime_min(job), job_id) for pool in POOL.values()
+                     for job_id, job in pool.items()
+                     if requested_runtime_min(job) > SLURM_PARTITION.max_minutes)
+    if _capped:
+        from snakemake.logging import logger
+
+        logger.warning(
+            f"{len(_capped)} of {sum(map(len, POOL.values()))} jobs ask for more time than "
+            f"SLURM partition {SLURM_PARTITION.name} allows (MaxTime "
+            f"{SLURM_PARTITION.max_minutes} min; the longest asks for {_capped[-1][0]} min, "
+            f"{RUNTIME_MARGIN:g} times its estimate: {_capped[-1][1]}): their requests are "
+            f"capped at {SLURM_PARTITION.max_minutes} min, and a job that needs longer ends "
+            "TIMEOUT; a partition with a longer MaxTime avoids that")
 
 THRESHOLD_NAMES = [s for s in STUDIES if s in THRESHOLD_STUDIES]
 FLOW_NAMES = [s for s in STUDIES if s in FLOW_STUDIES]
@@ -224,9 +245,17 @@ def job_args(wildcards):
 # with the same request.
 
 
+def job_runtime_min(minutes):
+    """A job's runtime (minutes): on a SLURM cluster at most the partition's MaxTime (above
+    it the job would wait forever), else as given."""
+    if SLURM_PARTITION is not None and SLURM_PARTITION.max_minutes is not None:
+        return min(minutes, SLURM_PARTITION.max_minutes)
+    return minutes
+
+
 def runtime_min(wildcards, attempt=1):
     # the cost model of roughflow.scenes.requests with its margin (minutes)
-    return requested_runtime_min(job_of(wildcards), attempt)
+    return job_runtime_min(requested_runtime_min(job_of(wildcards), attempt))
 
 
 def mem_mb(wildcards, attempt=1):

@@ -51,7 +51,7 @@ rule leak:
         # the imported scan's grid (the library's estimate; before the import, a default)
         mem_mb=lambda wc, input, attempt: job_mem_mb(
             leak_mem_mb(measured_job(wc), input[0], attempt)),
-        runtime=120,
+        runtime=job_runtime_min(120),
     shell:
         # the table is written whole or not at all, as the dataset is
         "ROUGHFLOW_FFT_THREADS={threads} {RF} -v leak {input} {params.args} "

@@ -37,7 +37,7 @@ rule channels:
     resources:
         mem_mb=lambda wc, attempt: job_mem_mb(
             requested_mem_mb(JOBS["channels"]["channels"], attempt)),
-        runtime=10,
+        runtime=job_runtime_min(10),
     shell:
         "ROUGHFLOW_FFT_THREADS={threads} {RF} -v scene {params.args} "
         "--threads {threads} -o {output} 2> {log}" + KEEP_FAILED_LOG
