@@ -354,3 +354,7 @@ def test_a_cluster_run_plans_against_what_its_partition_allows(tmp_path, monkeyp
     scene = [line for line in capped.stdout.split("rule scene:")[1].splitlines()
              if line.strip().startswith("resources:")][0]
     assert {"runtime=1", "mem_mb=800"} <= set(scene.replace(",", " ").split()), scene
+    # a rule sent to a partition of its own is not held to the profile's partition's limits
+    moved = dry_run(wd, *cluster, "--set-resources", "scene:slurm_partition=big")
+    assert moved.returncode == 0, (moved.stdout + moved.stderr)[-2000:]
+    assert 935 in _resources(moved.stdout, "mem_mb") and "ask for more time" not in moved.stderr

@@ -107,9 +107,14 @@ def _default_resource(name):
 
 
 # What a job may ask of the partition (memory, time): a request above it would never run
-# (roughflow.resources.SlurmPartition), so every cluster job's request is capped at it.
-SLURM_PARTITION = slurm_partition(_default_resource("slurm_partition")) if RUNS_ON_CLUSTER \
-    else None
+# (roughflow.resources.SlurmPartition), so every cluster job's request is capped at it. A
+# rule sent to another partition (--set-resources RULE:slurm_partition=...) would be capped
+# at the wrong one's limits, below what its jobs need: then nothing is capped.
+_OWN_PARTITION = [rule for rule, res in
+                  (getattr(workflow.resource_settings, "overwrite_resources", None) or {}).items()
+                  if "slurm_partition" in res]
+SLURM_PARTITION = slurm_partition(_default_resource("slurm_partition")) \
+    if RUNS_ON_CLUSTER and not _OWN_PARTITION else None
 # The memory a job may need, checked at planning before any job runs: the config's
 # max_mem_mb; on a SLURM cluster what the partition allows less the job's Snakemake
 # (WRAPPER_MB), so that every planned first request runs; else the memory of this
