@@ -301,7 +301,8 @@ def test_what_a_slurm_partition_allows_a_job(tmp_path, monkeypatch):
     assert resources.slurm_partition("small") == SlurmPartition("small", 2500, 3060)
     assert resources.slurm_partition() == SlurmPartition("big", 512000, None)  # the default
     assert resources.slurm_partition("empty") is None  # no node listed
-    assert resources.slurm_partition("missing") is None
+    with pytest.raises(InputError, match=r"'missing' does not exist .*: big, small, empty\)"):
+        resources.slurm_partition("missing")  # sbatch would refuse every job
     assert [resources.slurm_minutes(t) for t in ("00:05:00", "01:30:00", "1-01:00:00",
                                                  "00:00:30", "UNLIMITED")] == [5, 90, 1500, 1,
                                                                                None]

@@ -291,6 +291,19 @@ def test_aggregation_fits_and_figures_run_locally(runs):
         assert (runs["slurm"] / "results" / study / "figure.png").stat().st_size > 5000
 
 
+def test_a_partition_the_cluster_lacks_is_refused_at_planning(cluster, tmp_path):
+    """profiles/slurm as it is in the repository, its placeholder partition unedited: sbatch
+    would refuse each of the run's jobs at both attempts ("invalid partition specified"); the
+    planning refuses the run once, naming the cluster's partitions (hidden ones included)."""
+    wd = copy_workflow(tmp_path)
+    res = run_snakemake(wd, cluster.env, "-n", "--profile", "profiles/slurm", "--configfile",
+                        "config/test.yaml", timeout=300)
+    log = res.stdout + res.stderr
+    assert res.returncode != 0, log[-3000:]
+    assert (f"SLURM partition 'standard' does not exist on this cluster (its partitions: "
+            f"{PARTITION})") in log, log[-3000:]
+
+
 def test_jobs_of_different_sizes_each_run_once_in_their_allocation(cluster, tmp_path):
     """Each job's Snakemake parses the Snakefile again inside its allocation, where the cgroup
     limit is that job's memory: a plan check there refused every job smaller than the plan's

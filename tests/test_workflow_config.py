@@ -354,6 +354,13 @@ def test_a_cluster_run_plans_against_what_its_partition_allows(tmp_path, monkeyp
     scene = [line for line in capped.stdout.split("rule scene:")[1].splitlines()
              if line.strip().startswith("resources:")][0]
     assert {"runtime=1", "mem_mb=800"} <= set(scene.replace(",", " ").split()), scene
+    # a partition the cluster lacks (the profile's placeholder) is refused at planning
+    wrong = dry_run(wd, "--resources", "mem_mb=1000000000", "--default-resources",
+                    "slurm_partition=standard")
+    out = wrong.stdout + wrong.stderr
+    assert wrong.returncode != 0, out[-2000:]
+    assert "SLURM partition 'standard' does not exist on this cluster (its partitions: other, " \
+           "part)" in out, out[-2000:]
     # a rule sent to a partition of its own is not held to the profile's partition's limits
     moved = dry_run(wd, *cluster, "--set-resources", "scene:slurm_partition=big")
     assert moved.returncode == 0, (moved.stdout + moved.stderr)[-2000:]

@@ -35,7 +35,7 @@ import subprocess
 from dataclasses import dataclass
 from pathlib import Path
 
-from roughflow.errors import ResourceError
+from roughflow.errors import InputError, ResourceError
 
 MB = 1024**2
 
@@ -262,17 +262,24 @@ def slurm_minutes(text: str) -> int | None:
 
 def slurm_partition(name: str | None = None) -> SlurmPartition | None:
     """The limits of SLURM partition ``name`` (None: the cluster's default partition), from
-    ``scontrol show partition`` and ``sinfo``; None where these are missing or do not
-    answer within 30 s (not a SLURM login node) or list no such partition or node."""
-    shown = _slurm("scontrol", "show", "partition", "--oneliner")
+    ``scontrol show partition`` (hidden partitions included) and ``sinfo``; None where these
+    are missing or do not answer within 30 s (not a SLURM login node), or there is no default
+    partition or no node is listed. Raises :class:`~roughflow.errors.InputError` where the
+    cluster answers and has no partition ``name`` (sbatch would refuse every job)."""
+    shown = _slurm("scontrol", "--all", "--oneliner", "show", "partition")
     if shown is None:
         return None
+    names = []
     for line in shown.splitlines():
         fields = dict(word.split("=", 1) for word in line.split() if "=" in word)
         found = fields.get("PartitionName")
+        names += [found] if found else []
         if found and (found == name if name is not None else fields.get("Default") == "YES"):
             break
     else:
+        if name is not None and names:
+            raise InputError(f"SLURM partition {name!r} does not exist on this cluster (its "
+                             f"partitions: {', '.join(names)})")
         return None
     nodes = _slurm("sinfo", "--noheader", "--Node", f"--partition={found}", "--format=%m")
     sizes = [int(word) for word in (nodes or "").split() if word.isdigit()]

@@ -113,8 +113,12 @@ def _default_resource(name):
 _OWN_PARTITION = [rule for rule, res in
                   (getattr(workflow.resource_settings, "overwrite_resources", None) or {}).items()
                   if "slurm_partition" in res]
-SLURM_PARTITION = slurm_partition(_default_resource("slurm_partition")) \
-    if RUNS_ON_CLUSTER and not _OWN_PARTITION else None
+try:  # a partition the cluster lacks: sbatch would refuse every job, twice
+    SLURM_PARTITION = slurm_partition(_default_resource("slurm_partition")) \
+        if RUNS_ON_CLUSTER and not _OWN_PARTITION else None
+except InputError as exc:
+    raise WorkflowError(f"invalid slurm_partition in the profile's default-resources "
+                        f"(profiles/slurm/config.yaml): {exc}") from None
 # The memory a job may need, checked at planning before any job runs: the config's
 # max_mem_mb; on a SLURM cluster what the partition allows less the job's Snakemake
 # (WRAPPER_MB), so that every planned first request runs; else the memory of this
