@@ -195,9 +195,10 @@ for _study, _jobs in JOBS.items():
 # A sweep job whose request exceeds the partition's MaxTime asks for MaxTime instead
 # (job_runtime_min); say so before anything runs, since such a job may end TIMEOUT.
 if SLURM_PARTITION is not None and SLURM_PARTITION.max_minutes is not None:
-    _capped = sorted((requested_runtime_min(job), job_id) for pool in POOL.values()
-                     for job_id, job in pool.items()
-                     if requested_runtime_min(job) > SLURM_PARTITION.max_minutes)
+    _capped = sorted(request for request in
+                     ((requested_runtime_min(job), job_id) for pool in POOL.values()
+                      for job_id, job in pool.items())
+                     if request[0] > SLURM_PARTITION.max_minutes)
     if _capped:
         from snakemake.logging import logger
 
