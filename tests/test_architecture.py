@@ -15,8 +15,8 @@ PACKAGE = Path(roughflow.__file__).resolve().parent
 #: of solves, the datasets, the sweep side (the accuracy study, convergence, runs searches,
 #: contact and flow solves and writes through io) and the command line.
 LAYERS = (
-    {"defaults", "errors", "files", "progress", "units", "resources", "wisdom", "fft", "gpu",
-     "citation", "provenance", "reynolds", "_jit"},
+    {"defaults", "errors", "files", "progress", "units", "resources", "slurm", "wisdom", "fft",
+     "gpu", "citation", "provenance", "reynolds", "_jit"},
     {"surface", "scan"},
     {"contact"},
     {"accuracy"},

@@ -282,37 +282,6 @@ def test_job_memory_is_the_snakemake_request():
     assert task_mem_mb("threshold", 32 * 32) == mb and task_mem_mb("threshold", 1024, 2) == 2 * mb
 
 
-def test_what_a_slurm_partition_allows_a_job(tmp_path, monkeypatch):
-    # what a cluster run's requests are held to (workflow/rules/common.smk), from fake
-    # `scontrol show partition --oneliner` and `sinfo --Node --partition=P --format=%m`
-    def fake(scontrol: str, sinfo: str) -> None:
-        for name, body in (("scontrol", scontrol), ("sinfo", sinfo)):
-            (tmp_path / name).write_text(f"#!/bin/sh\n{body}\n")
-            (tmp_path / name).chmod(0o755)
-
-    monkeypatch.setenv("PATH", f"{tmp_path}{os.pathsep}{os.environ['PATH']}")
-    fake("printf 'PartitionName=big Default=YES MaxTime=UNLIMITED MaxMemPerNode=UNLIMITED\\n"
-         "PartitionName=small Default=NO MaxTime=2-03:00:30 MaxMemPerNode=2500\\n"
-         "PartitionName=empty Default=NO MaxTime=01:30:00 MaxMemPerNode=UNLIMITED\\n'",
-         'case "$*" in *=small\\ *) printf "1000\\n3000\\n2000\\n";; *=big\\ *) '
-         'echo 512000;; esac')
-    SlurmPartition = resources.SlurmPartition
-    # the largest node (3000) within MaxMemPerNode (2500); MaxTime in whole minutes
-    assert resources.slurm_partition("small") == SlurmPartition("small", 2500, 3060)
-    assert resources.slurm_partition() == SlurmPartition("big", 512000, None)  # the default
-    assert resources.slurm_partition("empty") is None  # no node listed
-    with pytest.raises(InputError, match=r"'missing' does not exist .*: big, small, empty\)"):
-        resources.slurm_partition("missing")  # sbatch would refuse every job
-    assert [resources.slurm_minutes(t) for t in ("00:05:00", "01:30:00", "1-01:00:00",
-                                                 "00:00:30", "UNLIMITED")] == [5, 90, 1500, 1,
-                                                                               None]
-    fake("echo 'slurm_load_partitions: Unable to contact slurm controller' >&2; exit 1",
-         "exit 1")
-    assert resources.slurm_partition("small") is None  # not a SLURM login node
-    monkeypatch.setenv("PATH", str(tmp_path / "empty"))
-    assert resources.slurm_partition("small") is None  # no SLURM commands at all
-
-
 def test_threads_must_be_positive():
     # item 10: --threads -3 raised OverflowError inside FFTW, 0 was accepted
     for bad in (0, -3, 2.5, True):

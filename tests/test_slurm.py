@@ -18,6 +18,7 @@ from __future__ import annotations
 
 import contextlib
 import fcntl
+import getpass
 import os
 import re
 import shutil
@@ -86,6 +87,10 @@ class Cluster:
 
     def scancel(self, job_id: str) -> None:
         subprocess.run(["scancel", job_id], env=self.env, check=True, timeout=60)
+
+    def sacctmgr(self, *args: str) -> None:
+        subprocess.run(["sacctmgr", "--immediate", *args], env=self.env, check=True,
+                       capture_output=True, timeout=60)
 
     def update_partition(self, **limits: str) -> None:
         subprocess.run(["scontrol", "update", f"PartitionName={PARTITION}",
@@ -294,7 +299,8 @@ def test_aggregation_fits_and_figures_run_locally(runs):
 def test_a_partition_the_cluster_lacks_is_refused_at_planning(cluster, tmp_path):
     """profiles/slurm as it is in the repository, its placeholder partition unedited: sbatch
     would refuse each of the run's jobs at both attempts ("invalid partition specified"); the
-    planning refuses the run once, naming the cluster's partitions (hidden ones included)."""
+    planning refuses the run once, naming the cluster's partitions (hidden ones included);
+    likewise the placeholder account, naming the user's accounts."""
     wd = copy_workflow(tmp_path)
     res = run_snakemake(wd, cluster.env, "-n", "--profile", "profiles/slurm", "--configfile",
                         "config/test.yaml", timeout=300)
@@ -302,6 +308,18 @@ def test_a_partition_the_cluster_lacks_is_refused_at_planning(cluster, tmp_path)
     assert res.returncode != 0, log[-3000:]
     assert (f"SLURM partition 'standard' does not exist on this cluster (its partitions: "
             f"{PARTITION})") in log, log[-3000:]
+    # the partition edited, the account not: SLURM would reject every job ("Invalid account")
+    resources = yaml.safe_load((wd / "profiles" / "slurm" / "config.yaml").read_text())[
+        "default-resources"]
+    (wd / "partition_only").mkdir()
+    (wd / "partition_only" / "config.yaml").write_text(yaml.safe_dump(
+        {"default-resources": {**resources, "slurm_partition": PARTITION}}))
+    res = run_snakemake(wd, cluster.env, "-n", "--profile", "profiles/slurm", "--profile",
+                        "partition_only", "--configfile", "config/test.yaml", timeout=300)
+    log = res.stdout + res.stderr
+    assert res.returncode != 0, log[-3000:]
+    assert "SLURM account 'your_account' has no association for user" in log, log[-3000:]
+    assert ACCOUNT in log.split("has no association")[1].split(")")[0], log[-3000:]
 
 
 def test_jobs_of_different_sizes_each_run_once_in_their_allocation(cluster, tmp_path):
@@ -503,12 +521,16 @@ def test_cancelled_job_is_reported_retried_and_rerun(cluster, tmp_path):
         assert np.isfinite(ds["a_c_star"].values).all()
 
 
-def test_a_retry_asks_for_no_more_than_the_partition_allows(cluster, tmp_path):
+@pytest.mark.parametrize("limited_by", ["partition", "qos"])
+def test_a_retry_asks_for_no_more_than_the_cluster_allows(cluster, tmp_path, limited_by):
     """A retry doubles a job's memory and time requests. Above the partition's MaxMemPerNode
     or MaxTime, a cluster that does not check partition limits at submission
     (EnforcePartLimits=NO, SLURM's default and the test cluster's) accepts the job and
     leaves it pending forever ("MaxMemPerLimit", "PartitionTimeLimit"), and Snakemake waits
-    with it. The requests are now capped at what the partition allows (scontrol, sinfo)."""
+    with it; so it does above the per-job limits of its QOS ("QOSMaxMemoryPerJob", where
+    the QOS lacks DenyOnLimit) or its association ("AssocMaxWallDurationPerJobLimit"). The
+    requests are now capped at what the partition (scontrol, sinfo), or the QOS and
+    association (sacctmgr), allow."""
     from roughflow.scenes import expand_study
     from roughflow.scenes.requests import requested_mem_mb, requested_runtime_min
 
@@ -522,8 +544,8 @@ def test_a_retry_asks_for_no_more_than_the_partition_allows(cluster, tmp_path):
     (job,) = expand_study("threshold_vs_gamma", block).values()
     mem, time_min = requested_mem_mb(job), requested_runtime_min(job)
     # room for the first attempt, not for the doubled retry
-    limits = {"MaxMemPerNode": mem + 100, "MaxTime": time_min + 1}
-    assert limits["MaxMemPerNode"] < 2 * mem and limits["MaxTime"] < 2 * time_min
+    limit_mb, limit_min = mem + 100, time_min + 1
+    assert limit_mb < 2 * mem and limit_min < 2 * time_min
     out = wd / "snakemake.log"
     job_logs = wd / "results" / "logs" / "jobs" / "threshold"
 
@@ -537,7 +559,14 @@ def test_a_retry_asks_for_no_more_than_the_partition_allows(cluster, tmp_path):
             return len(submitted()) >= count and any("seed 0" in p.read_text() for p in logs)
         return check
 
-    cluster.update_partition(**limits)
+    user, qos = getpass.getuser(), "rfretry"
+    where = ["where", f"account={ACCOUNT}", f"user={user}"]
+    if limited_by == "partition":
+        cluster.update_partition(MaxMemPerNode=limit_mb, MaxTime=limit_min)
+    else:  # memory from the job's QOS (its association's default), time from the association
+        cluster.sacctmgr("add", "qos", qos, f"MaxTRESPerJob=mem={limit_mb}")
+        cluster.sacctmgr("modify", "user", *where, "set", f"qos+={qos}", f"defaultqos={qos}",
+                         f"maxwall={limit_min}")
     try:
         with out.open("w") as fh:
             proc = subprocess.Popen([str(SNAKEMAKE), *profile, "--configfile",
@@ -548,7 +577,8 @@ def test_a_retry_asks_for_no_more_than_the_partition_allows(cluster, tmp_path):
             for p in job_logs.glob("*.log"):
                 p.unlink()
             cluster.scancel(submitted()[0])
-            # on the old code the retry waited here forever (MaxMemPerLimit)
+            # on the old code the retry waited here forever (MaxMemPerLimit,
+            # QOSMaxMemoryPerJob)
             _wait(started(2), "the retry to start solving", proc, timeout=120)
             rc = proc.wait(timeout=300)
         finally:
@@ -556,7 +586,12 @@ def test_a_retry_asks_for_no_more_than_the_partition_allows(cluster, tmp_path):
                 os.killpg(proc.pid, signal.SIGKILL)
                 proc.wait()
     finally:
-        cluster.update_partition(MaxMemPerNode=0, MaxTime="INFINITE")  # 0: unlimited
+        if limited_by == "partition":
+            cluster.update_partition(MaxMemPerNode=0, MaxTime="INFINITE")  # 0: unlimited
+        else:
+            cluster.sacctmgr("modify", "user", *where, "set", "qos=normal", "defaultqos=-1",
+                             "maxwall=-1")
+            cluster.sacctmgr("delete", "qos", qos)
     log = out.read_text()
     assert rc == 0, log[-3000:]
     first, second = submitted()
@@ -565,5 +600,5 @@ def test_a_retry_asks_for_no_more_than_the_partition_allows(cluster, tmp_path):
     assert megabytes(rows[first]["ReqMem"]) == mem
     assert minutes(rows[first]["Timelimit"]) == time_min
     assert rows[second]["State"] == "COMPLETED", rows[second]
-    assert megabytes(rows[second]["ReqMem"]) == limits["MaxMemPerNode"]
-    assert minutes(rows[second]["Timelimit"]) == limits["MaxTime"]
+    assert megabytes(rows[second]["ReqMem"]) == limit_mb
+    assert minutes(rows[second]["Timelimit"]) == limit_min

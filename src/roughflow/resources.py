@@ -31,11 +31,9 @@ process. This module imports nothing heavy.
 from __future__ import annotations
 
 import os
-import subprocess
-from dataclasses import dataclass
 from pathlib import Path
 
-from roughflow.errors import InputError, ResourceError
+from roughflow.errors import ResourceError
 
 MB = 1024**2
 
@@ -223,76 +221,6 @@ def total_source() -> str:
     if _limited_by_cgroup() is not None:
         return "the memory limit of this process's cgroup (a SLURM allocation or container)"
     return "the memory of this machine"
-
-
-@dataclass(frozen=True)
-class SlurmPartition:
-    """What one job may ask of a SLURM partition. A request above it never runs: sbatch
-    refuses memory above every node ("Requested node configuration is not available"), and
-    above the partition's own limits the job waits forever ("MaxMemPerLimit",
-    "PartitionTimeLimit") where the cluster does not check them at submission
-    (``EnforcePartLimits=NO``, SLURM's default)."""
-
-    name: str
-    #: memory in MiB (SLURM's "MB", the unit of ``sbatch --mem``): the partition's largest
-    #: node, within its ``MaxMemPerNode``
-    mem_mib: int
-    #: the partition's ``MaxTime`` in whole minutes; None where unlimited
-    max_minutes: int | None
-
-
-def _slurm(*argv: str) -> str | None:
-    try:
-        return subprocess.run(argv, capture_output=True, text=True, timeout=30,
-                              check=True).stdout
-    except (OSError, subprocess.SubprocessError):
-        return None
-
-
-def slurm_minutes(text: str) -> int | None:
-    """Whole minutes of a SLURM time limit as ``scontrol`` shows it (``[D-]HH:MM:SS``);
-    None for ``UNLIMITED``."""
-    if text.upper() in ("UNLIMITED", "INFINITE"):
-        return None
-    days, _, clock = text.rpartition("-")
-    hours, minutes, seconds = (int(part) for part in clock.split(":"))
-    total = (int(days or 0) * 24 + hours) * 60 * 60 + minutes * 60 + seconds
-    return max(total // 60, 1)  # SLURM counts time limits in minutes
-
-
-def slurm_partition(name: str | None = None) -> SlurmPartition | None:
-    """The limits of SLURM partition ``name`` (None: the cluster's default partition), from
-    ``scontrol show partition`` (hidden partitions included) and ``sinfo``; None where these
-    are missing or do not answer within 30 s (not a SLURM login node), or there is no default
-    partition or no node is listed. Raises :class:`~roughflow.errors.InputError` where the
-    cluster answers and has no partition ``name`` (sbatch would refuse every job)."""
-    shown = _slurm("scontrol", "--all", "--oneliner", "show", "partition")
-    if shown is None:
-        return None
-    names = []
-    for line in shown.splitlines():
-        fields = dict(word.split("=", 1) for word in line.split() if "=" in word)
-        found = fields.get("PartitionName")
-        names += [found] if found else []
-        if found and (found == name if name is not None else fields.get("Default") == "YES"):
-            break
-    else:
-        if name is not None and names:
-            raise InputError(f"SLURM partition {name!r} does not exist on this cluster (its "
-                             f"partitions: {', '.join(names)})")
-        return None
-    nodes = _slurm("sinfo", "--noheader", "--Node", f"--partition={found}", "--format=%m")
-    sizes = [int(word) for word in (nodes or "").split() if word.isdigit()]
-    if not sizes:
-        return None
-    mem = max(sizes)
-    if fields.get("MaxMemPerNode", "").isdigit():
-        mem = min(mem, int(fields["MaxMemPerNode"]))
-    try:
-        minutes = slurm_minutes(fields.get("MaxTime", "UNLIMITED"))
-    except ValueError:
-        minutes = None  # a form this parser does not know: leave time to the cluster
-    return SlurmPartition(found, mem, minutes)
 
 
 def available_bytes() -> int | None:

@@ -61,7 +61,8 @@ except InputError as exc:
 
 from roughflow.defaults import FLOW_STUDIES, MEASURED_STUDY, THRESHOLD_STUDIES  # noqa: E402
 from roughflow.figures import caption as figure_caption  # noqa: E402
-from roughflow.resources import slurm_partition, total_bytes, total_source  # noqa: E402
+from roughflow.resources import total_bytes, total_source  # noqa: E402
+from roughflow.slurm import job_limits  # noqa: E402
 from roughflow.scenes import expand_study, study_defaults  # noqa: E402
 from roughflow.scenes.jobs import aggregated_config  # noqa: E402
 from roughflow.scenes.requests import (  # noqa: E402
@@ -106,21 +107,23 @@ def _default_resource(name):
     return None
 
 
-# What a job may ask of the partition (memory, time): a request above it would never run
-# (roughflow.resources.SlurmPartition), so every cluster job's request is capped at it. A
-# rule sent to another partition (--set-resources RULE:slurm_partition=...) would be capped
-# at the wrong one's limits, below what its jobs need: then nothing is capped.
-_OWN_PARTITION = [rule for rule, res in
-                  (getattr(workflow.resource_settings, "overwrite_resources", None) or {}).items()
-                  if "slurm_partition" in res]
-try:  # a partition the cluster lacks: sbatch would refuse every job, twice
-    SLURM_PARTITION = slurm_partition(_default_resource("slurm_partition")) \
-        if RUNS_ON_CLUSTER and not _OWN_PARTITION else None
+# What a job may ask of the cluster (memory, time): a request above the limits of its
+# partition, QOS or association would never run (roughflow.slurm), so every cluster job's
+# request is capped at them. A rule sent to another partition, account or QOS
+# (--set-resources RULE:slurm_partition=...) could be capped below what its jobs need
+# there: then nothing is capped.
+_OWN_LIMITS = [rule for rule, res in
+               (getattr(workflow.resource_settings, "overwrite_resources", None) or {}).items()
+               if {"slurm_partition", "slurm_account", "qos"} & set(res)]
+try:  # a partition or account the cluster lacks: sbatch would refuse every job, twice
+    SLURM_LIMITS = job_limits(_default_resource("slurm_partition"),
+                              _default_resource("slurm_account"), _default_resource("qos")) \
+        if RUNS_ON_CLUSTER and not _OWN_LIMITS else None
 except InputError as exc:
-    raise WorkflowError(f"invalid slurm_partition in the profile's default-resources "
+    raise WorkflowError(f"invalid SLURM settings in the profile's default-resources "
                         f"(profiles/slurm/config.yaml): {exc}") from None
 # The memory a job may need, checked at planning before any job runs: the config's
-# max_mem_mb; on a SLURM cluster what the partition allows less the job's Snakemake
+# max_mem_mb; on a SLURM cluster what a job may ask of it less the job's Snakemake
 # (WRAPPER_MB), so that every planned first request runs; else the memory of this
 # machine. Only the Snakemake that plans the run checks the plan: the one that runs a job
 # inside a SLURM allocation (--mode remote, and under its srun --mode subprocess) parses
@@ -130,12 +133,11 @@ if not workflow.is_main_process:
     _MEM_LIMIT = (None, "")
 elif config.get("max_mem_mb") is not None:
     _MEM_LIMIT = (int(config["max_mem_mb"]) * 10**6, f"max_mem_mb = {config['max_mem_mb']}")
-elif SLURM_PARTITION is not None:
-    _MEM_LIMIT = ((SLURM_PARTITION.mem_mib - WRAPPER_MB) * 10**6,
-                  f"a job in SLURM partition {SLURM_PARTITION.name} may ask for "
-                  f"{SLURM_PARTITION.mem_mib} MB (its largest node, within its MaxMemPerNode), "
-                  f"less {WRAPPER_MB} MB for the job's Snakemake; max_mem_mb in the config "
-                  "sets another limit")
+elif SLURM_LIMITS is not None:
+    _MEM_LIMIT = ((SLURM_LIMITS.mem_mib - WRAPPER_MB) * 10**6,
+                  f"a job in SLURM partition {SLURM_LIMITS.partition} may ask for "
+                  f"{SLURM_LIMITS.mem_mib} MB ({SLURM_LIMITS.mem_by}), less {WRAPPER_MB} MB "
+                  "for the job's Snakemake; max_mem_mb in the config sets another limit")
 else:
     _MEM_LIMIT = (_machine_bytes, f"{total_source()}; set max_mem_mb in the config for a "
                                  "cluster")
@@ -158,10 +160,10 @@ _BUDGET_WARNED = []
 def job_mem_mb(mb):
     """A job's mem_mb: at most the local run's LOCAL_MEM_MB (a job that needs the whole
     machine runs alone; above it Snakemake would refuse to schedule it); on a SLURM cluster
-    at most what the partition allows (a retry's doubled request above it would never run;
-    the plan's check keeps the first attempt's below it); else as given."""
-    if SLURM_PARTITION is not None:
-        return min(mb, SLURM_PARTITION.mem_mib)
+    at most what a job may ask for there (a retry's doubled request above it would never
+    run; the plan's check keeps the first attempt's below it); else as given."""
+    if SLURM_LIMITS is not None:
+        return min(mb, SLURM_LIMITS.mem_mib)
     if LOCAL_MEM_MB is None:
         return mb
     if not workflow.local_exec and not _BUDGET_WARNED:
@@ -192,23 +194,23 @@ for _study, _jobs in JOBS.items():
             if POOL[_job.kind].setdefault(_id, _job) != _job:
                 raise WorkflowError(f"two different jobs share the id {_id!r}")
 
-# A sweep job whose request exceeds the partition's MaxTime asks for MaxTime instead
+# A sweep job whose request exceeds the time a job may ask for asks for that instead
 # (job_runtime_min); say so before anything runs, since such a job may end TIMEOUT.
-if SLURM_PARTITION is not None and SLURM_PARTITION.max_minutes is not None:
+if SLURM_LIMITS is not None and SLURM_LIMITS.max_minutes is not None:
     _capped = sorted(request for request in
                      ((requested_runtime_min(job), job_id) for pool in POOL.values()
                       for job_id, job in pool.items())
-                     if request[0] > SLURM_PARTITION.max_minutes)
+                     if request[0] > SLURM_LIMITS.max_minutes)
     if _capped:
         from snakemake.logging import logger
 
         logger.warning(
             f"{len(_capped)} of {sum(map(len, POOL.values()))} jobs ask for more time than "
-            f"SLURM partition {SLURM_PARTITION.name} allows (MaxTime "
-            f"{SLURM_PARTITION.max_minutes} min; the longest asks for {_capped[-1][0]} min, "
+            f"SLURM partition {SLURM_LIMITS.partition} allows ({SLURM_LIMITS.time_by} "
+            f"{SLURM_LIMITS.max_minutes} min; the longest asks for {_capped[-1][0]} min, "
             f"{RUNTIME_MARGIN:g} times its estimate: {_capped[-1][1]}): their requests are "
-            f"capped at {SLURM_PARTITION.max_minutes} min, and a job that needs longer ends "
-            "TIMEOUT; a partition with a longer MaxTime avoids that")
+            f"capped at {SLURM_LIMITS.max_minutes} min, and a job that needs longer ends "
+            "TIMEOUT; a partition or QOS with a longer limit avoids that")
 
 THRESHOLD_NAMES = [s for s in STUDIES if s in THRESHOLD_STUDIES]
 FLOW_NAMES = [s for s in STUDIES if s in FLOW_STUDIES]
@@ -256,10 +258,10 @@ def job_args(wildcards):
 
 
 def job_runtime_min(minutes):
-    """A job's runtime (minutes): on a SLURM cluster at most the partition's MaxTime (above
-    it the job would wait forever), else as given."""
-    if SLURM_PARTITION is not None and SLURM_PARTITION.max_minutes is not None:
-        return min(minutes, SLURM_PARTITION.max_minutes)
+    """A job's runtime (minutes): on a SLURM cluster at most the time a job may ask for
+    (above it the job would wait forever), else as given."""
+    if SLURM_LIMITS is not None and SLURM_LIMITS.max_minutes is not None:
+        return min(minutes, SLURM_LIMITS.max_minutes)
     return minutes
 
 
