@@ -14,11 +14,13 @@ The array helpers (:func:`detrend`, :func:`level_lines`, :func:`fill_missing`,
 
 from __future__ import annotations
 
+import contextlib
 import dataclasses
 import logging
 import math
 import os
 import re
+import warnings
 from pathlib import Path
 from typing import TYPE_CHECKING
 
@@ -399,19 +401,30 @@ def _open(path: Path):
     except ImportError as exc:  # installed, but broken (a missing library of its own)
         raise InputError(f"reading scans needs {SCAN_READER}, which fails to import: "
                          f"{exc}") from None
-    try:
-        reader = open_topography(str(path))
-    except Exception as exc:  # the readers raise many types for files they cannot read
-        raise _open_error(path, exc) from None
-    # the NASA SRTM reader has no header to check: it takes any file of 2 n^2 bytes (a
-    # 32-byte text file reads as a 4 x 4 map), so it is trusted only for .hgt files
-    if type(reader).__name__ == "HGTReader" and path.suffix.lower() != ".hgt":
+    with _readers_contained():
+        try:
+            reader = open_topography(str(path))
+        except Exception as exc:  # the readers raise many types for files they cannot read
+            raise _open_error(path, exc) from None
+        name = type(reader).__name__
+        if name == "HGTReader" and path.suffix.lower() != ".hgt":
+            # the NASA SRTM reader has no header to check: it takes any file of 2 n^2 bytes
+            # (a 32-byte text file reads as a 4 x 4 map), so it is trusted only for .hgt files
+            why = "only the header-less NASA SRTM reader took it; rename it to .hgt if it is one"
+        elif not reader.channels:
+            # the detection takes the first reader that opens the file without an exception:
+            # the MATLAB reader opened 128 bytes of an FRT file, the Nanoscope reader a file
+            # cut inside its text header, both without a channel (an IndexError followed)
+            why = f"{name} found no data channel in it"
+        else:
+            return reader
         _close(reader)
-        own = _own_reader_error(path)
-        raise InputError(f"{str(path)!r} is not a topography that SurfaceTopography can read "
-                         + (f"({own})" if own else "(only the header-less NASA SRTM reader "
-                            "took it; rename it to .hgt if it is one)"))
-    return reader
+        own, said = _own_reader(path)
+    if own is not None:
+        return own
+    if said:
+        raise InputError(f"{str(path)!r} cannot be read: {said}")
+    raise InputError(f"{str(path)!r} is not a topography that SurfaceTopography can read ({why})")
 
 
 def _readers_of(path: Path) -> list:
@@ -421,15 +434,21 @@ def _readers_of(path: Path) -> list:
     return [r for r in readers if f".{r.format()}" == path.suffix.lower()]
 
 
-def _own_reader_error(path: Path) -> str:
-    """What the reader of ``path``'s file ending says about it ("" where it reads it or no
-    reader has that ending)."""
-    for r in _readers_of(path):
-        try:
-            r(str(path))
-        except Exception as exc:
-            return f"{r.__name__}: {_printable(str(exc))}"
-    return ""
+def _own_reader(path: Path):
+    """The reader of ``path``'s file ending opened on it where it finds a data channel there,
+    else None and what it says about the file ("" where no reader has that ending)."""
+    own = _readers_of(path)
+    if not own:
+        return None, ""
+    try:
+        reader = own[0](str(path))
+    except Exception as exc:
+        return None, f"{own[0].__name__}: {_printable(str(exc))}"
+    if reader.channels:
+        return reader, ""
+    _close(reader)
+    return None, (f"{own[0].__name__}: no data channel in its {path.stat().st_size} bytes; is "
+                  "the file truncated?")
 
 
 def _header_size_unit(ch, path: Path) -> str | None:
@@ -449,8 +468,6 @@ def _is_point_list(path: Path) -> bool:
     """Whether a text file of a few columns holds x y z (...) lines of a grid: its first two
     columns repeat few values whose pairs cover the lines (a matrix 4 values wide has
     heights there, all different)."""
-    import warnings
-
     with warnings.catch_warnings():
         warnings.simplefilter("ignore")
         rows = np.genfromtxt(path, comments="#", invalid_raise=False, ndmin=2)
@@ -478,14 +495,63 @@ def _netcdf_y_first(path: Path) -> bool:
         return False
 
 
+#: The start of a reader library's message that is cleaned for the debug log (igor2 quotes
+#: whole files; :func:`_printable` keeps 300 characters of it).
+_READER_MESSAGE_CHARS = 1000
+
+
+class _ReaderRecords(logging.Filter):
+    """Holds back the log records of other libraries than roughflow from the handlers it is
+    added to, and passes each to roughflow's log at DEBUG, on one printable line."""
+
+    def __init__(self) -> None:
+        super().__init__()
+        self._last: logging.LogRecord | None = None
+
+    def filter(self, record: logging.LogRecord) -> bool:
+        if record.name == "roughflow" or record.name.startswith("roughflow."):
+            return True
+        if record is not self._last and log.isEnabledFor(logging.DEBUG):
+            self._last = record  # added to several handlers, it sees a record on each
+            try:
+                message = record.getMessage()
+            except Exception:  # a library's malformed record must not fail its reader here
+                message = str(record.msg)
+            log.debug("%s logged: %s", record.name,
+                      _printable(message[:_READER_MESSAGE_CHARS]))
+        return False
+
+
+@contextlib.contextmanager
+def _readers_contained():
+    """Keep what SurfaceTopography's readers and their libraries log or warn from the user's
+    standard error; -vv (DEBUG) shows each, shortened. Trying a truncated 4 MB .opd file as an
+    Igor wave, igor2 logged 6.5 MB of its raw bytes, even under ``roughflow -q``. A library's
+    records end at the root logger's handlers, or logging's last resort where it has none:
+    a filter there holds them back. Records of roughflow's own loggers pass, and the readers'
+    exceptions propagate."""
+    records = _ReaderRecords()
+    handlers = [h for h in (*logging.getLogger().handlers, logging.lastResort) if h is not None]
+    for h in handlers:
+        h.addFilter(records)
+    caught: list[warnings.WarningMessage] = []
+    try:
+        with warnings.catch_warnings(record=True) as caught:
+            warnings.simplefilter("always")
+            yield
+    finally:
+        for h in handlers:
+            h.removeFilter(records)
+        for message in dict.fromkeys(f"{w.category.__name__}: {w.message}" for w in caught):
+            log.debug("a reader warned: %s", _printable(message[:_READER_MESSAGE_CHARS]))
+
+
 def _close(reader) -> None:
     """Close ``reader``'s file once the heights are copied. The netCDF reader maps its file
     and warns on stderr when it is closed (or collected) while the reader's own masked
     arrays still refer to the map ("Cannot close a netcdf_file opened with mmap=True"),
     which they do after every read of a masked scan: closed here, without that warning
     (the map stays valid while anything refers to it)."""
-    import warnings
-
     close = getattr(reader, "close", None)
     if close is None:
         return
@@ -515,9 +581,19 @@ def _channel(reader, channel, path: Path):
         raise InputError(f"{str(path)!r} holds several arrays ({_channel_list(reader)}) and "
                          "none named as heights (height, heights, topography or z): choose "
                          "one with channel= (CLI --channel)")
-    for c in channels:
-        if str(channel) in (c.name, str(c.index)):
-            return c
+    # a name first, then an index; a Python int is an index only (a way that stays
+    # unambiguous where a channel is named "1")
+    by_index = isinstance(channel, (int, np.integer))
+    named = [] if by_index else [c for c in channels if str(c.name) == str(channel)]
+    if len(named) > 1:
+        # an AFM file may hold trace and retrace "Height": the first was taken without a word
+        first = named[0].index
+        raise InputError(f"channel {channel!r} names {len(named)} channels of {str(path)!r} "
+                         f"({', '.join(f'{c.index}: {c.name}' for c in named)}): choose one by "
+                         f"its index, e.g. channel={first} (CLI --channel {first})")
+    found = named or [c for c in channels if str(c.index) == str(channel)]
+    if found:
+        return found[0]
     raise InputError(f"channel {channel!r} not in the scan (channels: "
                      f"{_channel_list(reader)})")
 
@@ -550,7 +626,9 @@ def read_scan(path: str | os.PathLike, *,
     crop: grid window "i0:i1,j0:j1" kept (e.g. to cut a border of missing points), or
         ``"defined"``: the largest window without missing points
         (:func:`largest_defined_window`).
-    channel: name or index of the data channel (default: the file's height channel).
+    channel: name or index of the data channel (default: the file's height channel); a
+        string is matched to the names first, an int to the indices only. A name that two
+        channels share (trace and retrace "Height") is refused, listing their indices.
     periodic: the scan is periodic (e.g. a simulated one): no boundary treatment later.
     missing_value: the number that marks missing points in the file (an instrument's
         placeholder such as -999999 or 1e38), in the file's own numbers; matched to a
@@ -668,8 +746,9 @@ def read_scan(path: str | os.PathLike, *,
         if ch.unit is None:
             kw["unit"] = file_unit or st_unit
         try:
-            topo = ch.topography(**kw)
-            raw = topo.heights()
+            with _readers_contained():
+                topo = ch.topography(**kw)
+                raw = topo.heights()
         except Exception as exc:
             raise InputError(f"cannot read the heights of {str(path)!r} "
                              f"({type(exc).__name__}: {exc})") from None
