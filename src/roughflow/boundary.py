@@ -38,7 +38,7 @@ import numpy as np
 from roughflow.contact import ContactResult
 from roughflow.defaults import BOUNDARY_METHODS, WINDOW_MARGIN
 from roughflow.errors import InputError
-from roughflow.surface import Surface
+from roughflow.surface import Surface, mirror_tiled
 
 #: "pad": the padding lies this many height ranges (max - min) below the scan's lowest
 #: point, far below any elastic displacement of the surroundings of the scan.
@@ -141,9 +141,7 @@ def embed(surface: Surface, method: str, *, margin: float = WINDOW_MARGIN) -> Em
     if method == "periodic":
         return Embedding(method, surface, _ALL, 1.0, True)
     if method == "mirror":
-        top = np.concatenate([h, h[:, ::-1]], axis=1)
-        tiled = np.concatenate([top, top[::-1, :]], axis=0)
-        cell = Surface(heights=tiled, lx=2 * lx, ly=2 * ly)
+        cell = Surface(heights=mirror_tiled(h), lx=2 * lx, ly=2 * ly)
         return Embedding(method, cell, (slice(0, nx), slice(0, ny)), 1.0, False)
     if method == "pad":
         low = h.min() - PAD_DEPTH * (h.max() - h.min())

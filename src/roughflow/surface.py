@@ -251,6 +251,18 @@ class Surface:
         return self.scan is None or bool(self.scan.periodic)
 
     @property
+    def gbar(self) -> float:
+        """The rms gradient gbar that contact pressures scale with (pressures are in E*; a
+        generated surface's gbar is its spec's rms slope, 1 by default, so there E* gbar =
+        E*): a scan's recorded value (finite differences, its edges not joined), else
+        :func:`rms_gradient` of the heights."""
+        if self.spec is not None:
+            return float(self.spec.rms_slope)
+        if self.scan is not None:
+            return float(self.scan.rms_gradient)
+        return rms_gradient(self.heights, self.lx, self.ly, periodic=self.periodic)
+
+    @property
     def shape(self) -> tuple[int, int]:
         return self.heights.shape
 
@@ -285,6 +297,13 @@ def from_scan(path: str | os.PathLike, **options) -> Surface:
     from roughflow.scan import read_scan
 
     return read_scan(path, **options)
+
+
+def mirror_tiled(heights: np.ndarray) -> np.ndarray:
+    """The 2 x 2 periodic cell of a non-periodic height map and its mirror images along x,
+    y and both: continuous across every seam, so its spectrum has no wrap-around step."""
+    top = np.concatenate([heights, heights[:, ::-1]], axis=1)
+    return np.concatenate([top, top[::-1, :]], axis=0)
 
 
 def spectrum(q: np.ndarray, spec: SurfaceSpec) -> np.ndarray:

@@ -174,6 +174,9 @@ def main(argv: list[str] | None = None) -> int:
     provenance = Provenance.for_command(argv)
     parser = build_parser()
     args = parser.parse_args(argv)
+    if args.quiet and args.verbose:  # before or after the subcommand alike
+        parser.exit(2, f"roughflow {args.command}: error: -q (errors only) contradicts "
+                       f"-{'v' * args.verbose} (progress)\n")
     log_progress(_level(args))
     name = f"roughflow {args.command}"
     # in the main thread only (signal's rule), and not for a signal a launcher set ignored

@@ -23,7 +23,14 @@ from roughflow import defaults
 from roughflow.defaults import A_C_STAR_PAPER, A_C_STAR_THEORY, DEFAULT_MODEL, MODELS
 from roughflow.errors import InputError
 
-from ._common import add_input, add_output, add_surface_options, refuse_given, track_given
+from ._common import (
+    PRESSURE_UNIT,
+    add_input,
+    add_output,
+    add_surface_options,
+    refuse_given,
+    track_given,
+)
 
 if TYPE_CHECKING:  # numpy is imported when a command runs, not for --help
     import numpy as np
@@ -73,7 +80,7 @@ def register(sub: argparse._SubParsersAction) -> None:
                         "Peklenik number of each gap field from its autocorrelation (height)")
     s = p.add_argument_group("Persson theory (surface file or spec)")
     s.add_argument("--pressures", default=DEFAULT_PRESSURES,
-                   help=f"comma-separated pressures in E* gbar ({DEFAULT_PRESSURES})")
+                   help=f"comma-separated pressures in {PRESSURE_UNIT} ({DEFAULT_PRESSURES})")
     s.add_argument("--energy-factor", type=float, default=None,
                    help="correction factor of the elastic energy (default: "
                         "roughflow.theory.DEFAULT_ENERGY_FACTOR, docs/theory.md)")
@@ -108,7 +115,8 @@ def run(args: argparse.Namespace) -> None:
     else:
         surface = surface_from_dataset(ds)
         src = surface.spec if surface.spec is not None else surface
-        _run_persson(args, src, source=f"{path.name} ({'spec' if surface.spec else 'measured'})")
+        _run_persson(args, src, source=f"{path.name} ({'spec' if surface.spec else 'measured'})",
+                     surface=surface)
 
 
 def _check_form(args: argparse.Namespace, form: str) -> None:
@@ -153,9 +161,13 @@ def _a_c_star(args: argparse.Namespace, kind: str) -> float:
     return A_C_STAR_THEORY[kind] if args.a_c_star is None else args.a_c_star
 
 
-def _run_persson(args: argparse.Namespace, src, *, source: str) -> None:
+def _run_persson(args: argparse.Namespace, src, *, source: str, surface=None) -> None:
+    """Persson theory of ``src`` (a spec, or a surface's measured spectrum: a non-periodic
+    scan's is that of its mirror-tiled cell); the output describes ``surface`` where the
+    spectrum came from a file (its spec, or its scan and reference length)."""
     import xarray as xr
 
+    from roughflow.datasets.results import spec_attrs
     from roughflow.datasets.units import DIMENSIONLESS, LENGTH_UNITS, PRESSURE_UNITS, SIGMA_UNITS
     from roughflow.io import write_dataset
     from roughflow.theory import DEFAULT_ENERGY_FACTOR, predict_conductance
@@ -193,9 +205,10 @@ def _run_persson(args: argparse.Namespace, src, *, source: str) -> None:
             "a_c_star": a_star, "eta": args.eta, "energy_factor": energy_factor,
         },
     )
-    spec = src if not hasattr(src, "heights") else getattr(src, "spec", None)
-    if spec is not None:
-        ds.attrs.update({f"spec_{k}": v for k, v in spec.as_attrs().items()})
+    if surface is not None:
+        ds.attrs.update(spec_attrs(surface))
+    else:
+        ds.attrs.update({f"spec_{k}": v for k, v in src.as_attrs().items()})
     write_dataset(ds, args.output, provenance=args.provenance.using("persson", "closed_form"))
 
 
@@ -295,6 +308,7 @@ def _run_gap(args: argparse.Namespace, ds) -> None:
     from roughflow.datasets.units import DIMENSIONLESS, LENGTH_UNITS, SIGMA_UNITS
     from roughflow.io import write_dataset
     from roughflow.theory import effective_dimension, gap_theory
+    from roughflow.units import REFERENCE_ATTRS
 
     gap = ds["gap"]
     if gap.ndim < 2 or gap.ndim > 3:
@@ -366,6 +380,10 @@ def _run_gap(args: argparse.Namespace, ds) -> None:
                "a_c_star": a_star, "kind": kind, "eta": args.eta, "lx": lx, "ly": ly,
                "peklenik_source": args.peklenik, "gamma": gamma},
     )
-    res.attrs.update({k: v for k, v in ds.attrs.items() if k.startswith("spec_")})
+    # what the gap's surface was, and the SI values of the units (a scan's L), so that
+    # units.registry(res.attrs) converts this file as it does the gap file
+    reference = {attr for attr, _ in REFERENCE_ATTRS.values()}
+    res.attrs.update({k: v for k, v in ds.attrs.items()
+                      if k in reference or k.startswith(("spec_", "scan_"))})
     methods = ("bruggeman", "closed_form", *(("reynolds",) if reynolds else ()))
     write_dataset(res, args.output, provenance=args.provenance.using(*methods))

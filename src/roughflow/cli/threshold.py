@@ -65,13 +65,15 @@ def register(sub: argparse._SubParsersAction) -> None:
     p.add_argument("--strategy", choices=THRESHOLD_STRATEGIES,
                    default=THRESHOLD_STRATEGIES[0],
                    help="predict: aimed refinement (default); bisect: plain bisection")
-    p.add_argument("--p-min", type=float, default=p_min,
-                   help=f"lowest allowed pressure in {PRESSURE_UNIT} ({p_min:g})")
-    p.add_argument("--p-max", type=float, default=p_max,
-                   help=f"highest allowed pressure in {PRESSURE_UNIT} ({p_max:g})")
+    p.add_argument("--p-min", type=float, default=None,
+                   help=f"lowest allowed pressure in {PRESSURE_UNIT} (default {p_min:g} E* "
+                        "gbar, gbar the surface's rms gradient)")
+    p.add_argument("--p-max", type=float, default=None,
+                   help=f"highest allowed pressure in {PRESSURE_UNIT} (default {p_max:g} E* "
+                        "gbar)")
     p.add_argument("--p-guess", type=float, default=None,
                    help="first pressure, in [--p-min, --p-max] (default: the contact law's "
-                        f"load for a_c = {A_C_STAR_PAPER})")
+                        f"load for a_c = {A_C_STAR_PAPER}, in E* gbar)")
     p.add_argument("--contact-tol", type=float, default=THRESHOLD_CONTACT_TOL,
                    help="tolerance of each contact solve, gap error / rms height "
                         f"({THRESHOLD_CONTACT_TOL:g})")
@@ -94,8 +96,8 @@ def run(args: argparse.Namespace) -> None:
     from roughflow.search import threshold
 
     on_backend(args)  # CuPy and a GPU, before any work
-    options = _search_options(args)
     surface = surface_from_dataset(args.data["surface"])
+    options = _search_options(args, surface.gbar)
     warn_if_nonperiodic_scan(args.data["surface"], args.surface, "threshold")
     adhesion = resolve_adhesion(args.model, args.surface_energy, args.adhesion_range, surface,
                                 flags=("--surface-energy", "--adhesion-range"),
@@ -123,16 +125,22 @@ def run(args: argparse.Namespace) -> None:
 _SOLVE_FLAGS = ("--strategy", "--p-min", "--p-max", "--p-guess", "--method", "--contact-tol")
 
 
-def _search_options(args: argparse.Namespace):
-    """The :class:`~roughflow.search.SearchOptions` of the arguments, after refusing those
-    that the model does not use (they would be ignored)."""
-    from roughflow.search import SearchOptions
+def _search_options(args: argparse.Namespace, gbar: float):
+    """The :class:`~roughflow.search.SearchOptions` of the arguments for a surface of rms
+    gradient ``gbar`` (the default pressures, in E* gbar, scaled to it: a scan's pressures
+    are in E*), after refusing those that the model does not use (they would be ignored)."""
+    from roughflow.search import scaled_options
 
     if args.model == "bearing":
         refuse_given(args, _SOLVE_FLAGS, "to --model bearing: its threshold is an exact sweep "
                      "of the heights, without contact solves")
+    p_min, p_max = THRESHOLD_PRESSURE_RANGE
+    pressure_range = None
+    if args.p_min is not None or args.p_max is not None:
+        pressure_range = (gbar * p_min if args.p_min is None else args.p_min,
+                          gbar * p_max if args.p_max is None else args.p_max)
     # a --p-guess outside [--p-min, --p-max] is refused by SearchOptions (first_pressure)
-    return SearchOptions(
-        strategy=args.strategy, pressure_range=(args.p_min, args.p_max),
+    return scaled_options(
+        gbar, args.model, strategy=args.strategy, pressure_range=pressure_range,
         first_pressure=args.p_guess, contact_tol=args.contact_tol, method=args.method,
         on_unbracketed="nan" if args.allow_unbracketed else "raise")

@@ -17,6 +17,7 @@ from .critical import (
     Threshold,
     ThresholdNotBracketed,
     first_pressure,
+    scaled_options,
     threshold,
 )
 from .load import AreaSolve, LoadSearch, Point, load_for_area, warm_start, warm_start_compliance
@@ -32,6 +33,7 @@ __all__ = [
     "ThresholdNotBracketed",
     "first_pressure",
     "load_for_area",
+    "scaled_options",
     "threshold",
     "warm_start",
     "warm_start_compliance",

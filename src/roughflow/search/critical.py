@@ -268,6 +268,24 @@ def first_pressure(model: str = DEFAULT_MODEL) -> float:
     return ContactLaw(model).control(A_C_STAR_PAPER)
 
 
+def scaled_options(gbar: float, model: str = DEFAULT_MODEL, **fields) -> SearchOptions:
+    """:class:`SearchOptions` for a surface whose pressures are in E* and whose rms gradient
+    is ``gbar`` (a scan; :attr:`roughflow.surface.Surface.gbar`): the default pressure range
+    and first pressure, in E* gbar, scaled by ``gbar``. ``fields``: the other options, and
+    a ``pressure_range`` or ``first_pressure`` in E* that replaces the scaled default. The
+    bearing model's loads are areas: nothing is scaled."""
+    gbar = require_positive("gbar", gbar)
+    if model != "bearing":
+        if fields.get("pressure_range") is None:
+            fields["pressure_range"] = tuple(gbar * p for p in THRESHOLD_PRESSURE_RANGE)
+        if fields.get("first_pressure") is None:  # within a range given in E*
+            lo, hi = (float(p) for p in fields["pressure_range"])
+            fields["first_pressure"] = min(max(gbar * first_pressure(model), lo), hi)
+    elif fields.get("pressure_range") is None:
+        fields.pop("pressure_range", None)
+    return SearchOptions(**fields)
+
+
 # -------------------------------------------------------------------------------------------
 # solved states and brackets
 # -------------------------------------------------------------------------------------------

@@ -9,7 +9,9 @@ int dq q^n C(q) g(q) = (1/2 pi) sum_q |q|^(n-1) |h_q|^2 g(|q|), with h(r) =
 sum_q h_q exp(i q r) (so sum_q |h_q|^2 = <h^2>, sum_q q^2 |h_q|^2 = gbar^2). A
 :class:`~roughflow.surface.SurfaceSpec` gives |h_q|^2 = C(q_P) on its grid (normalised to
 its rms gradient, the amplitudes that ``generate`` uses); a
-:class:`~roughflow.surface.Surface` gives its own |h_q|^2. Anisotropic spectra are
+:class:`~roughflow.surface.Surface` gives its own |h_q|^2, a non-periodic scan that of its
+mirror-tiled 2 x 2 cell (its wrap-around step would add a q^-2 tail: on a 512^2 AFM scan
+gbar 1.39 instead of 0.91, docs/theory.md). Anisotropic spectra are
 treated through |q| only (Persson's isotropic theory).
 
 Formulas implemented (Persson, J. Chem. Phys. 115, 3840 (2001); Persson, PRL 99,
@@ -48,7 +50,13 @@ from scipy.special import erf, exp1
 from roughflow import fft
 from roughflow.defaults import DEFAULT_MODEL
 from roughflow.errors import InputError, require_field, require_positive
-from roughflow.surface import Surface, SurfaceSpec, peklenik_wavenumber, spectrum
+from roughflow.surface import (
+    Surface,
+    SurfaceSpec,
+    mirror_tiled,
+    peklenik_wavenumber,
+    spectrum,
+)
 
 from .closed_form import closed_form
 from .effective_medium import _wsum
@@ -98,8 +106,12 @@ def discrete_spectrum(source: SurfaceSpec | Surface) -> DiscreteSpectrum:
         target = source.rms_slope
     elif isinstance(source, Surface):
         h = require_field("heights", source.heights)
-        nx, ny = h.shape
         lx, ly = source.lx, source.ly
+        if not source.periodic:  # a scan: its wrap-around step would add a q^-2 tail
+            check_memory("spectrum", (2 * h.shape[0], 2 * h.shape[1]),
+                         what="the Persson spectrum of a scan's mirror-tiled cell")
+            h, lx, ly = mirror_tiled(h), 2 * lx, 2 * ly
+        nx, ny = h.shape
         qx, qy = fft.wavevectors(nx, ny, lx, ly)
         power = np.abs(fft.rfft2(h - h.mean()) / (nx * ny)) ** 2
         target = None
