@@ -21,7 +21,8 @@ PARTITIONS = ("PartitionName=big Default=YES QoS=N/A MaxTime=UNLIMITED "
               "PartitionName=small Default=NO QoS={part_qos} MaxTime={max_time} "
               "MaxMemPerNode=2500\n"
               "PartitionName=empty Default=NO QoS=N/A MaxTime=01:30:00 "
-              "MaxMemPerNode=UNLIMITED\n")
+              "MaxMemPerNode=UNLIMITED\n"
+              "PartitionName=percpu Default=NO QoS=N/A MaxTime=UNLIMITED MaxMemPerCPU=1000\n")
 
 
 def fake(tmp_path: Path, *, part_qos: str = "N/A", max_time: str = "2-03:00:30",
@@ -35,8 +36,9 @@ def fake(tmp_path: Path, *, part_qos: str = "N/A", max_time: str = "2-03:00:30",
     scripts = {
         "scontrol": f'case "$*" in *partition*) printf "{partitions}";; '
                     f'*config*) printf "{config}";; esac',
-        "sinfo": 'case "$*" in *=small\\ *) printf "1000\\n3000\\n2000\\n";; *=big\\ *) '
-                 'echo 512000;; esac',
+        "sinfo": 'case "$*" in *=small\\ *) printf "1000 4\\n3000 8\\n2000 2\\n";; '
+                 '*=big\\ *) echo "512000 64";; *=percpu\\ *) printf "3000 2\\n1500 4\\n";; '
+                 'esac',
         "sacctmgr": "exit 1" if sacctmgr_fails else
                     f'case "$*" in *" user {USER} "*) echo "{default_account}";; '
                     f'*cluster=test*user={USER}*) printf "{assoc}";; '
@@ -70,7 +72,14 @@ def test_partition_limits(slurm_path):
                                             "its MaxMemPerNode", "MaxTime")
     assert job_limits() == JobLimits("big", 512000, None, "its largest node", "MaxTime")
     assert job_limits("empty") is None  # no node listed
-    with pytest.raises(InputError, match=r"'missing' does not exist .*: big, small, empty\)"):
+    # measured: MaxMemPerCPU 1000 on a 2-CPU node: a job of 1900 MB ran on 2 CPUs, one of
+    # 2500 MB was refused by sbatch ("CPU count per node can not be satisfied"); here the
+    # nodes allow 2 x 1000 and min(1500, 4 x 1000)
+    assert job_limits("percpu") == JobLimits(
+        "percpu", 2000, None, "its largest node, within its MaxMemPerCPU times the node's "
+        "CPUs", "MaxTime")
+    with pytest.raises(InputError, match=r"'missing' does not exist .*: big, small, empty, "
+                                         r"percpu\)"):
         job_limits("missing")  # sbatch would refuse every job
     # where sacctmgr does not answer, the partition's limits alone
     fake(slurm_path, assoc="acct||rshort|normal,rshort|00:10:00||\n", sacctmgr_fails=True)

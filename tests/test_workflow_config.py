@@ -290,8 +290,8 @@ def _fake_slurm(tmp_path: Path, partitions: str) -> None:
     bin_dir = tmp_path / "bin"
     bin_dir.mkdir(exist_ok=True)
     scripts = {"scontrol": f"printf '{partitions}'",
-               "sinfo": 'case "$*" in *--partition=part\\ *) printf "700\\n800\\n";; '
-                        '*) echo 64000;; esac'}
+               "sinfo": 'case "$*" in *--partition=part\\ *) printf "700 2\\n800 2\\n";; '
+                        '*) echo "64000 16";; esac'}
     for name, body in scripts.items():
         (bin_dir / name).write_text(f"#!/bin/sh\n{body}\n")
         (bin_dir / name).chmod(0o755)

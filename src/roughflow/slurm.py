@@ -14,9 +14,11 @@ partition QOS, job QOS (the two swapped where the job QOS has ``OverPartQOS``), 
 association (``sacctmgr`` shows a user's association with the limits it inherits from its
 accounts) that defines it; time is bounded by the partition's ``MaxTime`` as well, unless
 the QOS that sets it has ``PartitionTimeLimit``, and memory by the partition's largest node
-within its ``MaxMemPerNode``. QOS and association limits count only where the cluster
-enforces them (``AccountingStorageEnforce`` with ``limits``). Aggregate limits (``Grp*``,
-per user or account) are not read: they bound what runs at once, not one job.
+within its ``MaxMemPerNode`` (or its ``MaxMemPerCPU`` times the node's CPUs: SLURM gives a
+job more CPUs to fit its memory, up to the node's). QOS and association limits count only
+where the cluster enforces them (``AccountingStorageEnforce`` with ``limits``). Aggregate
+limits (``Grp*``, per user or account) are not read: they bound what runs at once, not one
+job.
 """
 
 from __future__ import annotations
@@ -94,9 +96,9 @@ def _fields(line: str) -> dict[str, str]:
     return dict(word.split("=", 1) for word in line.split() if "=" in word)
 
 
-def _partition(name: str | None) -> tuple[dict[str, str], int] | None:
-    """``scontrol`` fields of partition ``name`` (None: the default one) and its largest
-    node's memory (MiB)."""
+def _partition(name: str | None) -> tuple[dict[str, str], list[tuple[int, int]]] | None:
+    """``scontrol`` fields of partition ``name`` (None: the default one) and its nodes'
+    memory (MiB) and CPUs."""
     shown = _slurm("scontrol", "--all", "--oneliner", "show", "partition")
     if shown is None:
         return None
@@ -112,9 +114,11 @@ def _partition(name: str | None) -> tuple[dict[str, str], int] | None:
             raise InputError(f"SLURM partition {name!r} does not exist on this cluster (its "
                              f"partitions: {', '.join(names)})")
         return None
-    nodes = _slurm("sinfo", "--noheader", "--Node", f"--partition={found}", "--format=%m")
-    sizes = [int(word) for word in (nodes or "").split() if word.isdigit()]
-    return (fields, max(sizes)) if sizes else None
+    nodes = _slurm("sinfo", "--noheader", "--Node", f"--partition={found}", "--format=%m %c")
+    sizes = [(int(words[0]), int(words[1])) for words in
+             (line.split() for line in (nodes or "").splitlines())
+             if len(words) == 2 and words[0].isdigit() and words[1].isdigit()]
+    return (fields, sizes) if sizes else None
 
 
 def _rows(text: str | None, names: tuple[str, ...]) -> list[dict[str, str]]:
@@ -242,12 +246,18 @@ def job_limits(partition: str | None = None, account: str | None = None,
     found = _partition(partition)
     if found is None:
         return None
-    fields, node_mib = found
+    fields, nodes = found
     name = fields["PartitionName"]
-    mem, mem_by = node_mib, "its largest node"
+    mem, mem_by = max(node_mib for node_mib, _ in nodes), "its largest node"
     if fields.get("MaxMemPerNode", "").isdigit():
         mem = min(mem, int(fields["MaxMemPerNode"]))
         mem_by = "its largest node, within its MaxMemPerNode"
+    elif fields.get("MaxMemPerCPU", "").isdigit():
+        # SLURM gives a job more CPUs to fit its memory, and sbatch refuses one that would
+        # need more than a node has ("CPU count per node can not be satisfied")
+        per_cpu = int(fields["MaxMemPerCPU"])
+        mem = max(min(node_mib, per_cpu * cpus) for node_mib, cpus in nodes)
+        mem_by = "its largest node, within its MaxMemPerCPU times the node's CPUs"
     try:
         minutes = slurm_minutes(fields.get("MaxTime", "UNLIMITED"))
     except ValueError:
