@@ -161,8 +161,8 @@ def test_numpy_twin_takes_the_same_path():
 def test_non_convergence_raises_with_its_residual():
     s, ad = _papers_case(128)
     with pytest.raises(ConvergenceError) as err:
-        solve(s, 0.05, model="adhesive", adhesion=ad, tol=1e-12, max_iter=3)
-    assert err.value.residual > 1e-12 and err.value.iterations == 3
+        solve(s, 0.05, model="adhesive", adhesion=ad, tol=1e-10, max_iter=3)
+    assert err.value.residual > 1e-10 and err.value.iterations == 3
 
 
 def test_a_nan_stops_the_solver_at_once():

@@ -55,14 +55,20 @@ def _defaults_of(argv: list[str]) -> dict:
 
 
 def test_threshold_cli_defaults_are_the_search_defaults():
-    from roughflow.search import SearchOptions, threshold
+    from roughflow.cli import build_parser
+    from roughflow.cli.threshold import _search_options
+    from roughflow.search import SearchOptions, first_pressure, threshold
 
     got = _defaults_of(["threshold", "s.nc", "-o", "t.nc"])
     opts = SearchOptions()
     assert got["tol"] == inspect.signature(threshold).parameters["tol"].default
-    assert (got["p_min"], got["p_max"]) == opts.pressure_range
     assert got["contact_tol"] == opts.contact_tol
     assert got["strategy"] == opts.strategy and got["method"] == opts.method
+    # the pressures default to the search's, scaled by the surface's gbar (1 when generated)
+    assert got["p_min"] is None and got["p_max"] is None and got["p_guess"] is None
+    cli = _search_options(build_parser().parse_args(["threshold", "s.nc", "-o", "t.nc"]), 1.0)
+    assert cli.pressure_range == opts.pressure_range
+    assert cli.first_pressure == first_pressure() and opts.first_pressure is None
 
 
 def test_contact_and_flow_cli_defaults_are_the_solver_defaults():
@@ -115,3 +121,9 @@ def test_schema_limits_are_the_librarys(block, key, limit):
     # nor one the library takes refused by the schema
     prop = yaml.safe_load(SCHEMA.read_text())["$defs"][block]["properties"][key]
     assert prop["maximum"] == getattr(defaults, limit)
+
+
+def test_schema_contact_tol_floor_is_the_librarys():
+    prop = yaml.safe_load(SCHEMA.read_text())["$defs"]["threshold_study"]["properties"][
+        "contact_tol"]
+    assert prop["minimum"] == defaults.CONTACT_TOL_MIN

@@ -144,18 +144,18 @@ def test_bad_pressures_are_refused(pressures, match):
 
 def test_pressures_in_pascals_are_refused_before_any_solve(monkeypatch):
     """leak_curve takes pressures in E*. 1 MPa passed as 1e6 came out "sealed" at every
-    pressure; anything above LEAK_PRESSURE_MAX E* (no linear-elastic contact) is refused,
+    pressure; anything above CONTACT_PRESSURE_MAX E* (no linear-elastic contact) is refused,
     naming the value and the unit. Full contact itself is an answer (a_c = 1, sigma = 0),
     also far above a smooth scan's 4 E* gbar: one study's pressures serve every scan."""
     import roughflow.leak as leak
-    from roughflow.defaults import LEAK_PRESSURE_MAX
+    from roughflow.defaults import CONTACT_PRESSURE_MAX
 
     s = scan_surface()
     monkeypatch.setattr(leak, "solve", lambda *a, **k: pytest.fail("a contact solve ran"))
     with pytest.raises(InputError, match=r"pressure 1e\+06 E\* .*units of the contact modulus"):
         leak_curve(s, [1e5, 1e6])
     with pytest.raises(InputError, match="pressure 101 E"):
-        leak_curve(s, [1.01 * LEAK_PRESSURE_MAX])
+        leak_curve(s, [1.01 * CONTACT_PRESSURE_MAX])
     monkeypatch.undo()
     p = 10 * s.scan.rms_gradient  # two and a half times full contact
     c = leak_curve(s, [p], sealing=False)

@@ -69,6 +69,8 @@ def test_scaled_search_options():
     # a generated surface (gbar 1): the search's own defaults, to the last bit
     assert scaled_options(1.0).pressure_range == THRESHOLD_PRESSURE_RANGE
     assert scaled_options(1.0).first_pressure == first_pressure()
+    # a steep surface's range stops where contact.solve refuses pressures (100 E*)
+    assert scaled_options(50.0).pressure_range == (50.0 * THRESHOLD_PRESSURE_RANGE[0], 100.0)
     # the bearing model's loads are areas
     bearing = scaled_options(gbar, "bearing")
     assert bearing.pressure_range == THRESHOLD_PRESSURE_RANGE and bearing.first_pressure is None

@@ -23,26 +23,27 @@ import numpy as np
 
 from roughflow import flow
 from roughflow.boundary import Embedding, embed
-from roughflow.contact import ContactResult, solve
+from roughflow.contact import ContactResult, check_contact_tol, check_pressure_scale, solve
 from roughflow.defaults import (
     BOUNDARY,
     CONTACT_TOL,
     FLOW_SIGMA_TOL,
     FLOW_TOL,
-    LEAK_PRESSURE_MAX,
     THRESHOLD_CONTACT_TOL,
-    THRESHOLD_PRESSURE_RANGE,
     THRESHOLD_TOL,
 )
 from roughflow.errors import InputError, require_positive
 from roughflow.flow import check_sigma_tol
 from roughflow.resources import check_memory
-from roughflow.search import SearchOptions, Threshold, first_pressure, threshold
+from roughflow.search import Threshold, scaled_options, threshold
 from roughflow.search.critical import check_area_tol
-from roughflow.surface import Surface, rms_gradient
+from roughflow.surface import Surface
+from roughflow.units import canonical
 
 if TYPE_CHECKING:
     from numpy.typing import ArrayLike
+
+    from roughflow.units import Scales
 
 log = logging.getLogger(__name__)
 
@@ -98,16 +99,24 @@ def check_pressures(pressures: ArrayLike) -> np.ndarray:
     return p
 
 
-def check_pressure_scale(pressures: np.ndarray) -> None:
-    """:class:`InputError` where a nominal pressure exceeds
-    :data:`~roughflow.defaults.LEAK_PRESSURE_MAX` E*: a pressure in physical units passed as
-    one in units of E*, which would come out "sealed" at every pressure."""
-    top = float(np.max(pressures))
-    if top > LEAK_PRESSURE_MAX:
+def check_seal(surface: Surface, scales: Scales, *, fluid_pressure: float,
+               seal_width: float, seal_length: float) -> None:
+    """:class:`InputError` naming the value unless the seal's ``fluid_pressure`` (Pa),
+    ``seal_width`` and ``seal_length`` (m) are positive and finite, and ``scales.length`` is
+    the surface's own L where it records one (an imported scan keeps its physical size).
+    ``roughflow leak`` and :func:`roughflow.datasets.leak_dataset` both check with it."""
+    for name, v in (("fluid_pressure (Pa)", fluid_pressure), ("seal_width (m)", seal_width),
+                    ("seal_length (m)", seal_length)):
+        require_positive(name, v)
+    if surface.scan is None:
+        return
+    own = surface.scan.length_scale
+    # compared to the digits a quantity keeps (units.canonical): "0.125um" and "125nm" agree
+    if canonical(scales.length) != canonical(own):
         raise InputError(
-            f"pressure {top:g} E* is above {LEAK_PRESSURE_MAX:g} E*, beyond any linear-elastic "
-            f"contact: pressures here are in units of the contact modulus E* (from Python, "
-            f"convert pascals with roughflow.units.Scales.pressure_from_si)")
+            f"the length scale {scales.length!r} m contradicts the scan's own L = {own!r} m "
+            f"(an imported scan keeps its physical size; a wrong L scales the leak rate by its "
+            f"cube): use Scales(length=surface.scan.length_scale, ...)")
 
 
 def fluid_pressure_note(fluid_pressure: float, pressures: ArrayLike, unit: str = "") -> str:
@@ -140,12 +149,9 @@ def sealing_search(emb: Embedding, *, gbar: float, tol: float = THRESHOLD_TOL,
     pressures converted to nominal ones. The search's pressure range and first pressure
     (:mod:`roughflow.defaults`, in E* gbar) are scaled by the surface's rms gradient
     ``gbar`` and the embedding's load factor; an unbracketed axis gets NaN and a message."""
-    scale = gbar * emb.load_factor
-    opts = SearchOptions(
-        pressure_range=tuple(scale * p for p in THRESHOLD_PRESSURE_RANGE),
-        first_pressure=scale * first_pressure("elastic"), contact_tol=contact_tol,
-        on_unbracketed="nan", observe=emb.observe, observed_shape=emb.shape,
-        periodic=emb.periodic)
+    opts = scaled_options(gbar * emb.load_factor, "elastic", contact_tol=contact_tol,
+                          on_unbracketed="nan", observe=emb.observe, observed_shape=emb.shape,
+                          periodic=emb.periodic)
     res = threshold(emb.surface, None, tol=tol, options=opts, threads=threads)
     return {ax: dataclasses.replace(t, p_lo=emb.nominal_pressure(t.p_lo),
                                     p_hi=emb.nominal_pressure(t.p_hi))
@@ -171,9 +177,10 @@ def leak_curve(surface: Surface, pressures: ArrayLike, *, boundary: str | None =
     check_pressure_scale(p)
     if not isinstance(surface, Surface):
         raise InputError(f"surface must be a roughflow Surface, got {type(surface).__name__}")
-    for name, v in (("contact_tol", contact_tol), ("flow_tol", flow_tol),
-                    ("threshold_tol", threshold_tol),
+    for name, v in (("contact_tol", contact_tol),
                     ("threshold_contact_tol", threshold_contact_tol)):
+        check_contact_tol(v, name)
+    for name, v in (("flow_tol", flow_tol), ("threshold_tol", threshold_tol)):
         require_positive(name, v)
     check_sigma_tol(flow_sigma_tol)
     method = default_boundary(surface) if boundary is None else boundary
@@ -182,8 +189,7 @@ def leak_curve(surface: Surface, pressures: ArrayLike, *, boundary: str | None =
         check_area_tol(threshold_tol, emb.shape)
     # a leak curve holds what a pressure ladder holds, on the embedded grid
     check_memory("ladder", emb.surface.heights.shape, what="a leak curve")
-    gbar = (surface.scan.rms_gradient if surface.scan is not None else
-            rms_gradient(surface.heights, surface.lx, surface.ly, periodic=surface.periodic))
+    gbar = surface.gbar
     curve = pressure_curve(emb, p, contact_tol=contact_tol, flow_tol=flow_tol,
                            flow_sigma_tol=flow_sigma_tol, threads=threads)
     thresholds = (sealing_search(emb, gbar=gbar, tol=threshold_tol,

@@ -10,6 +10,8 @@ from roughflow.citation import contact_methods
 from roughflow.defaults import (
     CONTACT_METHODS,
     CONTACT_TOL,
+    CONTACT_TOL_MAX,
+    CONTACT_TOL_MIN,
     DEFAULT_MODEL,
     MODELS,
 )
@@ -59,7 +61,8 @@ def register(sub: argparse._SubParsersAction) -> None:
                         "mass-weighted GFMD (default: gfmd, the faster one; "
                         "docs/contact.md)")
     p.add_argument("--tol", type=float, default=CONTACT_TOL,
-                   help=f"residual: largest gap error in units of the rms height ({CONTACT_TOL:g})")
+                   help=f"residual: largest gap error in units of the rms height, "
+                        f"{CONTACT_TOL_MIN:g} - {CONTACT_TOL_MAX:g} ({CONTACT_TOL:g})")
     p.add_argument("--max-iter", type=int, default=None,
                    help="iteration cap; not converging by then is an error (exit 3)")
     p.add_argument("--surface-energy", type=float, default=None,
@@ -93,15 +96,17 @@ def run(args: argparse.Namespace) -> None:
         area_fraction=args.area_fraction, tol=args.tol, max_iter=args.max_iter,
         adhesion=adhesion, backend=args.backend,
     )
-    log.info("%s contact (%s) on %d x %d: p = %.6g -> a_c = %.5f (%d iterations, residual "
-             "%.1e, %.2f s)", result.model, result.method, *surface.shape, result.pressure,
+    # the bearing model cuts the heights: it has no pressure to report (NaN in the result)
+    load = "" if result.model == "bearing" else f", p = {result.pressure:.6g}"
+    log.info("%s contact (%s) on %d x %d%s -> a_c = %.5f (%d iterations, residual %.1e, "
+             "%.2f s)", result.model, result.method, *surface.shape, load,
              result.area_fraction, result.iterations, result.residual,
              time.perf_counter() - t0)
     methods = contact_methods(result.model, result.method,
                               None if adhesion is None else adhesion.repulsion)
     write_dataset(contact_dataset(surface, result, adhesion), args.output,
                   provenance=args.provenance.using(*methods))
-    print(f"{args.output}: {result.model} contact, p = {result.pressure:.6g}: a_c = "
+    print(f"{args.output}: {result.model} contact{load}: a_c = "
           f"{result.area_fraction:.5f}, mean gap {result.mean_gap:.6g} (lengths in L)")
 
 

@@ -73,7 +73,7 @@ def run(args: argparse.Namespace) -> None:
     from roughflow.citation import LEAK_METHODS
     from roughflow.datasets import leak_dataset
     from roughflow.io import surface_from_dataset, write_dataset
-    from roughflow.leak import check_pressures, leak_curve
+    from roughflow.leak import check_pressures, check_seal, leak_curve
     from roughflow.units import Scales, parse_quantity, parse_range
 
     # every quantity is checked before any solve (the surface file was read and checked by
@@ -95,6 +95,7 @@ def run(args: argparse.Namespace) -> None:
                          "import): give --length-scale, the physical cell side L")
     scales = Scales(length=surface.scan.length_scale if given is None else given,
                     modulus=modulus, viscosity=eta)
+    check_seal(surface, scales, fluid_pressure=fluid, seal_width=width, seal_length=length)
     p = check_pressures(scales.pressure_from_si(pressures))
     curve = leak_curve(surface, p, boundary=args.boundary, contact_tol=args.contact_tol,
                        threshold_tol=args.threshold_tol, threads=args.threads)

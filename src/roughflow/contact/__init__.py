@@ -11,7 +11,15 @@ from ._result import ContactResult
 from .adhesion import Adhesion, adhesion_summary, tabor_parameter
 from .elastic import cell_compliance, full_contact_energy
 from .law import ContactLaw
-from .solve import METHODS, MODELS, prepare, solve, workspace
+from .solve import (
+    METHODS,
+    MODELS,
+    check_contact_tol,
+    check_pressure_scale,
+    prepare,
+    solve,
+    workspace,
+)
 
 __all__ = [
     "METHODS",
@@ -21,6 +29,8 @@ __all__ = [
     "ContactResult",
     "adhesion_summary",
     "cell_compliance",
+    "check_contact_tol",
+    "check_pressure_scale",
     "full_contact_energy",
     "prepare",
     "solve",

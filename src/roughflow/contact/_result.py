@@ -45,7 +45,8 @@ class ContactResult:
         hard wall, overlap on the harmonic one; the gap is set to zero there).
     area_fraction: relative contact area a_c = contact.mean().
     mean_gap: mean of ``gap`` over the cell.
-    pressure: applied mean pressure (load per area).
+    pressure: applied mean pressure (load per area); NaN for the bearing model, which has
+        none (:meth:`scalars` leaves it out there).
     iterations, residual, converged: solver diagnostics (residual as defined by the
         method; see ``roughflow.contact.solve``).
     model, method: what produced the result.
@@ -70,8 +71,9 @@ class ContactResult:
     separation: float = float("nan")
 
     def scalars(self) -> dict:
-        """Every scalar field, for netCDF attributes."""
-        return {
+        """Every scalar field, for netCDF attributes; no ``pressure`` for the bearing model
+        (a rigid cut, no load: a NaN there read as a failed solve)."""
+        out = {
             "area_fraction": self.area_fraction,
             "mean_gap": self.mean_gap,
             "pressure": self.pressure,
@@ -82,3 +84,6 @@ class ContactResult:
             "method": self.method,
             "separation": self.separation,
         }
+        if self.model == "bearing":
+            del out["pressure"]
+        return out

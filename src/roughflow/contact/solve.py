@@ -10,8 +10,10 @@ import numpy as np
 
 from roughflow.defaults import (
     CONTACT_METHODS,
+    CONTACT_PRESSURE_MAX,
     CONTACT_TOL,
     CONTACT_TOL_MAX,
+    CONTACT_TOL_MIN,
     DEFAULT_BACKEND,
     DEFAULT_MODEL,
     MODELS,
@@ -33,6 +35,8 @@ from .adhesion import Adhesion, check_overlap, check_setup
 from .bearing import solve_bearing
 
 if TYPE_CHECKING:  # gfmd (numba) is imported on first use: the CLI starts faster
+    from numpy.typing import ArrayLike
+
     from .gfmd import HardWallSetup, HardWallWork
 
 log = logging.getLogger(__name__)
@@ -75,8 +79,10 @@ def solve(
       spacings, a contact gap beyond the height range, a harmonic wall too soft for the load,
       the last also after the solve, see ``adhesion.check_setup``) or ``"bearing"`` (overlap model,
       ``area_fraction=a``: contact at the top fraction a of heights, gap = max(d - h, 0),
-      no elasticity; ``pressure`` is ignored; ``method`` and ``tol``, unused, are still
-      checked).
+      no elasticity and no pressure: ``pressure`` is refused, the result's is NaN;
+      ``method`` and ``tol``, unused, are still checked).
+      A pressure beyond ``CONTACT_PRESSURE_MAX`` E* either way is refused
+      (:func:`check_pressure_scale`).
     method:
       ``"cg"``: constrained conjugate gradients on the pressure (Polonsky-Keer), 2 FFT
       pairs per iteration. ``"gfmd"``: Green's function molecular dynamics with mass
@@ -93,8 +99,9 @@ def solve(
     tol:
       residual to reach: the largest gap error (cg: max |gap - 0| on the contact set and
       max overlap off it; gfmd: the same measured after the solve) in units of the rms
-      height, at most ``CONTACT_TOL_MAX``. The default 1e-6 converges a_c and the mean
-      gap to about 1e-7 relative (docs/contact.md). The load holds to it as well: gfmd
+      height, within [``CONTACT_TOL_MIN``, ``CONTACT_TOL_MAX``] (:func:`check_contact_tol`).
+      The default 1e-6 converges a_c and the mean gap to about 1e-7 relative
+      (docs/contact.md). The load holds to it as well: gfmd
       counts the imbalance |mean(contact_pressure) - pressure| in its residual, relative
       to ``pressure`` on the hard wall (measured up to 9.4e-3 at tol 1e-2), relative to
       k_min rms(h) with adhesion; the result's ``pressure`` is the applied load, not that
@@ -130,9 +137,12 @@ def solve(
                  what=f"a {model} contact solve")
     # checked for every model, the bearing one included (which uses neither): a bad value
     # is a caller's mistake whatever the model
-    tol = _check_tol(tol)
+    tol = check_contact_tol(tol)
     method = _check_method(method)
     if model == "bearing":
+        if pressure is not None:  # the CLI refuses --pressure the same way
+            raise InputError(f"pressure={pressure!r} is not for model='bearing': it cuts the "
+                             "heights at area_fraction= and has no pressure")
         return solve_bearing(heights, _check_bearing_area(area_fraction))
     if area_fraction is not None:
         raise InputError(
@@ -154,6 +164,7 @@ def solve(
             raise InputError(f"model='adhesive' needs adhesion=Adhesion(...), got {adhesion!r}")
         if method != "gfmd":
             raise InputError(f"model='adhesive' needs method='gfmd', got {method!r}")
+    check_pressure_scale(load)
     if max_iter is None:
         max_iter = _DEFAULT_MAX_ITER[method]
     if isinstance(max_iter, bool) or not isinstance(max_iter, (int, np.integer)) or max_iter < 1:
@@ -276,12 +287,34 @@ def _adhesive_cold_start(surface: Surface, load: float, threads: int | None) -> 
                  tol=_ADHESIVE_START_TOL, threads=threads)
 
 
-def _check_tol(tol: float) -> float:
-    tol = require_positive("tol", tol)
+def check_contact_tol(tol: float, name: str = "tol") -> float:
+    """``tol`` of a contact solve as a float within [``CONTACT_TOL_MIN``,
+    ``CONTACT_TOL_MAX``] (:mod:`roughflow.defaults`), else :class:`InputError` naming
+    ``name``."""
+    tol = require_positive(name, tol)
     if tol > CONTACT_TOL_MAX:
-        raise InputError(f"tol must be at most {CONTACT_TOL_MAX:g} (a gap error of 1 % of the rms "
-                         f"height; a looser one returns the starting state), got {tol!r}")
+        raise InputError(f"{name} must be at most {CONTACT_TOL_MAX:g} (a gap error of 1 % of "
+                         f"the rms height; a looser one returns the starting state), got "
+                         f"{tol!r}")
+    if tol < CONTACT_TOL_MIN:
+        raise InputError(f"{name} must be at least {CONTACT_TOL_MIN:g} (a gap error the "
+                         f"solvers reach in float64; a tighter one stalls on round-off and "
+                         f"runs to the iteration cap), got {tol!r}")
     return tol
+
+
+def check_pressure_scale(pressure: ArrayLike) -> None:
+    """:class:`InputError` where a pressure (E*; a scalar or an array) exceeds
+    ``CONTACT_PRESSURE_MAX`` E* in magnitude: no linear-elastic contact, but a pressure in
+    pascals passed where roughflow takes units of E*."""
+    p = np.asarray(pressure, dtype=np.float64).ravel()
+    worst = float(p[np.argmax(np.abs(p))]) if p.size else 0.0
+    if abs(worst) > CONTACT_PRESSURE_MAX:
+        side = "above " if worst > 0 else "below -"
+        raise InputError(
+            f"pressure {worst:g} E* is {side}{CONTACT_PRESSURE_MAX:g} E*, beyond any "
+            f"linear-elastic contact: pressures here are in units of the contact modulus E* "
+            f"(from Python, convert pascals with roughflow.units.Scales.pressure_from_si)")
 
 
 def _check_method(method: str | None) -> str:

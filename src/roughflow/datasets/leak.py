@@ -73,11 +73,14 @@ def leak_dataset(curve: LeakCurve, surface: Surface, *, scales: Scales, fluid_pr
 
     ``scales``: L (m), E* (Pa), eta (Pa s); ``fluid_pressure`` (Pa): the pressure drop
     across the seal; ``seal_width`` (m, along the flow) and ``seal_length`` (m, across it);
-    ``name``: the scan's label (the ``scan`` coordinate).
+    ``name``: the scan's label (the ``scan`` coordinate). Bad values raise
+    :class:`~roughflow.errors.InputError` (:func:`roughflow.leak.check_seal`).
     """
-    from roughflow.leak import fluid_pressure_note
+    from roughflow.leak import check_seal, fluid_pressure_note
     from roughflow.units import leak_rate
 
+    check_seal(surface, scales, fluid_pressure=fluid_pressure, seal_width=seal_width,
+               seal_length=seal_length)
     pressures_si = scales.pressure_to_si(curve.pressure)
     fluid_note = fluid_pressure_note(fluid_pressure, pressures_si, unit="Pa")
     if fluid_note:

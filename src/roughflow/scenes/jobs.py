@@ -22,6 +22,7 @@ from typing import TYPE_CHECKING, Any
 
 from roughflow import defaults
 from roughflow.citation import LEAK_METHODS, contact_methods, threshold_methods
+from roughflow.contact import check_contact_tol
 from roughflow.datasets.sweep import param_key, rnd
 from roughflow.defaults import (
     FLOW_STUDIES,
@@ -172,7 +173,7 @@ class ThresholdJob(_SeedGroup):
                              "`roughflow threshold --model adhesive` on a surface file)")
         object.__setattr__(self, "seeds", require_seeds("seeds", self.seeds))
         _check_tol("tol", self.tol, defaults.THRESHOLD_TOL_MAX)
-        _check_tol("contact_tol", self.contact_tol, defaults.CONTACT_TOL_MAX)
+        check_contact_tol(self.contact_tol, "contact_tol")
         # the search's own check, at planning: a tol below one cell of the grid failed in
         # the job, after the other jobs of the run
         from roughflow.search.critical import check_threshold_tol

@@ -39,12 +39,13 @@ from typing import TYPE_CHECKING, NamedTuple
 import numpy as np
 
 from roughflow.accuracy import PERIMETER_C, perimeter_term
-from roughflow.contact import ContactResult, prepare, solve, workspace
+from roughflow.contact import ContactResult, check_contact_tol, prepare, solve, workspace
 from roughflow.contact.bearing import solve_bearing
 from roughflow.contact.law import ContactLaw
 from roughflow.defaults import (
     A_C_STAR_PAPER,
     AXIS_NAMES,
+    CONTACT_PRESSURE_MAX,
     CONTACT_TOL_MAX,
     DEFAULT_BACKEND,
     DEFAULT_MODEL,
@@ -212,7 +213,7 @@ class SearchOptions:
         if not (math.isfinite(p_min) and math.isfinite(p_max) and p_min < p_max):
             raise InputError("pressure_range must be finite with p_min < p_max, got "
                              f"{self.pressure_range!r}")
-        require_positive("contact_tol", self.contact_tol)
+        check_contact_tol(self.contact_tol, "contact_tol")
         if self.first_pressure is not None:
             # a first pressure outside the range would be clamped into it without a word
             # (the default one may be: it is the contact law's, whatever the range)
@@ -277,7 +278,11 @@ def scaled_options(gbar: float, model: str = DEFAULT_MODEL, **fields) -> SearchO
     gbar = require_positive("gbar", gbar)
     if model != "bearing":
         if fields.get("pressure_range") is None:
-            fields["pressure_range"] = tuple(gbar * p for p in THRESHOLD_PRESSURE_RANGE)
+            # a steep surface (gbar above 25) would reach loads that contact.solve refuses
+            # as beyond any linear-elastic contact: a fluid still spanning there is
+            # unbracketed, with its message
+            lo, hi = (gbar * p for p in THRESHOLD_PRESSURE_RANGE)
+            fields["pressure_range"] = (lo, min(hi, CONTACT_PRESSURE_MAX))
         if fields.get("first_pressure") is None:  # within a range given in E*
             lo, hi = (float(p) for p in fields["pressure_range"])
             fields["first_pressure"] = min(max(gbar * first_pressure(model), lo), hi)
