@@ -4,6 +4,7 @@ naming the option and its value) instead of being ignored."""
 from __future__ import annotations
 
 import pytest
+from cli_checks import refused
 
 from roughflow.cli import main
 from roughflow.errors import InputError
@@ -20,18 +21,6 @@ def files(tmp_path_factory):
     assert main(["contact", str(surface), "--model", "bearing", "--area-fraction", "0.3",
                  "-o", str(gap)]) == 0
     return {"surface": str(surface), "gap": str(gap), "dir": d}
-
-
-def refused(argv: list[str], capsys, *names: str) -> str:
-    """Run ``argv`` with an output in a fresh folder; it must exit 2 before writing anything,
-    with a message naming every one of ``names``."""
-    with pytest.raises(SystemExit) as exc:
-        main(argv)
-    err = capsys.readouterr().err
-    assert exc.value.code == 2, err
-    for name in names:
-        assert name in err, (name, err)
-    return err
 
 
 def _out(files, name: str = "out.nc") -> str:
