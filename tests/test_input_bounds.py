@@ -217,6 +217,7 @@ def test_bearing_contact_file_claims_no_pressure(surface_file, tmp_path, capsys)
     assert "bearing contact: a_c = 0.29" in printed and "nan" not in printed
     with xr.open_dataset(out) as ds:
         assert "pressure" not in ds.attrs and ds.attrs["model"] == "bearing"
+        assert "contact_pressure" not in ds  # it held zeros, a load of none
     assert main(["flow", str(out), "-o", str(tmp_path / "f.nc")]) in (0, None)
     with xr.open_dataset(tmp_path / "f.nc") as ds:
         assert not any(np.isnan(v) for v in ds.attrs.values() if isinstance(v, float))

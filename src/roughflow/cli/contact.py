@@ -97,16 +97,16 @@ def run(args: argparse.Namespace) -> None:
         adhesion=adhesion, backend=args.backend,
     )
     # the bearing model cuts the heights: it has no pressure to report (NaN in the result)
-    load = "" if result.model == "bearing" else f", p = {result.pressure:.6g}"
+    load = "" if result.model == "bearing" else f"p = {result.pressure:.6g}"
     log.info("%s contact (%s) on %d x %d%s -> a_c = %.5f (%d iterations, residual %.1e, "
-             "%.2f s)", result.model, result.method, *surface.shape, load,
+             "%.2f s)", result.model, result.method, *surface.shape, load and f": {load}",
              result.area_fraction, result.iterations, result.residual,
              time.perf_counter() - t0)
     methods = contact_methods(result.model, result.method,
                               None if adhesion is None else adhesion.repulsion)
     write_dataset(contact_dataset(surface, result, adhesion), args.output,
                   provenance=args.provenance.using(*methods))
-    print(f"{args.output}: {result.model} contact{load}: a_c = "
+    print(f"{args.output}: {result.model} contact{load and f', {load}'}: a_c = "
           f"{result.area_fraction:.5f}, mean gap {result.mean_gap:.6g} (lengths in L)")
 
 

@@ -71,7 +71,8 @@ def spec_attrs(surface: Surface) -> dict:
 
 def contact_dataset(surface: Surface, result: ContactResult,
                     adhesion: Adhesion | None = None) -> xr.Dataset:
-    """Gap, contact mask, contact pressure and heights on (x, y); scalars as attributes."""
+    """Gap, contact mask, contact pressure (not for the bearing model, which has none) and
+    heights on (x, y); scalars as attributes."""
     nx, ny = surface.shape
     ds = xr.Dataset(
         {
@@ -92,6 +93,8 @@ def contact_dataset(surface: Surface, result: ContactResult,
     )
     if adhesion is not None:
         ds.attrs.update(adhesion_attrs(surface, adhesion))
+    if result.model == "bearing":  # a rigid cut carries no load: its zeros claimed one
+        ds = ds.drop_vars("contact_pressure")
     return ds
 
 
