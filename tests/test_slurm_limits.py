@@ -166,6 +166,14 @@ def test_the_job_qos_when_none_is_named(slurm_path):
     assert job_limits("small", "acct").max_minutes == 20
 
 
+def test_a_limit_in_an_unknown_form_is_left_to_the_cluster(slurm_path):
+    # a planning that crashed on a value it cannot parse would stop every cluster run
+    fake(slurm_path, assoc="acct||rshort|normal,rshort|soon|mem=lots|\n", qos=QOS,
+         max_time="UNLIMITED")
+    limits = job_limits("small", "acct")
+    assert (limits.mem_mib, limits.max_minutes) == (2500, 30)  # the QOS's, then the node's
+
+
 def test_a_partition_specific_association_comes_first(slurm_path):
     fake(slurm_path, assoc="acct|||normal|01:00:00||\nacct|small||normal|00:05:00||\n",
          qos=QOS)

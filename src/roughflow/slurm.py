@@ -187,13 +187,22 @@ def _job_qos(requested: str | None, association: dict[str, str]) -> str:
     return allowed[0] if len(allowed) == 1 else "normal"
 
 
+def _level(name: str, row: dict[str, str], flags: str = "") -> _Level:
+    """The per-job limits of a ``sacctmgr`` row; a value in a form these parsers do not
+    know is left to the cluster (no cap), as the partition's MaxTime is."""
+    def parsed(parse, key):
+        try:
+            return parse(row.get(key, ""))
+        except (ValueError, KeyError):
+            return None
+
+    return _Level(name, parsed(slurm_minutes, "MaxWall"), parsed(tres_mem_mib, "MaxTRES"),
+                  parsed(tres_mem_mib, "MaxTRESPerNode"),
+                  frozenset(flag for flag in flags.split(",") if flag))
+
+
 def _qos_level(name: str, row: dict[str, str] | None) -> _Level | None:
-    if row is None:
-        return None
-    return _Level(f"QOS {name}", slurm_minutes(row.get("MaxWall", "")),
-                  tres_mem_mib(row.get("MaxTRES", "")),
-                  tres_mem_mib(row.get("MaxTRESPerNode", "")),
-                  frozenset(flag for flag in row.get("Flags", "").split(",") if flag))
+    return None if row is None else _level(f"QOS {name}", row, row.get("Flags", ""))
 
 
 def _levels(fields: dict[str, str], account: str | None, qos: str | None) -> list[_Level]:
@@ -217,10 +226,7 @@ def _levels(fields: dict[str, str], account: str | None, qos: str | None) -> lis
     job = _qos_level(job_qos, qos_rows.get(job_qos))
     part = _qos_level(part_qos, qos_rows.get(part_qos)) if part_qos else None
     order = [job, part] if job is not None and "OverPartQOS" in job.flags else [part, job]
-    assoc = _Level(f"the association of account {account} and user {user}",
-                   slurm_minutes(association.get("MaxWall", "")),
-                   tres_mem_mib(association.get("MaxTRES", "")),
-                   tres_mem_mib(association.get("MaxTRESPerNode", "")))
+    assoc = _level(f"the association of account {account} and user {user}", association)
     return [level for level in (*order, assoc) if level is not None]
 
 
