@@ -1,7 +1,6 @@
 # Config validation and job planning (runs before any job starts).
 
 import json
-import os
 import posixpath
 import shlex
 import sys
@@ -63,7 +62,7 @@ from roughflow.defaults import FLOW_STUDIES, MEASURED_STUDY, THRESHOLD_STUDIES  
 from roughflow.figures import caption as figure_caption  # noqa: E402
 from roughflow.resources import total_bytes, total_source  # noqa: E402
 from roughflow.slurm import job_limits  # noqa: E402
-from roughflow.scenes import expand_study, study_defaults  # noqa: E402
+from roughflow.scenes import expand_study, pool_jobs, study_defaults  # noqa: E402
 from roughflow.scenes.jobs import aggregated_config  # noqa: E402
 from roughflow.scenes.requests import (  # noqa: E402
     KEEP_FAILED_LOG,
@@ -82,10 +81,10 @@ STUDIES = config["studies"]
 
 
 def study_config_text(study):
-    """The config files and the study's block, for the figure's caption in the report (a
-    report of the test config looked like one of the paper's)."""
-    files = ", ".join(os.path.relpath(f) for f in workflow.configfiles) or "config/config.yaml"
-    return f"config {files}; studies.{study}: {json.dumps(STUDIES[study], sort_keys=True)}"
+    """The study's config block, for the figure's caption in the report (a report of the
+    test config looked like one of the paper's). Not the config files' names: a params
+    value, it would rerun every figure when a file is renamed or an overlay added."""
+    return f"studies.{study}: {json.dumps(STUDIES[study], sort_keys=True)}"
 # A run whose jobs go to a SLURM cluster. Snakemake names the executor only after it has read
 # this file (workflow.local_exec is still True here under --executor slurm), so such a run
 # is told by the global mem_mb that profiles/slurm gives it, above this machine's memory:
@@ -180,19 +179,15 @@ def job_mem_mb(mb):
 
 try:
     JOBS = {name: expand_study(name, block) for name, block in STUDIES.items()}
+    # one pool of jobs per kind, keyed by job id: a job shared by several studies (same
+    # parameters, e.g. elastic gamma = 2 at the default size) runs once
+    _POOLED = pool_jobs(JOBS)
     if _MEM_LIMIT[0] is not None:
         check_plan_memory(JOBS, *_MEM_LIMIT)
 except InputError as exc:
     raise WorkflowError(f"invalid config: {exc}") from None
-
-# One pool of jobs per kind, keyed by job id: a job shared by several studies (same
-# parameters, e.g. elastic gamma = 2 at the default size) runs once.
-POOL = {"threshold": {}, "ladder": {}}
-for _study, _jobs in JOBS.items():
-    for _id, _job in _jobs.items():
-        if _job.kind in POOL:
-            if POOL[_job.kind].setdefault(_id, _job) != _job:
-                raise WorkflowError(f"two different jobs share the id {_id!r}")
+POOL = {kind: {job_id: job for job_id, job in _POOLED.items() if job.kind == kind}
+        for kind in ("threshold", "ladder")}
 
 # A sweep job whose request exceeds the time a job may ask for asks for that instead
 # (job_runtime_min); say so before anything runs, since such a job may end TIMEOUT.

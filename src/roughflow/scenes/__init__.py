@@ -24,6 +24,7 @@ from .jobs import (
     expand_study,
     grid_points,
     job_methods,
+    pool_jobs,
     study_defaults,
 )
 from .requests import check_job_memory, estimated_memory
@@ -37,7 +38,7 @@ _RUNNERS = {"run_threshold": "threshold", "run_ladder": "ladder", "run_channels"
 
 __all__ = ["ChannelsJob", "LadderJob", "SurfaceParams", "ThresholdJob", "check_job_memory",
            "estimated_memory", "expand_studies", "expand_study", "grid_points", "job_methods",
-           "run", "study_defaults", *_RUNNERS]
+           "pool_jobs", "run", "study_defaults", *_RUNNERS]
 
 
 def __getattr__(name: str):

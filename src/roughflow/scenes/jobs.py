@@ -268,6 +268,16 @@ class LadderJob(_SeedGroup):
             value = getattr(self, name)
             if value is not None and not (math.isfinite(value) and value > 0):
                 raise InputError(f"{name} must be a positive number, got {value!r}")
+        if self.model != "adhesive":
+            # the adhesion settings are the adhesive model's only: kept at their defaults
+            # elsewhere, so that a study's adhesion block does not make its elastic ladder
+            # differ from the same ladder of another study (refused as two jobs of one id)
+            repulsion = defaults.ADHESION_REPULSION
+            for name, value in (("surface_energy_ratio", defaults.ADHESION_SURFACE_ENERGY_RATIO),
+                                ("tabor", None), ("repulsion", repulsion),
+                                ("range_over_lambda_s",
+                                 defaults.ADHESION_RANGE_OVER_LAMBDA_S[repulsion])):
+                object.__setattr__(self, name, value)
 
     @property
     def job_id(self) -> str:
@@ -716,10 +726,41 @@ def _check_keys_apply(name: str, block: dict) -> None:
 def expand_studies(studies: dict) -> dict[str, Job]:
     """Jobs of every study of a config's ``studies`` block, keyed by job id (a job that
     two studies share, such as an H = 0.8 threshold point, appears once)."""
-    jobs: dict[str, Job] = {}
-    for name, block in studies.items():
-        jobs.update(expand_study(name, block))
-    return jobs
+    return pool_jobs({name: expand_study(name, block) for name, block in studies.items()})
+
+
+def pool_jobs(jobs_by_study: dict[str, dict[str, Job]]) -> dict[str, Job]:
+    """The jobs of several studies keyed by job id, each once: a job that two studies
+    share runs once. Two different jobs with one id (values that agree to the 6
+    significant digits of job ids) raise :class:`InputError` naming both studies and how
+    the jobs differ: the second would be dropped."""
+    pool: dict[str, Job] = {}
+    owner: dict[str, str] = {}
+    for study, jobs in jobs_by_study.items():
+        for job_id, job in jobs.items():
+            other = pool.setdefault(job_id, job)
+            owner.setdefault(job_id, study)
+            if other != job:
+                diff = "; ".join(f"{name} {a!r} vs {b!r}" for name, a, b in _differences(other,
+                                                                                          job))
+                raise InputError(
+                    f"config studies.{owner[job_id]} and studies.{study}: two different jobs "
+                    f"get the id {job_id!r} ({diff}; the values agree to the 6 significant "
+                    "digits of job ids): make them equal, or differ more")
+    return pool
+
+
+def _differences(a, b, prefix: str = "") -> list[tuple[str, object, object]]:
+    """(field, value in a, value in b) where two jobs (dataclasses, nested) differ."""
+    if type(a) is not type(b) or not hasattr(a, "__dataclass_fields__"):
+        return [(prefix.rstrip(".") or "kind", a, b)] if a != b else []
+    out = []
+    for f in fields(a):
+        x, y = getattr(a, f.name), getattr(b, f.name)
+        if x != y:
+            out += (_differences(x, y, f"{prefix}{f.name}.")
+                    if hasattr(x, "__dataclass_fields__") else [(prefix + f.name, x, y)])
+    return out
 
 
 def _expand_measured(block: dict) -> dict[str, Job]:
