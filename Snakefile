@@ -16,8 +16,9 @@ for _var in ("OPENBLAS_NUM_THREADS", "OMP_NUM_THREADS"):
 min_version("8.0")
 
 
-# The default config unless one is given with --configfile (a --configfile would
-# otherwise only extend the default, and its studies would leak into the run).
+# The default config unless a --configfile gives studies of its own (it would otherwise
+# only extend the default, and the default's studies would leak into the run); one without
+# studies changes settings of the default run (results, max_mem_mb, ...).
 if "studies" not in config:
 
     configfile: "config/config.yaml"

@@ -54,8 +54,12 @@ def contact_at_area(surface: Surface, target: float, model: str, *, tol: float =
 
 def run_channels(job: ChannelsJob, *, threads: int | None = None) -> xr.Dataset:
     """Heights, gap and phase maps of both cells at the target contact area."""
+    # every parameter of the job, not only inside job_parameters' command line
     data, attrs = {}, {"title": "roughflow channels scene (paper Fig. 1)", "scene": "channels",
-                       "gamma": job.gamma, "target_area_fraction": job.area_fraction,
+                       "gamma": job.gamma, "hurst": job.hurst,
+                       "l_over_lambda_r": job.l_over_lambda_r, "eps_f": job.eps_f,
+                       "points_per_lambda_s": job.points_per_lambda_s,
+                       "target_area_fraction": job.area_fraction,
                        "model": job.model, "seed": job.seed}
     for name, params in zip(("iso", "aniso"), job.surfaces(), strict=True):
         spec = params.spec(job.seed)
@@ -78,12 +82,14 @@ def run_channels(job: ChannelsJob, *, threads: int | None = None) -> xr.Dataset:
         attrs.update({
             f"{name}_lx": spec.lx, f"{name}_ly": spec.ly, f"{name}_gamma": spec.gamma,
             f"{name}_lambda_r": spec.lambda_r, f"{name}_lambda_s": spec.lambda_s,
-            f"{name}_area_fraction": res.area_fraction, f"{name}_pressure": res.pressure,
+            f"{name}_area_fraction": res.area_fraction,
             f"{name}_fluid_percolates_x": int(percolates(~mask, 0)),
             f"{name}_fluid_percolates_y": int(percolates(~mask, 1)),
             f"{name}_contact_percolates_x": int(contact_percolates(mask, 0)),
             f"{name}_contact_percolates_y": int(contact_percolates(mask, 1)),
         })
+        if job.model != "bearing":  # a rigid cut has no load
+            attrs[f"{name}_pressure"] = res.pressure
         log.info("%s: a_c = %.4f, fluid percolates x: %d, y: %d", name, res.area_fraction,
                  attrs[f"{name}_fluid_percolates_x"], attrs[f"{name}_fluid_percolates_y"])
     return xr.Dataset(data, attrs=attrs)
