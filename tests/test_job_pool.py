@@ -13,7 +13,7 @@ FLOW = {"l_over_lambda_r": [4], "eps_f": [0.125], "seeds": [0], "points_per_lamb
 
 
 @pytest.mark.parametrize("adhesion", [{"surface_energy_ratio": 0.05},
-                                      {"repulsion": "harmonic"}, {"tabor": 2.0}])
+                                      {"repulsion": "harmonic"}, {"tabor": 0.1}])
 def test_an_adhesion_block_does_not_split_the_elastic_ladder(adhesion):
     # the adhesion settings are the adhesive model's: before, the elastic ladder of the
     # study with an adhesion block differed from the other study's in fields its command

@@ -299,6 +299,21 @@ def from_scan(path: str | os.PathLike, **options) -> Surface:
     return read_scan(path, **options)
 
 
+def spec_power(spec: SurfaceSpec) -> tuple[np.ndarray, np.ndarray]:
+    """|q| and the power w |h_q|^2 of each rfft mode (w: :func:`roughflow.fft.rfft_weights`,
+    each mode of the full plane counted once) of the heights that :func:`generate` makes
+    from ``spec``, whatever its seed: the amplitudes are deterministic, the seed sets the
+    phases only. sum(q^2 power) = rms_slope^2. A spectral moment of a spec's surfaces
+    (its full-contact energy, its curvature) costs this, not a surface."""
+    qx, qy = fft.wavevectors(spec.nx, spec.ny, spec.lx, spec.ly)
+    q = np.sqrt(qx * qx + qy * qy)
+    power = spectrum(peklenik_wavenumber(qx, qy, spec.gamma), spec) * fft.rfft_weights(spec.ny)
+    m2 = float((q * q * power).sum())
+    if m2 == 0:
+        raise InputError(f"spectrum of {spec} has no modes inside the cutoff")
+    return q, power * (spec.rms_slope**2 / m2)
+
+
 def mirror_tiled(heights: np.ndarray) -> np.ndarray:
     """The 2 x 2 periodic cell of a non-periodic height map and its mirror images along x,
     y and both: continuous across every seam, so its spectrum has no wrap-around step."""

@@ -51,7 +51,7 @@ import numpy as np
 from roughflow.defaults import ADHESION_CONTACT_WITHIN, ADHESION_REPULSION, ADHESION_REPULSIONS
 from roughflow.errors import InputError, require_finite, require_positive
 
-from .elastic import full_contact_energy
+from .elastic import full_contact_energy, power_contact_energy
 
 log = logging.getLogger(__name__)
 
@@ -179,18 +179,8 @@ def check_setup(adhesion: Adhesion, heights: np.ndarray, lx: float, ly: float,
     """Refuse (:class:`InputError`) an adhesive solve outside the model's validity before it
     starts, naming the value and the fix; with ``warn``, log a warning where the adhesive
     zone is under-resolved (module constants above; docs/contact.md "Adhesion")."""
-    nx, ny = heights.shape
-    spacing = max(lx / nx, ly / ny)
-    zone = adhesion.zone / spacing
+    zone = check_zone(adhesion, heights.shape, lx, ly)
     what = f"surface energy {adhesion.surface_energy:.4g}, range {adhesion.range:.4g}"
-    if zone < ZONE_PINNED:
-        raise InputError(
-            f"the adhesive zone 4 rho^2 / (pi^2 gamma_s) = {adhesion.zone:.3g} ({what}) spans "
-            f"{zone:.3g} grid spacings of {spacing:.3g}, below {ZONE_PINNED:g}: the grid pins "
-            f"the contact line and the contact area is the grid's; give a range of at least "
-            f"{_range_for(adhesion, ZONE_PINNED * spacing):.3g} or a grid at least "
-            f"{ZONE_PINNED / zone:.3g} times finer (about {ZONE_RESOLVED:g} spacings "
-            "converge a_c to 0.001)")
     height_range = float(np.max(heights) - np.min(heights))
     if adhesion.contact_gap >= height_range:
         raise InputError(
@@ -214,6 +204,24 @@ def check_setup(adhesion: Adhesion, heights: np.ndarray, lx: float, ly: float,
                     "spacings, under the %g that converge the contact area to 0.001 (at 2.3 "
                     "spacings it is about 0.015 too large): use a larger range or a finer grid",
                     adhesion.zone, what, zone, ZONE_RESOLVED)
+
+
+def check_zone(adhesion: Adhesion, shape: tuple[int, int], lx: float, ly: float) -> float:
+    """The adhesive zone in grid spacings of a ``shape`` grid on an ``lx`` x ``ly`` cell;
+    :class:`InputError` where the grid pins the contact line (below ``ZONE_PINNED``)."""
+    nx, ny = shape
+    spacing = max(lx / nx, ly / ny)
+    zone = adhesion.zone / spacing
+    what = f"surface energy {adhesion.surface_energy:.4g}, range {adhesion.range:.4g}"
+    if zone < ZONE_PINNED:
+        raise InputError(
+            f"the adhesive zone 4 rho^2 / (pi^2 gamma_s) = {adhesion.zone:.3g} ({what}) spans "
+            f"{zone:.3g} grid spacings of {spacing:.3g}, below {ZONE_PINNED:g}: the grid pins "
+            f"the contact line and the contact area is the grid's; give a range of at least "
+            f"{_range_for(adhesion, ZONE_PINNED * spacing):.3g} or a grid at least "
+            f"{ZONE_PINNED / zone:.3g} times finer (about {ZONE_RESOLVED:g} spacings "
+            "converge a_c to 0.001)")
+    return zone
 
 
 def check_overlap(adhesion: Adhesion, load: float, pressure: np.ndarray) -> None:
@@ -244,7 +252,12 @@ def curvature_radius(heights: np.ndarray, lx: float, ly: float) -> float:
     c = fft.rfft2(heights) / (nx * ny)
     qx, qy = fft.wavevectors(nx, ny, lx, ly)
     w = fft.rfft_weights(ny)
-    lap2 = float((w * (qx**2 + qy**2) ** 2 * np.abs(c) ** 2).sum())
+    return power_curvature_radius(np.sqrt(qx**2 + qy**2), w * np.abs(c) ** 2)
+
+
+def power_curvature_radius(q: np.ndarray, power: np.ndarray) -> float:
+    """R_c of :func:`curvature_radius` from the modes' |q| and power w |h~(q)|^2."""
+    lap2 = float(((q * q) ** 2 * power).sum())
     return 1.0 / math.sqrt(lap2 / 4.0)
 
 
@@ -279,17 +292,37 @@ def adhesion_for(heights: np.ndarray, lx: float, ly: float, *,
     The paper's case: ``gamma_over_v_full=ADHESION_SURFACE_ENERGY_RATIO``,
     ``range=ADHESION_RANGE_OVER_LAMBDA_S[repulsion] * lambda_s``.
     """
+    return _adhesion(lambda: full_contact_energy(heights, lx, ly),
+                     lambda: curvature_radius(heights, lx, ly),
+                     gamma_over_v_full=gamma_over_v_full, tabor=tabor, range=range,
+                     repulsion=repulsion, contact_within=contact_within)
+
+
+def adhesion_for_power(q: np.ndarray, power: np.ndarray, *, gamma_over_v_full: float,
+                       tabor: float | None = None, range: float | None = None,
+                       repulsion: str = ADHESION_REPULSION,
+                       contact_within: float | None = None) -> Adhesion:
+    """:func:`adhesion_for` from the modes' |q| and power (w |h~(q)|^2) of a surface: of
+    every surface of a spec (:func:`roughflow.surface.spec_power`) before any is made."""
+    return _adhesion(lambda: power_contact_energy(q, power),
+                     lambda: power_curvature_radius(q, power),
+                     gamma_over_v_full=gamma_over_v_full, tabor=tabor, range=range,
+                     repulsion=repulsion, contact_within=contact_within)
+
+
+def _adhesion(v_full, radius, *, gamma_over_v_full, tabor, range, repulsion,
+              contact_within) -> Adhesion:
+    """The Adhesion of :func:`adhesion_for`, ``v_full`` and ``radius`` computing the
+    surface's v_ela^full and R_c once the arguments are checked."""
     if repulsion not in ADHESION_REPULSIONS:  # before the surface's energy is computed
         raise InputError(f"repulsion must be one of {ADHESION_REPULSIONS}, got {repulsion!r}")
     if (tabor is None) == (range is None):
         raise InputError(f"give exactly one of tabor= and range=, got tabor={tabor!r}, "
                          f"range={range!r}")
-    gs = require_positive("gamma_over_v_full", gamma_over_v_full) * full_contact_energy(
-        heights, lx, ly)
+    gs = require_positive("gamma_over_v_full", gamma_over_v_full) * v_full()
     if range is not None:
         rho = require_positive("range", range)
     else:
-        rc = curvature_radius(heights, lx, ly)
-        rho = (rc * gs**2 / require_positive("tabor", tabor) ** 3) ** (1 / 3)
+        rho = (radius() * gs**2 / require_positive("tabor", tabor) ** 3) ** (1 / 3)
     return Adhesion(surface_energy=gs, range=rho, repulsion=repulsion,
                     contact_within=contact_within)

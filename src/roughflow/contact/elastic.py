@@ -63,4 +63,11 @@ def full_contact_energy(heights: np.ndarray, lx: float, ly: float, e_star: float
     nx, ny = heights.shape
     c = fft.rfft2(heights) / (nx * ny)
     w = fft.rfft_weights(ny)
-    return float(0.25 * e_star * (w * _qabs(nx, ny, float(lx), float(ly)) * np.abs(c) ** 2).sum())
+    return power_contact_energy(_qabs(nx, ny, float(lx), float(ly)), w * np.abs(c) ** 2,
+                                e_star)
+
+
+def power_contact_energy(q: np.ndarray, power: np.ndarray, e_star: float = 1.0) -> float:
+    """v_ela^full from the modes' |q| and power w |h~(q)|^2 (:func:`full_contact_energy`;
+    a spec's surfaces: :func:`roughflow.surface.spec_power`)."""
+    return float(0.25 * e_star * (q * power).sum())

@@ -597,6 +597,8 @@ def expand_study(name: str, block: dict) -> dict[str, Job]:
                 for g in groups:
                     job = _make_job(name, s, model, gamma, hurst, size, eps_f, ppl, g)
                     _add_job(jobs, job)
+                if isinstance(job, LadderJob) and job.model == "adhesive":
+                    check_adhesion_grid(job)  # one check per parameter set: seeds do not matter
             except InputError as exc:
                 raise InputError(f"{where}: {values}: {exc}") from None
     check_collisions(name, jobs.values())
@@ -634,6 +636,34 @@ def seed_groups(seeds: list[int], per: int) -> list[tuple[int, ...]]:
     for seed in sorted(seeds):
         blocks.setdefault(seed // per, []).append(seed)
     return [tuple(block) for _, block in sorted(blocks.items())]
+
+
+def check_adhesion_grid(job: LadderJob) -> None:
+    """Refuse an adhesive ladder whose adhesive zone the grid pins
+    (:func:`roughflow.contact.adhesion.check_zone`), from its spec's spectrum
+    (:func:`roughflow.surface.spec_power`: the adhesion is the same on every seed's
+    surface): at planning, not after the job made its surface and its reference flow
+    solve. The message gives the range in the config's units."""
+    from roughflow.contact.adhesion import ZONE_PINNED, adhesion_for_power, check_zone
+    from roughflow.surface import spec_power
+
+    spec = job.surface.spec(job.seeds[0])
+    q, power = spec_power(spec)
+    rho = None if job.range_over_lambda_s is None else job.range_over_lambda_s * spec.lambda_s
+    adhesion = adhesion_for_power(q, power, gamma_over_v_full=job.surface_energy_ratio,
+                                  tabor=job.tabor, range=rho, repulsion=job.repulsion)
+    try:
+        check_zone(adhesion, (spec.nx, spec.ny), spec.lx, spec.ly)
+    except InputError as exc:
+        spacing = max(spec.lx / spec.nx, spec.ly / spec.ny)
+        zone_range = math.pi * math.sqrt(ZONE_PINNED * spacing * adhesion.surface_energy) / 2
+        raise InputError(
+            f"adhesion (surface_energy_ratio {job.surface_energy_ratio:g}, "
+            + (f"tabor {job.tabor:g}" if job.tabor is not None else
+               f"range_over_lambda_s {job.range_over_lambda_s:g}")
+            + f"): {exc}; in the config's units the range is {adhesion.range / spec.lambda_s:.3g}"
+            f" lambda_s and must be at least {zone_range / spec.lambda_s:.3g} lambda_s "
+            "(adhesion.range_over_lambda_s), or points_per_lambda_s larger") from None
 
 
 def _add_job(jobs: dict[str, Job], job: Job) -> None:
