@@ -710,3 +710,15 @@ def test_a_bracket_at_most_two_tolerances_wide_is_halved():
     target, want = _propose(_Work(hi.area - lo.area, 0, lo, hi), tol=2e-3, misses=0,
                             strategy="predict")
     assert target == pytest.approx(0.4015) and want is None
+
+
+def test_a_contact_tolerance_too_loose_for_tol_is_named():
+    # 64^2, tol 3e-4 at contact_tol 1e-2: 36 of 40 solves returned their warm starts with
+    # 0 iterations and the search ran out of solves; the error said nothing of why
+    from roughflow.errors import ConvergenceError
+
+    s = generate(SurfaceSpec.from_sweep(gamma=1, eps_f=0.125, points_per_lambda_s=2, seed=0))
+    with pytest.raises(ConvergenceError, match=r"returned their warm starts unchanged .*"
+                                               r"contact_tol=0.01 .*tighten contact_tol or "
+                                               r"loosen tol"):
+        threshold(s, None, tol=3e-4, options=SearchOptions(contact_tol=1e-2))
