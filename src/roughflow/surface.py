@@ -305,6 +305,9 @@ def spec_power(spec: SurfaceSpec) -> tuple[np.ndarray, np.ndarray]:
     from ``spec``, whatever its seed: the amplitudes are deterministic, the seed sets the
     phases only. sum(q^2 power) = rms_slope^2. A spectral moment of a spec's surfaces
     (its full-contact energy, its curvature) costs this, not a surface."""
+    from roughflow.resources import check_memory
+
+    check_memory("spectrum", (spec.nx, spec.ny), what="the mode powers of a spec")
     qx, qy = fft.wavevectors(spec.nx, spec.ny, spec.lx, spec.ly)
     q = np.sqrt(qx * qx + qy * qy)
     power = spectrum(peklenik_wavenumber(qx, qy, spec.gamma), spec) * fft.rfft_weights(spec.ny)
