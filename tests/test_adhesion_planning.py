@@ -34,7 +34,7 @@ def test_spec_power_gives_the_moments_of_every_seed_s_surface(gamma, seed):
     assert float((q * q * power).sum()) == pytest.approx(spec.rms_slope**2, rel=1e-12)
     assert power_contact_energy(q, power) == pytest.approx(
         full_contact_energy(s.heights, s.lx, s.ly), rel=1e-12)
-    assert power_curvature_radius(q, power) == pytest.approx(
+    assert power_curvature_radius(q * q, power) == pytest.approx(
         curvature_radius(s.heights, s.lx, s.ly), rel=1e-12)
     on_surface = adhesion_for(s.heights, s.lx, s.ly, gamma_over_v_full=0.2, tabor=2.0)
     planned = adhesion_for_power(q, power, gamma_over_v_full=0.2, tabor=2.0)

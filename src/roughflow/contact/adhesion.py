@@ -252,12 +252,12 @@ def curvature_radius(heights: np.ndarray, lx: float, ly: float) -> float:
     c = fft.rfft2(heights) / (nx * ny)
     qx, qy = fft.wavevectors(nx, ny, lx, ly)
     w = fft.rfft_weights(ny)
-    return power_curvature_radius(np.sqrt(qx**2 + qy**2), w * np.abs(c) ** 2)
+    return power_curvature_radius(qx**2 + qy**2, w * np.abs(c) ** 2)
 
 
-def power_curvature_radius(q: np.ndarray, power: np.ndarray) -> float:
-    """R_c of :func:`curvature_radius` from the modes' |q| and power w |h~(q)|^2."""
-    lap2 = float(((q * q) ** 2 * power).sum())
+def power_curvature_radius(q_squared: np.ndarray, power: np.ndarray) -> float:
+    """R_c of :func:`curvature_radius` from the modes' |q|^2 and power w |h~(q)|^2."""
+    lap2 = float((q_squared**2 * power).sum())
     return 1.0 / math.sqrt(lap2 / 4.0)
 
 
@@ -305,7 +305,7 @@ def adhesion_for_power(q: np.ndarray, power: np.ndarray, *, gamma_over_v_full: f
     """:func:`adhesion_for` from the modes' |q| and power (w |h~(q)|^2) of a surface: of
     every surface of a spec (:func:`roughflow.surface.spec_power`) before any is made."""
     return _adhesion(lambda: power_contact_energy(q, power),
-                     lambda: power_curvature_radius(q, power),
+                     lambda: power_curvature_radius(q * q, power),
                      gamma_over_v_full=gamma_over_v_full, tabor=tabor, range=range,
                      repulsion=repulsion, contact_within=contact_within)
 
