@@ -54,8 +54,7 @@ from roughflow.surface import (
     Surface,
     SurfaceSpec,
     mirror_tiled,
-    peklenik_wavenumber,
-    spectrum,
+    spec_power,
 )
 
 from .closed_form import closed_form
@@ -98,12 +97,8 @@ def discrete_spectrum(source: SurfaceSpec | Surface) -> DiscreteSpectrum:
     from roughflow.resources import check_memory
 
     if isinstance(source, SurfaceSpec):
-        nx, ny, lx, ly = source.nx, source.ny, source.lx, source.ly
-        check_memory("spectrum", (nx, ny), what="the Persson spectrum of a spec")
-        qx, qy = fft.wavevectors(nx, ny, lx, ly)
-        power = spectrum(peklenik_wavenumber(qx, qy, source.gamma), source)
-        power = np.broadcast_to(power, (nx, ny // 2 + 1))
-        target = source.rms_slope
+        q, power = spec_power(source)  # weighted, normalised to the spec's rms slope
+        q, power = q.ravel(), power.ravel()
     elif isinstance(source, Surface):
         h = require_field("heights", source.heights)
         lx, ly = source.lx, source.ly
@@ -113,23 +108,18 @@ def discrete_spectrum(source: SurfaceSpec | Surface) -> DiscreteSpectrum:
             h, lx, ly = mirror_tiled(h), 2 * lx, 2 * ly
         nx, ny = h.shape
         qx, qy = fft.wavevectors(nx, ny, lx, ly)
-        power = np.abs(fft.rfft2(h - h.mean()) / (nx * ny)) ** 2
-        target = None
+        q = np.sqrt(qx**2 + qy**2) * np.ones((1, ny // 2 + 1))
+        power = np.abs(fft.rfft2(h - h.mean()) / (nx * ny)) ** 2 * fft.rfft_weights(ny)
+        q, power = q.ravel(), power.ravel()
     else:
         raise InputError(
             f"expected a SurfaceSpec or a Surface, got {type(source).__name__}"
         )
-    q = np.sqrt(qx**2 + qy**2) * np.ones((1, ny // 2 + 1))
-    power = power * fft.rfft_weights(ny)
-    q, power = q.ravel(), power.ravel()
     keep = (q > 0) & (power > 0)
     q, power = q[keep], power[keep]
     if q.size == 0:
         raise InputError("the spectrum has no modes with q > 0")
-    m2 = float(_wsum(q * q, power))
-    if target is not None:
-        power = power * (target * target / m2)
-        m2 = target * target
+    m2 = source.rms_slope**2 if isinstance(source, SurfaceSpec) else float(_wsum(q * q, power))
     key = np.round(q / q.max(), 12)
     uniq, inv = np.unique(key, return_inverse=True)
     p_shell = np.bincount(inv, weights=power)
