@@ -38,3 +38,15 @@ def local_test_run(tmp_path_factory):
                          cwd=wd, env=env, capture_output=True, text=True, timeout=600)
     assert run.returncode == 0, run.stdout[-3000:] + run.stderr[-3000:]
     return wd, run
+
+
+@pytest.fixture(scope="session")
+def cli_surface_file(tmp_path_factory):
+    """A small surface written by ``roughflow surface`` (2 points per lambda_s, seed 1),
+    shared read-only by the command-line tests of a session."""
+    from roughflow.cli import main
+
+    path = tmp_path_factory.mktemp("cli_surface") / "s.nc"
+    assert main(["surface", "--points-per-lambda-s", "2", "--seed", "1", "-o", str(path)]) in (
+        0, None)
+    return path

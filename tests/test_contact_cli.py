@@ -11,18 +11,10 @@ from roughflow.contact import solve
 from roughflow.io import read_surface
 
 
-@pytest.fixture(scope="module")
-def surface_file(tmp_path_factory):
-    path = tmp_path_factory.mktemp("contact") / "s.nc"
-    assert main(["surface", "--points-per-lambda-s", "2", "--seed", "1", "-o", str(path)]) in (
-        0, None)
-    return path
-
-
-def test_cli_elastic_matches_api(surface_file, tmp_path):
+def test_cli_elastic_matches_api(cli_surface_file, tmp_path):
     out = tmp_path / "c.nc"
-    main(["contact", str(surface_file), "--pressure", "0.1", "-o", str(out)])
-    ref = solve(read_surface(surface_file), 0.1)
+    main(["contact", str(cli_surface_file), "--pressure", "0.1", "-o", str(out)])
+    ref = solve(read_surface(cli_surface_file), 0.1)
     with xr.open_dataset(out) as ds:
         for name in ("gap", "contact", "contact_pressure"):
             assert ds[name].dims == ("x", "y")
@@ -39,9 +31,9 @@ def test_cli_elastic_matches_api(surface_file, tmp_path):
         assert ds.attrs["spec_hurst"] == pytest.approx(0.8)
 
 
-def test_cli_bearing(surface_file, tmp_path):
+def test_cli_bearing(cli_surface_file, tmp_path):
     out = tmp_path / "b.nc"
-    main(["contact", str(surface_file), "--model", "bearing", "--area-fraction", "0.4",
+    main(["contact", str(cli_surface_file), "--model", "bearing", "--area-fraction", "0.4",
           "-o", str(out)])
     with xr.open_dataset(out) as ds:
         assert ds.attrs["area_fraction"] == pytest.approx(0.4, abs=1e-4)
@@ -74,25 +66,25 @@ def test_cli_bearing(surface_file, tmp_path):
          "cannot hold the load"),
     ],
 )
-def test_cli_errors(surface_file, tmp_path, capsys, extra, code, message):
+def test_cli_errors(cli_surface_file, tmp_path, capsys, extra, code, message):
     # the message too: exit 2 is also argparse's for an option it does not know
     with pytest.raises(SystemExit) as exc:
-        main(["contact", str(surface_file), *extra, "-o", str(tmp_path / "x.nc")])
+        main(["contact", str(cli_surface_file), *extra, "-o", str(tmp_path / "x.nc")])
     assert exc.value.code == code
     assert message in capsys.readouterr().err
     assert not (tmp_path / "x.nc").exists()
 
 
-def test_cli_adhesive_defaults_to_the_papers_case(surface_file, tmp_path):
+def test_cli_adhesive_defaults_to_the_papers_case(cli_surface_file, tmp_path):
     # no --surface-energy/--range: gamma_s = 0.1 v_ela^full, rho = 0.8 lambda_s of the file's
     # spec, and the result equals the API call with those parameters (same deterministic solve)
     from roughflow.contact import full_contact_energy
     from roughflow.contact.adhesion import adhesion_for
 
     out = tmp_path / "a.nc"
-    main(["contact", str(surface_file), "--model", "adhesive", "--pressure", "0.05",
+    main(["contact", str(cli_surface_file), "--model", "adhesive", "--pressure", "0.05",
           "-o", str(out)])
-    s = read_surface(surface_file)
+    s = read_surface(cli_surface_file)
     ad = adhesion_for(s.heights, s.lx, s.ly, gamma_over_v_full=0.1,
                       range=0.8 * s.spec.lambda_s)
     ref = solve(s, 0.05, model="adhesive", adhesion=ad)
@@ -106,13 +98,13 @@ def test_cli_adhesive_defaults_to_the_papers_case(surface_file, tmp_path):
         assert ds.attrs["area_fraction"] == pytest.approx(ref.area_fraction, abs=1e-12)
 
 
-def test_cli_adhesive_harmonic_takes_its_own_calibration(surface_file, tmp_path):
+def test_cli_adhesive_harmonic_takes_its_own_calibration(cli_surface_file, tmp_path):
     # --repulsion harmonic without adhesion values: the harmonic wall's calibrated range
     # (0.42 lambda_s, defaults.ADHESION_RANGE_OVER_LAMBDA_S), overlap as contact
     out = tmp_path / "h.nc"
-    main(["contact", str(surface_file), "--model", "adhesive", "--pressure", "0.05",
+    main(["contact", str(cli_surface_file), "--model", "adhesive", "--pressure", "0.05",
           "--repulsion", "harmonic", "-o", str(out)])
-    s = read_surface(surface_file)
+    s = read_surface(cli_surface_file)
     with xr.open_dataset(out) as ds:
         assert ds.attrs["adhesion_range"] == pytest.approx(0.42 * s.spec.lambda_s, rel=1e-12)
         assert ds.attrs["adhesion_repulsion"] == "harmonic"

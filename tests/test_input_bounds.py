@@ -53,16 +53,6 @@ SCALES = Scales(length=L_SCAN, modulus=2e11, viscosity=1e-3)
 SEAL = {"fluid_pressure": 1e5, "seal_width": 2e-3, "seal_length": 60e-3}
 
 
-@pytest.fixture(scope="module")
-def surface_file(tmp_path_factory):
-    path = tmp_path_factory.mktemp("bounds") / "s.nc"
-    assert main(["surface", "--points-per-lambda-s", "2", "--seed", "1", "-o", str(path)]) in (
-        0, None)
-    return path
-
-
-
-
 # --- the seal's numbers and the scan's length scale (leak.check_seal) ----------------------
 
 @pytest.mark.parametrize(("key", "value"), [
@@ -138,9 +128,9 @@ def test_the_bearing_model_refuses_a_pressure():
         solve(small_surface(), 1e6, model="bearing", area_fraction=0.3)
 
 
-def test_contact_command_refuses_a_pressure_in_pascals(surface_file, tmp_path, capsys):
+def test_contact_command_refuses_a_pressure_in_pascals(cli_surface_file, tmp_path, capsys):
     # --pressure 1e6 (pascals typed for E*) gave exit 0 with a_c = 1 and mean gap 0
-    refused(["contact", str(surface_file), "--pressure", "1e6", "-o", str(tmp_path / "m.nc")],
+    refused(["contact", str(cli_surface_file), "--pressure", "1e6", "-o", str(tmp_path / "m.nc")],
             capsys, "pressure 1e+06 E* is above 100 E*", "units of the contact modulus")
     assert not (tmp_path / "m.nc").exists()
 
@@ -185,9 +175,9 @@ def test_leak_curve_refuses_contact_tolerances_before_any_solve(monkeypatch):
             leak_curve(scan_surface(), [1e-3], **{key: 1e-16})
 
 
-def test_contact_command_refuses_a_tolerance_below_round_off(surface_file, tmp_path, capsys):
+def test_contact_command_refuses_a_tolerance_below_round_off(cli_surface_file, tmp_path, capsys):
     # --tol 1e-16 ran 50000 iterations, then exit 3 (--max-iter 20 here: the old code exits 3)
-    refused(["contact", str(surface_file), "--pressure", "0.1", "--tol", "1e-16",
+    refused(["contact", str(cli_surface_file), "--pressure", "0.1", "--tol", "1e-16",
              "--max-iter", "20", "-o", str(tmp_path / "t.nc")], capsys, "tol must be at least")
 
 
@@ -206,12 +196,12 @@ def test_sealing_search_of_a_steep_scan_stays_below_the_pressure_bound():
 
 # --- the bearing model has no pressure ------------------------------------------------------
 
-def test_bearing_contact_file_claims_no_pressure(surface_file, tmp_path, capsys):
+def test_bearing_contact_file_claims_no_pressure(cli_surface_file, tmp_path, capsys):
     """A bearing contact file held pressure = NaN and the command printed "p = nan"; flow,
     theory and threshold still read the file."""
     out = tmp_path / "bear.nc"
     capsys.readouterr()
-    assert main(["contact", str(surface_file), "--model", "bearing", "--area-fraction", "0.3",
+    assert main(["contact", str(cli_surface_file), "--model", "bearing", "--area-fraction", "0.3",
                  "-o", str(out)]) in (0, None)
     printed = capsys.readouterr().out
     assert "bearing contact: a_c = 0.29" in printed and "nan" not in printed
