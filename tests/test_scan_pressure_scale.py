@@ -71,7 +71,15 @@ def test_scaled_search_options():
     assert scaled_options(1.0).first_pressure == first_pressure()
     # a steep surface's range stops where contact.solve refuses pressures (100 E*)
     assert scaled_options(50.0).pressure_range == (50.0 * THRESHOLD_PRESSURE_RANGE[0], 100.0)
+    # an end given as None keeps its scaled default (the command line's --p-min alone), and
+    # the upper one its cap: the CLI scaled a half-given range itself, without the cap
+    assert scaled_options(gbar, pressure_range=(None, 1e-2)).pressure_range == (
+        gbar * THRESHOLD_PRESSURE_RANGE[0], 1e-2)
+    assert scaled_options(50.0, pressure_range=(1.0, None)).pressure_range == (1.0, 100.0)
+    assert scaled_options(gbar, pressure_range=(None, None)) == scaled_options(gbar)
     # the bearing model's loads are areas
+    assert scaled_options(gbar, "bearing", pressure_range=(None, None)) == scaled_options(
+        gbar, "bearing")
     bearing = scaled_options(gbar, "bearing")
     assert bearing.pressure_range == THRESHOLD_PRESSURE_RANGE and bearing.first_pressure is None
 

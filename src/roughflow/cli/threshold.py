@@ -134,13 +134,8 @@ def _search_options(args: argparse.Namespace, gbar: float):
     if args.model == "bearing":
         refuse_given(args, _SOLVE_FLAGS, "to --model bearing: its threshold is an exact sweep "
                      "of the heights, without contact solves")
-    p_min, p_max = THRESHOLD_PRESSURE_RANGE
-    pressure_range = None
-    if args.p_min is not None or args.p_max is not None:
-        pressure_range = (gbar * p_min if args.p_min is None else args.p_min,
-                          gbar * p_max if args.p_max is None else args.p_max)
     # a --p-guess outside [--p-min, --p-max] is refused by SearchOptions (first_pressure)
     return scaled_options(
-        gbar, args.model, strategy=args.strategy, pressure_range=pressure_range,
+        gbar, args.model, strategy=args.strategy, pressure_range=(args.p_min, args.p_max),
         first_pressure=args.p_guess, contact_tol=args.contact_tol, method=args.method,
         on_unbracketed="nan" if args.allow_unbracketed else "raise")

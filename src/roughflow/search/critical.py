@@ -273,20 +273,25 @@ def scaled_options(gbar: float, model: str = DEFAULT_MODEL, **fields) -> SearchO
     """:class:`SearchOptions` for a surface whose pressures are in E* and whose rms gradient
     is ``gbar`` (a scan; :attr:`roughflow.surface.Surface.gbar`): the default pressure range
     and first pressure, in E* gbar, scaled by ``gbar``. ``fields``: the other options, and
-    a ``pressure_range`` or ``first_pressure`` in E* that replaces the scaled default. The
-    bearing model's loads are areas: nothing is scaled."""
+    a ``pressure_range`` or ``first_pressure`` in E* that replaces the scaled default (an
+    end of the range given as None keeps its scaled default). The bearing model's loads
+    are areas: nothing is scaled."""
     gbar = require_positive("gbar", gbar)
+    given = fields.get("pressure_range")
+    if given is not None and all(p is None for p in given):
+        given = None
     if model != "bearing":
-        if fields.get("pressure_range") is None:
-            # a steep surface (gbar above 25) would reach loads that contact.solve refuses
-            # as beyond any linear-elastic contact: a fluid still spanning there is
-            # unbracketed, with its message
-            lo, hi = (gbar * p for p in THRESHOLD_PRESSURE_RANGE)
-            fields["pressure_range"] = (lo, min(hi, CONTACT_PRESSURE_MAX))
+        # a steep surface (gbar above 25) would reach loads that contact.solve refuses as
+        # beyond any linear-elastic contact: a fluid still spanning there is unbracketed,
+        # with its message
+        lo, hi = (None, None) if given is None else given
+        fields["pressure_range"] = (gbar * THRESHOLD_PRESSURE_RANGE[0] if lo is None else lo,
+                                    min(gbar * THRESHOLD_PRESSURE_RANGE[1], CONTACT_PRESSURE_MAX)
+                                    if hi is None else hi)
         if fields.get("first_pressure") is None:  # within a range given in E*
             lo, hi = (float(p) for p in fields["pressure_range"])
             fields["first_pressure"] = min(max(gbar * first_pressure(model), lo), hi)
-    elif fields.get("pressure_range") is None:
+    elif given is None:
         fields.pop("pressure_range", None)
     return SearchOptions(**fields)
 
