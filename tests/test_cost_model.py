@@ -23,7 +23,12 @@ import pytest
 import yaml
 
 from roughflow.scenes import expand_studies
-from roughflow.scenes.requests import RUNTIME_FLOOR_MIN, estimated_seconds, requested_runtime_min
+from roughflow.scenes.requests import (
+    RUNTIME_FLOOR_MIN,
+    estimated_seconds,
+    plan_cost,
+    requested_runtime_min,
+)
 
 ROOT = Path(__file__).resolve().parents[1]
 
@@ -97,6 +102,16 @@ def test_estimate_cost_script_prints_the_paper_total(paper_jobs):
     expected = sum(estimated_seconds(j) for j in paper_jobs.values()) / 3600
     assert float(hours) == pytest.approx(expected, abs=0.05)  # printed to 0.1 h
 
+
+
+def test_plan_cost_names_the_total_and_the_longest_job(paper_jobs):
+    # the line the workflow logs at planning: the same model as estimate_cost.py's total
+    line = plan_cost(paper_jobs.values())
+    hours = sum(estimated_seconds(j) for j in paper_jobs.values()) / 3600
+    longest = max(paper_jobs.values(), key=estimated_seconds)
+    assert line.startswith(f"{len(paper_jobs)} sweep jobs planned, about {hours:.2g} core-hours")
+    assert f"{estimated_seconds(longest) / 60:.2g} min" in line
+    assert plan_cost([]) == "no sweep jobs planned"
 
 # job id of config/paper.yaml -> measured peak resident memory in MB (1e6 bytes; the
 # process's ru_maxrss from os.wait4, one run each, benchmarks/bench_cost_model.py, the runs

@@ -44,6 +44,17 @@ def shell_commands(output: str, word: str) -> list[list[str]]:
             for line in output.splitlines() if "Shell command:" in line and word in line]
 
 
+
+def test_the_plan_states_its_cost(tmp_path):
+    # a run of hours (config/paper.yaml: about 11 core-hours) says so before it starts
+    wd = copy_workflow(tmp_path)
+    write_case(wd, studies=("threshold_vs_gamma",))
+    run = dry_run(wd)
+    assert run.returncode == 0, run.stderr[-2000:]
+    output = run.stdout + run.stderr
+    lines = [line for line in output.splitlines() if "sweep jobs planned" in line]
+    assert len(lines) == 1 and "core-hours by the cost model" in lines[0], lines
+
 # (a) a scan path with a space and shell characters reaches `roughflow import` as one word
 def test_scan_path_with_spaces_and_shell_characters_is_quoted(tmp_path):
     wd = copy_workflow(tmp_path)

@@ -69,6 +69,7 @@ from roughflow.scenes.requests import (  # noqa: E402
     RUNTIME_MARGIN,
     WRAPPER_MB,
     check_plan_memory,
+    plan_cost,
     requested_mem_mb,
     requested_runtime_min,
 )
@@ -188,6 +189,10 @@ except InputError as exc:
     raise WorkflowError(f"invalid config: {exc}") from None
 POOL = {kind: {job_id: job for job_id, job in _POOLED.items() if job.kind == kind}
         for kind in ("threshold", "ladder")}
+if workflow.is_main_process:  # a paper-sized plan runs for hours: say so before it starts
+    from snakemake.logging import logger
+
+    logger.info(plan_cost(job for job in _POOLED.values() if job.kind != "leak"))
 
 # A sweep job whose request exceeds the time a job may ask for asks for that instead
 # (job_runtime_min); say so before anything runs, since such a job may end TIMEOUT.

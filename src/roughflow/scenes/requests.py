@@ -6,6 +6,7 @@ memory models and a runtime model fitted to measured jobs."""
 from __future__ import annotations
 
 import math
+from collections.abc import Iterable
 from pathlib import Path
 
 from .jobs import ChannelsJob, Job, LeakJob, ThresholdJob, _grid, grid_points
@@ -161,6 +162,19 @@ def estimated_seconds(job: Job) -> float:
     contact = COST_LADDER_CONTACT_S[job.model] * n * math.log2(n)
     steps = len(job.area_fractions)  # each: contact, flow along x and y; plus the reference
     return COST_START_S + seeds * (steps * (2 * flow + contact) + 2 * flow)
+
+
+def plan_cost(jobs: Iterable[Job]) -> str:
+    """One line on the cost of a plan: its number of jobs and their estimated core-hours
+    (:func:`estimated_seconds`), and the longest job; said at planning, before a run of
+    hours starts (``workflow/scripts/estimate_cost.py`` itemises it by kind and model).
+    Measured-scan jobs are not among ``jobs``: their cost is known only after the import."""
+    seconds = sorted((estimated_seconds(job), job.job_id) for job in jobs)
+    if not seconds:
+        return "no sweep jobs planned"
+    total = sum(s for s, _ in seconds)
+    return (f"{len(seconds)} sweep jobs planned, about {total / 3600:.2g} core-hours by the "
+            f"cost model (the longest, {seconds[-1][1]}, about {seconds[-1][0] / 60:.2g} min)")
 
 
 #: Snakemake ``runtime`` of a job: this many times its estimate (the model is fitted to
