@@ -123,6 +123,12 @@ def test_schema_limits_are_the_librarys(block, key, limit):
     assert prop["maximum"] == getattr(defaults, limit)
 
 
+def test_schema_bootstrap_bound_is_the_librarys():
+    prop = yaml.safe_load(SCHEMA.read_text())["$defs"]["threshold_study"]["properties"][
+        "fit"]["properties"]["bootstrap"]
+    assert prop["maximum"] == defaults.FIT_BOOTSTRAP_MAX
+
+
 def test_schema_contact_tol_floor_is_the_librarys():
     prop = yaml.safe_load(SCHEMA.read_text())["$defs"]["threshold_study"]["properties"][
         "contact_tol"]

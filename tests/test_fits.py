@@ -129,6 +129,16 @@ def test_fit_dataset_flags_underdetermined_fits():
         fit_dataset(_threshold_dataset(), seed=-1)
 
 
+@pytest.mark.parametrize("n_boot", [-1, 10_001, 1e3])
+def test_bootstrap_resamples_are_bounded(n_boot):
+    # a mistyped 1e9 ran for years (30 ms a resample); defaults.FIT_BOOTSTRAP_MAX
+    with pytest.raises(InputError, match="bootstrap resamples"):
+        fit_dataset(_threshold_dataset(), n_boot=n_boot)
+    eps, a_seed = synthetic()
+    with pytest.raises(InputError, match="bootstrap resamples"):
+        bootstrap_fit(eps, a_seed, n_boot=n_boot)
+
+
 def _threshold_dataset(a_star=0.415, nu=NU_PERCOLATION, noise=0.003, seed=2):
     """A threshold_vs_size-like dataset: gamma 2 at several sizes, gamma 1 at two."""
     rng = np.random.default_rng(seed)

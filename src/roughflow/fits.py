@@ -32,6 +32,7 @@ from roughflow.datasets.units import DIMENSIONLESS, flags
 from roughflow.defaults import (
     CORRECTION_MIN_POINTS,
     FIT_BOOTSTRAP,
+    FIT_BOOTSTRAP_MAX,
     FIT_LACK_OF_FIT_QUANTILE,
     FIT_MIN_SEEDS,
     NU_BOUNDS,
@@ -148,6 +149,10 @@ def fit_scaling(data: dict[str, tuple], *, nu: float | None = NU_PERCOLATION) ->
                       rms_residual=float(np.sqrt(np.mean(r**2))), n_points=n)
 
 
+def _check_n_boot(n_boot: int) -> int:
+    return require_int("bootstrap resamples", n_boot, minimum=0, maximum=FIT_BOOTSTRAP_MAX)
+
+
 def bootstrap_fit(eps: dict[str, np.ndarray], a_seed: dict[str, np.ndarray], *,
                   nu: float | None = NU_PERCOLATION, n_boot: int = FIT_BOOTSTRAP,
                   rng: np.random.Generator | int | None = 0) -> ScalingFit:
@@ -162,6 +167,7 @@ def bootstrap_fit(eps: dict[str, np.ndarray], a_seed: dict[str, np.ndarray], *,
     so. They stay NaN where a point has one seed (nothing to resample there). ``chi2_dof``
     is also given (:class:`ScalingFit`).
     """
+    n_boot = _check_n_boot(n_boot)
     rng = np.random.default_rng(rng)
     names = list(eps)
     n_seeds = {np.asarray(a_seed[d]).shape[0] for d in names}
@@ -378,7 +384,7 @@ def fit_dataset(ds: xr.Dataset, *, n_boot: int = FIT_BOOTSTRAP, nu: float = NU_P
     ``underdetermined`` = 1 and a warning in the log.
     """
     nu = check_nu(nu)
-    n_boot = require_int("bootstrap resamples", n_boot, minimum=0)
+    n_boot = _check_n_boot(n_boot)
     seed = require_int("seed", seed, minimum=0)
     groups = [g for g in ("anisotropic", "isotropic")
               if ((ds["gamma"] != 1.0).any() if g == "anisotropic" else (ds["gamma"] == 1.0).any())]
