@@ -307,7 +307,7 @@ def spec_power(spec: SurfaceSpec) -> tuple[np.ndarray, np.ndarray]:
     (its full-contact energy, its curvature) costs this, not a surface."""
     from roughflow.resources import check_memory
 
-    check_memory("spectrum", (spec.nx, spec.ny), what="the mode powers of a spec")
+    check_memory("spectrum", (spec.nx, spec.ny), what="the spectrum (mode powers) of a spec")
     qx, qy = fft.wavevectors(spec.nx, spec.ny, spec.lx, spec.ly)
     q = np.sqrt(qx * qx + qy * qy)
     power = spectrum(peklenik_wavenumber(qx, qy, spec.gamma), spec) * fft.rfft_weights(spec.ny)
