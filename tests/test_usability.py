@@ -307,6 +307,26 @@ def test_figures_leave_the_matplotlib_backend_alone(files, tmp_path):
     assert (tmp_path / "f.png").stat().st_size > 5000 and (tmp_path / "f.pdf").exists()
 
 
+
+def test_a_figure_ships_its_caption(files, tmp_path, capsys):
+    # results folders were read without the docs: the PNG alone did not say what its error
+    # bars, lines and area scale are, nor where it departs from the paper (an outputs audit)
+    from roughflow.figures import caption
+
+    png = tmp_path / "g.png"
+    assert main(["figure", "threshold_vs_gamma", str(files["study"]), "-o", str(png)]) == 0
+    text = png.with_suffix(".md").read_text()
+    assert "![threshold_vs_gamma](g.png)" in text and caption("threshold_vs_gamma") in text
+    assert '{"model": ["bearing"], "seeds": [0, 1, 2]}' in text  # the study block it shows
+    assert f"study dataset {str(files['study'])!r}" in text
+    # one of the three in the way: none is written
+    (tmp_path / "h.md").mkdir()
+    code, _, err = run(["figure", "threshold_vs_gamma", files["study"], "-o",
+                        tmp_path / "h.png"], capsys)
+    assert code == 2 and "the figure's caption" in err and "is a directory" in err
+    assert not (tmp_path / "h.png").exists() and not (tmp_path / "h.pdf").exists()
+
+
 # --- citation -----------------------------------------------------------------------------
 
 def test_docs_reference_list_is_the_citation_module():

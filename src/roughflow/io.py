@@ -113,6 +113,11 @@ def figure_writer(fig: Figure, path: str | os.PathLike, **savefig_kw) -> Writer:
                                          **savefig_kw)
 
 
+def text_writer(text: str, path: str | os.PathLike) -> Writer:
+    """``(path, write)`` for :func:`write_together`: ``text`` as UTF-8."""
+    return Path(path), lambda tmp: Path(tmp).write_text(text, encoding="utf-8")
+
+
 def save_figure(fig: Figure, *paths: str | os.PathLike, **savefig_kw) -> Path:
     """Render the matplotlib ``fig`` to each of ``paths`` (the format from each suffix),
     published together (:func:`write_together`), creating missing folders; a failed render

@@ -51,7 +51,7 @@ rule fit:
 
 
 rule figure:
-    """The study's figure (PNG and PDF) with its caption."""
+    """The study's figure (PNG and PDF) with its caption (figure.md, and in the report)."""
     input:
         unpack(figure_inputs),
     output:
@@ -62,6 +62,7 @@ rule figure:
             labels={"study": "{study}"},
         ),
         pdf=f"{RESULTS}/{{study}}/figure.pdf",
+        caption=f"{RESULTS}/{{study}}/figure.md",
     params:
         fit=lambda wc, input: f"--fit {input.fit}" if "fit" in input.keys() else "",
         # for the report (report/figure.rst): the library's caption, the one `figure

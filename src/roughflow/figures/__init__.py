@@ -1,7 +1,7 @@
 """Figures of the paper, one module per study; each draws from the aggregated dataset.
 
-``make_figure(study, dataset, output, fit=None)`` writes ``output`` (PNG) and the PDF
-next to it and returns the caption. Every module has ``CAPTION`` and
+``make_figure(study, dataset, output, fit=None)`` writes ``output`` (PNG), the PDF and the
+caption (Markdown, ``.md``) next to it and returns the caption. Every module has ``CAPTION`` and
 ``draw(ds, fit=None) -> matplotlib.figure.Figure``. The figures are made without pyplot,
 so the library never selects or switches a matplotlib backend: in a notebook the returned
 Figure displays inline, and ``fig.savefig`` renders with Agg or the PDF backend.
@@ -41,20 +41,22 @@ def caption(study: str) -> str:
 def make_figure(study: str, dataset: xr.Dataset | str | os.PathLike,
                 output: str | os.PathLike, fit: xr.Dataset | str | os.PathLike | None = None, *,
                 source: str = "the dataset") -> str:
-    """Draw ``study`` from ``dataset`` (xr.Dataset or path) into ``output`` (a .png file) and
-    the PDF next to it; returns the caption. The dataset must be of the study's kind
+    """Draw ``study`` from ``dataset`` (xr.Dataset or path) into ``output`` (a .png file),
+    the PDF and the caption (:func:`caption_document`, a .md file) next to it, all three or
+    none; returns the caption. The dataset must be of the study's kind
     (:data:`roughflow.datasets.kinds.STUDY_KINDS`); ``source`` names it in messages."""
     from roughflow.aggregate import load
     from roughflow.datasets.kinds import STUDY_KINDS, check_kind
-    from roughflow.io import check_output, save_figure
+    from roughflow.io import check_output, figure_writer, text_writer, write_together
 
     out = Path(output)
     if out.suffix.lower() != ".png":
         raise InputError(f"the figure is written as PNG (and a PDF next to it): {str(out)!r} "
                          "must end in .png")
-    pdf = out.with_suffix(".pdf")
+    pdf, md = out.with_suffix(".pdf"), out.with_suffix(".md")
     check_output(out, option="figure", suffixes=(".png",))
     check_output(pdf, option="the figure's PDF", suffixes=(".pdf",))
+    check_output(md, option="the figure's caption", suffixes=(".md",))
     mod = module(study)
     if isinstance(dataset, (str, os.PathLike)):
         source = f"study dataset {str(dataset)!r}"
@@ -66,5 +68,22 @@ def make_figure(study: str, dataset: xr.Dataset | str | os.PathLike,
                          f"as {made_for}, not {study}")
     fit_ds = load(fit, "fit") if isinstance(fit, (str, os.PathLike)) else fit
     fig = mod.draw(dataset, fit=fit_ds)
-    save_figure(fig, out, pdf, dpi=150)  # both or neither
+    document = caption_document(study, dataset, source, image=out.name)
+    write_together([figure_writer(fig, out, dpi=150), figure_writer(fig, pdf, dpi=150),
+                    text_writer(document, md)])  # all three or none
     return mod.CAPTION
+
+
+def caption_document(study: str, dataset: xr.Dataset, source: str, image: str) -> str:
+    """The caption file of a figure (Markdown): the figure, its caption, and what it was
+    drawn from, so that a results folder read without the docs still says what error bars,
+    lines and area scales mean and where the figure departs from the paper."""
+    lines = [f"# {study}", "", f"![{study}]({image})", "", caption(study), "",
+             f"Drawn from {source}."]
+    block = dataset.attrs.get("study_config")
+    if block:
+        lines.append(f"Its study block (config): `{block}`.")
+    commit = dataset.attrs.get("roughflow_commit")
+    if commit:
+        lines.append(f"roughflow commit of the dataset: {commit}.")
+    return "\n".join(lines) + "\n"
