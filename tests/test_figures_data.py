@@ -12,7 +12,11 @@ import pytest  # noqa: E402
 import xarray as xr  # noqa: E402
 from matplotlib.colors import to_rgba  # noqa: E402
 
-from roughflow.figures import threshold_vs_gamma, threshold_vs_size  # noqa: E402
+from roughflow.figures import (  # noqa: E402
+    threshold_vs_gamma,
+    threshold_vs_hurst,
+    threshold_vs_size,
+)
 from roughflow.figures._style import EASY, HARD, seed_stats  # noqa: E402
 
 EASY_A, HARD_A = 0.38, 0.45
@@ -57,6 +61,18 @@ def test_gamma_below_one_is_drawn_by_direction_not_by_axis():
     by_color = lines_by_color(fig.axes[0])
     np.testing.assert_allclose(by_color[to_rgba(EASY)], EASY_A, atol=0.01)
     np.testing.assert_allclose(by_color[to_rgba(HARD)], HARD_A, atol=0.01)
+
+
+@pytest.mark.parametrize(("model", "reference"), [("elastic", 0.415), ("bearing", 0.5)])
+def test_the_reference_line_is_the_models(model, reference):
+    # the bearing panel drew the elastic 0.415 as "the paper's a_c*"; its own is exactly 1/2
+    for fig in (threshold_vs_gamma.draw(study([1.0, 2.0], model=model)),
+                threshold_vs_hurst.draw(study([1.0, 2.0], model=model))):
+        ax = fig.axes[0]
+        flat = [line for line in ax.get_lines() if line.get_linestyle() == ":"]
+        assert len(flat) == 1 and set(flat[0].get_ydata()) == {reference}
+        assert any(f"a_c* = {reference:g}" in t.get_text() and model in t.get_text()
+                   for t in ax.get_legend().get_texts())
 
 
 def test_one_seed_has_no_error_bar_not_a_zero_one():

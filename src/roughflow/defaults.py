@@ -83,6 +83,10 @@ ADHESION_RANGE_OVER_LAMBDA_S = {"hard": 0.8, "harmonic": 0.42}
 #: The paper's large-system critical contact area of elastic contacts, 0.415 +- 0.01: the
 #: reference line of the threshold figures and the first target of a threshold search.
 A_C_STAR_PAPER = 0.415
+#: The bearing model's threshold of isotropic surfaces, exactly 1/2 (heights symmetric about
+#: the mean: the fluid of one surface is the contact of its mirror image; paper Sect. 3.2):
+#: the reference line of its threshold panels.
+A_C_STAR_BEARING = 0.5
 #: Largest allowed a_hi - a_lo of a threshold bracket.
 THRESHOLD_TOL = 2e-3
 #: Widest bracket accepted (a_c* itself varies by about 0.1 between systems).
@@ -110,7 +114,7 @@ THRESHOLD_STRATEGIES = ("predict", "bisect")
 # --- theory lines of the flow studies (paper Fig. 5-7) ------------------------------------
 #: a_c* of the Bruggeman and closed-form lines per model: the paper draws its Fig. 5 theory
 #: lines with 0.4 for elastic and adhesive contacts; the bearing model's exact threshold is 1/2.
-A_C_STAR_THEORY = {"elastic": 0.4, "adhesive": 0.4, "bearing": 0.5}
+A_C_STAR_THEORY = {"elastic": 0.4, "adhesive": 0.4, "bearing": A_C_STAR_BEARING}
 #: The second isotropic Bruggeman line of Fig. 5a.
 A_C_STAR_ALT = 0.5
 #: Largest |a_c - target| of a pressure-ladder step (contact area, absolute).

@@ -9,7 +9,7 @@ import xarray as xr
 from matplotlib.figure import Figure
 
 from roughflow.datasets.sweep import unbracketed_searches
-from roughflow.defaults import A_C_STAR_PAPER
+from roughflow.defaults import A_C_STAR_BEARING, A_C_STAR_PAPER
 from roughflow.errors import InputError
 from roughflow.fits import direction_names
 
@@ -85,7 +85,15 @@ def note_unbracketed(fig: Figure, ds: xr.Dataset) -> None:
                      fontsize=8)
 
 
-def format_gamma_axis(ax, gammas) -> None:
+def reference_threshold(model: str) -> tuple[float, str]:
+    """The reference a_c* of a threshold panel of ``model`` and its legend label: the
+    bearing model's exact 1/2, else the paper's elastic large-system value."""
+    if model == "bearing":
+        return A_C_STAR_BEARING, f"bearing model's exact isotropic a_c* = {A_C_STAR_BEARING:g}"
+    return A_C_STAR_PAPER, f"paper's large-system elastic a_c* = {A_C_STAR_PAPER:g}"
+
+
+def format_gamma_axis(ax, gammas, model: str) -> None:
     ax.set_xscale("log")
     # a fixed margin: with one gamma, autoscaling spread the few-percent nudges that keep
     # the series apart over the whole panel, as if they were other gammas
@@ -95,6 +103,6 @@ def format_gamma_axis(ax, gammas) -> None:
     ax.minorticks_off()
     ax.set_xlabel("Peklenik number gamma")
     ax.set_ylabel("critical contact area a_c*")
-    ax.axhline(A_C_STAR_PAPER, color="gray", lw=0.6, ls=":",
-               label=f"paper's large-system a_c* = {A_C_STAR_PAPER:g}")
+    reference, label = reference_threshold(model)
+    ax.axhline(reference, color="gray", lw=0.6, ls=":", label=label)
     ax.grid(alpha=0.3)

@@ -6,6 +6,7 @@ from __future__ import annotations
 
 from roughflow.defaults import (
     A_C_STAR_ALT,
+    A_C_STAR_BEARING,
     A_C_STAR_PAPER,
     A_C_STAR_THEORY,
     CORRECTION_MIN_POINTS,
@@ -36,7 +37,8 @@ CAPTIONS: dict[str, str] = {
         "(circles: the largest eps_f, then squares, triangles, diamonds); (b) bearing-area "
         "contact. The paper's H = 0.8 and L/lambda_r = 4 max(sqrt(gamma), 1/sqrt(gamma)); the "
         "panel titles give the data's model and H. The dotted line marks the paper's "
-        f"large-system threshold {A_C_STAR_PAPER}."
+        f"large-system threshold of elastic contact, {A_C_STAR_PAPER}, and in the bearing "
+        f"panel the bearing model's exact isotropic threshold {A_C_STAR_BEARING:g}."
     ),
     "threshold_vs_size": (
         _CORRECTED

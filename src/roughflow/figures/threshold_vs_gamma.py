@@ -39,7 +39,7 @@ def draw(ds: xr.Dataset, fit: xr.Dataset | None = None) -> Figure:
                           offset=1.0 + 0.02 * i)
         if not eps_list:
             no_data(ax)
-        format_gamma_axis(ax, ds["gamma"].values)
+        format_gamma_axis(ax, ds["gamma"].values, model)
         ax.set_title(f"({tag}) {setting_text(am)}", fontsize=10)  # eps_f: in the legend
         ax.legend(fontsize=7)
     note_unbracketed(fig, ds)

@@ -37,7 +37,7 @@ def draw(ds: xr.Dataset, fit: xr.Dataset | None = None) -> Figure:
         low = h == hursts[0] and len(hursts) > 1
         plot_vs_gamma(ax, sub, marker="^" if low else "o", filled=low, label=f"H = {h:g}",
                       offset=1.02 if low else 1.0)
-    format_gamma_axis(ax, a["gamma"].values)
+    format_gamma_axis(ax, a["gamma"].values, str(a["model"].values))
     ax.set_title(setting_text(a), fontsize=9)
     ax.legend(fontsize=7)
     note_unbracketed(fig, ds)
