@@ -8,7 +8,10 @@ import xarray as xr
 
 from roughflow.cli import main
 from roughflow.io import surface_to_dataset, write_dataset
-from roughflow.search import threshold
+from roughflow.scenes.jobs import SurfaceParams, ThresholdJob
+from roughflow.scenes.threshold import run_threshold
+from roughflow.search import SearchOptions, threshold
+from roughflow.search.critical import SCOUT_TOL_FACTOR
 from roughflow.surface import SurfaceSpec, generate
 
 
@@ -44,6 +47,25 @@ def test_cli_threshold_elastic_one_axis(surface_file, tmp_path):
         assert 0 < hi - lo <= 4e-3
         assert ds.sizes["solve"] == ds.attrs["n_solves"] >= 2
         assert float(ds["p_lo"][0]) < float(ds["p_hi"][0])
+
+
+def test_scouts_are_marked_and_full_solves_meet_the_contact_tol(surface_file, tmp_path):
+    # the threshold scenes' contact_residual reached 30 x contact_tol: the maximum took in the
+    # scouts, solved to SCOUT_TOL_FACTOR x contact_tol by design, and read as unconverged
+    s, path = surface_file
+    out = tmp_path / "t.nc"
+    assert main(["threshold", str(path), "-o", str(out)]) == 0
+    with xr.open_dataset(out) as ds:
+        scout = ds["solve_scout"].values.astype(bool)
+        residual = ds["solve_residual"].values
+    contact_tol = SearchOptions().contact_tol
+    assert scout.any() and (~scout).any()  # this surface's search has both
+    assert residual[~scout].max() <= contact_tol < residual[scout].max()
+    assert residual[scout].max() <= SCOUT_TOL_FACTOR * contact_tol
+    job = ThresholdJob(surface=SurfaceParams(points_per_lambda_s=2, l_over_lambda_r=2),
+                       seeds=(1,))
+    ds = run_threshold(job)
+    assert ds["contact_residual"].values.ravel().tolist() == [residual[~scout].max()]
 
 
 def test_cli_threshold_errors(surface_file, tmp_path, capsys):

@@ -194,6 +194,11 @@ def threshold_dataset(results: Mapping[int, Threshold], surface: Surface | None 
         ds["solve_residual"] = ("solve", s[:, 3], {
             "units": DIMENSIONLESS,
             "long_name": "residual of each contact solve (gap error / rms height)"})
+        ds["solve_scout"] = ("solve", s[:, 4].astype(np.int8), {
+            "units": DIMENSIONLESS,
+            "long_name": "1 where the solve was a scout, solved to SCOUT_TOL_FACTOR times the "
+                         "contact tolerance (docs/percolation.md), 0 where to the contact "
+                         "tolerance itself"})
     return ds
 
 

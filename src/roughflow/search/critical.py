@@ -146,12 +146,14 @@ class ThresholdNotBracketed(InputError):
 
 
 class SolveRecord(NamedTuple):
-    """One contact solve of a threshold search."""
+    """One contact solve of a threshold search; ``scout``: solved to the loose scout
+    tolerance (:data:`SCOUT_TOL_FACTOR` times the contact tolerance), not the full one."""
 
     pressure: float
     area_fraction: float
     iterations: int
     residual: float
+    scout: bool = False
 
 
 @dataclass(frozen=True)
@@ -476,7 +478,8 @@ def _assemble(samples: list[_Sample], history: list[_Sample], axes, unbracketed:
     order, scouts that were re-solved included); ``interpolate``: see :func:`_weight`."""
     n = len(history)
     records = tuple(SolveRecord(q.load, q.area, getattr(q.state, "iterations", 0),
-                                float(getattr(q.state, "residual", 0.0))) for q in history)
+                                float(getattr(q.state, "residual", 0.0)), q.scout)
+                    for q in history)
     nan = float("nan")
 
     def pressure(q: _Sample | None) -> float:
