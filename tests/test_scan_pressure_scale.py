@@ -6,6 +6,7 @@ spectrum without the wrap-around step, and the theory files keep the scan's unit
 
 from __future__ import annotations
 
+from dataclasses import replace
 from pathlib import Path
 
 import numpy as np
@@ -14,7 +15,7 @@ import xarray as xr
 
 from roughflow.cli import main
 from roughflow.defaults import THRESHOLD_PRESSURE_RANGE
-from roughflow.search import first_pressure, scaled_options
+from roughflow.search import SearchOptions, first_pressure, scaled_options
 from roughflow.surface import ScanInfo, Surface, SurfaceSpec, generate, rms_gradient
 from roughflow.theory.persson import discrete_spectrum
 from roughflow.units import registry
@@ -137,3 +138,22 @@ def test_quiet_and_verbose_together_are_refused(argv, capsys):
         main([argv[0], "surface", "--l-over-lambda-r", "1", argv[1], "-o", "unused.nc"])
     assert exc.value.code == 2
     assert "-q (errors only) contradicts -v" in capsys.readouterr().err
+
+
+@pytest.mark.parametrize("rms_slope", [20.0, 1e-5])
+def test_the_library_search_follows_the_surfaces_rms_gradient(rms_slope):
+    # search.threshold(surface) searched 1e-4 ... 4 E* whatever the surface: an rms slope of
+    # 20 or 1e-5 was refused as unbracketed, though a_c* does not depend on it (an API audit)
+    from roughflow.search import ThresholdNotBracketed, threshold
+
+    spec = SurfaceSpec.from_sweep(points_per_lambda_s=2, l_over_lambda_r=2, seed=1)
+    ref = threshold(generate(spec))
+    steep = generate(replace(spec, rms_slope=rms_slope))
+    got = threshold(steep)
+    for ax in (0, 1):
+        # the same contact problem scaled: a_c* to round-off of the solves (contact tol 1e-4)
+        assert got[ax].a_c_star == pytest.approx(ref[ax].a_c_star, abs=1e-3)
+        assert got[ax].p_lo == pytest.approx(rms_slope * ref[ax].p_lo, rel=0.05)
+    # options given in E* are taken as they are, and the refusal says how to scale them
+    with pytest.raises(ThresholdNotBracketed, match=r"rms gradient is .*scaled_options"):
+        threshold(steep, options=SearchOptions())

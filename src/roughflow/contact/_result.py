@@ -31,8 +31,9 @@ class SolverOutput:
 class ContactResult:
     """Solution of a rigid rough surface pressed onto a flat elastic half-space.
 
-    Units: lengths in L (cell side), pressures in E* gbar (E* = 1, rms gradient 1 for
-    the project's surfaces). Fields are indexed ``[ix, iy]``.
+    Units: lengths in L (cell side), pressures in E* (E* = 1; the generated surfaces'
+    rms gradient gbar is 1, so their pressures are also in E* gbar). Fields are indexed
+    ``[ix, iy]``.
 
     gap: interfacial separation u_g(r) >= 0 (zero in contact).
     contact_pressure: local contact pressure (>= 0 for repulsive models; negative values

@@ -163,8 +163,9 @@ class SearchOptions:
     strategy: ``"predict"`` (aimed refinement) or ``"bisect"`` (plain bisection in a_c, the
         naive reference; with ``warm_start=False`` and one axis per call it is the cold
         baseline).
-    pressure_range: pressures (E* gbar) the search may try; a surface whose fluid spans at
-        the top or never spans at the bottom is unbracketed.
+    pressure_range: pressures (E*) the search may try; a surface whose fluid spans at the
+        top or never spans at the bottom is unbracketed. The default is for an rms gradient
+        of 1 (the generated surfaces'); :func:`scaled_options` scales it to another.
     first_pressure: the first pressure tried, within ``pressure_range``; default the contact
         law's load for :data:`~roughflow.defaults.A_C_STAR_PAPER` (clamped into the range).
     contact_tol: tolerance of each contact solve (largest gap error / rms height).
@@ -233,7 +234,7 @@ class Threshold:
     a_c* lies in [a_lo, a_hi]; ``a_c_star`` is the estimate inside it: with the default
     strategy ``"predict"`` (periodic cells) the root of the first-order predictions of the
     two ends, linear between them (:func:`_weight`), else the midpoint. Pressures are in
-    E* gbar (NaN for the bearing model, which is parameterised by the area itself).
+    E* (NaN for the bearing model, which is parameterised by the area itself).
     ``n_solves`` counts the contact solves of the whole search (shared between the axes when
     both were asked for; scouts and their re-solves each count); ``solves`` lists them in
     order.
@@ -669,8 +670,10 @@ def threshold(
     ``axis=None`` returns ``{0: Threshold, 1: Threshold}`` from one shared sequence of
     contact solves. ``tol`` is the largest allowed ``a_hi - a_lo``. ``model``: ``"elastic"``
     (default), ``"adhesive"`` (needs ``adhesion=Adhesion(...)``) or ``"bearing"``.
-    ``options``: :class:`SearchOptions` (strategy, pressure range, contact tolerance, ...).
-    Every contact solve logs one line (load, area, iterations, residual, seconds) at INFO.
+    ``options``: :class:`SearchOptions` (strategy, pressure range, contact tolerance, ...);
+    default ``scaled_options(surface.gbar, model)``: the default pressures, set in E* gbar,
+    scaled to the surface's rms gradient (a_c* does not depend on it). Every contact solve
+    logs one line (load, area, iterations, residual, seconds) at INFO.
     ``backend="cupy"``: the elastic gfmd solves on a CUDA GPU (``contact.solve``'s backend).
     """
     if not isinstance(surface, Surface):
@@ -682,7 +685,8 @@ def threshold(
     if tol > THRESHOLD_TOL_MAX:
         raise InputError(f"tol must be at most {THRESHOLD_TOL_MAX:g} (a contact-area "
                          f"difference), got {tol!r}")
-    opts = SearchOptions() if options is None else options
+    # a given options' pressures are taken as they are (E*); the defaults follow gbar
+    opts = scaled_options(surface.gbar, model) if options is None else options
     if not isinstance(opts, SearchOptions):
         raise InputError(f"options must be SearchOptions, got {type(opts).__name__}")
     if model == "elastic" and opts.pressure_range[0] <= 0:
@@ -776,8 +780,17 @@ def threshold(
         return dataclasses.replace(sample(r, p, None, r.contact_pressure), scout=scout)
 
     first = first_pressure(model) if opts.first_pressure is None else float(opts.first_pressure)
-    res = _refine(evaluate, axes, tol=tol, first=first, load_range=opts.pressure_range, law=law,
-                  options=opts, model=model, loads_are_pressures=True, compliance=compliance,
-                  scouts=model == "elastic" and scout_tol > opts.contact_tol,
-                  start_out=start_out)
+    try:
+        res = _refine(evaluate, axes, tol=tol, first=first, load_range=opts.pressure_range,
+                      law=law, options=opts, model=model, loads_are_pressures=True,
+                      compliance=compliance,
+                      scouts=model == "elastic" and scout_tol > opts.contact_tol,
+                      start_out=start_out)
+    except ThresholdNotBracketed as exc:
+        if options is None or 0.5 <= surface.gbar <= 2.0:
+            raise
+        raise ThresholdNotBracketed(
+            f"{exc}; the surface's rms gradient is {surface.gbar:.3g}, and the given "
+            "options' pressures are in E*: search.scaled_options(surface.gbar, model, ...) "
+            "scales the default range to it") from None
     return res if axis is None else res[axes[0]]
