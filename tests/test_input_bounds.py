@@ -122,6 +122,34 @@ def test_contact_solve_refuses_pressures_beyond_any_elastic_contact():
             solve(s, load, model="adhesive", adhesion=ad, max_iter=5)
 
 
+def test_a_load_below_what_the_grid_resolves_is_refused():
+    # an API audit: p = 1e-14 on 128^2 ran gfmd's 50,000 iterations (10 s) and failed; below
+    # about one cell the contact is that cell whatever the load (defaults.CONTACT_MIN_CELLS)
+    s = small_surface()
+    floor = defaults.CONTACT_MIN_CELLS / s.heights.size / 2.0  # the law's slope 2, gbar 1
+    with pytest.raises(InputError, match=r"pressure 1e-14 E\* is below what a 128 x 128 grid "
+                                         r"resolves \(3.05e-08 E\*"):
+        solve(s, 1e-14)
+    with pytest.raises(InputError, match="below what"):
+        solve(s, 0.99 * floor, method="cg")
+    # at the floor the solve converges, with one cell in contact
+    assert solve(s, floor).area_fraction == 1 / s.heights.size
+    # the floor follows the surface's rms gradient: the same problem scaled by 1e-3 passes
+    scaled = Surface.from_array(s.heights * 1e-3, lx=s.lx, ly=s.ly)
+    assert solve(scaled, 1e-3 * floor).area_fraction == 1 / s.heights.size
+
+
+def test_a_tension_beyond_the_adhesions_largest_is_refused():
+    # a pull of 300 times what every cell together can hold ran 50,000 iterations (24 s)
+    s = small_surface()
+    ad = adhesion_for(s.heights, s.lx, s.ly,
+                      gamma_over_v_full=defaults.ADHESION_SURFACE_ENERGY_RATIO,
+                      range=defaults.ADHESION_RANGE_OVER_LAMBDA_S["hard"] * s.spec.lambda_s)
+    with pytest.raises(InputError, match=r"beyond the adhesion's largest tension .*no "
+                                         r"equilibrium"):
+        solve(s, -1.0001 * ad.max_tension, model="adhesive", adhesion=ad, max_iter=5)
+
+
 def test_the_bearing_model_refuses_a_pressure():
     # it cuts the heights at an area and has no load: a pressure given was ignored silently
     with pytest.raises(InputError, match="pressure=1000000.0 is not for model='bearing'"):

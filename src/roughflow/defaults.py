@@ -106,6 +106,13 @@ THRESHOLD_PRESSURE_RANGE = (1e-4, MAX_SEARCH_LOAD)
 #: pressures serve smooth and rough scans alike, and on a smooth one a_c = 1 and Q = 0 is
 #: the answer, not an error.
 CONTACT_PRESSURE_MAX = 100.0
+#: An elastic load whose contact the small-load law (a_c = 2 p / (E* gbar)) puts at fewer
+#: than this many grid cells is refused: below about one cell the contact is one cell
+#: whatever the load (512^2: one cell from 1e-7 to 1e-13 E* gbar), and gfmd's load balance,
+#: relative to the load, reaches the round-off of the force, so the solve ran its 50,000
+#: iterations and failed (512^2 at 1e-10; 64^2 at 1e-11). At this floor it converged on
+#: every grid tried (512^2 - 2048^2: 44-206 iterations).
+CONTACT_MIN_CELLS = 1e-3
 #: Cap on the contact solves of one threshold search.
 THRESHOLD_MAX_SOLVES = 40
 #: Threshold search strategies: aimed refinement (default) and plain bisection (reference).

@@ -42,6 +42,12 @@ LOAD_BOUNDS = {"elastic": (1e-6, MAX_SEARCH_LOAD), "adhesive": (0.0, MAX_SEARCH_
 _AREA_MARGIN = 1e-6
 
 
+def elastic_load_for_cells(cells: float, n_cells: int) -> float:
+    """The load (E* gbar) at which the small-load law a_c = ELASTIC_SLOPE p puts ``cells``
+    of a grid of ``n_cells`` in contact (linear: no clipping of tiny areas)."""
+    return cells / n_cells / ELASTIC_SLOPE
+
+
 def elastic_area(pressure: float) -> float:
     """a_c = erf(c p) of the elastic law at ``pressure`` (E* gbar): the contact area a cold
     solve expects (``contact.gfmd`` starts from the flat whose bearing area it is)."""

@@ -10,6 +10,7 @@ import numpy as np
 
 from roughflow.defaults import (
     CONTACT_METHODS,
+    CONTACT_MIN_CELLS,
     CONTACT_PRESSURE_MAX,
     CONTACT_TOL,
     CONTACT_TOL_MAX,
@@ -33,6 +34,7 @@ from roughflow.surface import Surface
 from ._result import ContactResult
 from .adhesion import Adhesion, check_overlap, check_setup
 from .bearing import solve_bearing
+from .law import elastic_load_for_cells
 
 if TYPE_CHECKING:  # gfmd (numba) is imported on first use: the CLI starts faster
     from numpy.typing import ArrayLike
@@ -158,13 +160,21 @@ def solve(
         load = require_positive("pressure", pressure)
         if adhesion is not None:
             raise InputError("adhesion= is only for model='adhesive'")
+        check_resolved_load(load, surface.gbar, heights.shape)
     else:
         load = require_finite("pressure", pressure)
         if not isinstance(adhesion, Adhesion):
             raise InputError(f"model='adhesive' needs adhesion=Adhesion(...), got {adhesion!r}")
         if method != "gfmd":
             raise InputError(f"model='adhesive' needs method='gfmd', got {method!r}")
-    check_pressure_scale(load)
+    check_pressure_scale(load)  # first: a pressure in pascals is the likelier mistake
+    if model == "adhesive" and load <= -adhesion.max_tension:
+        # the mean tension of cells each pulling at most max_tension: no equilibrium, and
+        # the solve would run its max_iter steps before saying so
+        raise InputError(
+            f"the tensile load {load:g} E* is beyond the adhesion's largest tension "
+            f"{adhesion.max_tension:.4g} E* (every cell at its peak pull): no equilibrium "
+            "exists (the surfaces separate)")
     if max_iter is None:
         max_iter = _DEFAULT_MAX_ITER[method]
     if isinstance(max_iter, bool) or not isinstance(max_iter, (int, np.integer)) or max_iter < 1:
@@ -315,6 +325,19 @@ def check_pressure_scale(pressure: ArrayLike) -> None:
             f"pressure {worst:g} E* is {side}{CONTACT_PRESSURE_MAX:g} E*, beyond any "
             f"linear-elastic contact: pressures here are in units of the contact modulus E* "
             f"(from Python, convert pascals with roughflow.units.Scales.pressure_from_si)")
+
+
+def check_resolved_load(pressure: float, gbar: float, shape: tuple[int, int]) -> None:
+    """:class:`InputError` where an elastic load is below what the grid resolves: the
+    small-load law puts fewer than :data:`CONTACT_MIN_CELLS` cells in contact."""
+    floor = gbar * elastic_load_for_cells(CONTACT_MIN_CELLS, shape[0] * shape[1])
+    if pressure < floor:
+        raise InputError(
+            f"pressure {pressure:g} E* is below what a {shape[0]} x {shape[1]} grid resolves "
+            f"({floor:.3g} E* for its rms gradient {gbar:.3g}): the elastic law puts "
+            f"{CONTACT_MIN_CELLS:g} of one cell in contact there, the contact is a single "
+            "cell from about a thousand times that load down, and the solver's load balance "
+            "reaches round-off")
 
 
 def _check_method(method: str | None) -> str:
