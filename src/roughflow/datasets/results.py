@@ -14,7 +14,7 @@ import numpy as np
 import xarray as xr
 
 from roughflow.defaults import AXIS_NAMES
-from roughflow.errors import InputError
+from roughflow.errors import InputError, check_axis
 
 from .units import (
     AREAL_ENERGY_UNITS,
@@ -72,8 +72,19 @@ def spec_attrs(surface: Surface) -> dict:
 def contact_dataset(surface: Surface, result: ContactResult,
                     adhesion: Adhesion | None = None) -> xr.Dataset:
     """Gap, contact mask, contact pressure (not for the bearing model, which has none) and
-    heights on (x, y); scalars as attributes."""
+    heights on (x, y); scalars as attributes.
+
+    An adhesive result needs ``adhesion`` (the :class:`~roughflow.contact.Adhesion` it was
+    solved with; the result does not record it), whose parameters become ``adhesion_*``
+    attributes. A result whose grid is not the surface's raises :class:`InputError`; one of
+    another surface of the same shape cannot be told apart (the result keeps no heights)."""
     nx, ny = surface.shape
+    if np.shape(result.gap) != (nx, ny):
+        raise InputError(f"contact_dataset: the result's grid {np.shape(result.gap)} is not "
+                         f"the surface's {(nx, ny)} (a result of another surface?)")
+    if result.model == "adhesive" and adhesion is None:
+        raise InputError("contact_dataset: an adhesive result needs adhesion= (the Adhesion "
+                         "it was solved with): without it the file records no adhesion")
     ds = xr.Dataset(
         {
             "gap": (("x", "y"), result.gap,
@@ -153,17 +164,53 @@ THRESHOLD_FIELDS = {
 }
 
 
-def threshold_dataset(results: Mapping[int, Threshold], surface: Surface | None = None, *,
-                      solve_log: bool = True, adhesion: Adhesion | None = None) -> xr.Dataset:
+def _by_axis(func: str, results: Mapping, what: str) -> dict:
+    """``results`` keyed by axis 0 / 1: each key (0, 1, ``"x"`` or ``"y"``) must name the
+    axis the result itself records (``result.axis``), else :class:`InputError` naming both
+    (a key alone labelled an x-flow passed under 1 ``sigma_y``)."""
+    if not isinstance(results, Mapping):
+        raise InputError(f"{func}: results must be a mapping of axis (0 / 'x', 1 / 'y') to "
+                         f"{what}, got {type(results).__name__}")
+    out = {}
+    for key, r in results.items():
+        try:
+            ax = check_axis(key)
+        except InputError as e:
+            raise InputError(f"{func}: results key {key!r}: {e}") from None
+        own = check_axis(r.axis)
+        if own != ax:
+            raise InputError(f"{func}: the {what} under key {key!r} (axis "
+                             f"{AXIS_NAMES[ax]}) is along axis {AXIS_NAMES[own]} (its .axis "
+                             f"= {r.axis!r})")
+        if ax in out:
+            raise InputError(f"{func}: axis {AXIS_NAMES[ax]} given twice (keys of results: "
+                             f"{list(results)})")
+        out[ax] = r
+    return out
+
+
+def threshold_dataset(results: Mapping[int | str, Threshold] | Threshold,
+                      surface: Surface | None = None, *, solve_log: bool = True,
+                      adhesion: Adhesion | None = None) -> xr.Dataset:
     """a_c*, its bracket and its pressures over ``axis`` (the axes in ``results``).
 
+    ``results``: what :func:`roughflow.search.threshold` returns, a mapping of axis (0 or
+    ``"x"``, 1 or ``"y"``) to :class:`~roughflow.search.Threshold` or a single one (one
+    axis); each key must be the threshold's own ``axis`` (:class:`InputError` if not).
     With ``solve_log`` the contact solves of the search are listed over ``solve``; with
     ``adhesion`` (and ``surface``) its parameters are attributes, as for a contact.
     """
+    from roughflow.search import Threshold
+
     if adhesion is not None and surface is None:
         raise InputError("threshold_dataset: adhesion= needs the surface (its summary)")
-    axes = sorted(results)
-    r = [results[a] for a in axes]
+    if isinstance(results, Threshold):  # search.threshold(surface, axis=...) returns one
+        results = {results.axis: results}
+    by_axis = _by_axis("threshold_dataset", results, "Threshold")
+    if not by_axis:
+        raise InputError("threshold_dataset: results is empty")
+    axes = sorted(by_axis)
+    r = [by_axis[a] for a in axes]
     data = {}
     for name, (units, long_name) in THRESHOLD_FIELDS.items():
         values = np.asarray([getattr(t, name) for t in r])
@@ -202,19 +249,35 @@ def threshold_dataset(results: Mapping[int, Threshold], surface: Surface | None 
     return ds
 
 
-def flow_dataset(results: Mapping[int, FlowResult], contact: np.ndarray, *, lx: float,
+def flow_dataset(results: Mapping[int | str, FlowResult], contact: np.ndarray, *, lx: float,
                  ly: float, eta: float, tol: float,
                  sigma_tol: float | None = None) -> xr.Dataset:
     """sigma per axis, the pressure and flux fields, and the solver diagnostics (the
-    attribute ``sigma_tol`` only where the solves had one)."""
-    nx, ny = contact.shape
+    attribute ``sigma_tol`` only where the solves had one).
+
+    ``results`` maps an axis (0 or ``"x"``, 1 or ``"y"``) to the
+    :class:`~roughflow.flow.FlowResult` along it; a key that is not the result's own
+    ``axis``, an ``lx`` / ``ly`` other than the result's, or a result on another grid than
+    ``contact`` raises :class:`InputError`. ``eta`` and ``tol`` are recorded as given (a
+    FlowResult does not carry them): pass those of the solves."""
+    by_axis = _by_axis("flow_dataset", results, "FlowResult")
+    nx, ny = np.shape(contact)
+    for ax, r in by_axis.items():
+        a = AXIS_NAMES[ax]
+        for name, given, own in (("lx", lx, r.lx), ("ly", ly, r.ly)):
+            if not np.isclose(float(given), float(own), rtol=1e-12, atol=0.0):
+                raise InputError(f"flow_dataset: {name}={given!r} but the flow result along "
+                                 f"{a} was solved with {name}={own!r}")
+        if np.shape(r.pressure) != (nx, ny):
+            raise InputError(f"flow_dataset: the flow result along {a} is on a "
+                             f"{np.shape(r.pressure)} grid, the contact mask {(nx, ny)}")
     out = xr.Dataset(coords=grid_coords(nx, ny, lx, ly))
     out["contact"] = (("x", "y"), np.asarray(contact).astype(np.int8),
                       {"units": DIMENSIONLESS, "long_name": "contact mask (1 = contact)",
                        **CONTACT_FLAGS})
     attrs = {"title": "roughflow flow", "lx": lx, "ly": ly, "eta": eta, "tol": tol,
              **({} if sigma_tol is None else {"sigma_tol": sigma_tol})}
-    for ax, r in results.items():
+    for ax, r in sorted(by_axis.items()):
         a = AXIS_NAMES[ax]
         out[f"sigma_{a}"] = ((), r.sigma, {
             "units": SIGMA_UNITS,
