@@ -83,7 +83,7 @@ def run_tamaas(s: Surface, pressure: float, tol: float) -> dict:
     with captured_fd1() as log:
         model = tm.ModelFactory.createModel(tm.model_type.basic_2d, [s.lx, s.ly], [nx, ny])
         model.E, model.nu = 1.0, 0.0
-        solver = tm.PolonskyKeerRey(model, np.ascontiguousarray(s.heights), tol)
+        solver = tm.PolonskyKeerRey(model, np.array(s.heights), tol)  # writable
         solver.max_iter = 100000
         solver.solve(pressure)
     wall = time.perf_counter() - t0

@@ -16,7 +16,7 @@ def _tamaas(heights: np.ndarray, lx: float, ly: float, pressure: float):
     tm.set_log_level(tm.LogLevel.error)  # the solver prints its iterations otherwise
     model = tm.ModelFactory.createModel(tm.model_type.basic_2d, [lx, ly], [nx, ny])
     model.E, model.nu = 1.0, 0.0  # E* = E / (1 - nu^2) = 1
-    solver = tm.PolonskyKeerRey(model, np.ascontiguousarray(heights), 1e-12)
+    solver = tm.PolonskyKeerRey(model, np.array(heights), 1e-12)  # a writable copy
     solver.max_iter = 20000
     solver.solve(pressure)
     traction = np.array(model.traction).reshape(nx, ny)

@@ -68,11 +68,29 @@ def test_nan_heights_are_refused_wherever_they_enter(surface):
         percolation.bearing_bracket(h, 1)
     with pytest.raises(InputError, match=r"key has 1 nan values, first at \(3, 3\)"):
         percolation.critical_open_count_by_key(-h, 1)
-    # a Surface's array changed in place after it was checked
-    changed = Surface(surface.heights.copy(), 1.0, 0.75)
-    changed.heights[3, 3] = np.nan
+    # a Surface's own array is read-only; the caller's array it was made from can still
+    # be changed in place after the check (the constructor does not copy)
+    with pytest.raises(ValueError, match="read-only"):
+        surface.heights[3, 3] = np.nan
+    caller = surface.heights.copy()
+    changed = Surface(caller, 1.0, 0.75)
+    caller[3, 3] = np.nan
     with pytest.raises(InputError, match="non-finite"):
         search.threshold(changed, model="bearing")
+
+
+def test_a_surface_does_not_follow_its_callers_array(surface):
+    # an API audit: from_array kept the caller's array, so h *= 3 in a notebook changed the
+    # surface, and a setup prepared before solved the old one (a_c 0.242 instead of 0.095)
+    h = surface.heights.copy()
+    s = Surface.from_array(h, lx=surface.lx, ly=surface.ly)
+    before = contact.solve(s, 0.1)
+    setup = contact.prepare(s)
+    h *= 3
+    assert np.array_equal(contact.solve(s, 0.1, setup=setup).gap, before.gap)
+    assert np.array_equal(contact.solve(s, 0.1).gap, before.gap)
+    with pytest.raises(ValueError, match="read-only"):
+        s.heights[...] *= 3  # and not through the surface itself either
 
 
 def test_masked_arrays_are_refused_not_read_through(state, surface):
@@ -142,9 +160,13 @@ def test_surface_made_from_a_list_works_everywhere(surface):
 
 
 def test_degenerate_grids_get_input_errors():
-    one = Surface(np.zeros((1, 1)), 1.0, 1.0)
-    with pytest.raises(InputError, match="at least 2 points, got 1 x 1"):
-        contact.solve(one, 0.1)
+    # one size rule for every surface (from_array had 4 x 4, the constructor none: a 1 x 8
+    # surface was solved)
+    for shape in ((1, 1), (2, 2), (1, 8), (8, 3)):
+        with pytest.raises(InputError, match=rf"at least 4 x 4, got shape \({shape[0]}, "):
+            Surface(np.zeros(shape), 1.0, 1.0)
+        with pytest.raises(InputError, match="at least 4 x 4"):
+            Surface.from_array(np.zeros(shape))
     with pytest.raises(InputError, match="empty"):
         accuracy.perimeter_corrected_area(np.zeros((0, 4), dtype=bool))
 

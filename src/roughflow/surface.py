@@ -227,7 +227,11 @@ class ScanInfo:
 @dataclass(frozen=True, eq=False)
 class Surface:
     """Heights ``heights[ix, iy]`` (float64) of a cell of size ``lx`` x ``ly``: periodic
-    (generated, ``spec``) or an imported scan (``scan``, usually not periodic)."""
+    (generated, ``spec``) or an imported scan (``scan``, usually not periodic).
+
+    ``heights`` is held as a read-only view, so the surface cannot be changed through it
+    (a prepared solver setup or a recorded gbar would then describe another surface). The
+    constructor does not copy the array it is given; :meth:`from_array` does."""
 
     heights: np.ndarray
     lx: float
@@ -240,8 +244,12 @@ class Surface:
         # only later, in whichever stage met them first
         # C order: sums over the heights (the mean level of the solvers) run in memory
         # order, so a Fortran-ordered or transposed array gave other last bits
-        object.__setattr__(self, "heights", np.ascontiguousarray(
-            require_field("surface heights", self.heights)))
+        heights = np.ascontiguousarray(require_field("surface heights", self.heights))
+        if min(heights.shape) < 4:  # the one size rule of every surface (from_array too)
+            raise InputError(f"heights must be at least 4 x 4, got shape {heights.shape}")
+        view = heights.view()
+        view.flags.writeable = False
+        object.__setattr__(self, "heights", view)
         for name in ("lx", "ly"):
             object.__setattr__(self, name, require_positive(name, getattr(self, name)))
 
@@ -284,11 +292,11 @@ class Surface:
         from roughflow.errors import require_field
 
         h = require_field("heights", heights)
-        if min(h.shape) < 4:
-            raise InputError(f"heights must be at least 4 x 4, got shape {h.shape}")
         lx = require_positive("lx", lx)
         ly = lx * h.shape[1] / h.shape[0] if ly is None else require_positive("ly", ly)
-        return cls(heights=h, lx=lx, ly=ly)
+        # a copy: the caller's array, changed in place later (h *= 1e-6 in a notebook),
+        # changed the surface under a prepared setup, which then solved the old one
+        return cls(heights=np.array(h, dtype=np.float64, order="C", copy=True), lx=lx, ly=ly)
 
 
 def from_scan(path: str | os.PathLike, **options) -> Surface:

@@ -153,9 +153,6 @@ def solve(
         )
     if pressure is None:
         raise InputError(f"the {model} model needs pressure= (mean pressure in E* gbar)")
-    if heights.size < 2:  # no wave: nothing elastic to solve (k(q) > 0 is empty)
-        raise InputError(f"the {model} model needs a grid of at least 2 points, got "
-                         f"{heights.shape[0]} x {heights.shape[1]}")
     if model == "elastic":
         load = require_positive("pressure", pressure)
         if adhesion is not None:
