@@ -242,7 +242,7 @@ def threshold_dataset(results: Mapping[int | str, Threshold] | Threshold,
             "units": DIMENSIONLESS,
             "long_name": "residual of each contact solve (gap error / rms height)"})
         ds["solve_scout"] = ("solve", s[:, 4].astype(np.int8), {
-            "units": DIMENSIONLESS,
+            "units": DIMENSIONLESS, **flags("full scout", np.int8),
             "long_name": "1 where the solve was a scout, solved to SCOUT_TOL_FACTOR times the "
                          "contact tolerance (docs/percolation.md), 0 where to the contact "
                          "tolerance itself"})

@@ -686,7 +686,9 @@ def threshold(
         raise InputError(f"tol must be at most {THRESHOLD_TOL_MAX:g} (a contact-area "
                          f"difference), got {tol!r}")
     # a given options' pressures are taken as they are (E*); the defaults follow gbar
-    opts = scaled_options(surface.gbar, model) if options is None else options
+    gbar = surface.gbar  # 0 for a flat surface: nothing to scale (full contact at any load)
+    opts = options if options is not None else (
+        scaled_options(gbar, model) if gbar > 0 else SearchOptions())
     if not isinstance(opts, SearchOptions):
         raise InputError(f"options must be SearchOptions, got {type(opts).__name__}")
     if model == "elastic" and opts.pressure_range[0] <= 0:
@@ -787,10 +789,10 @@ def threshold(
                       scouts=model == "elastic" and scout_tol > opts.contact_tol,
                       start_out=start_out)
     except ThresholdNotBracketed as exc:
-        if options is None or 0.5 <= surface.gbar <= 2.0:
+        if options is None or not gbar > 0 or 0.5 <= gbar <= 2.0:
             raise
         raise ThresholdNotBracketed(
-            f"{exc}; the surface's rms gradient is {surface.gbar:.3g}, and the given "
+            f"{exc}; the surface's rms gradient is {gbar:.3g}, and the given "
             "options' pressures are in E*: search.scaled_options(surface.gbar, model, ...) "
             "scales the default range to it") from None
     return res if axis is None else res[axes[0]]
