@@ -150,6 +150,21 @@ def test_a_tension_beyond_the_adhesions_largest_is_refused():
         solve(s, -1.0001 * ad.max_tension, model="adhesive", adhesion=ad, max_iter=5)
 
 
+def test_persson_theory_refuses_a_pressure_in_pascals():
+    # predict_conductance(spec, [1e6]) gave a_c = 1 and sigma = 0 without a word (an API
+    # audit); with the modulus in pascals the same pressure is an answer
+    from roughflow.theory import persson_mean_gap, predict_conductance
+
+    spec = SurfaceSpec.from_sweep()
+    with pytest.raises(InputError, match=r"pressure 1e\+06 E\* is above 100 E\*"):
+        predict_conductance(spec, [1e-2, 1e6], a_c_star=0.4)
+    with pytest.raises(InputError, match="above 100"):
+        persson_mean_gap(1e6, spec)
+    pa = predict_conductance(spec, [1e6], a_c_star=0.4, modulus=2e6).area_fraction
+    assert pa == pytest.approx(predict_conductance(spec, [0.5], a_c_star=0.4).area_fraction,
+                               rel=1e-12)
+
+
 def test_the_bearing_model_refuses_a_pressure():
     # it cuts the heights at an area and has no load: a pressure given was ignored silently
     with pytest.raises(InputError, match="pressure=1000000.0 is not for model='bearing'"):

@@ -753,8 +753,12 @@ def conductance(
     periodic: bool = True,
     sigma_tol: float | None = None,
 ) -> float | Conductances:
-    """Effective conductance along ``axis``, or :class:`Conductances` (sigma_x, sigma_y) when
-    ``axis`` is None."""
+    """Effective conductance sigma along ``axis`` (0/"x" or 1/"y"), or
+    :class:`Conductances` (sigma_x, sigma_y) when ``axis`` is None: the flow per unit width
+    across the flow per unit pressure gradient, in units of L^3 / eta (local conductivity
+    u^3 / (12 eta)). ``gap[ix, iy]``: the gap field in units of L; ``lx``, ``ly``: cell
+    lengths; ``eta``: viscosity. The other arguments are :func:`solve`'s, which returns
+    the pressure and flux fields and the solver's diagnostics too."""
     kw = dict(lx=lx, ly=ly, eta=eta, tol=tol, method=method, periodic=periodic,
               sigma_tol=sigma_tol)
     if axis is None:

@@ -134,10 +134,15 @@ def _as_spectrum(source) -> DiscreteSpectrum:
     return source if isinstance(source, DiscreteSpectrum) else discrete_spectrum(source)
 
 
-def _pressures(pressure) -> np.ndarray:
+def _pressures(pressure, modulus: float) -> np.ndarray:
+    """``pressure`` (in the units of ``modulus``) as an array, refused where not finite and
+    positive, or beyond any linear-elastic contact (a pressure in pascals with modulus 1)."""
+    from roughflow.contact import check_pressure_scale
+
     p = np.asarray(pressure, dtype=np.float64)
     if not np.isfinite(p).all() or (p <= 0).any():
         raise InputError(f"pressure must be finite and > 0, got {pressure!r}")
+    check_pressure_scale(p / modulus)
     return p
 
 
@@ -206,7 +211,7 @@ def persson_mean_gap(
     ds = _as_spectrum(spec)
     gp = _check_factor(energy_factor)
     e = require_positive("modulus", modulus)
-    p = _pressures(pressure)
+    p = _pressures(pressure, e)
     coef = ds.q * ds.power * ds.w / (2.0 * math.sqrt(math.pi))
     flat = p.ravel()
     u = np.empty(flat.size)
@@ -257,7 +262,7 @@ def predict_conductance(
     when they are known.
     """
     ds = _as_spectrum(spec)
-    p = _pressures(pressures)
+    p = _pressures(pressures, require_positive("modulus", modulus))
     a = np.asarray(persson_area(p, ds.rms_slope, modulus=modulus))
     u = np.asarray(persson_mean_gap(p, ds, energy_factor=energy_factor, modulus=modulus))
     sigma = np.asarray(closed_form(u, a, a_c_star=a_c_star, kind=kind, eta=eta))
