@@ -25,7 +25,8 @@ def solve_bearing(heights: np.ndarray, area_fraction: float, *,
     the k-th (a quantized scan), no plane separates them: the whole tie group is in contact
     and a_c is the area it then has, above round(a N)/N (logged as a warning), never a
     choice among equal heights. At full contact d is the lowest height; without contact
-    the plane touches the highest point. ``warn_ties=False`` leaves the warning out (a
+    it lies above the highest point by half that point's step to the next height (every
+    gap positive; a flat surface's plane touches it). ``warn_ties=False`` leaves the warning out (a
     threshold search, which judges the tie groups inside its brackets itself).
     """
     h = heights
@@ -37,7 +38,11 @@ def solve_bearing(heights: np.ndarray, area_fraction: float, *,
         d = float(flat.min())
         contact[:] = True
     elif k == 0:
-        d = float(flat.max())
+        # above the highest point by half its step to the next height, as between contact
+        # and non-contact above: a plane on it left that point gap 0 without contact
+        top = float(flat.max())
+        below = flat[flat < top]
+        d = top + 0.5 * (top - float(below.max())) if below.size else top
     else:
         # positions k - 1 and k sorted: the lowest contact and highest non-contact heights
         order = np.argpartition(-flat, (k - 1, k))
