@@ -28,7 +28,8 @@ from dataclasses import dataclass
 import numpy as np
 
 from roughflow._jit import njit
-from roughflow.flow.assembly import Faces
+from roughflow.flow.assembly import Faces, face_transmissibilities
+from roughflow.percolation import label
 from roughflow.percolation.sweep import _find
 
 #: the tree's sort key is a transmissibility's float64 bits without the last 44 of its 52
@@ -363,3 +364,58 @@ def dissipation_bounds(faces: Faces, active: np.ndarray, cells: np.ndarray,
     # same energy)
     flux = 0.5 * (f_in + f_out)
     return DissipationBounds(upper, flux**2 / energy)
+
+
+@dataclass(frozen=True)
+class DroppedFlow:
+    """The open cells a flow solve left out (below the unresolved-gap floor, or cut off by
+    it), as regions: ``labels`` 1..n on them (0 elsewhere), ``bound[k]`` an upper bound on
+    the dissipation region k would add to the solved one (``bound[0]`` = 0); same units and
+    orientation (flow along axis 0) as the solve's."""
+
+    labels: np.ndarray
+    bound: np.ndarray
+
+    @property
+    def total(self) -> float:
+        return float(self.bound.sum())
+
+
+def dropped_flow(sigma: np.ndarray, active: np.ndarray, pressure: np.ndarray, h_flow: float,
+                 h_across: float, *, periodic: bool = True) -> DroppedFlow:
+    """Bound the flow through the open cells (``sigma`` > 0, flow along axis 0) outside
+    ``active``, given the solved ``pressure`` on ``active`` (inlet 1, outlet 0).
+
+    A region R of such cells meets the solved network (and the reservoirs) through its
+    boundary faces, whose pressures span [p_min, p_max]. Adding R raises the dissipation by
+    at most what the trial field p = (p_min + p_max) / 2 in R costs (Dirichlet's principle:
+    the old solution extended by it is admissible), i.e. (p_max - p_min)^2 / 4 times the
+    transmissibilities of R's boundary faces, however well R conducts inside.
+    """
+    dropped = (sigma > 0) & ~active
+    labels, n = label(dropped, periodic=(False, bool(periodic)))
+    bound = np.zeros(n + 1)
+    if n == 0:
+        return DroppedFlow(labels, bound)
+    faces = face_transmissibilities(sigma, h_flow, h_across, periodic=periodic)
+    low, high, trans = np.full(n + 1, np.inf), np.full(n + 1, -np.inf), np.zeros(n + 1)
+
+    def meet(region: np.ndarray, p: np.ndarray, t: np.ndarray) -> None:
+        # region: the label of a dropped cell whose face t reaches pressure p (0: no such)
+        m = (region > 0) & (t > 0)
+        k = region[m]
+        np.minimum.at(low, k, p[m])
+        np.maximum.at(high, k, p[m])
+        np.add.at(trans, k, t[m])
+
+    meet(np.where(active[1:], labels[:-1], 0), pressure[1:], faces.t_along)
+    meet(np.where(active[:-1], labels[1:], 0), pressure[:-1], faces.t_along)
+    if sigma.shape[1] > 1:
+        meet(np.where(np.roll(active, -1, 1), labels, 0), np.roll(pressure, -1, 1),
+             faces.t_across)
+        meet(np.where(active, np.roll(labels, -1, 1), 0), pressure, faces.t_across)
+    meet(labels[0], np.ones(sigma.shape[1]), faces.t_in)
+    meet(labels[-1], np.zeros(sigma.shape[1]), faces.t_out)
+    spread = np.where(trans > 0, high - low, 0.0)
+    bound = trans * spread * spread / 4.0
+    return DroppedFlow(labels, bound)
