@@ -17,7 +17,8 @@ Methods (chosen by measurement, see ``benchmarks/bench_flow.py`` and docs/flow.m
   degree ordering, or an order the caller passes: :mod:`roughflow.flow.ldl`; no pivoting
   is needed for this SPD M-matrix); the default for small systems and for thin flowing
   clusters, near a_c*, where its fill is small.
-- ``"cg"``: CG without preconditioner (benchmark reference; slow).
+- ``"cg"``: CG without preconditioner (benchmark reference; slow: on contact gaps of
+  128^2 - 256^2 it misses the default tol within its 20,000 iterations and raises).
 
 ``"auto"`` (:func:`choose`) takes the direct solver up to :data:`DIRECT_MAX_UNKNOWNS`
 unknowns, and beyond where the flowing cells are at most
