@@ -99,6 +99,15 @@ def test_spec_form(tmp_path, capsys):
         np.testing.assert_allclose(ds["mean_gap"].values, ref.mean_gap, rtol=1e-12)
         np.testing.assert_allclose(ds["sigma"].values, ref.sigma, rtol=1e-12)
         assert ds["pressure"].attrs["units"] == PRESSURE_UNITS
+        # the library builds the same dataset (its units and long_names lived in the CLI)
+        from roughflow.datasets import persson_dataset
+
+        built = persson_dataset(ref, SurfaceSpec.from_sweep(points_per_lambda_s=2),
+                                description=ds.attrs["source"])
+        for name in ("area_fraction", "mean_gap", "sigma", "pressure"):
+            np.testing.assert_array_equal(built[name].values, ds[name].values)
+            assert built[name].attrs == {k: ds[name].attrs[k] for k in built[name].attrs}
+        assert {k: v for k, v in built.attrs.items()} == {k: ds.attrs[k] for k in built.attrs}
 
 
 def test_surface_file_form(tmp_path, capsys):

@@ -165,10 +165,7 @@ def _run_persson(args: argparse.Namespace, src, *, source: str, surface=None) ->
     """Persson theory of ``src`` (a spec, or a surface's measured spectrum: a non-periodic
     scan's is that of its mirror-tiled cell); the output describes ``surface`` where the
     spectrum came from a file (its spec, or its scan and reference length)."""
-    import xarray as xr
-
-    from roughflow.datasets.results import spec_attrs
-    from roughflow.datasets.units import DIMENSIONLESS, LENGTH_UNITS, PRESSURE_UNITS, SIGMA_UNITS
+    from roughflow.datasets import persson_dataset
     from roughflow.io import write_dataset
     from roughflow.theory import DEFAULT_ENERGY_FACTOR, predict_conductance
 
@@ -188,27 +185,8 @@ def _run_persson(args: argparse.Namespace, src, *, source: str, surface=None) ->
         out.write(f"{p_:12.5g} {a:10.5f} {u:12.5g} {sg:12.5g}\n")
     if args.output is None:
         return
-    p_attrs = {"units": PRESSURE_UNITS, "long_name": "applied mean pressure"}
-    ds = xr.Dataset(
-        {
-            "area_fraction": ("pressure", pred.area_fraction, {
-                "units": DIMENSIONLESS,
-                "long_name": "Persson relative contact area erf(sqrt(2) p/(E* gbar))"}),
-            "mean_gap": ("pressure", pred.mean_gap, {
-                "units": LENGTH_UNITS, "long_name": "Persson mean gap (Yang & Persson 2008)"}),
-            "sigma": ("pressure", pred.sigma, {
-                "units": SIGMA_UNITS, "long_name": f"closed-form conductance, Eq. 16 ({kind})"}),
-        },
-        coords={"pressure": ("pressure", pred.pressure, p_attrs)},
-        attrs={
-            "title": "roughflow theory: Persson prediction", "source": source, "kind": kind,
-            "a_c_star": a_star, "eta": args.eta, "energy_factor": energy_factor,
-        },
-    )
-    if surface is not None:
-        ds.attrs.update(spec_attrs(surface))
-    else:
-        ds.attrs.update({f"spec_{k}": v for k, v in src.as_attrs().items()})
+    ds = persson_dataset(pred, src if surface is None else surface, eta=args.eta,
+                         energy_factor=energy_factor, description=source)
     write_dataset(ds, args.output, provenance=args.provenance.using("persson", "closed_form"))
 
 

@@ -35,7 +35,8 @@ if TYPE_CHECKING:
     from roughflow.contact import Adhesion, ContactResult
     from roughflow.flow import FlowResult
     from roughflow.search import Threshold
-    from roughflow.surface import Surface
+    from roughflow.surface import Surface, SurfaceSpec
+    from roughflow.theory import PerssonPrediction
 
 #: The ``axis`` coordinate of every per-direction variable.
 AXIS_COORD = ("axis", list(AXIS_NAMES), {"long_name": "flow / percolation direction "
@@ -297,3 +298,41 @@ def flow_dataset(results: Mapping[int | str, FlowResult], contact: np.ndarray, *
                       f"imbalance_floor_{a}": r.imbalance_floor})
     out.attrs = attrs
     return out
+
+
+def persson_dataset(prediction: PerssonPrediction, source: SurfaceSpec | Surface, *,
+                    eta: float = 1.0, energy_factor: float | None = None,
+                    description: str = "") -> xr.Dataset:
+    """The Persson prediction sigma(p) (:func:`roughflow.theory.predict_conductance`) over
+    ``pressure``: a_c, mean gap and the closed-form sigma (Eq. 16), with the spec, or the
+    surface (its spec, or its scan and reference length), it was computed from; ``eta`` and
+    ``energy_factor``: those of the prediction (None: the default); ``description``: where
+    the spectrum came from (the ``source`` attribute)."""
+    from roughflow.surface import Surface
+    from roughflow.theory import DEFAULT_ENERGY_FACTOR
+
+    factor = DEFAULT_ENERGY_FACTOR if energy_factor is None else energy_factor
+    p_attrs = {"units": PRESSURE_UNITS, "long_name": "applied mean pressure"}
+    kind = prediction.kind
+    ds = xr.Dataset(
+        {
+            "area_fraction": ("pressure", prediction.area_fraction, {
+                "units": DIMENSIONLESS,
+                "long_name": "Persson relative contact area erf(sqrt(2) p/(E* gbar))"}),
+            "mean_gap": ("pressure", prediction.mean_gap, {
+                "units": LENGTH_UNITS, "long_name": "Persson mean gap (Yang & Persson 2008)"}),
+            "sigma": ("pressure", prediction.sigma, {
+                "units": SIGMA_UNITS, "long_name": f"closed-form conductance, Eq. 16 ({kind})"}),
+        },
+        coords={"pressure": ("pressure", prediction.pressure, p_attrs)},
+        attrs={
+            "title": "roughflow theory: Persson prediction", "source": description,
+            "kind": kind, "a_c_star": prediction.a_c_star, "eta": eta,
+            "energy_factor": factor,
+        },
+    )
+    if isinstance(source, Surface):
+        ds.attrs.update(spec_attrs(source))
+    else:
+        ds.attrs.update({f"spec_{k}": v for k, v in source.as_attrs().items()})
+    return ds
