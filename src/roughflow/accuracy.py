@@ -44,6 +44,9 @@ if TYPE_CHECKING:
 
     from numpy.typing import ArrayLike
 
+__all__ = ["PERIMETER_C", "contact_faces", "contact_line_length", "perimeter_term",
+           "perimeter_corrected_area", "richardson", "PerimeterFit", "fit_perimeter_constant"]
+
 #: Perimeter constant c fitted by ``roughflow accuracy`` (elastic contact, default
 #: sweep surfaces, 4 to 16 points per lambda_s; docs/accuracy.md): the misclassified area
 #: per contact/non-contact face, in cell areas. Fitted on square cells (gamma = 1) and

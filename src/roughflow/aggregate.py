@@ -38,6 +38,8 @@ from roughflow.errors import InputError
 from roughflow.io import default_provenance, read_dataset, write_dataset
 from roughflow.provenance import Provenance, settings_of_inputs
 
+__all__ = ["load", "ADDED_JOB_VARIABLES", "check_disjoint", "combine", "aggregate"]
+
 log = logging.getLogger(__name__)
 
 

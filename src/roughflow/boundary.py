@@ -40,6 +40,8 @@ from roughflow.defaults import BOUNDARY_METHODS, WINDOW_MARGIN
 from roughflow.errors import InputError
 from roughflow.surface import Surface, mirror_tiled
 
+__all__ = ["PAD_DEPTH", "Embedding", "cell_points", "embed"]
+
 #: "pad": the padding lies this many height ranges (max - min) below the scan's lowest
 #: point, far below any elastic displacement of the surroundings of the scan.
 PAD_DEPTH = 2.0

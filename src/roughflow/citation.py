@@ -20,6 +20,9 @@ from typing import TYPE_CHECKING
 if TYPE_CHECKING:
     from collections.abc import Collection
 
+__all__ = ["Reference", "REFERENCES", "METHODS", "contact_methods", "threshold_methods",
+           "LEAK_METHODS", "references", "keys_for", "markdown", "cff"]
+
 
 @dataclass(frozen=True)
 class Reference:

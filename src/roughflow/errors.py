@@ -12,6 +12,12 @@ if TYPE_CHECKING:
     import numpy as np
     from numpy.typing import ArrayLike
 
+__all__ = ["InputError", "ResourceError", "OutputError", "ConvergenceError", "require_finite",
+           "require_positive", "require_cell", "require_installed", "MAX_SEED", "require_int",
+           "require_seeds", "require_distinct", "check_axis", "check_nu", "plain_array",
+           "require_mask", "require_finite_values", "require_numbers", "require_squares_in_range",
+           "require_field"]
+
 
 class InputError(ValueError):
     """Bad input (config, CLI or API argument), raised before any work starts."""

@@ -43,6 +43,10 @@ from roughflow.errors import InputError, check_nu, require_int
 if TYPE_CHECKING:
     from numpy.typing import ArrayLike
 
+__all__ = ["UnderdeterminedFit", "scaling", "ScalingFit", "fit_scaling", "bootstrap_fit",
+           "lack_of_fit_limit", "direction_names", "FITTED_DIMS", "fitted_setting",
+           "corrected_text", "main_gamma", "threshold_points", "fit_dataset"]
+
 log = logging.getLogger(__name__)
 
 #: What every ``*_err`` of a fit dataset is (bootstrap_fit).

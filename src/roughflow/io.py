@@ -40,6 +40,11 @@ from roughflow.surface import ScanInfo, Surface, SurfaceSpec
 if TYPE_CHECKING:
     from matplotlib.figure import Figure
 
+__all__ = ["NETCDF_MAGIC", "check_output", "Writer", "figure_writer", "text_writer", "save_figure",
+           "write_together", "dataset_methods", "default_provenance", "dataset_writer",
+           "write_dataset", "read_dataset", "surface_to_dataset", "surface_from_dataset",
+           "read_surface"]
+
 
 def _attr_value(v):
     """netCDF attributes cannot hold None or bool: store them as strings/ints."""

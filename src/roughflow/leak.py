@@ -45,6 +45,9 @@ if TYPE_CHECKING:
 
     from roughflow.units import Scales
 
+__all__ = ["LeakCurve", "check_pressures", "check_seal", "fluid_pressure_note", "default_boundary",
+           "sealing_search", "leak_curve", "pressure_curve"]
+
 log = logging.getLogger(__name__)
 
 

@@ -42,6 +42,9 @@ from pathlib import Path
 
 from roughflow.defaults import DEFAULT_BACKEND
 
+__all__ = ["PROVENANCE_ATTRS", "COMPUTE_ATTRS", "PACKAGE_DIR", "source_commit", "Provenance",
+           "settings_of_inputs", "input_history", "input_references"]
+
 #: Attributes written by :meth:`Provenance.attrs` (never copied from one file into another).
 PROVENANCE_ATTRS = ("roughflow_version", "roughflow_commit", "python_version", "backend",
                     "fft_threads", "fftw_effort", "command", "created", "wall_time_s", "history",

@@ -35,6 +35,10 @@ from pathlib import Path
 
 from roughflow.errors import ResourceError
 
+__all__ = ["BASE", "PER_POINT", "TASKS", "FLOW_LDL_BYTES_PER_UNKNOWN", "SMALL", "estimate_bytes",
+           "total_bytes", "total_source", "available_bytes", "headroom_bytes", "describe",
+           "check_memory"]
+
 MB = 1024**2
 
 #: Fixed cost of a process in bytes: interpreter and libraries (numba's compiler for the

@@ -5,6 +5,8 @@ from __future__ import annotations
 
 import numpy as np
 
+__all__ = ["cubic_law"]
+
 
 def cubic_law(gap: np.ndarray | float, eta: float = 1.0) -> np.ndarray:
     """Local conductivity u^3 / (12 eta) of a gap (units L^3/eta); no input checks (the

@@ -49,6 +49,10 @@ from roughflow.surface import ScanInfo, Surface, rms_gradient
 if TYPE_CHECKING:
     from collections.abc import Sequence
 
+__all__ = ["detrend", "level_lines", "fill_missing", "largest_defined_window", "check_crop",
+           "parse_crop", "length_factor", "scan_size", "is_number", "TEXT_SUFFIXES",
+           "HEIGHT_CHANNEL_NAMES", "MISSING_VALUE_RTOL", "read_scan"]
+
 log = logging.getLogger(__name__)
 
 

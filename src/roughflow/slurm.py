@@ -29,6 +29,8 @@ from dataclasses import dataclass
 
 from roughflow.errors import InputError
 
+__all__ = ["JobLimits", "slurm_minutes", "tres_mem_mib", "job_limits"]
+
 #: what SLURM's memory suffixes mean (its "MB" is a MiB, the unit of ``sbatch --mem``)
 _MEM_UNITS = {"K": 1 / 1024, "M": 1, "G": 1024, "T": 1024**2, "P": 1024**3}
 

@@ -44,6 +44,10 @@ if TYPE_CHECKING:
 
     from numpy.typing import ArrayLike
 
+__all__ = ["paper_l_over_lambda_r", "SurfaceSpec", "fft_friendly", "ScanInfo", "Surface",
+           "from_scan", "spec_power", "mirror_tiled", "spectrum", "peklenik_wavenumber",
+           "rms_gradient", "spectral_rms_gradient", "generate"]
+
 
 def paper_l_over_lambda_r(gamma: float) -> float:
     """The paper's default size L / lambda_r = 4 max(sqrt(gamma), 1/sqrt(gamma)): four

@@ -31,6 +31,10 @@ if TYPE_CHECKING:
     import pint
     from numpy.typing import ArrayLike
 
+__all__ = ["REF_LENGTH", "REF_PRESSURE", "REF_VISCOSITY", "REFERENCE_ATTRS", "REFERENCE_VARIABLES",
+           "DIMENSIONS", "registry", "SI_DIGITS", "canonical", "parse_quantity", "parse_range",
+           "Scales", "leak_rate"]
+
 #: The reference units of the dimensionless system (roughflow.datasets.units describes them;
 #: they live here, below the datasets, because scan import and the leak question use them).
 REF_LENGTH = "ref_length"

@@ -22,6 +22,8 @@ if TYPE_CHECKING:
 
     import xarray as xr
 
+__all__ = ["module", "caption", "make_figure", "caption_document"]
+
 
 def module(study: str) -> ModuleType:
     if study not in STUDIES:
