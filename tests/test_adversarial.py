@@ -564,6 +564,10 @@ def test_sigterm_removes_the_temporary_files_like_ctrl_c(files, capsys, monkeypa
     monkeypatch.setattr(Figure, "savefig", killed_while_rendering)
     code, err = run(["figure", "threshold_vs_gamma", files["study"], "-o",
                      tmp_path / "fig.png"], capsys)
-    assert code == 128 + int(sig) and f"terminated ({name})" in err, err
-    assert list(tmp_path.iterdir()) == []
+    if before is signal.SIG_IGN:
+        # a run under nohup ignores SIGHUP, and so does roughflow: the command completes
+        assert code == 0, err
+    else:
+        assert code == 128 + int(sig) and f"terminated ({name})" in err, err
+        assert list(tmp_path.iterdir()) == []
     assert signal.getsignal(sig) is before  # main() restores the handler
