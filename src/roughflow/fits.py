@@ -509,7 +509,9 @@ def fit_dataset(ds: xr.Dataset, *, n_boot: int = FIT_BOOTSTRAP, nu: float = NU_P
                                           "gamma != 1 with the most sizes, attribute "
                                           "anisotropic_gamma) or isotropic (gamma = 1)"}),
         "fit": ("fit", list(fits), {"long_name": "direction fitted: easy or hard alone, or "
-                                    "joint (a shared a_c*)"}),
+                                    "joint (a shared a_c*); the isotropic group has only "
+                                    "the joint fit (x and y pooled): its easy and hard "
+                                    "entries, flags included, are NaN"}),
         "nu_mode": ("nu_mode", list(modes), {"long_name": "exponent nu: fixed (given) or "
                                              "free (fitted)"}),
     }
