@@ -55,12 +55,14 @@ FLOW_SIGMA_ERROR_LONG_NAME = (
     "smaller; that bound for AMG-CG ones (no A^-1); 0 without a solve")
 
 
-def spec_attrs(surface: Surface) -> dict:
-    """The surface's generation parameters as ``spec_*`` attributes, or for an imported
-    scan its provenance as ``scan_*`` attributes plus the reference length in metres
-    (empty for a bare height map)."""
+def spec_attrs(surface: Surface | SurfaceSpec) -> dict:
+    """The surface's (or a spec's own) generation parameters as ``spec_*`` attributes, or
+    for an imported scan its provenance as ``scan_*`` attributes plus the reference length
+    in metres (empty for a bare height map)."""
+    from roughflow.surface import SurfaceSpec
+
     out = {}
-    spec = getattr(surface, "spec", None)
+    spec = surface if isinstance(surface, SurfaceSpec) else getattr(surface, "spec", None)
     if spec is not None:
         out.update({f"spec_{k}": v for k, v in spec.as_attrs().items()})
     scan = getattr(surface, "scan", None)
@@ -308,7 +310,6 @@ def persson_dataset(prediction: PerssonPrediction, source: SurfaceSpec | Surface
     surface (its spec, or its scan and reference length), it was computed from; ``eta`` and
     ``energy_factor``: those of the prediction (None: the default); ``description``: where
     the spectrum came from (the ``source`` attribute)."""
-    from roughflow.surface import Surface
     from roughflow.theory import DEFAULT_ENERGY_FACTOR
 
     factor = DEFAULT_ENERGY_FACTOR if energy_factor is None else energy_factor
@@ -331,8 +332,5 @@ def persson_dataset(prediction: PerssonPrediction, source: SurfaceSpec | Surface
             "energy_factor": factor,
         },
     )
-    if isinstance(source, Surface):
-        ds.attrs.update(spec_attrs(source))
-    else:
-        ds.attrs.update({f"spec_{k}": v for k, v in source.as_attrs().items()})
+    ds.attrs.update(spec_attrs(source))
     return ds
