@@ -166,6 +166,13 @@ FLOW_CLOSED_BELOW = 1e-16
 #: flowing channels (sigma 2.7e-4 low, or 0 for two open channels). On contact gaps the
 #: bound was at most 2e-15 (256^2 and 512^2, a_c 0.11 - 0.45, 58 solves), so they never are.
 DROPPED_FLOW_RESOLVE = 1e-9
+#: Where a solve cannot be certified (or the floor above closes every path), regions whose
+#: faces conduct at least this many times more inside than any face out of them (deep
+#: dead-end pockets) are solved as one unknown each (flow.lump): float64 cannot resolve
+#: their inner pressure differences, while the lumped field stays admissible and its error
+#: is certified like any other. A pocket 1e3 times deeper than its channel (u^3 ratio 1e9)
+#: still solved unlumped to 5e-13; 1e4 (1e12) to only 3e-5 (docs/flow.md "Unresolved gaps").
+FLOW_LUMP_RATIO = 1e8
 #: Linear solvers of the flow: auto (direct for small systems and thin flowing clusters,
 #: else rs), Ruge-Stueben AMG + CG, smoothed aggregation + CG, sparse direct, plain CG.
 FLOW_METHODS = ("auto", "rs", "sa", "direct", "cg")

@@ -58,6 +58,7 @@ from .linsolve import (
     solve_spd,
 )
 from .linsolve import residual_scale as _residual_scale
+from .lump import find_lumps, lumped_system
 
 if TYPE_CHECKING:
     from numpy.typing import ArrayLike
@@ -104,6 +105,9 @@ class FlowResult:
     lx, ly: the lengths of the periodic cell (the domain) along x and y, units of L.
     ordering: the elimination order of a direct solve's factorisation (None after an
         iterative solve), for the ``ordering`` of the next solve of a similar gap.
+    lumped_cells: the cells solved as parts of near-equipotential regions, one unknown each
+        (deep dead-end pockets, where a solve could not be certified without: 0 otherwise;
+        :mod:`roughflow.flow.lump`, docs/flow.md "Unresolved gaps").
     """
 
     sigma: float
@@ -123,6 +127,7 @@ class FlowResult:
     lx: float = 1.0
     ly: float = 1.0
     ordering: CellOrdering | None = None
+    lumped_cells: int = 0
 
 
 @dataclass(frozen=True)
@@ -397,8 +402,11 @@ class _SigmaCertificate:
     (the bound is 1 - 400 times the exact error on RS iterates) lowers the next one's
     threshold by the factor it missed by."""
 
-    def __init__(self, faces: Faces, act: np.ndarray, cells: np.ndarray, target: float):
+    def __init__(self, faces: Faces, act: np.ndarray, cells: np.ndarray, target: float,
+                 full=None):
         self.faces, self.act, self.cells, self.target = faces, act, cells, target
+        # the pressures of ``cells`` from an iterate's unknowns (a lumped system's fewer)
+        self.full = (lambda x: x) if full is None else full
         self.threshold = target
         # Q of an earlier iterate, at least the present one's (CG lowers Q at every step): at
         # first Q(0), the inlet faces' sum, since the run starts from zero (solve_prepared)
@@ -413,6 +421,7 @@ class _SigmaCertificate:
     def __call__(self, x: np.ndarray, drop: float) -> bool:
         if drop > self.threshold * self.dissipation:  # no pass over the faces needed
             return False
+        x = self.full(x)
         self.dissipation = _flux_balance(self.faces, self.act, self.cells, x).dissipation
         if drop > self.threshold * self.dissipation:
             return False
@@ -430,7 +439,8 @@ class _SigmaCertificate:
 def _solve_flux_balanced(matrix, rhs, cells, act, faces: Faces, *, tol: float, method: str,
                          sigma_tol: float | None = None,
                          direct_max_flowing_fraction: float | None = None,
-                         hint: OrderHint | None = None, rounds: int = 4) -> _Balanced:
+                         hint: OrderHint | None = None, rounds: int = 4,
+                         node: np.ndarray | None = None) -> _Balanced:
     """Solve to ||b - A x|| <= tol ||b|| (else :class:`ConvergenceError`) and on until the
     flux imbalance |Q_in - Q_out| / Q is at most ``tol``, or round-off stops the solver.
 
@@ -450,20 +460,26 @@ def _solve_flux_balanced(matrix, rhs, cells, act, faces: Faces, *, tol: float, m
     most ``sigma_tol`` (:class:`_SigmaCertificate`), whatever its residual and imbalance,
     and a direct one takes Thomson's bound only beyond it (:func:`direct_bound_above`).
     ``direct_max_flowing_fraction``: see :func:`linsolve.choose`; ``hint``: the direct
-    solver's elimination order (:func:`linsolve.prepare`).
+    solver's elimination order (:func:`linsolve.prepare`). ``node``: where the system is
+    lumped (:mod:`roughflow.flow.lump`), the unknown of each cell of ``cells``; the error is
+    then Thomson's bound on the full system, which covers the lumping too.
     """
+    def full(x: np.ndarray) -> np.ndarray:  # the pressures of ``cells``
+        return x if node is None else x[node]
+
     # not also "within _imbalance_floor": near a_c* that stopped RS with sigma 3e-4 off where
     # going on to round-off gave 1e-8 (1024^2, a_c 0.44, y)
     def balanced(x: np.ndarray) -> bool:
-        return _flux_balance(faces, act, cells, x).imbalance <= tol
+        return _flux_balance(faces, act, cells, full(x)).imbalance <= tol
 
     # one factorisation for every refinement round: near a_c* it costs as much as a round
-    certificate = None if sigma_tol is None else _SigmaCertificate(faces, act, cells, sigma_tol)
+    certificate = (None if sigma_tol is None
+                   else _SigmaCertificate(faces, act, cells, sigma_tol, full))
     sol, prepared = solve_prepared(matrix, rhs, tol=tol, method=method, accept=balanced,
                                    certify=certificate, flowing_fraction=cells.size / act.size,
                                    direct_max_flowing_fraction=direct_max_flowing_fraction,
                                    hint=hint)
-    q, dissipation, imbalance = _flux_balance(faces, act, cells, sol.x)
+    q, dissipation, imbalance = _flux_balance(faces, act, cells, full(sol.x))
     for _round in range(rounds if prepared.factor is not None else 0):
         if imbalance <= tol:
             break
@@ -472,10 +488,14 @@ def _solve_flux_balanced(matrix, rhs, cells, act, faces: Faces, *, tol: float, m
         if not better.residual < 0.5 * sol.residual:  # stalled at round-off
             break
         sol = replace(better, iterations=sol.iterations)
-        q, dissipation, imbalance = _flux_balance(faces, act, cells, sol.x)
+        q, dissipation, imbalance = _flux_balance(faces, act, cells, full(sol.x))
     scale = _residual_scale(matrix, rhs, sol.x)
     floor = _imbalance_floor(scale, dissipation)
-    if prepared.factor is not None:
+    if node is not None:  # the residual's bound is the lumped system's alone
+        error = (certificate.bound if sol.certified
+                 else _sigma_error_bound(faces, act, cells, full(sol.x),
+                                         None if certificate is None else certificate.tree))
+    elif prepared.factor is not None:
         error = _sigma_error(matrix, rhs, sol.x, scale, prepared.factor.solve, dissipation)
         if error > direct_bound_above(sigma_tol):
             # where r is mostly round-off its allowance dominates; the bound does not use r
@@ -485,7 +505,8 @@ def _solve_flux_balanced(matrix, rhs, cells, act, faces: Faces, *, tol: float, m
     else:
         error = _sigma_error_bound(faces, act, cells, sol.x,
                                    None if certificate is None else certificate.tree)
-    factor = prepared.factor if isinstance(prepared.factor, LDLFactor) else None
+    factor = (prepared.factor if isinstance(prepared.factor, LDLFactor) and node is None
+              else None)
     return _Balanced(sol, q, dissipation, imbalance, floor, error, factor)
 
 
@@ -498,7 +519,8 @@ def _uncertified(balanced: _Balanced) -> str:
 def _balanced_solution(matrix, rhs, cells, act, faces: Faces, *, tol: float,
                        method: str, sigma_tol: float | None = None,
                        direct_max_flowing_fraction: float | None = None,
-                       hint: OrderHint | None = None) -> _Balanced:
+                       hint: OrderHint | None = None,
+                       node: np.ndarray | None = None) -> _Balanced:
     """:func:`_solve_flux_balanced`, checked where sigma's error is not certified to
     :data:`FLOW_SIGMA_RTOL`.
 
@@ -520,7 +542,7 @@ def _balanced_solution(matrix, rhs, cells, act, faces: Faces, *, tol: float,
     first = _solve_flux_balanced(matrix, rhs, cells, act, faces, tol=tol, method=method,
                                  sigma_tol=sigma_tol,
                                  direct_max_flowing_fraction=direct_max_flowing_fraction,
-                                 hint=hint)
+                                 hint=hint, node=node)
     if first.certified:
         return first
     if first.solution.method != "direct":
@@ -539,7 +561,7 @@ def _balanced_solution(matrix, rhs, cells, act, faces: Faces, *, tol: float,
         log.warning("%s; checking with the direct solver (%d unknowns)", _uncertified(first),
                     matrix.shape[0])
         again = _solve_flux_balanced(matrix, rhs, cells, act, faces, tol=tol, method="direct",
-                                     hint=hint)
+                                     hint=hint, node=node)
         first = replace(again, solution=replace(
             again.solution, iterations=again.solution.iterations + first.solution.iterations))
         if first.certified:
@@ -573,17 +595,28 @@ def flowing_cells(sigma_local: np.ndarray, axis: int, *, periodic: bool = True) 
         # dropout) conducts no more than its neighbours let it (one pit 3e5 times the gap
         # around it closed every other cell and gave sigma = 0 for an open channel)
         top = _largest_face(np.where(active, sigma_local, 0.0), axis, periodic)
-        unresolved = active & (sigma_local <= FLOW_CLOSED_BELOW * top)
-        if unresolved.any():
-            active = spanning_cells(active & ~unresolved, axis, periodic=periodic)
-            if not active.any():  # say so: the open cells do percolate
-                log.warning(
-                    "flow along %s: every open path runs through a gap below %.2g of the "
-                    "largest (u^3 below %g of it), which float64 cannot resolve beside it: "
-                    "sigma is reported 0 and the gap as not percolating (docs/flow.md, "
-                    "'Unresolved gaps')", AXIS_NAMES[axis], FLOW_CLOSED_BELOW ** (1 / 3),
-                    FLOW_CLOSED_BELOW)
+        active = _above_floor(sigma_local, active, top, axis, periodic)
     return active
+
+
+def _above_floor(sigma_local: np.ndarray, active: np.ndarray, top: float, axis: int,
+                 periodic: bool, keep: np.ndarray | None = None) -> np.ndarray:
+    """The cells of ``active`` whose u^3 exceeds ``FLOW_CLOSED_BELOW`` of ``top`` (or that
+    ``keep`` holds), and that still connect the reservoirs."""
+    unresolved = active & (sigma_local <= FLOW_CLOSED_BELOW * top)
+    if keep is not None:
+        unresolved &= ~keep
+    if unresolved.any():
+        active = spanning_cells(active & ~unresolved, axis, periodic=periodic)
+    return active
+
+
+def _closed_by_floor(axis: int) -> None:
+    log.warning(
+        "flow along %s: every open path runs through a gap below %.2g of the largest (u^3 "
+        "below %g of it), which float64 cannot resolve beside it: sigma is reported 0 and "
+        "the gap as not percolating (docs/flow.md, 'Unresolved gaps')", AXIS_NAMES[axis],
+        FLOW_CLOSED_BELOW ** (1 / 3), FLOW_CLOSED_BELOW)
 
 
 def check_sigma_tol(sigma_tol: float | None) -> float | None:
@@ -645,6 +678,11 @@ def solve(
     (uniform gaps of 1e-96 - 1e100 give u^3 / (12 eta) to 2e-15), and, the scaling being
     exact, the same bit for bit as an unscaled solve wherever that neither under- nor
     overflowed.
+    Where a solve is not certified, or the floor closes every open path, regions whose inside
+    conducts ``FLOW_LUMP_RATIO`` times more than any face out of them (deep dead-end pockets,
+    open stripes between closed ones) are solved as one unknown each, the floor scaled by the
+    faces outside them, and certified the same way (:mod:`roughflow.flow.lump`;
+    ``lumped_cells`` counts them).
     Raises ``InputError`` for bad input (a boolean gap, a contact mask passed by mistake,
     included; and a largest u^3 / (12 eta) that overflows float64 or lies below
     :data:`SMALLEST_TOP`) and ``ConvergenceError`` if the solver misses ``tol``, or where
@@ -686,26 +724,34 @@ def solve(
     unit = int(np.frexp(top)[1])
     sigma_local = np.ldexp(sigma_local, -unit, out=sigma_local)
     active = flowing_cells(sigma_local, ax, periodic=periodic)
+    open_cells = spanning_cells(sigma_local > 0, ax, periodic=periodic)
 
-    nan = np.full(g.shape, np.nan)
-    zeros = np.zeros(g.shape)
-    if not active.any():
-        return FlowResult(0.0, nan, zeros, zeros.copy(), 0.0, 0.0, 0, False, ax,
-                          lx=lx, ly=ly)
-
-    def attempt(active: np.ndarray) -> tuple[FlowResult, DroppedFlow, float]:
+    def attempt(active: np.ndarray, lumped: bool = False
+                ) -> tuple[FlowResult, DroppedFlow, float] | None:
         # work with flow along axis 0
         system = reynolds_system(sigma_local, active, ax, lx=lx, ly=ly, periodic=periodic)
         faces, act, cells, matrix, rhs = (system.faces, system.active, system.cells,
                                           system.matrix, system.rhs)
         h_flow, h_across = system.h_flow, system.h_across
+        node = None
+        if lumped:
+            lumps = find_lumps(faces, act, cells)
+            if lumps is None:
+                return None
+            node = lumps.node
+            matrix, rhs = lumped_system(faces, act, cells, lumps)
+            log.info("flow along %s: %d cells in %d near-equipotential regions solved as one "
+                     "unknown each (docs/flow.md, 'Unresolved gaps')", AXIS_NAMES[ax],
+                     int(lumps.lumped.sum()), lumps.n_regions)
         balanced = _balanced_solution(matrix, rhs, cells, act, faces, tol=tol, method=method,
                                       sigma_tol=sigma_tol,
                                       direct_max_flowing_fraction=direct_max_flowing_fraction,
-                                      hint=None if ordering is None else ordering.hint(cells))
+                                      hint=(None if ordering is None or lumped
+                                            else ordering.hint(cells)),
+                                      node=node)
         sol, q, dissipation = balanced.solution, balanced.pressure, balanced.dissipation
         p = np.full(act.shape, np.nan)
-        p.ravel()[cells] = sol.x
+        p.ravel()[cells] = sol.x if node is None else sol.x[node]
         # the flow the floor left out, bounded from the solved pressures
         dropped = dropped_flow(sigma_local if ax == 0 else sigma_local.T, act,
                                np.where(act, p, 0.0), h_flow, h_across, periodic=periodic)
@@ -739,36 +785,89 @@ def solve(
             ly=ly,
             ordering=(None if balanced.factor is None
                       else CellOrdering.of(balanced.factor, ax, g.shape, cells)),
+            lumped_cells=0 if node is None else int(lumps.lumped.sum()),
         )
         return result, dropped, share
 
-    result, dropped, share = attempt(active)
-    if share > DROPPED_FLOW_RESOLVE:
-        # cells below the floor that carry flow (a deep pocket elsewhere set the floor's
-        # scale): solve again with the regions that matter, and certify or raise
-        # the regions of largest bound, until those left bound a tenth of the trigger
-        order = np.argsort(dropped.bound)[::-1]
-        left = dropped.total - np.cumsum(dropped.bound[order])
-        take = order[:int(np.searchsorted(-left, -0.1 * DROPPED_FLOW_RESOLVE
-                                          * dropped.total / share)) + 1]
-        matters = np.zeros(dropped.bound.size, dtype=bool)
-        matters[take] = True
-        matters[0] = False
-        regions = matters[dropped.labels]
-        if ax == 1:
-            regions = regions.T
-        log.info("flow along %s: open cells below the unresolved-gap floor carry up to %.2g "
-                 "of sigma; solving again with %d of them", AXIS_NAMES[ax], share,
-                 int(regions.sum()))
-        result, dropped, share = attempt(spanning_cells(active | regions, ax,
-                                                        periodic=periodic))
+    def unresolved(result: FlowResult, share: float) -> ConvergenceError:
+        return ConvergenceError(
+            f"Reynolds solve along {AXIS_NAMES[ax]}: sigma's error bound "
+            f"{result.sigma_error:.2g} > {FLOW_SIGMA_RTOL:g} with the open cells below "
+            f"the unresolved-gap floor (they carry up to {share:.2g} of sigma) taken in; "
+            "float64 cannot resolve this gap's flow (docs/flow.md, 'Unresolved gaps')",
+            residual=result.sigma_error, iterations=result.iterations)
+
+    def lumped() -> FlowResult | None:
+        """The solve with near-equipotential regions lumped (:mod:`roughflow.flow.lump`),
+        the floor's scale taken from the faces outside them; None where there is none."""
+        frame = open_cells if ax == 0 else open_cells.T
+        s_frame = sigma_local if ax == 0 else sigma_local.T
+        unit_faces = face_transmissibilities(np.where(frame, s_frame, 0.0), 1.0, 1.0,
+                                             periodic=periodic)
+        lumps = find_lumps(unit_faces, frame, np.flatnonzero(frame.ravel()))
+        if lumps is None:
+            return None
+        top = lumps.largest_face_outside(unit_faces)
+        keep = lumps.lumped if ax == 0 else lumps.lumped.T
+        cells_on = _above_floor(sigma_local, open_cells, top, ax, periodic, keep=keep)
+        if not cells_on.any():
+            return None
+        out = attempt(cells_on, lumped=True)
+        if out is None:
+            return None
+        result, _dropped, share = out
         if result.sigma_error > FLOW_SIGMA_RTOL:
             raise ConvergenceError(
-                f"Reynolds solve along {AXIS_NAMES[ax]}: sigma's error bound "
-                f"{result.sigma_error:.2g} > {FLOW_SIGMA_RTOL:g} with the open cells below "
-                f"the unresolved-gap floor (they carry up to {share:.2g} of sigma) taken in; "
-                "float64 cannot resolve this gap's flow (docs/flow.md, 'Unresolved gaps')",
-                residual=result.sigma_error, iterations=result.iterations)
+                f"Reynolds solve along {AXIS_NAMES[ax]} with near-equipotential regions "
+                f"lumped: sigma's error bound {result.sigma_error:.2g} > {FLOW_SIGMA_RTOL:g} "
+                f"(the open cells below the unresolved-gap floor carry up to {share:.2g} of "
+                "it); float64 cannot resolve this gap's flow (docs/flow.md, 'Unresolved "
+                "gaps')", residual=result.sigma_error, iterations=result.iterations)
+        return result
+
+    nan = np.full(g.shape, np.nan)
+    zeros = np.zeros(g.shape)
+    if not active.any():
+        if open_cells.any():  # the floor closed every path: a deep pocket may have set it
+            result = lumped()
+            if result is not None:
+                return result
+            _closed_by_floor(ax)
+        return FlowResult(0.0, nan, zeros, zeros.copy(), 0.0, 0.0, 0, False, ax,
+                          lx=lx, ly=ly)
+
+    try:
+        result, dropped, share = attempt(active)
+        if share > DROPPED_FLOW_RESOLVE:
+            # cells below the floor that carry flow (a deep pocket elsewhere set the floor's
+            # scale): solve again with the regions that matter, and certify or raise
+            # the regions of largest bound, until those left bound a tenth of the trigger
+            order = np.argsort(dropped.bound)[::-1]
+            left = dropped.total - np.cumsum(dropped.bound[order])
+            take = order[:int(np.searchsorted(-left, -0.1 * DROPPED_FLOW_RESOLVE
+                                              * dropped.total / share)) + 1]
+            matters = np.zeros(dropped.bound.size, dtype=bool)
+            matters[take] = True
+            matters[0] = False
+            regions = matters[dropped.labels]
+            if ax == 1:
+                regions = regions.T
+            log.info("flow along %s: open cells below the unresolved-gap floor carry up to "
+                     "%.2g of sigma; solving again with %d of them", AXIS_NAMES[ax], share,
+                     int(regions.sum()))
+            result, dropped, share = attempt(spanning_cells(active | regions, ax,
+                                                            periodic=periodic))
+            if result.sigma_error > FLOW_SIGMA_RTOL:
+                raise unresolved(result, share)
+    except ConvergenceError as failed:
+        # float64 could not resolve the flow: where near-equipotential regions (deep
+        # pockets) are the cause, lumping them resolves it
+        again = lumped()
+        if again is None:
+            raise
+        log.info("flow along %s: %s; solved with near-equipotential regions lumped",
+                 AXIS_NAMES[ax], failed)
+        return again
     return result
 
 
