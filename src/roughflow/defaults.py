@@ -168,11 +168,14 @@ FLOW_CLOSED_BELOW = 1e-16
 DROPPED_FLOW_RESOLVE = 1e-9
 #: Where a solve cannot be certified (or the floor above closes every path), regions whose
 #: faces conduct at least this many times more inside than any face out of them (deep
-#: dead-end pockets) are solved as one unknown each (flow.lump): float64 cannot resolve
-#: their inner pressure differences, while the lumped field stays admissible and its error
-#: is certified like any other. A pocket 1e3 times deeper than its channel (u^3 ratio 1e9)
-#: still solved unlumped to 5e-13; 1e4 (1e12) to only 3e-5 (docs/flow.md "Unresolved gaps").
-FLOW_LUMP_RATIO = 1e8
+#: dead-end pockets, open stripes between closed ones) are solved as one unknown each, or at
+#: a reservoir's pressure where they reach it (flow.lump), with the floor scaled by the faces
+#: outside them: float64 cannot resolve their inner pressure differences, while the lumped
+#: field stays admissible and its error, about 1 / ratio of the region's share of the flow,
+#: is certified like any other. The ratios are tried in turn until a solve is certified: a
+#: pocket of graded depths (gaps 100, 1e4, 1e6 beside a channel of 1) has no single step of
+#: 1e8 in u^3 (docs/flow.md "Unresolved gaps").
+FLOW_LUMP_RATIOS = (1e8, 1e6, 1e4)
 #: Linear solvers of the flow: auto (direct for small systems and thin flowing clusters,
 #: else rs), Ruge-Stueben AMG + CG, smoothed aggregation + CG, sparse direct, plain CG.
 FLOW_METHODS = ("auto", "rs", "sa", "direct", "cg")

@@ -26,6 +26,7 @@ from roughflow.defaults import (
     AXIS_NAMES,
     DROPPED_FLOW_RESOLVE,
     FLOW_CLOSED_BELOW,
+    FLOW_LUMP_RATIOS,
     FLOW_SIGMA_RTOL,
     FLOW_TOL,
     FLOW_TOL_MAX,
@@ -58,7 +59,7 @@ from .linsolve import (
     solve_spd,
 )
 from .linsolve import residual_scale as _residual_scale
-from .lump import find_lumps, lumped_system
+from .lump import Lumps, find_lumps, inner_potential, lumped_system
 
 if TYPE_CHECKING:
     from numpy.typing import ArrayLike
@@ -98,7 +99,8 @@ class FlowResult:
         the direct solver included (0 for a direct solve or when no solve was needed).
     percolating: whether the open cells connect the two reservoirs, cells whose u^3 is at
         most ``FLOW_CLOSED_BELOW`` of the largest counted as closed (float64 cannot resolve
-        them; docs/flow.md "Unresolved gaps": a warning says when they alone block the flow).
+        them; docs/flow.md "Unresolved gaps": a warning says when they alone block the flow),
+        the largest taken outside the regions lumped (``lumped_cells``) where there are any.
     axis: flow axis (0 = x, 1 = y); method: linear solver used ("none" if none);
     sigma_flux: the boundary-flux estimate of sigma (less accurate, for comparison);
     n_active: number of unknowns (cells connected to both reservoirs);
@@ -241,16 +243,33 @@ def check_gap(gap: ArrayLike) -> np.ndarray:
     return g
 
 
-def _cell_fluxes(faces: Faces, p: np.ndarray, h_flow: float, h_across: float):
-    """Cell-centred flux densities (along, across) from face values, flow along axis 0."""
+def _cell_fluxes(faces: Faces, p: np.ndarray, h_flow: float, h_across: float,
+                 lumps: Lumps | None = None):
+    """Cell-centred flux densities (along, across) from face values, flow along axis 0; on
+    the inner faces of ``lumps``' regions from their
+    :func:`~roughflow.flow.lump.inner_potential`."""
     q = np.where(np.isnan(p), 0.0, p)
-    # face flux densities: transmissibility * dp / face length
-    f_along = faces.t_along * (q[:-1] - q[1:]) / h_across
-    f_in = faces.t_in * (1.0 - q[0]) / h_across
-    f_out = faces.t_out * q[-1] / h_across
-    faces_along = np.concatenate([f_in[None], f_along, f_out[None]], axis=0)
+    # face fluxes: transmissibility * dp (densities: over the face length, below)
+    f_along = faces.t_along * (q[:-1] - q[1:])
+    f_in = faces.t_in * (1.0 - q[0])
+    f_out = faces.t_out * q[-1]
+    f_across = faces.t_across * (q - np.roll(q, -1, axis=1))
+    if lumps is not None:
+        active = ~np.isnan(p)
+        phi = inner_potential(faces, active, q, lumps)
+        r = lumps.region
+        inner = (r[:-1] == r[1:]) & (r[:-1] >= 0)
+        f_along = np.where(inner, faces.t_along * (phi[:-1] - phi[1:]), f_along)
+        inner = (r == np.roll(r, -1, axis=1)) & (r >= 0)
+        f_across = np.where(inner, faces.t_across * (phi - np.roll(phi, -1, axis=1)),
+                            f_across)
+        node = np.full(p.shape, -1, dtype=np.int64)
+        node[active] = lumps.node
+        f_in = np.where(node[0] == lumps.n_nodes, -faces.t_in * phi[0], f_in)
+        f_out = np.where(node[-1] == lumps.n_nodes + 1, faces.t_out * phi[-1], f_out)
+    faces_along = np.concatenate([f_in[None], f_along, f_out[None]], axis=0) / h_across
     j_along = 0.5 * (faces_along[:-1] + faces_along[1:])
-    f_across = faces.t_across * (q - np.roll(q, -1, axis=1)) / h_flow
+    f_across = f_across / h_flow
     j_across = 0.5 * (f_across + np.roll(f_across, 1, axis=1))
     return j_along, j_across
 
@@ -440,7 +459,7 @@ def _solve_flux_balanced(matrix, rhs, cells, act, faces: Faces, *, tol: float, m
                          sigma_tol: float | None = None,
                          direct_max_flowing_fraction: float | None = None,
                          hint: OrderHint | None = None, rounds: int = 4,
-                         node: np.ndarray | None = None) -> _Balanced:
+                         lumps: Lumps | None = None) -> _Balanced:
     """Solve to ||b - A x|| <= tol ||b|| (else :class:`ConvergenceError`) and on until the
     flux imbalance |Q_in - Q_out| / Q is at most ``tol``, or round-off stops the solver.
 
@@ -460,12 +479,12 @@ def _solve_flux_balanced(matrix, rhs, cells, act, faces: Faces, *, tol: float, m
     most ``sigma_tol`` (:class:`_SigmaCertificate`), whatever its residual and imbalance,
     and a direct one takes Thomson's bound only beyond it (:func:`direct_bound_above`).
     ``direct_max_flowing_fraction``: see :func:`linsolve.choose`; ``hint``: the direct
-    solver's elimination order (:func:`linsolve.prepare`). ``node``: where the system is
-    lumped (:mod:`roughflow.flow.lump`), the unknown of each cell of ``cells``; the error is
-    then Thomson's bound on the full system, which covers the lumping too.
+    solver's elimination order (:func:`linsolve.prepare`). ``lumps``: where the system is
+    lumped (:mod:`roughflow.flow.lump`), its unknowns; the error is then Thomson's bound on
+    the full system, which covers the lumping too.
     """
     def full(x: np.ndarray) -> np.ndarray:  # the pressures of ``cells``
-        return x if node is None else x[node]
+        return x if lumps is None else lumps.pressures(x)
 
     # not also "within _imbalance_floor": near a_c* that stopped RS with sigma 3e-4 off where
     # going on to round-off gave 1e-8 (1024^2, a_c 0.44, y)
@@ -491,7 +510,7 @@ def _solve_flux_balanced(matrix, rhs, cells, act, faces: Faces, *, tol: float, m
         q, dissipation, imbalance = _flux_balance(faces, act, cells, full(sol.x))
     scale = _residual_scale(matrix, rhs, sol.x)
     floor = _imbalance_floor(scale, dissipation)
-    if node is not None:  # the residual's bound is the lumped system's alone
+    if lumps is not None:  # the residual's bound is the lumped system's alone
         error = (certificate.bound if sol.certified
                  else _sigma_error_bound(faces, act, cells, full(sol.x),
                                          None if certificate is None else certificate.tree))
@@ -505,7 +524,7 @@ def _solve_flux_balanced(matrix, rhs, cells, act, faces: Faces, *, tol: float, m
     else:
         error = _sigma_error_bound(faces, act, cells, sol.x,
                                    None if certificate is None else certificate.tree)
-    factor = (prepared.factor if isinstance(prepared.factor, LDLFactor) and node is None
+    factor = (prepared.factor if isinstance(prepared.factor, LDLFactor) and lumps is None
               else None)
     return _Balanced(sol, q, dissipation, imbalance, floor, error, factor)
 
@@ -520,7 +539,7 @@ def _balanced_solution(matrix, rhs, cells, act, faces: Faces, *, tol: float,
                        method: str, sigma_tol: float | None = None,
                        direct_max_flowing_fraction: float | None = None,
                        hint: OrderHint | None = None,
-                       node: np.ndarray | None = None) -> _Balanced:
+                       lumps: Lumps | None = None) -> _Balanced:
     """:func:`_solve_flux_balanced`, checked where sigma's error is not certified to
     :data:`FLOW_SIGMA_RTOL`.
 
@@ -542,7 +561,7 @@ def _balanced_solution(matrix, rhs, cells, act, faces: Faces, *, tol: float,
     first = _solve_flux_balanced(matrix, rhs, cells, act, faces, tol=tol, method=method,
                                  sigma_tol=sigma_tol,
                                  direct_max_flowing_fraction=direct_max_flowing_fraction,
-                                 hint=hint, node=node)
+                                 hint=hint, lumps=lumps)
     if first.certified:
         return first
     if first.solution.method != "direct":
@@ -561,7 +580,7 @@ def _balanced_solution(matrix, rhs, cells, act, faces: Faces, *, tol: float,
         log.warning("%s; checking with the direct solver (%d unknowns)", _uncertified(first),
                     matrix.shape[0])
         again = _solve_flux_balanced(matrix, rhs, cells, act, faces, tol=tol, method="direct",
-                                     hint=hint, node=node)
+                                     hint=hint, lumps=lumps)
         first = replace(again, solution=replace(
             again.solution, iterations=again.solution.iterations + first.solution.iterations))
         if first.certified:
@@ -679,10 +698,10 @@ def solve(
     exact, the same bit for bit as an unscaled solve wherever that neither under- nor
     overflowed.
     Where a solve is not certified, or the floor closes every open path, regions whose inside
-    conducts ``FLOW_LUMP_RATIO`` times more than any face out of them (deep dead-end pockets,
-    open stripes between closed ones) are solved as one unknown each, the floor scaled by the
-    faces outside them, and certified the same way (:mod:`roughflow.flow.lump`;
-    ``lumped_cells`` counts them).
+    conducts ``FLOW_LUMP_RATIOS`` times more than any face out of them (deep dead-end
+    pockets, open stripes between closed ones) are solved as one unknown each (or at the
+    pressure of a reservoir they reach), the floor scaled by the faces outside them, and
+    certified the same way (:mod:`roughflow.flow.lump`; ``lumped_cells`` counts them).
     Raises ``InputError`` for bad input (a boolean gap, a contact mask passed by mistake,
     included; and a largest u^3 / (12 eta) that overflows float64 or lies below
     :data:`SMALLEST_TOP`) and ``ConvergenceError`` if the solver misses ``tol``, or where
@@ -724,44 +743,38 @@ def solve(
     unit = int(np.frexp(top)[1])
     sigma_local = np.ldexp(sigma_local, -unit, out=sigma_local)
     active = flowing_cells(sigma_local, ax, periodic=periodic)
-    open_cells = spanning_cells(sigma_local > 0, ax, periodic=periodic)
+    s_frame = sigma_local if ax == 0 else sigma_local.T  # flow along axis 0
 
-    def attempt(active: np.ndarray, lumped: bool = False
-                ) -> tuple[FlowResult, DroppedFlow, float] | None:
-        # work with flow along axis 0
+    def attempt(active: np.ndarray, lumps: Lumps | None = None
+                ) -> tuple[FlowResult, DroppedFlow, float]:
         system = reynolds_system(sigma_local, active, ax, lx=lx, ly=ly, periodic=periodic)
         faces, act, cells, matrix, rhs = (system.faces, system.active, system.cells,
                                           system.matrix, system.rhs)
         h_flow, h_across = system.h_flow, system.h_across
-        node = None
-        if lumped:
-            lumps = find_lumps(faces, act, cells)
-            if lumps is None:
-                return None
-            node = lumps.node
+        if lumps is not None:
             matrix, rhs = lumped_system(faces, act, cells, lumps)
-            log.info("flow along %s: %d cells in %d near-equipotential regions solved as one "
-                     "unknown each (docs/flow.md, 'Unresolved gaps')", AXIS_NAMES[ax],
-                     int(lumps.lumped.sum()), lumps.n_regions)
+            log.info("flow along %s: %d cells in %d near-equipotential regions, each solved as "
+                     "one unknown or at its reservoir's pressure (docs/flow.md, 'Unresolved "
+                     "gaps')", AXIS_NAMES[ax], int(lumps.lumped.sum()), lumps.n_regions)
         balanced = _balanced_solution(matrix, rhs, cells, act, faces, tol=tol, method=method,
                                       sigma_tol=sigma_tol,
                                       direct_max_flowing_fraction=direct_max_flowing_fraction,
-                                      hint=(None if ordering is None or lumped
+                                      hint=(None if ordering is None or lumps is not None
                                             else ordering.hint(cells)),
-                                      node=node)
+                                      lumps=lumps)
         sol, q, dissipation = balanced.solution, balanced.pressure, balanced.dissipation
         p = np.full(act.shape, np.nan)
-        p.ravel()[cells] = sol.x if node is None else sol.x[node]
+        p.ravel()[cells] = sol.x if lumps is None else lumps.pressures(sol.x)
         # the flow the floor left out, bounded from the solved pressures
-        dropped = dropped_flow(sigma_local if ax == 0 else sigma_local.T, act,
-                               np.where(act, p, 0.0), h_flow, h_across, periodic=periodic)
+        dropped = dropped_flow(s_frame, act, np.where(act, p, 0.0), h_flow, h_across,
+                               periodic=periodic)
         share = dropped.total / dissipation if dissipation > 0 else 0.0
         q_in = float(np.sum(faces.t_in * (1.0 - q[0])))
         q_out = float(np.sum(faces.t_out * q[-1]))
         q_mean = 0.5 * (q_in + q_out)
         scale = system.l_flow / system.l_across
         j_along, j_across = (np.ldexp(j, unit)
-                             for j in _cell_fluxes(faces, p, h_flow, h_across))
+                             for j in _cell_fluxes(faces, p, h_flow, h_across, lumps))
         if ax == 0:
             pressure, fx, fy = p, j_along, j_across
         else:
@@ -785,90 +798,111 @@ def solve(
             ly=ly,
             ordering=(None if balanced.factor is None
                       else CellOrdering.of(balanced.factor, ax, g.shape, cells)),
-            lumped_cells=0 if node is None else int(lumps.lumped.sum()),
+            lumped_cells=0 if lumps is None else int(lumps.lumped.sum()),
         )
         return result, dropped, share
 
-    def unresolved(result: FlowResult, share: float) -> ConvergenceError:
-        return ConvergenceError(
-            f"Reynolds solve along {AXIS_NAMES[ax]}: sigma's error bound "
-            f"{result.sigma_error:.2g} > {FLOW_SIGMA_RTOL:g} with the open cells below "
-            f"the unresolved-gap floor (they carry up to {share:.2g} of sigma) taken in; "
-            "float64 cannot resolve this gap's flow (docs/flow.md, 'Unresolved gaps')",
-            residual=result.sigma_error, iterations=result.iterations)
-
-    def lumped() -> FlowResult | None:
-        """The solve with near-equipotential regions lumped (:mod:`roughflow.flow.lump`),
-        the floor's scale taken from the faces outside them; None where there is none."""
-        frame = open_cells if ax == 0 else open_cells.T
-        s_frame = sigma_local if ax == 0 else sigma_local.T
+    def lumps_of(active: np.ndarray, ratio: float) -> Lumps | None:
+        # regions by the conductances alone (unit cell lengths), as the floor takes them
+        frame = active if ax == 0 else active.T
         unit_faces = face_transmissibilities(np.where(frame, s_frame, 0.0), 1.0, 1.0,
                                              periodic=periodic)
-        lumps = find_lumps(unit_faces, frame, np.flatnonzero(frame.ravel()))
-        if lumps is None:
-            return None
-        top = lumps.largest_face_outside(unit_faces)
-        keep = lumps.lumped if ax == 0 else lumps.lumped.T
-        cells_on = _above_floor(sigma_local, open_cells, top, ax, periodic, keep=keep)
-        if not cells_on.any():
-            return None
-        out = attempt(cells_on, lumped=True)
-        if out is None:
-            return None
-        result, _dropped, share = out
+        return find_lumps(unit_faces, frame, np.flatnonzero(frame.ravel()), ratio=ratio)
+
+    def solved(active: np.ndarray, ratio: float | None = None) -> FlowResult:
+        """The certified solve on ``active`` (lumped at ``ratio``, where given), repeated with
+        the open cells below the floor that may carry flow; else :class:`ConvergenceError`."""
+        lumps = None if ratio is None else lumps_of(active, ratio)
+        result, dropped, share = attempt(active, lumps)
+        if share <= DROPPED_FLOW_RESOLVE:
+            return result
+        # cells below the floor that carry flow (a deep pocket elsewhere set the floor's
+        # scale): solve again with the regions that matter, and certify or raise
+        regions = _regions_that_matter(dropped, share)
+        if ax == 1:
+            regions = regions.T
+        log.info("flow along %s: open cells below the unresolved-gap floor carry up to %.2g "
+                 "of sigma; solving again with %d of them", AXIS_NAMES[ax], share,
+                 int(regions.sum()))
+        active = spanning_cells(active | regions, ax, periodic=periodic)
+        lumps = None if ratio is None else lumps_of(active, ratio)
+        result, dropped, share = attempt(active, lumps)
         if result.sigma_error > FLOW_SIGMA_RTOL:
             raise ConvergenceError(
-                f"Reynolds solve along {AXIS_NAMES[ax]} with near-equipotential regions "
-                f"lumped: sigma's error bound {result.sigma_error:.2g} > {FLOW_SIGMA_RTOL:g} "
-                f"(the open cells below the unresolved-gap floor carry up to {share:.2g} of "
-                "it); float64 cannot resolve this gap's flow (docs/flow.md, 'Unresolved "
-                "gaps')", residual=result.sigma_error, iterations=result.iterations)
+                f"Reynolds solve along {AXIS_NAMES[ax]}: sigma's error bound "
+                f"{result.sigma_error:.2g} > {FLOW_SIGMA_RTOL:g} with the open cells below "
+                f"the unresolved-gap floor (they carry up to {share:.2g} of sigma) taken in; "
+                "float64 cannot resolve this gap's flow (docs/flow.md, 'Unresolved gaps')",
+                residual=result.sigma_error, iterations=result.iterations)
         return result
 
-    nan = np.full(g.shape, np.nan)
-    zeros = np.zeros(g.shape)
+    def lumped() -> FlowResult | None:
+        """The solve with near-equipotential regions lumped (:mod:`roughflow.flow.lump`) at
+        the first of ``FLOW_LUMP_RATIOS`` that certifies it, the floor's scale taken from the
+        faces outside them; None where there are no regions, the last
+        :class:`ConvergenceError` where none certifies."""
+        open_cells = spanning_cells(sigma_local > 0, ax, periodic=periodic)
+        failed = None
+        for ratio in FLOW_LUMP_RATIOS:
+            frame = open_cells if ax == 0 else open_cells.T
+            unit_faces = face_transmissibilities(np.where(frame, s_frame, 0.0), 1.0, 1.0,
+                                                 periodic=periodic)
+            lumps = find_lumps(unit_faces, frame, np.flatnonzero(frame.ravel()), ratio=ratio)
+            if lumps is None:
+                continue
+            keep = lumps.lumped if ax == 0 else lumps.lumped.T
+            cells_on = _above_floor(sigma_local, open_cells, lumps.largest_face_outside(
+                unit_faces), ax, periodic, keep=keep)
+            if not cells_on.any():
+                continue
+            try:
+                return solved(cells_on, ratio)
+            except ConvergenceError as exc:
+                failed = exc
+        if failed is not None:
+            raise failed
+        return None
+
     if not active.any():
-        if open_cells.any():  # the floor closed every path: a deep pocket may have set it
+        if spanning_cells(sigma_local > 0, ax, periodic=periodic).any():
+            # the floor closed every open path: deep regions may have set its scale
             result = lumped()
             if result is not None:
                 return result
             _closed_by_floor(ax)
+        nan = np.full(g.shape, np.nan)
+        zeros = np.zeros(g.shape)
         return FlowResult(0.0, nan, zeros, zeros.copy(), 0.0, 0.0, 0, False, ax,
                           lx=lx, ly=ly)
-
     try:
-        result, dropped, share = attempt(active)
-        if share > DROPPED_FLOW_RESOLVE:
-            # cells below the floor that carry flow (a deep pocket elsewhere set the floor's
-            # scale): solve again with the regions that matter, and certify or raise
-            # the regions of largest bound, until those left bound a tenth of the trigger
-            order = np.argsort(dropped.bound)[::-1]
-            left = dropped.total - np.cumsum(dropped.bound[order])
-            take = order[:int(np.searchsorted(-left, -0.1 * DROPPED_FLOW_RESOLVE
-                                              * dropped.total / share)) + 1]
-            matters = np.zeros(dropped.bound.size, dtype=bool)
-            matters[take] = True
-            matters[0] = False
-            regions = matters[dropped.labels]
-            if ax == 1:
-                regions = regions.T
-            log.info("flow along %s: open cells below the unresolved-gap floor carry up to "
-                     "%.2g of sigma; solving again with %d of them", AXIS_NAMES[ax], share,
-                     int(regions.sum()))
-            result, dropped, share = attempt(spanning_cells(active | regions, ax,
-                                                            periodic=periodic))
-            if result.sigma_error > FLOW_SIGMA_RTOL:
-                raise unresolved(result, share)
-    except ConvergenceError as failed:
-        # float64 could not resolve the flow: where near-equipotential regions (deep
-        # pockets) are the cause, lumping them resolves it
+        return solved(active)
+    except ConvergenceError as exc:
+        failed = exc.with_traceback(None)  # its frames would keep the factorisation alive
+    # float64 could not resolve the flow: where near-equipotential regions (deep pockets)
+    # are the cause, lumping them resolves it
+    try:
         again = lumped()
-        if again is None:
-            raise
-        log.info("flow along %s: %s; solved with near-equipotential regions lumped",
-                 AXIS_NAMES[ax], failed)
-        return again
-    return result
+    except ConvergenceError:
+        raise failed from None
+    if again is None:
+        raise failed
+    log.info("flow along %s: %s; solved with near-equipotential regions lumped",
+             AXIS_NAMES[ax], failed)
+    return again
+
+
+def _regions_that_matter(dropped: DroppedFlow, share: float) -> np.ndarray:
+    """The cells of the left-out regions to take into the next solve (flow along axis 0):
+    those of largest bound, until the regions left bound a tenth of
+    :data:`DROPPED_FLOW_RESOLVE` of sigma."""
+    order = np.argsort(dropped.bound)[::-1]
+    left = dropped.total - np.cumsum(dropped.bound[order])
+    take = order[:int(np.searchsorted(-left, -0.1 * DROPPED_FLOW_RESOLVE
+                                      * dropped.total / share)) + 1]
+    matters = np.zeros(dropped.bound.size, dtype=bool)
+    matters[take] = True
+    matters[0] = False
+    return matters[dropped.labels]
 
 
 class Conductances(NamedTuple):
