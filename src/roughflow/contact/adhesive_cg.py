@@ -44,7 +44,14 @@ from roughflow.defaults import SOLVER_LOG_EVERY
 from roughflow.errors import InputError
 
 from . import _kernels as _k
-from ._gfmd_common import Z_MASS, load_scale, residual, spectral_factors
+from ._gfmd_common import (
+    Z_MASS,
+    held_pressure,
+    load_scale,
+    one_cell_scale,
+    residual,
+    spectral_factors,
+)
 from ._linalg import dot, height_scale
 from ._result import SolverOutput
 from .adhesion import Adhesion
@@ -103,7 +110,7 @@ def adhesive_cg(
     h0 = float(heights.mean())
     h = np.ascontiguousarray(heights - h0, dtype=np.float64).ravel()
     hscale = height_scale(h)
-    scale = load_scale(kmin, hscale, load, True)
+    floor = one_cell_scale(tuple(shape), float(lx), float(ly), hscale)
     amp, rho = adhesion.max_tension, adhesion.range
     w = math.pi / rho
     kappa = adhesion.kappa
@@ -141,7 +148,10 @@ def adhesive_cg(
         return the residual (else inf)."""
         real_in[:] = f
         ft = plan.execute_forward()  # preserved by the inverses below
-        res = residual(plan, ft, comp_n, hscale, scale) if check else math.inf
+        res = math.inf
+        if check:
+            scale = load_scale(kmin, hscale, held_pressure(load, sigma), floor)
+            res = residual(plan, ft, comp_n, hscale, scale)
         np.multiply(ft, inv_mass_n, out=plan.spectral_in)
         np.copyto(z, plan.execute_inverse().reshape(-1))
         np.multiply(ft, stiff_over_mass_n, out=plan.spectral_in)

@@ -79,8 +79,11 @@ contact cell's gap is set to zero.
 
 Residual: max |G f_eff| / rms(h), the largest displacement the unbalanced force would still
 cause, in units of the rms height (G = compliance 2/(|q| E*)); same units as the CG
-residual. G has no q = 0 part, so the load imbalance |mean f_eff| / min(p, k_min rms(h))
-enters the maximum as well. FIRE and the adhesive CG check it every ``check_every``
+residual. G has no q = 0 part, so the load imbalance |mean f_eff| enters the maximum as
+well, over the pressure the contacts hold (:func:`~._gfmd_common.load_scale`): min(p, k_min
+rms(h)); with adhesion the load plus the mean attraction, at least one held cell's stiffness
+times rms(h), where that is below k_min rms(h) (at zero load the few contacts alone hold the
+mean separation). FIRE and the adhesive CG check it every ``check_every``
 iterations; the hard-wall CG
 checks it once the free estimate max |z| / rms(h) says it may be below the tolerance (the
 start only if its estimate is within ``START_CHECK`` tolerances), and after a failed check
@@ -103,7 +106,14 @@ from roughflow.errors import InputError, require_field
 from roughflow.surface import spectral_rms_gradient
 
 from . import _kernels as _k
-from ._gfmd_common import Z_MASS, load_scale, residual, spectral_factors
+from ._gfmd_common import (
+    Z_MASS,
+    held_pressure,
+    load_scale,
+    one_cell_scale,
+    residual,
+    spectral_factors,
+)
 from ._linalg import height_scale
 from ._result import SolverOutput
 from .adhesion import Adhesion
@@ -500,7 +510,7 @@ def _hard_wall(
         h, pre = _on_device(setup)
     elif not on_gpu and gpu.array_module(h) is not np:
         raise InputError("setup built on the GPU (backend='cupy') passed to a CPU solve")
-    scale = load_scale(kmin, hscale, load, False)
+    scale = load_scale(kmin, hscale, load)
     eps = 1e-12 * hscale  # round-off of the FFT round trip: points this close touch
 
     if work is None:
@@ -660,6 +670,7 @@ def _fire(
     # masses m(q) = sqrt((z k_min)^2 + k^2), kept as 1/m
     inv_mass = np.hypot(Z_MASS * kmin, neg_k)
     soft = adhesion is not None and adhesion.repulsion == "harmonic"
+    floor = 0.0 if adhesion is None else one_cell_scale(shape, lx, ly, hscale)
     dt_max = ADHESIVE_DT0 if soft else DT_MAX
     if adhesion is not None and not soft:
         inv_mass.flat[0] = adhesive_q0_mass(load, kmin, hscale)
@@ -680,7 +691,6 @@ def _fire(
     sigma = np.empty(size)
     active = np.zeros(size, dtype=bool)
     a = np.empty(size)
-    scale = load_scale(kmin, hscale, load, adhesion is not None)
     eps = 1e-12 * hscale  # round-off of the FFT round trip: points this close touch
     h_clip = np.full(size, -np.inf) if soft else h
     tension = np.zeros(size)
@@ -702,7 +712,10 @@ def _fire(
             sigma[...] = adhesion.pressure(u - h)
             np.add(fel, sigma - load, out=f)
         ft = plan.forward(f.reshape(shape))
-        res = residual(plan, ft, comp_n, hscale, scale) if check else math.inf
+        res = math.inf
+        if check:
+            held = load if adhesion is None else held_pressure(load, sigma if soft else tension)
+            res = residual(plan, ft, comp_n, hscale, load_scale(kmin, hscale, held, floor))
         ft *= inv_mass
         np.copyto(a, plan.inverse(ft).ravel())
         return res

@@ -85,7 +85,9 @@ CAPTIONS: dict[str, str] = {
         "gamma for the Hurst exponents of the config (paper Fig. 4: "
         "H = 0.3 full triangles, H = 0.8 open circles), the paper's elastic contact with "
         "eps_f = 1/16 (the title gives the data's), L/lambda_r = 4 max(sqrt(gamma), "
-        "1/sqrt(gamma)); seed means with standard errors (none for a point of one seed)."
+        "1/sqrt(gamma)); seed means with standard errors (none for a point of one seed). At "
+        "gamma = 1 the surface is isotropic: its x and y points, which start the easy and hard "
+        "lines, differ by seed scatter alone."
     ),
     "flow_isotropic": (
         "Fluid-flow conductance sigma versus relative contact area a_c (paper Fig. 5), "
