@@ -178,3 +178,18 @@ def test_cli_refuses_a_sigma_it_cannot_certify(tmp_path, capsys, monkeypatch, me
         main(["flow", str(src), "--axis", "y", "--method", method, "-o", str(out)])
     assert exc.value.code == 3 and "error bound" in capsys.readouterr().err
     assert not out.exists()
+
+
+def test_the_flow_command_records_the_lumped_cells(tmp_path):
+    """``roughflow flow`` writes how many cells each axis lumped (``lumped_cells_x``; a
+    channel of gap 1 beside a 2 x 2 pocket of gap 3e5, test_flow_lump.py), so a file says
+    where its sigma came from a lumped solve; 0 on an ordinary gap."""
+    g = np.zeros((64, 64))
+    g[:, 10] = 1.0
+    g[30:32, 11:13] = 3e5
+    src, out = tmp_path / "c.nc", tmp_path / "f.nc"
+    write_contact(src, g)
+    main(["flow", str(src), "--axis", "both", "-o", str(out)])
+    with xr.open_dataset(out) as ds:
+        assert ds.attrs["lumped_cells_x"] == 4 and ds.attrs["sigma_x"] > 0
+        assert ds.attrs["lumped_cells_y"] == 0 and ds.attrs["sigma_y"] == 0

@@ -178,3 +178,4 @@ def test_the_flux_inside_a_lumped_region_is_the_flow_through_it():
     channel = r.flux_x[:, 10]
     assert channel == pytest.approx(np.full(48, channel[0]), rel=1e-9)
     assert np.count_nonzero(r.flux_x[:, 11:]) == 0
+

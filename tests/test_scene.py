@@ -210,6 +210,8 @@ def test_ladder_scene_flow_only_where_percolating():
         ds["flow_iterations"].sel(seed=0).values[2] == 0)
     # which solver gave sigma: the sparse LU on these small grids, nothing where not solved
     np.testing.assert_array_equal(ds["flow_direct"].sel(seed=0).values, [[1, 1], [1, 1], [0, 0]])
+    # an ordinary gap needs no lumping (flow.lump: a fallback for deep pockets)
+    np.testing.assert_array_equal(ds["flow_lumped_cells"].sel(seed=0).values, 0)
     assert np.all(perc[0] == 1) and np.all(sig[0] > 0)
     # the ladder's conductance is the flow stage's (same gap: bearing is deterministic)
     from roughflow import contact
@@ -383,7 +385,9 @@ def test_ladder_records_the_flow_solver_and_combines_with_files_that_do_not(monk
     older = run_ladder(LadderJob(surface=TINY, model="bearing", seeds=(2,),
                                  area_fractions=(0.05, 0.3), a_c_star=0.5, a_c_star_alt=0.4))
     out = combine([direct, older.drop_vars(["flow_direct", "flow_imbalance",
-                                            "flow_imbalance_floor", "flow_sigma_error"])])
+                                            "flow_imbalance_floor", "flow_sigma_error",
+                                            "flow_lumped_cells"])])
+    assert np.isnan(out["flow_lumped_cells"].sel(seed=2)).all()
     assert np.isnan(out["flow_direct"].sel(seed=2)).all()
     assert np.isnan(out["flow_imbalance"].sel(seed=2)).all()
     assert np.isnan(out["flow_sigma_error"].sel(seed=2)).all()

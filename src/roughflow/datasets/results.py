@@ -297,7 +297,8 @@ def flow_dataset(results: Mapping[int | str, FlowResult], contact: np.ndarray, *
                       f"flux_imbalance_{a}": r.flux_imbalance, f"iterations_{a}": r.iterations,
                       f"percolating_{a}": r.percolating, f"method_{a}": r.method,
                       f"sigma_flux_{a}": r.sigma_flux, f"sigma_error_{a}": r.sigma_error,
-                      f"imbalance_floor_{a}": r.imbalance_floor})
+                      f"imbalance_floor_{a}": r.imbalance_floor,
+                      f"lumped_cells_{a}": r.lumped_cells})
     out.attrs = attrs
     return out
 

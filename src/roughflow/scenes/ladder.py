@@ -149,6 +149,7 @@ def run_ladder(job: LadderJob, *, threads: int | None = None) -> xr.Dataset:
     r["flow_sigma_error"] = np.full((ns, nk, 2), np.nan)
     r["flow_iterations"] = np.full((ns, nk, 2), -1, dtype=np.int64)
     r["flow_direct"] = np.full((ns, nk, 2), -1, dtype=np.int64)
+    r["flow_lumped_cells"] = np.full((ns, nk, 2), -1, dtype=np.int64)
     r["percolating"] = np.full((ns, nk, 2), -1, dtype=np.int64)
     r["sigma_emt"] = np.full((ns, nk, len(EMT_FORMS), 2), np.nan)
     r["sigma_ref"] = np.full((ns, 2), np.nan)
@@ -200,6 +201,7 @@ def run_ladder(job: LadderJob, *, threads: int | None = None) -> xr.Dataset:
                 r["flow_sigma_error"][i, k, ax] = 0.0 if fr is None else fr.sigma_error
                 r["flow_iterations"][i, k, ax] = 0 if fr is None else fr.iterations
                 r["flow_direct"][i, k, ax] = int(fr is not None and fr.method == "direct")
+                r["flow_lumped_cells"][i, k, ax] = 0 if fr is None else fr.lumped_cells
             th = _theory(c.gap, ~open_mask, c.area_fraction if math.isnan(a_cont) else a_cont,
                          job)
             r["sigma_emt"][i, k] = (
@@ -248,6 +250,9 @@ def run_ladder(job: LadderJob, *, threads: int | None = None) -> xr.Dataset:
                            "thin flowing clusters, or the fallback of an AMG solve that did "
                            "not converge or balance the fluxes), 0: AMG-CG or no solve",
                            **flags("iterative_or_none direct")),
+        "flow_lumped_cells": var(r["flow_lumped_cells"], ska, DIMENSIONLESS,
+                                 "cells the flow solve lumped into near-equipotential "
+                                 "regions (deep pockets float64 cannot resolve; 0: none)"),
         "sigma_emt": var(r["sigma_emt"], ("seed", "step", "emt", "axis"), SIGMA_UNITS,
                          "Bruggeman effective-medium conductance"),
         "sigma_closed_form": var(r["sigma_closed_form"], sk, SIGMA_UNITS,
