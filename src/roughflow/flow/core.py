@@ -802,12 +802,16 @@ def solve(
         )
         return result, dropped, share
 
-    def lumps_of(active: np.ndarray, ratio: float) -> Lumps | None:
-        # regions by the conductances alone (unit cell lengths), as the floor takes them
+    def unit_faces(active: np.ndarray) -> tuple[np.ndarray, Faces]:
+        # the cells in the flow's frame and their faces by the conductances alone (unit cell
+        # lengths), as the floor takes them
         frame = active if ax == 0 else active.T
-        unit_faces = face_transmissibilities(np.where(frame, s_frame, 0.0), 1.0, 1.0,
-                                             periodic=periodic)
-        return find_lumps(unit_faces, frame, np.flatnonzero(frame.ravel()), ratio=ratio)
+        return frame, face_transmissibilities(np.where(frame, s_frame, 0.0), 1.0, 1.0,
+                                              periodic=periodic)
+
+    def lumps_of(active: np.ndarray, ratio: float) -> Lumps | None:
+        frame, faces = unit_faces(active)
+        return find_lumps(faces, frame, np.flatnonzero(frame.ravel()), ratio=ratio)
 
     def solved(active: np.ndarray, ratio: float | None = None) -> FlowResult:
         """The certified solve on ``active`` (lumped at ``ratio``, where given), repeated with
@@ -836,23 +840,22 @@ def solve(
                 residual=result.sigma_error, iterations=result.iterations)
         return result
 
-    def lumped() -> FlowResult | None:
-        """The solve with near-equipotential regions lumped (:mod:`roughflow.flow.lump`) at
-        the first of ``FLOW_LUMP_RATIOS`` that certifies it, the floor's scale taken from the
-        faces outside them; None where there are no regions, the last
-        :class:`ConvergenceError` where none certifies."""
-        open_cells = spanning_cells(sigma_local > 0, ax, periodic=periodic)
+    def lumped(open_cells: np.ndarray) -> FlowResult | None:
+        """The solve on the open cells that connect the reservoirs, ``open_cells``, with
+        near-equipotential regions lumped (:mod:`roughflow.flow.lump`) at the first of
+        ``FLOW_LUMP_RATIOS`` that certifies it, the floor's scale taken from the faces outside
+        them; None where there are no regions, the last :class:`ConvergenceError` where none
+        certifies."""
+        frame, faces = unit_faces(open_cells)
+        cells = np.flatnonzero(frame.ravel())
         failed = None
         for ratio in FLOW_LUMP_RATIOS:
-            frame = open_cells if ax == 0 else open_cells.T
-            unit_faces = face_transmissibilities(np.where(frame, s_frame, 0.0), 1.0, 1.0,
-                                                 periodic=periodic)
-            lumps = find_lumps(unit_faces, frame, np.flatnonzero(frame.ravel()), ratio=ratio)
+            lumps = find_lumps(faces, frame, cells, ratio=ratio)
             if lumps is None:
                 continue
             keep = lumps.lumped if ax == 0 else lumps.lumped.T
-            cells_on = _above_floor(sigma_local, open_cells, lumps.largest_face_outside(
-                unit_faces), ax, periodic, keep=keep)
+            cells_on = _above_floor(sigma_local, open_cells, lumps.largest_face_outside(faces),
+                                    ax, periodic, keep=keep)
             if not cells_on.any():
                 continue
             try:
@@ -864,9 +867,11 @@ def solve(
         return None
 
     if not active.any():
-        if spanning_cells(sigma_local > 0, ax, periodic=periodic).any():
+        # (the open cells are found again only off the common path, where it is needed)
+        open_cells = spanning_cells(sigma_local > 0, ax, periodic=periodic)
+        if open_cells.any():
             # the floor closed every open path: deep regions may have set its scale
-            result = lumped()
+            result = lumped(open_cells)
             if result is not None:
                 return result
             _closed_by_floor(ax)
@@ -881,7 +886,7 @@ def solve(
     # float64 could not resolve the flow: where near-equipotential regions (deep pockets)
     # are the cause, lumping them resolves it
     try:
-        again = lumped()
+        again = lumped(spanning_cells(sigma_local > 0, ax, periodic=periodic))
     except ConvergenceError:
         raise failed from None
     if again is None:
