@@ -30,7 +30,8 @@ os.environ.setdefault("ROUGHFLOW_FFT_THREADS", "1")
 
 from roughflow.errors import ConvergenceError  # noqa: E402
 from roughflow.leak import leak_curve  # noqa: E402
-from roughflow.surface import Surface, from_scan, rms_gradient  # noqa: E402
+from roughflow.scan import read_scan  # noqa: E402
+from roughflow.surface import Surface, rms_gradient  # noqa: E402
 
 OUT = Path(__file__).resolve().parents[1] / "results" / "benchmarks"
 
@@ -108,7 +109,7 @@ def build_parser() -> argparse.ArgumentParser:
 def main() -> None:
     args = build_parser().parse_args()
     OUT.mkdir(parents=True, exist_ok=True)
-    native = from_scan(args.scan, size=args.size, unit=args.unit, fill=args.fill,
+    native = read_scan(args.scan, size=args.size, unit=args.unit, fill=args.fill,
                        crop=args.crop)
     p = np.array(sorted(args.pressures))
     jobs = [(regrid(native, 1 / k), f"1/{k}", 1e-6) for k in args.coarsen]

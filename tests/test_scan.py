@@ -21,7 +21,6 @@ from roughflow.scan import (
     parse_crop,
     read_scan,
 )
-from roughflow.surface import from_scan
 
 ST = pytest.importorskip("SurfaceTopography")
 DATA = Path(__file__).resolve().parent / "data"
@@ -44,12 +43,12 @@ def check_scaled(surface, h_m: np.ndarray, lx_m: float, ly_m: float) -> None:
 def test_netcdf_written_by_surfacetopography_gives_size_and_unit(tmp_path):
     h = heights()
     ST.Topography(h, (2.0, 1.5), unit="um").to_netcdf(str(tmp_path / "scan.nc"))
-    s = from_scan(tmp_path / "scan.nc", detrend_mode="none")
+    s = read_scan(tmp_path / "scan.nc", detrend_mode="none")
     check_scaled(s, h * UM, 2 * UM, 1.5 * UM)
     assert s.scan.filled == 0 and not s.periodic and s.scan.detrend == "none"
     # the file gives its size: a --size of our own is refused, naming it
     with pytest.raises(InputError, match="already gives its size"):
-        from_scan(tmp_path / "scan.nc", size="3um")
+        read_scan(tmp_path / "scan.nc", size="3um")
 
 
 def test_a_refused_scan_leaves_its_reader_closed(tmp_path, monkeypatch):
@@ -61,9 +60,9 @@ def test_a_refused_scan_leaves_its_reader_closed(tmp_path, monkeypatch):
     monkeypatch.setattr(scan, "_close", lambda reader: closed.append(type(reader).__name__))
     ST.Topography(heights(), (2.0, 1.5), unit="um").to_netcdf(str(tmp_path / "scan.nc"))
     with pytest.raises(InputError, match="already gives its size"):
-        from_scan(tmp_path / "scan.nc", size="3um")
+        read_scan(tmp_path / "scan.nc", size="3um")
     assert len(closed) == 1
-    from_scan(tmp_path / "scan.nc")
+    read_scan(tmp_path / "scan.nc")
     assert len(closed) == 2  # and once, not twice, on success
 
 
@@ -71,20 +70,20 @@ def test_npy_needs_size_and_unit(tmp_path):
     h = heights()
     np.save(tmp_path / "scan.npy", h)
     with pytest.raises(InputError, match="unit"):
-        from_scan(tmp_path / "scan.npy", size="2um,1.5um")
+        read_scan(tmp_path / "scan.npy", size="2um,1.5um")
     with pytest.raises(InputError, match="physical size"):
-        from_scan(tmp_path / "scan.npy", unit="nm")
-    s = from_scan(tmp_path / "scan.npy", size="2um,1.5um", unit="nm", detrend_mode="none")
+        read_scan(tmp_path / "scan.npy", unit="nm")
+    s = read_scan(tmp_path / "scan.npy", size="2um,1.5um", unit="nm", detrend_mode="none")
     check_scaled(s, h * 1e-9, 2 * UM, 1.5 * UM)
     # numbers alone are in --unit; heights in another unit via height_unit
-    s = from_scan(tmp_path / "scan.npy", size="2000,1500", unit="nm", height_unit="um",
+    s = read_scan(tmp_path / "scan.npy", size="2000,1500", unit="nm", height_unit="um",
                   detrend_mode="none")
     check_scaled(s, h * UM, 2 * UM, 1.5 * UM)
 
 
 def test_cli_import_passes_the_height_unit(tmp_path):
     """`roughflow import` once dropped --height-unit: the heights were read in --unit (nm),
-    1000 times too small against heights in um. The command's surface is from_scan's, and
+    1000 times too small against heights in um. The command's surface is read_scan's, and
     both are the raw numbers in um."""
     h = heights()
     np.save(tmp_path / "scan.npy", h)
@@ -93,7 +92,7 @@ def test_cli_import_passes_the_height_unit(tmp_path):
                  "--height-unit", "um", "--detrend", "none", "-o", str(out)]) == 0
     got = read_surface(out)
     check_scaled(got, h * UM, 2 * UM, 1.5 * UM)
-    want = from_scan(tmp_path / "scan.npy", size="2000,1500", unit="nm", height_unit="um",
+    want = read_scan(tmp_path / "scan.npy", size="2000,1500", unit="nm", height_unit="um",
                      detrend_mode="none")
     np.testing.assert_array_equal(got.heights, want.heights)
     assert got.scan.length_scale == want.scan.length_scale
@@ -123,10 +122,10 @@ def test_truncated_npy_refused_before_reading(tmp_path):
     data = (tmp_path / "scan.npy").read_bytes()
     (tmp_path / "cut.npy").write_bytes(data[:300])
     with pytest.raises(InputError, match="truncated"):
-        from_scan(tmp_path / "cut.npy", size="1um", unit="um")
+        read_scan(tmp_path / "cut.npy", size="1um", unit="um")
     (tmp_path / "junk.npy").write_bytes(b"garbage")
     with pytest.raises(InputError, match="not a valid .npy"):
-        from_scan(tmp_path / "junk.npy", size="1um", unit="um")
+        read_scan(tmp_path / "junk.npy", size="1um", unit="um")
     out = tmp_path / "cut.nc"
     with pytest.raises(SystemExit) as exc:
         main(["import", str(tmp_path / "cut.npy"), "--size", "1um", "--unit", "um",
@@ -140,7 +139,7 @@ def test_plain_text_written_by_numpy(tmp_path):
     # SurfaceTopography's plain-text reader takes a row as a line along x (rows are y):
     # write the transpose so that the file holds h[ix, iy]
     np.savetxt(tmp_path / "scan.txt", h.T)
-    s = from_scan(tmp_path / "scan.txt", size="2mm,1.5mm", unit="mm", detrend_mode="none")
+    s = read_scan(tmp_path / "scan.txt", size="2mm,1.5mm", unit="mm", detrend_mode="none")
     check_scaled(s, h * 1e-3, 2e-3, 1.5e-3)
 
 
@@ -158,11 +157,11 @@ def test_a_text_line_the_reader_would_drop_is_refused(tmp_path, token):
     expected = (f"kept {h.shape[1] - 1} of the {h.shape[1]} lines.*"
                 + re.escape(f"line 5 holds {token!r}"))
     with pytest.raises(InputError, match=expected):
-        from_scan(tmp_path / "gap.txt", size="2mm,1.5mm", unit="mm", fill="harmonic")
+        read_scan(tmp_path / "gap.txt", size="2mm,1.5mm", unit="mm", fill="harmonic")
     row[2] = "nan"
     lines[4] = " ".join(row)
     (tmp_path / "nan.txt").write_text("\n".join(lines) + "\n")
-    s = from_scan(tmp_path / "nan.txt", size="2mm,1.5mm", unit="mm", fill="harmonic")
+    s = read_scan(tmp_path / "nan.txt", size="2mm,1.5mm", unit="mm", fill="harmonic")
     assert s.shape == h.shape and s.scan.filled == 1
 
 
@@ -171,7 +170,7 @@ def test_a_header_line_of_as_many_words_is_not_a_dropped_line(tmp_path):
     h = 0.01 * heights(4, 6)  # 4 values a line: a header "w x y z" has as many words
     lines = [" ".join(f"{v:.6g}" for v in row) for row in h.T]
     (tmp_path / "head.txt").write_text("w x y z\n" + "\n".join(lines) + "\n")
-    s = from_scan(tmp_path / "head.txt", size="4mm,6mm", unit="mm", detrend_mode="none")
+    s = read_scan(tmp_path / "head.txt", size="4mm,6mm", unit="mm", detrend_mode="none")
     assert s.shape == (4, 6)
 
 
@@ -181,12 +180,12 @@ def test_heights_in_the_wrong_unit_draw_a_warning(tmp_path, caplog):
     h = 0.01 * heights()  # rms gradient 0.15 on mm pixels
     np.save(tmp_path / "h.npy", h)
     with caplog.at_level("WARNING", logger="roughflow.scan"):
-        right = from_scan(tmp_path / "h.npy", size="2mm,1.5mm", unit="mm")
+        right = read_scan(tmp_path / "h.npy", size="2mm,1.5mm", unit="mm")
     assert caplog.text == ""
     for height_unit, factor in (("m", 1e3), ("nm", 1e-6)):
         caplog.clear()
         with caplog.at_level("WARNING", logger="roughflow.scan"):
-            wrong = from_scan(tmp_path / "h.npy", size="2mm,1.5mm", unit="mm",
+            wrong = read_scan(tmp_path / "h.npy", size="2mm,1.5mm", unit="mm",
                               height_unit=height_unit)
         assert wrong.scan.rms_gradient == pytest.approx(factor * right.scan.rms_gradient)
         assert "rms gradient is" in caplog.text and f"read in {height_unit}" in caplog.text
@@ -201,17 +200,17 @@ def test_swapped_axes_draw_a_warning_about_the_pixels(tmp_path, caplog):
     np.savetxt(tmp_path / "xy.txt", h)
     np.savetxt(tmp_path / "yx.txt", h.T)
     with caplog.at_level("WARNING", logger="roughflow.scan"):
-        swapped = from_scan(tmp_path / "xy.txt", size=size, unit="um")
+        swapped = read_scan(tmp_path / "xy.txt", size=size, unit="um")
     assert swapped.shape == h.shape[::-1]
     assert "the pixels are" in caplog.text and "axes are swapped" in caplog.text
     caplog.clear()
     with caplog.at_level("WARNING", logger="roughflow.scan"):
-        right = from_scan(tmp_path / "yx.txt", size=size, unit="um")
+        right = read_scan(tmp_path / "yx.txt", size=size, unit="um")
     assert right.shape == h.shape and caplog.text == ""
 
 
 def test_repository_scan_imports():
-    s = from_scan(DATA / "afm-64.npy", size="500nm", unit="nm")
+    s = read_scan(DATA / "afm-64.npy", size="500nm", unit="nm")
     assert s.shape == (64, 64) and s.scan.length_scale == pytest.approx(500e-9)
     # the AFM scan's rms gradient is about 0.77 at full resolution; the 8x8 block average
     # smooths the shortest wavelengths away
@@ -225,22 +224,22 @@ def test_missing_points_refused_unless_filled(tmp_path):
     h[0, 0] = np.nan
     np.save(tmp_path / "scan.npy", h)
     with pytest.raises(InputError, match="3 missing points"):
-        from_scan(tmp_path / "scan.npy", size="1um", unit="um")
-    s = from_scan(tmp_path / "scan.npy", size="1um", unit="um", fill="min",
+        read_scan(tmp_path / "scan.npy", size="1um", unit="um")
+    s = read_scan(tmp_path / "scan.npy", size="1um", unit="um", fill="min",
                   detrend_mode="none")
     assert s.scan.filled == 3 and s.scan.fill == "min"
     ok = np.isfinite(h)
     assert np.all(s.heights[~ok] == pytest.approx(s.heights[ok].min()))
-    s = from_scan(tmp_path / "scan.npy", size="1um", unit="um", fill="harmonic")
+    s = read_scan(tmp_path / "scan.npy", size="1um", unit="um", fill="harmonic")
     assert s.scan.filled == 3 and np.isfinite(s.heights).all()
     # masked points of a SurfaceTopography file count as missing too
     m = np.ma.masked_array(heights(), mask=np.zeros((16, 12), bool))
     m.mask[5, 5] = True
     ST.Topography(m, (1.0, 1.0), unit="um").to_netcdf(str(tmp_path / "m.nc"))
     with pytest.raises(InputError, match="1 missing points"):
-        from_scan(tmp_path / "m.nc")
+        read_scan(tmp_path / "m.nc")
     # cropping the missing points away needs no fill
-    s = from_scan(tmp_path / "m.nc", crop="6:,:")
+    s = read_scan(tmp_path / "m.nc", crop="6:,:")
     assert s.shape == (10, 12) and s.scan.filled == 0 and s.scan.crop == "6:16,0:12"
 
 
@@ -438,10 +437,10 @@ def test_scan_lines_levelled_on_import(tmp_path):
     rough = level_lines(heights(32, 24, seed=6), 0)
     np.save(tmp_path / "scan.npy", rough + 2.0 * line_artefacts(rough.shape, 0))
     kw = {"size": "2um,1.5um", "unit": "um"}
-    s = from_scan(tmp_path / "scan.npy", detrend_mode="lines-x", **kw)
+    s = read_scan(tmp_path / "scan.npy", detrend_mode="lines-x", **kw)
     assert s.scan.detrend == "lines-x"
     check_scaled(s, rough * UM, 2 * UM, 1.5 * UM)
-    plane = from_scan(tmp_path / "scan.npy", **kw)
+    plane = read_scan(tmp_path / "scan.npy", **kw)
     assert plane.scan.rms_gradient > 2 * s.scan.rms_gradient
     main(["import", str(tmp_path / "scan.npy"), "--size", "2um,1.5um", "--unit", "um",
           "--detrend", "lines-x", "-o", str(tmp_path / "s.nc"), "-q"])
@@ -470,9 +469,9 @@ def test_a_file_that_is_not_a_topography_is_refused(tmp_path):
     bad = tmp_path / "notes.txt"
     bad.write_text("this is not a height map\nat all\n")
     with pytest.raises(InputError, match="notes.txt"):
-        from_scan(bad, size="1um", unit="um")
+        read_scan(bad, size="1um", unit="um")
     with pytest.raises(InputError, match="does not exist"):
-        from_scan(tmp_path / "missing.di")
+        read_scan(tmp_path / "missing.di")
 
 
 def test_cli_import_round_trip(tmp_path, capsys):
@@ -482,7 +481,7 @@ def test_cli_import_round_trip(tmp_path, capsys):
     assert "64 x 64 points" in capsys.readouterr().out
     s = read_surface(out)
     assert s.scan.length_scale == pytest.approx(500e-9) and s.scan.reader.startswith("NumPy")
-    direct = from_scan(DATA / "afm-64.npy", size="500nm", unit="nm")
+    direct = read_scan(DATA / "afm-64.npy", size="500nm", unit="nm")
     np.testing.assert_array_equal(s.heights, direct.heights)
     assert s.scan == direct.scan
 
@@ -595,14 +594,14 @@ def test_a_text_header_gives_the_size_unit_which_is_kept(tmp_path):
     number and drops its unit, and --unit nm read the scan as 20 nm wide (1000x off)."""
     h = heights()
     np.savetxt(tmp_path / "p.txt", h.T, header="Width: 16 um\nHeight: 12 um")
-    s = from_scan(tmp_path / "p.txt", height_unit="nm", detrend_mode="none")
+    s = read_scan(tmp_path / "p.txt", height_unit="nm", detrend_mode="none")
     check_scaled(s, h * 1e-9, 16 * UM, 12 * UM)
     with pytest.raises(InputError, match=r"gives its size in um \(16 x 12\); unit='nm'"):
-        from_scan(tmp_path / "p.txt", unit="nm")
+        read_scan(tmp_path / "p.txt", unit="nm")
     with pytest.raises(InputError, match="not the unit of its heights"):
-        from_scan(tmp_path / "p.txt")
+        read_scan(tmp_path / "p.txt")
     # a unit= equal to the header's reads both in it
-    s = from_scan(tmp_path / "p.txt", unit="um", detrend_mode="none")
+    s = read_scan(tmp_path / "p.txt", unit="um", detrend_mode="none")
     check_scaled(s, h * UM, 16 * UM, 12 * UM)
 
 
@@ -627,19 +626,19 @@ def test_netcdf_heights_over_y_x_are_transposed(tmp_path, shape):
     h = heights(*shape)
     _netcdf3(tmp_path / "xy.nc", h, ("x", "y"))
     _netcdf3(tmp_path / "yx.nc", h, ("y", "x"))
-    a = from_scan(tmp_path / "xy.nc", detrend_mode="none")
-    b = from_scan(tmp_path / "yx.nc", detrend_mode="none", crop="1:,:")
+    a = read_scan(tmp_path / "xy.nc", detrend_mode="none")
+    b = read_scan(tmp_path / "yx.nc", detrend_mode="none", crop="1:,:")
     assert a.shape == shape and b.shape == (shape[0] - 1, shape[1])
     check_scaled(a, h * UM, 6 * UM, 4.5 * UM)
     check_scaled(b, h[1:] * UM, 6 * UM * (shape[0] - 1) / shape[0],
                  4.5 * UM)
     # a netCDF-4 file (xarray's default) over (y, x), read as HDF5, with the size given
     xr.Dataset({"heights": (("y", "x"), h.T)}).to_netcdf(tmp_path / "nc4.nc")
-    c = from_scan(tmp_path / "nc4.nc", size="6um,4.5um", unit="um", detrend_mode="none")
+    c = read_scan(tmp_path / "nc4.nc", size="6um,4.5um", unit="um", detrend_mode="none")
     check_scaled(c, h * UM, 6 * UM, 4.5 * UM)
     # without the size, the error says why its attributes were not read
     with pytest.raises(InputError, match="netCDF-4 file, read as plain HDF5"):
-        from_scan(tmp_path / "nc4.nc")
+        read_scan(tmp_path / "nc4.nc")
 
 
 @pytest.mark.parametrize("suffix", [".npz", ".mat", ".h5"])
@@ -665,14 +664,14 @@ def test_a_file_of_several_arrays_needs_the_height_array_named(tmp_path, suffix)
                     f[k] = v
 
     write(tmp_path / f"named{suffix}", {"phase": other, "X": x, "Z": h})
-    s = from_scan(tmp_path / f"named{suffix}", size="16um,12um", unit="nm",
+    s = read_scan(tmp_path / f"named{suffix}", size="16um,12um", unit="nm",
                   detrend_mode="none")
     assert s.scan.channel == "Z"
     check_scaled(s, h * 1e-9, 16 * UM, 12 * UM)
     write(tmp_path / f"unnamed{suffix}", {"a": other, "b": h})
     with pytest.raises(InputError, match=r"several arrays \(0: a, 1: b\).*channel="):
-        from_scan(tmp_path / f"unnamed{suffix}", size="16um,12um", unit="nm")
-    s = from_scan(tmp_path / f"unnamed{suffix}", size="16um,12um", unit="nm", channel="b",
+        read_scan(tmp_path / f"unnamed{suffix}", size="16um,12um", unit="nm")
+    s = read_scan(tmp_path / f"unnamed{suffix}", size="16um,12um", unit="nm", channel="b",
                   detrend_mode="none")
     check_scaled(s, h * 1e-9, 16 * UM, 12 * UM)
 
@@ -685,10 +684,10 @@ def test_a_flat_scan_is_refused_despite_round_off(tmp_path):
     np.save(tmp_path / "plane.npy", 1e3 + 0.3 * x - 0.7 * y)
     for name in ("c.npy", "plane.npy"):
         with pytest.raises(InputError, match="flat after detrending"):
-            from_scan(tmp_path / name, size="1um", unit="nm")
+            read_scan(tmp_path / name, size="1um", unit="nm")
     # heights a millionth of their level still count (1e-9 of it is the bound)
     np.save(tmp_path / "tiny.npy", 1.0 + 1e-6 * heights())
-    assert from_scan(tmp_path / "tiny.npy", size="1um", unit="nm").shape == (16, 12)
+    assert read_scan(tmp_path / "tiny.npy", size="1um", unit="nm").shape == (16, 12)
 
 
 def test_a_coordinate_list_the_grid_reader_refused_is_not_read_as_a_matrix(tmp_path):
@@ -700,10 +699,10 @@ def test_a_coordinate_list_the_grid_reader_refused_is_not_read_as_a_matrix(tmp_p
     np.savetxt(tmp_path / "gap.txt", np.c_[x.ravel(), y.ravel(), z.ravel()][1:])
     for name, lines in (("xyzi.txt", "768 lines of 4 values"), ("gap.txt", "767 lines of 3")):
         with pytest.raises(InputError, match=f"looks like a list of points \\({lines}"):
-            from_scan(tmp_path / name, size="1um", unit="nm")
+            read_scan(tmp_path / name, size="1um", unit="nm")
     # a genuine matrix 4 values wide and 40 lines long is read (the first cut refused it)
     np.savetxt(tmp_path / "narrow.txt", heights(4, 40).T)
-    assert from_scan(tmp_path / "narrow.txt", size="4um,40um", unit="nm").shape == (4, 40)
+    assert read_scan(tmp_path / "narrow.txt", size="4um,40um", unit="nm").shape == (4, 40)
 
 
 def test_a_placeholder_that_overflows_is_refused(tmp_path):
@@ -711,7 +710,7 @@ def test_a_placeholder_that_overflows_is_refused(tmp_path):
     h[3, 3] = 1e300  # an instrument's "no data", in nm
     np.save(tmp_path / "big.npy", h)
     with pytest.raises(InputError, match="overflow the statistics: a placeholder"):
-        from_scan(tmp_path / "big.npy", size="1um", unit="nm")
+        read_scan(tmp_path / "big.npy", size="1um", unit="nm")
 
 
 @pytest.mark.parametrize("write, match", [
@@ -728,7 +727,7 @@ def test_unreadable_files_get_the_reason_of_their_own_reader(tmp_path, write, ma
     write(tmp_path)
     path = next(tmp_path.iterdir())
     with pytest.raises(InputError, match=match) as exc:
-        from_scan(path, size="1um", unit="nm")
+        read_scan(path, size="1um", unit="nm")
     assert "tried" not in str(exc.value) and len(str(exc.value)) < 600
     assert str(exc.value).isprintable()
 
@@ -738,7 +737,7 @@ def test_pixels_the_file_states_draw_no_swapped_axes_warning(tmp_path, caplog):
     # warning about swapped axes is for sizes given to arrays and text matrices
     _netcdf3(tmp_path / "r.nc", heights(12, 12), ("x", "y"))
     with caplog.at_level("WARNING", logger="roughflow.scan"):
-        s = from_scan(tmp_path / "r.nc")
+        s = read_scan(tmp_path / "r.nc")
     assert s.lx / s.ly == pytest.approx(6 / 4.5) and "axes are swapped" not in caplog.text
 
 
@@ -761,16 +760,16 @@ def test_a_placeholder_for_missing_points_can_be_named(tmp_path, capsys):
     f32[5, 5] = np.float32(1e38)  # 9.99999968e37 as float32
     np.save(tmp_path / "f32.npy", f32)
     with pytest.raises(InputError, match="2 missing points"):
-        from_scan(tmp_path / "p.npy", size="16um,12um", unit="nm", missing_value=-999999)
-    s = from_scan(tmp_path / "p.npy", size="16um,12um", unit="nm", missing_value=-999999,
+        read_scan(tmp_path / "p.npy", size="16um,12um", unit="nm", missing_value=-999999)
+    s = read_scan(tmp_path / "p.npy", size="16um,12um", unit="nm", missing_value=-999999,
                   fill="harmonic")
     assert s.scan.filled == 2 and s.scan.missing_value == "-999999.0"
     assert np.abs(s.heights * s.scan.length_scale).max() < 1e-8  # no -1e-3 m left
-    s = from_scan(tmp_path / "f32.npy", size="16um,12um", unit="nm", missing_value=1e38,
+    s = read_scan(tmp_path / "f32.npy", size="16um,12um", unit="nm", missing_value=1e38,
                   fill="min")
     assert s.scan.filled == 1
     with pytest.raises(InputError, match="missing_value must be finite"):
-        from_scan(tmp_path / "p.npy", size="16um,12um", unit="nm", missing_value=float("nan"))
+        read_scan(tmp_path / "p.npy", size="16um,12um", unit="nm", missing_value=float("nan"))
     # the command line, and the record in the surface file
     out = tmp_path / "p.nc"
     assert main(["import", str(tmp_path / "p.npy"), "--size", "16um,12um", "--unit", "nm",

@@ -175,10 +175,10 @@ def test_one_quantity_in_other_units_is_one_float():
 
 
 def test_a_scan_has_one_size_whatever_the_units(tmp_path):
-    from roughflow.surface import from_scan
+    from roughflow.scan import read_scan
 
     h = np.random.default_rng(0).normal(size=(16, 16)) * 1e-3
     np.save(tmp_path / "h.npy", h)
-    a = from_scan(tmp_path / "h.npy", size="0.125um", unit="um")
-    b = from_scan(tmp_path / "h.npy", size="125nm", height_unit="um")
+    a = read_scan(tmp_path / "h.npy", size="0.125um", unit="um")
+    b = read_scan(tmp_path / "h.npy", size="125nm", height_unit="um")
     assert a.scan.length_scale == b.scan.length_scale == 1.25e-7

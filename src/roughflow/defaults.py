@@ -29,9 +29,15 @@ ASPECT = 1.0
 #: Roll-off of the height spectrum: smooth (1 + (q/q_r)^2)^-(1+H), as in the paper, or a
 #: plateau below q_r.
 ROLLOFF_FORMS = ("smooth", "plateau")
+ROLLOFF = "smooth"
+#: Slack with which lengths given as ratios (L / lambda_r, points per lambda_s) round to whole
+#: grid points and mode numbers: a product such as 16 * 4 * 0.9999999999 is 64 points.
+GRID_ROUNDING_SLACK = 1e-9
 #: L / lambda_r in the easy direction when none is given: the paper's
 #: L / lambda_r = PAPER_SIZE_FACTOR max(sqrt(gamma), 1/sqrt(gamma)).
 PAPER_SIZE_FACTOR = 4.0
+#: Seeds of the accuracy study (``roughflow accuracy``, the workflow's ``accuracy`` target).
+ACCURACY_SEEDS = (0, 1, 2, 3, 4, 5)
 #: Fewest grid points per lambda_s at which a_c is perimeter-corrected: the constant is
 #: calibrated on 4 to 16 points per lambda_s (docs/accuracy.md).
 CORRECTION_MIN_POINTS = 4.0
@@ -48,6 +54,11 @@ DEFAULT_BACKEND = "cpu"
 CONTACT_TOL = 1e-6
 #: Solver steps between two DEBUG progress lines of a contact solve (roughflow -vv).
 SOLVER_LOG_EVERY = 20
+#: Iterations between two exact residual checks of FIRE and the adhesive CG (each check
+#: costs an inverse transform; the hard wall's CG decides from its free estimate).
+CONTACT_CHECK_EVERY = 5
+#: Iteration cap of one contact solve per method, where the caller gives none.
+CONTACT_MAX_ITER = {"cg": 20000, "gfmd": 50000}
 #: Loosest contact tolerance accepted: a gap error of 1 % of the rms height (a looser one
 #: returns the starting state after zero iterations as "converged").
 CONTACT_TOL_MAX = 1e-2
@@ -117,6 +128,7 @@ CONTACT_MIN_CELLS = 1e-3
 THRESHOLD_MAX_SOLVES = 40
 #: Threshold search strategies: aimed refinement (default) and plain bisection (reference).
 THRESHOLD_STRATEGIES = ("predict", "bisect")
+THRESHOLD_STRATEGY = "predict"
 
 # --- theory lines of the flow studies (paper Fig. 5-7) ------------------------------------
 #: a_c* of the Bruggeman and closed-form lines per model: the paper draws its Fig. 5 theory
@@ -124,6 +136,11 @@ THRESHOLD_STRATEGIES = ("predict", "bisect")
 A_C_STAR_THEORY = {"elastic": 0.4, "adhesive": 0.4, "bearing": A_C_STAR_BEARING}
 #: The second isotropic Bruggeman line of Fig. 5a.
 A_C_STAR_ALT = 0.5
+#: Correction factor gamma_P of Persson theory's stored elastic energy (Yang & Persson 2008;
+#: docs/theory.md).
+PERSSON_ENERGY_FACTOR = 0.42
+#: Pressures (E* gbar) of a Persson prediction where none are given (``roughflow theory``).
+PERSSON_PRESSURES = (0.002, 0.005, 0.01, 0.02, 0.05, 0.1, 0.15, 0.2, 0.25)
 #: Largest |a_c - target| of a pressure-ladder step (contact area, absolute).
 LADDER_AREA_TOL = 5e-3
 #: The loosest such tolerance a ladder accepts: its steps are 0.03-0.05 apart in a_c.
@@ -179,6 +196,7 @@ FLOW_LUMP_RATIOS = (1e8, 1e6, 1e4)
 #: Linear solvers of the flow: auto (direct for small systems and thin flowing clusters,
 #: else rs), Ruge-Stueben AMG + CG, smoothed aggregation + CG, sparse direct, plain CG.
 FLOW_METHODS = ("auto", "rs", "sa", "direct", "cg")
+FLOW_METHOD = "auto"
 
 # --- measured scans and leak questions (docs/measured.md) ---------------------------------
 #: Detrending of an imported scan: none, plane (mean and tilt) or curvature (plane plus a
@@ -254,6 +272,8 @@ FLOW_L_OVER_LAMBDA_R = 16.0
 #: on unit-area cells, pressed to a_c = 0.4.
 CHANNELS = {"gamma": 4.0, "hurst": 0.8, "l_over_lambda_r": 4.0, "eps_f": 0.1,
             "area_fraction": 0.4, "model": "elastic", "seed": 1, "points_per_lambda_s": 8.0}
+#: Largest |a_c - target| of the channels scene's contact.
+CHANNELS_AREA_TOL = 2e-3
 
 # --- finite-size scaling (paper Fig. 3) ----------------------------------------------------
 #: Correlation-length exponent of 2D percolation.

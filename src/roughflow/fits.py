@@ -14,7 +14,7 @@ from __future__ import annotations
 
 import logging
 from dataclasses import dataclass, field, replace
-from typing import TYPE_CHECKING
+from typing import TYPE_CHECKING, NamedTuple
 
 import numpy as np
 import xarray as xr
@@ -45,7 +45,7 @@ if TYPE_CHECKING:
 
 __all__ = ["UnderdeterminedFit", "scaling", "ScalingFit", "fit_scaling", "bootstrap_fit",
            "lack_of_fit_limit", "direction_names", "FITTED_DIMS", "fitted_setting",
-           "corrected_text", "main_gamma", "threshold_points", "fit_dataset"]
+           "corrected_text", "main_gamma", "ThresholdPoints", "threshold_points", "fit_dataset"]
 
 log = logging.getLogger(__name__)
 
@@ -339,7 +339,15 @@ def main_gamma(a: xr.DataArray) -> float | None:
     return best
 
 
-def threshold_points(ds: xr.Dataset, group: str) -> tuple[dict, dict]:
+class ThresholdPoints(NamedTuple):
+    """The points of one finite-size-scaling fit, keyed by direction: ``eps`` the eps_t
+    with data, ``a_seed`` the per-seed a_c* there (seed along axis 0, eps_t along axis 1)."""
+
+    eps: dict[str, np.ndarray]
+    a_seed: dict[str, np.ndarray]
+
+
+def threshold_points(ds: xr.Dataset, group: str) -> ThresholdPoints:
     """(eps, a_seed) per direction from a threshold study dataset.
 
     ``group`` "anisotropic" takes the gamma of :func:`main_gamma` (its easy and hard
@@ -368,8 +376,8 @@ def threshold_points(ds: xr.Dataset, group: str) -> tuple[dict, dict]:
                 aseed.setdefault(d, []).append(col[:, k])
     if not eps:
         raise InputError(f"no {group} thresholds in the dataset")
-    return ({d: np.asarray(v) for d, v in eps.items()},
-            {d: np.stack(v, axis=1) for d, v in aseed.items()})
+    return ThresholdPoints({d: np.asarray(v) for d, v in eps.items()},
+                           {d: np.stack(v, axis=1) for d, v in aseed.items()})
 
 
 def _main_gamma_attr(ds: xr.Dataset) -> float:

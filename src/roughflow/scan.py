@@ -1,12 +1,12 @@
 """Measured topographies: reading scans into dimensionless :class:`~roughflow.surface.Surface`s.
 
-:func:`read_scan` (also :func:`roughflow.surface.from_scan`) reads every format that
-SurfaceTopography reads (the optional extra ``pip install roughflow[topography]``, imported
-here only) and prepares the heights in this order: crop to a grid window, convert to metres,
-detrend (fitted to the defined points), fill missing points (a scan with missing points is
-refused unless a fill is chosen), and scale to the dimensionless system: lengths in units
-of L = sqrt(lx ly) of the scan, whose value in metres is ``ScanInfo.length_scale``. The
-scan keeps its own rms gradient, so its pressures are in units of E* (not E* gbar).
+:func:`read_scan` reads every format that SurfaceTopography reads (the optional extra
+``pip install roughflow[topography]``, imported here only) and prepares the heights in this
+order: crop to a grid window, convert to metres, detrend (fitted to the defined points),
+fill missing points (a scan with missing points is refused unless a fill is chosen), and
+scale to the dimensionless system: lengths in units of L = sqrt(lx ly) of the scan, whose
+value in metres is ``ScanInfo.length_scale``. The scan keeps its own rms gradient, so its
+pressures are in units of E* (not E* gbar).
 
 The array helpers (:func:`detrend`, :func:`level_lines`, :func:`fill_missing`,
 :func:`largest_defined_window`) work on plain numpy arrays.

@@ -41,12 +41,10 @@ from roughflow.errors import (
 from roughflow.gpu import array_module
 
 if TYPE_CHECKING:
-    import os
-
     from numpy.typing import ArrayLike
 
 __all__ = ["paper_l_over_lambda_r", "SurfaceSpec", "fft_friendly", "ScanInfo", "Surface",
-           "from_scan", "spec_power", "mirror_tiled", "spectrum", "peklenik_wavenumber",
+           "spec_power", "mirror_tiled", "spectrum", "peklenik_wavenumber",
            "rms_gradient", "spectral_rms_gradient", "generate"]
 
 
@@ -76,7 +74,7 @@ class SurfaceSpec:
     lambda_s: float
     seed: int
     rms_slope: float = 1.0
-    rolloff: str = "smooth"
+    rolloff: str = defaults.ROLLOFF
 
     def __post_init__(self) -> None:
         for name in ("nx", "ny"):
@@ -102,7 +100,7 @@ class SurfaceSpec:
         # Shortest wavelength kept along each axis: the cutoff ellipse q_P = q_s.
         shortest = (("x", self.lambda_s * sg, self.dx), ("y", self.lambda_s / sg, self.dy))
         for axis, lam, d in shortest:
-            if lam < 2 * d * (1 - 1e-9):  # from_sweep rounds with 1e-9 slack
+            if lam < 2 * d * (1 - defaults.GRID_ROUNDING_SLACK):  # as from_sweep rounds
                 raise InputError(
                     f"lambda_s={self.lambda_s!r} is under two grid spacings along {axis}: the "
                     f"shortest wavelength there is {lam:.4g} but the spacing is {d:.4g} "
@@ -139,7 +137,7 @@ class SurfaceSpec:
         points_per_lambda_s: float = defaults.POINTS_PER_LAMBDA_S,
         aspect: float = defaults.ASPECT,
         seed: int = 0,
-        rolloff: str = "smooth",
+        rolloff: str = defaults.ROLLOFF,
         area: float = 1.0,
         multiple_of: int = 1,
     ) -> SurfaceSpec:
@@ -172,8 +170,9 @@ class SurfaceSpec:
         lambda_r = length / l_over_lambda_r
         lambda_s = eps_f * lambda_r
         k = require_int("multiple_of", multiple_of, minimum=1)
-        nx = k * fft_friendly(math.ceil(math.ceil(ppl * lx / (lambda_s * sg) - 1e-9) / k))
-        ny = k * fft_friendly(math.ceil(math.ceil(ppl * ly / (lambda_s / sg) - 1e-9) / k))
+        slack = defaults.GRID_ROUNDING_SLACK
+        nx = k * fft_friendly(math.ceil(math.ceil(ppl * lx / (lambda_s * sg) - slack) / k))
+        ny = k * fft_friendly(math.ceil(math.ceil(ppl * ly / (lambda_s / sg) - slack) / k))
         return cls(
             nx=nx, ny=ny, lx=lx, ly=ly, hurst=hurst, gamma=gamma,
             lambda_r=lambda_r, lambda_s=lambda_s, seed=seed, rolloff=rolloff,
@@ -202,7 +201,7 @@ class ScanInfo:
     imported; heights and lengths of the :class:`Surface` are in units of L).
     ``rms_gradient``: rms gradient of the imported heights (finite differences, the scan
     being non-periodic); the scan keeps it, so its dimensionless pressures are in E*, not
-    E* gbar. ``detrend``, ``fill``: the choices of :func:`from_scan`; ``filled``: the
+    E* gbar. ``detrend``, ``fill``: the choices of :func:`roughflow.scan.read_scan`; ``filled``: the
     number of missing points filled; ``crop``: the grid window kept ("none" or
     "i0:i1,j0:j1"); ``periodic``: whether the surface is periodic (a scan is not; the
     contact and flow stages then use :mod:`roughflow.boundary`); ``warnings``: what the
@@ -291,9 +290,9 @@ class Surface:
     def from_array(cls, heights: ArrayLike, lx: float = 1.0, ly: float | None = None) -> Surface:
         """Wrap a user height map (validated: 2D, finite, at least 4 x 4) as a periodic
         cell. Heights, ``lx`` and ``ly`` are in one length unit (the solvers take E* = 1,
-        so pressures come out in E*). A measured map is better read with :func:`from_scan`:
-        it records the physical units, and leak calculations then treat its edges as
-        non-periodic (docs/measured.md)."""
+        so pressures come out in E*). A measured map is better read with
+        :func:`roughflow.scan.read_scan`: it records the physical units, and leak calculations
+        then treat its edges as non-periodic (docs/measured.md)."""
         from roughflow.errors import require_field
 
         h = require_field("heights", heights)
@@ -302,14 +301,6 @@ class Surface:
         # a copy: the caller's array, changed in place later (h *= 1e-6 in a notebook),
         # changed the surface under a prepared setup, which then solved the old one
         return cls(heights=np.array(h, dtype=np.float64, order="C", copy=True), lx=lx, ly=ly)
-
-
-def from_scan(path: str | os.PathLike, **options) -> Surface:
-    """Read a measured topography (every format SurfaceTopography reads; the optional
-    extra ``topography``). See :func:`roughflow.scan.read_scan` for the options."""
-    from roughflow.scan import read_scan
-
-    return read_scan(path, **options)
 
 
 def spec_power(spec: SurfaceSpec) -> tuple[np.ndarray, np.ndarray]:
@@ -403,8 +394,10 @@ def _phase_box(spec: SurfaceSpec) -> tuple[np.ndarray, int, int]:
     today.)
     """
     qs = 2 * np.pi / spec.lambda_s
-    kx_max = int(np.floor(qs / math.sqrt(spec.gamma) * spec.lx / (2 * np.pi) + 1e-9))
-    ky_max = int(np.floor(qs * math.sqrt(spec.gamma) * spec.ly / (2 * np.pi) + 1e-9))
+    kx_max = int(np.floor(qs / math.sqrt(spec.gamma) * spec.lx / (2 * np.pi)
+                      + defaults.GRID_ROUNDING_SLACK))
+    ky_max = int(np.floor(qs * math.sqrt(spec.gamma) * spec.ly / (2 * np.pi)
+                      + defaults.GRID_ROUNDING_SLACK))
     shape = (2 * kx_max + 1, ky_max + 1)
     raw = np.random.PCG64(spec.seed).random_raw(shape[0] * shape[1]).reshape(shape)
     phases = (raw >> np.uint64(11)).astype(np.float64) * (2.0**-53 * 2 * np.pi)

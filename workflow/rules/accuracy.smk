@@ -26,7 +26,7 @@ from roughflow.scenes.requests import check_task_memory, task_mem_mb  # noqa: E4
 from roughflow.surface import SurfaceSpec  # noqa: E402
 
 _ACC = config.get("accuracy", {}) or {}
-_ACC_SEEDS = " ".join(str(s) for s in _ACC.get("seeds", [0, 1, 2, 3, 4, 5]))
+_ACC_SEEDS = " ".join(str(s) for s in _ACC.get("seeds", ResolutionOptions().seeds))
 _ACC_PPL_LIST = [int(p) for p in _ACC.get("points_per_lambda_s", ResolutionOptions().ppl)]
 # the finer grids are sampled down to the coarser ones (`roughflow accuracy resolution`):
 # refused here, before the tolerance job runs, not in the resolution job after it

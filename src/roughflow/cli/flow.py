@@ -8,6 +8,7 @@ from typing import TYPE_CHECKING
 
 from roughflow.defaults import (
     AXIS_NAMES,
+    FLOW_METHOD,
     FLOW_METHODS,
     FLOW_SIGMA_RTOL,
     FLOW_SIGMA_TOL,
@@ -46,7 +47,7 @@ def register(sub: argparse._SubParsersAction) -> None:
                         f"relative error (at most {FLOW_SIGMA_RTOL:g}), whatever its residual: "
                         "fewer iterations, a less converged pressure field (off; the sweeps "
                         f"use {FLOW_SIGMA_TOL:g})")
-    p.add_argument("--method", choices=FLOW_METHODS, default="auto",
+    p.add_argument("--method", choices=FLOW_METHODS, default=FLOW_METHOD,
                    help="linear solver: auto (direct for small systems and thin flowing "
                         "clusters, else rs; an AMG result whose fluxes do not balance "
                         "is solved again directly), rs (Ruge-Stueben AMG + CG), sa (smoothed "

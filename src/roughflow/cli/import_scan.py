@@ -66,9 +66,9 @@ def register(sub: argparse._SubParsersAction) -> None:
 
 def run(args: argparse.Namespace) -> None:
     from roughflow.io import surface_to_dataset, write_dataset
-    from roughflow.surface import from_scan
+    from roughflow.scan import read_scan
 
-    surface = from_scan(args.scan, size=args.size, unit=args.unit,
+    surface = read_scan(args.scan, size=args.size, unit=args.unit,
                         height_unit=args.height_unit, detrend_mode=args.detrend,
                         fill=args.fill, crop=args.crop, channel=args.channel,
                         periodic=args.periodic, missing_value=args.missing_value)

@@ -20,7 +20,14 @@ from pathlib import Path
 from typing import TYPE_CHECKING
 
 from roughflow import defaults
-from roughflow.defaults import A_C_STAR_PAPER, A_C_STAR_THEORY, DEFAULT_MODEL, MODELS
+from roughflow.defaults import (
+    A_C_STAR_PAPER,
+    A_C_STAR_THEORY,
+    DEFAULT_MODEL,
+    MODELS,
+    PERSSON_ENERGY_FACTOR,
+    PERSSON_PRESSURES,
+)
 from roughflow.errors import InputError
 
 from ._common import (
@@ -35,7 +42,7 @@ from ._common import (
 if TYPE_CHECKING:  # numpy is imported when a command runs, not for --help
     import numpy as np
 
-DEFAULT_PRESSURES = "0.002,0.005,0.01,0.02,0.05,0.1,0.15,0.2,0.25"
+DEFAULT_PRESSURES = ",".join(f"{p:g}" for p in PERSSON_PRESSURES)
 #: The options of the spec without a file (besides --gamma), and of Persson theory.
 SPEC_FLAGS = ("--hurst", "--l-over-lambda-r", "--eps-f", "--points-per-lambda-s", "--aspect",
               "--rolloff")
@@ -82,8 +89,8 @@ def register(sub: argparse._SubParsersAction) -> None:
     s.add_argument("--pressures", default=DEFAULT_PRESSURES,
                    help=f"comma-separated pressures in {PRESSURE_UNIT} ({DEFAULT_PRESSURES})")
     s.add_argument("--energy-factor", type=float, default=None,
-                   help="correction factor of the elastic energy (default: "
-                        "roughflow.theory.DEFAULT_ENERGY_FACTOR, docs/theory.md)")
+                   help="correction factor gamma_P of the elastic energy "
+                        f"({PERSSON_ENERGY_FACTOR:g}, docs/theory.md)")
     add_surface_options(s, SPEC_FLAGS)
     add_output(p, required=False, help="also write the results to this netCDF file")
     p.set_defaults(func=run)
@@ -167,12 +174,12 @@ def _run_persson(args: argparse.Namespace, src, *, source: str, surface=None) ->
     spectrum came from a file (its spec, or its scan and reference length)."""
     from roughflow.datasets import persson_dataset
     from roughflow.io import write_dataset
-    from roughflow.theory import DEFAULT_ENERGY_FACTOR, predict_conductance
+    from roughflow.theory import predict_conductance
 
     pressures = _parse_pressures(args.pressures)
     kind = args.kind or DEFAULT_MODEL
     a_star = _a_c_star(args, kind)
-    energy_factor = DEFAULT_ENERGY_FACTOR if args.energy_factor is None else args.energy_factor
+    energy_factor = PERSSON_ENERGY_FACTOR if args.energy_factor is None else args.energy_factor
     pred = predict_conductance(
         src, pressures, a_c_star=a_star, kind=kind, eta=args.eta,
         energy_factor=energy_factor,

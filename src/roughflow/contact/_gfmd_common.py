@@ -15,6 +15,9 @@ from .elastic import cell_compliance, compliance, stiffness
 #: q = 0 mass z k_min of m(q) = sqrt((z k_min)^2 + k(q)^2): 3 gave the fewest FIRE steps
 #: cold and warm (1, 3, 10, 30, 100).
 Z_MASS = 3.0
+#: Points of the body and the surface closer than this times rms(h) touch: the round-off of
+#: the FFT round trip.
+TOUCH_TOL = 1e-12
 
 
 class SpectralFactors(NamedTuple):

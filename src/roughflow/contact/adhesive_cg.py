@@ -40,7 +40,7 @@ import math
 import numpy as np
 
 from roughflow import fft
-from roughflow.defaults import SOLVER_LOG_EVERY
+from roughflow.defaults import CONTACT_CHECK_EVERY, SOLVER_LOG_EVERY
 from roughflow.errors import InputError
 
 from . import _kernels as _k
@@ -87,7 +87,7 @@ def adhesive_cg(
     max_iter: int,
     u0: np.ndarray | None = None,
     threads: int | None = None,
-    check_every: int = 5,
+    check_every: int = CONTACT_CHECK_EVERY,
     use_numba: bool = True,
 ) -> SolverOutput:
     """Minimise with the harmonic ``adhesion``; arguments and result as ``gfmd.gfmd``

@@ -101,12 +101,13 @@ from typing import TYPE_CHECKING
 import numpy as np
 
 from roughflow import fft, gpu
-from roughflow.defaults import DEFAULT_BACKEND, SOLVER_LOG_EVERY
+from roughflow.defaults import CONTACT_CHECK_EVERY, DEFAULT_BACKEND, SOLVER_LOG_EVERY
 from roughflow.errors import InputError, require_field
 from roughflow.surface import spectral_rms_gradient
 
 from . import _kernels as _k
 from ._gfmd_common import (
+    TOUCH_TOL,
     Z_MASS,
     held_pressure,
     load_scale,
@@ -396,7 +397,7 @@ def gfmd(
     u0: np.ndarray | None = None,
     adhesion: Adhesion | None = None,
     threads: int | None = None,
-    check_every: int = 5,
+    check_every: int = CONTACT_CHECK_EVERY,
     use_numba: bool = True,
     minimizer: str = "auto",
     setup: HardWallSetup | None = None,
@@ -511,7 +512,7 @@ def _hard_wall(
     elif not on_gpu and gpu.array_module(h) is not np:
         raise InputError("setup built on the GPU (backend='cupy') passed to a CPU solve")
     scale = load_scale(kmin, hscale, load)
-    eps = 1e-12 * hscale  # round-off of the FFT round trip: points this close touch
+    eps = TOUCH_TOL * hscale
 
     if work is None:
         work = hard_wall_work(shape, xp)
@@ -650,7 +651,7 @@ def _fire(
     u0: np.ndarray | None = None,
     adhesion: Adhesion | None = None,
     threads: int | None = None,
-    check_every: int = 5,
+    check_every: int = CONTACT_CHECK_EVERY,
     use_numba: bool = True,
 ) -> SolverOutput:
     """Mass-weighted FIRE (the adhesive model); arguments as :func:`gfmd`."""
@@ -691,7 +692,7 @@ def _fire(
     sigma = np.empty(size)
     active = np.zeros(size, dtype=bool)
     a = np.empty(size)
-    eps = 1e-12 * hscale  # round-off of the FFT round trip: points this close touch
+    eps = TOUCH_TOL * hscale
     h_clip = np.full(size, -np.inf) if soft else h
     tension = np.zeros(size)
 

@@ -9,6 +9,7 @@ from typing import TYPE_CHECKING
 import numpy as np
 
 from roughflow.defaults import (
+    CONTACT_MAX_ITER,
     CONTACT_METHODS,
     CONTACT_MIN_CELLS,
     CONTACT_PRESSURE_MAX,
@@ -48,7 +49,6 @@ METHODS = CONTACT_METHODS
 # acts from the first step) and a loose tolerance (it is only a starting point).
 _ADHESIVE_START_LOAD = 1e-2
 _ADHESIVE_START_TOL = 1e-4
-_DEFAULT_MAX_ITER = {"cg": 20000, "gfmd": 50000}
 
 
 def solve(
@@ -173,7 +173,7 @@ def solve(
             f"{adhesion.max_tension:.4g} E* (every cell at its peak pull): no equilibrium "
             "exists (the surfaces separate)")
     if max_iter is None:
-        max_iter = _DEFAULT_MAX_ITER[method]
+        max_iter = CONTACT_MAX_ITER[method]
     if isinstance(max_iter, bool) or not isinstance(max_iter, (int, np.integer)) or max_iter < 1:
         raise InputError(f"max_iter must be a positive integer, got {max_iter!r}")
     if init is not None:

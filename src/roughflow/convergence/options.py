@@ -1,8 +1,8 @@
 """The accuracy study's settings: frozen option sets, checked when they are made.
 
-Only the standard library and :mod:`roughflow.errors` are imported here (the command line
-reads its defaults from these classes to build its parser); :func:`study_specs` imports
-:mod:`roughflow.surface` when it runs.
+Only the standard library, :mod:`roughflow.defaults` and :mod:`roughflow.errors` are imported
+here (the command line reads its defaults from these classes to build its parser);
+:func:`study_specs` imports :mod:`roughflow.surface` when it runs.
 """
 
 from __future__ import annotations
@@ -12,6 +12,7 @@ from collections.abc import Iterable
 from dataclasses import dataclass
 from typing import TYPE_CHECKING
 
+from roughflow.defaults import ACCURACY_SEEDS, CONTACT_TOL
 from roughflow.errors import (
     InputError,
     require_distinct,
@@ -25,6 +26,10 @@ if TYPE_CHECKING:
 
 #: a_c of the sigma measurements (resolution) and of the fixed-load contact solves (tolerances)
 TARGETS = (0.2, 0.35)
+#: Bisection and contact tolerance of the study's threshold searches where the setting
+#: varied is another: finer than the sweeps' own (2e-3 and 1e-4).
+BISECT_TOL = 1e-3
+THRESHOLD_CONTACT_TOL = 1e-5
 
 
 def _positive_tuple(name: str, values: Iterable[float]) -> tuple[float, ...]:
@@ -100,15 +105,15 @@ class ResolutionOptions:
     to the sigma targets.
     """
 
-    seeds: tuple[int, ...] = (0, 1, 2)
+    seeds: tuple[int, ...] = ACCURACY_SEEDS
     ppl: tuple[int, ...] = (2, 4, 8, 16)
     gamma: float = 1.0
     l_over_lambda_r: float | None = None
     sigma: bool | None = None
     fixed_targets: tuple[float, ...] = (0.2, 0.35, 0.42)
-    bisect_tol: float = 1e-3
-    threshold_contact_tol: float = 1e-5
-    contact_tol: float = 1e-6
+    bisect_tol: float = BISECT_TOL
+    threshold_contact_tol: float = THRESHOLD_CONTACT_TOL
+    contact_tol: float = CONTACT_TOL
     area_tol: float = 3e-4
 
     def __post_init__(self) -> None:
@@ -135,14 +140,14 @@ class ToleranceOptions:
     ``threshold_contact_tols`` inside a threshold search of bisection tol
     ``threshold_bisect_tol``, and ``bisect_tols`` with contact tol ``threshold_contact_tol``."""
 
-    seeds: tuple[int, ...] = (0, 1, 2)
+    seeds: tuple[int, ...] = ACCURACY_SEEDS
     ppl: int = 4
     contact_tols: tuple[float, ...] = (1e-3, 1e-4, 1e-5, 1e-6, 1e-8)
     threshold_contact_tols: tuple[float, ...] = (1e-3, 1e-4, 1e-5, 1e-7)
-    threshold_bisect_tol: float = 1e-3
+    threshold_bisect_tol: float = BISECT_TOL
     bisect_tols: tuple[float, ...] = (0.032, 0.016, 0.008, 0.004, 0.002, 0.001, 0.0005,
                                       0.00025)
-    threshold_contact_tol: float = 1e-5
+    threshold_contact_tol: float = THRESHOLD_CONTACT_TOL
 
     def __post_init__(self) -> None:
         object.__setattr__(self, "seeds", require_seeds("seeds", self.seeds))

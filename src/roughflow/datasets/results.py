@@ -13,7 +13,7 @@ from typing import TYPE_CHECKING
 import numpy as np
 import xarray as xr
 
-from roughflow.defaults import AXIS_NAMES
+from roughflow.defaults import AXIS_NAMES, PERSSON_ENERGY_FACTOR
 from roughflow.errors import InputError, check_axis
 
 from .units import (
@@ -311,9 +311,7 @@ def persson_dataset(prediction: PerssonPrediction, source: SurfaceSpec | Surface
     surface (its spec, or its scan and reference length), it was computed from; ``eta`` and
     ``energy_factor``: those of the prediction (None: the default); ``description``: where
     the spectrum came from (the ``source`` attribute)."""
-    from roughflow.theory import DEFAULT_ENERGY_FACTOR
-
-    factor = DEFAULT_ENERGY_FACTOR if energy_factor is None else energy_factor
+    factor = PERSSON_ENERGY_FACTOR if energy_factor is None else energy_factor
     p_attrs = {"units": PRESSURE_UNITS, "long_name": "applied mean pressure"}
     kind = prediction.kind
     ds = xr.Dataset(

@@ -46,6 +46,7 @@ import qdldl
 import scipy.sparse as sp
 import scipy.sparse.linalg as spla
 
+from roughflow.defaults import FLOW_METHOD
 from roughflow.defaults import FLOW_METHODS as METHODS
 from roughflow.errors import ConvergenceError, InputError, require_finite
 from roughflow.flow import amg, ldl
@@ -128,7 +129,7 @@ class Prepared:
 
 
 def check_method(method: str | None) -> str:
-    m = "auto" if method is None else method
+    m = FLOW_METHOD if method is None else method
     if m not in METHODS:
         raise InputError(f"method must be one of {METHODS} or None, got {method!r}")
     return m
@@ -154,13 +155,21 @@ def _amg_preconditioner(a: sp.csr_matrix, method: str) -> spla.LinearOperator:
     return ml.aspreconditioner(cycle="V")
 
 
-def direct_fits(n: int) -> tuple[bool, int, int | None]:
+class DirectFit(NamedTuple):
+    """Whether a direct factorisation fits in memory, the bytes it needs and those available
+    (None: unknown, taken as fitting)."""
+
+    fits: bool
+    need: int
+    have: int | None
+
+
+def direct_fits(n: int) -> DirectFit:
     """Whether the direct factorisation of ``n`` unknowns fits beside what this process
-    holds (``FLOW_LDL_BYTES_PER_UNKNOWN`` each, :mod:`roughflow.resources`); also the bytes
-    it needs and those available (None: unknown, taken as fitting)."""
+    holds (``FLOW_LDL_BYTES_PER_UNKNOWN`` each, :mod:`roughflow.resources`)."""
     need = FLOW_LDL_BYTES_PER_UNKNOWN * n
     have = headroom_bytes()
-    return have is None or need <= have, need, have
+    return DirectFit(have is None or need <= have, need, have)
 
 
 def check_direct_max_flowing_fraction(value: float | None) -> float | None:
@@ -190,11 +199,11 @@ def choose(method: str | None, n: int, flowing_fraction: float | None = None,
     limit = (DIRECT_MAX_FLOWING_FRACTION if direct_max_flowing_fraction is None
              else direct_max_flowing_fraction)
     if flowing_fraction is not None and flowing_fraction <= limit:
-        return "direct" if direct_fits(n)[0] else "rs"
+        return "direct" if direct_fits(n).fits else "rs"
     return "rs"
 
 
-def prepare(a: sp.spmatrix, method: str = "auto",
+def prepare(a: sp.spmatrix, method: str = FLOW_METHOD,
             flowing_fraction: float | None = None, hint: OrderHint | None = None) -> Prepared:
     """Factorise (``"direct"``) or build the AMG preconditioner of ``a`` for
     :func:`solve_spd` (``"auto"``: :func:`choose`). ``hint``: the direct solver's
@@ -314,7 +323,7 @@ def pcg(a: sp.csr_matrix, b: np.ndarray, *, tol: float,
 
 
 def solve_spd(
-    a: sp.csr_matrix, b: np.ndarray, *, tol: float, method: str = "auto",
+    a: sp.csr_matrix, b: np.ndarray, *, tol: float, method: str = FLOW_METHOD,
     max_iter: int | None = None, x0: np.ndarray | None = None, strict: bool = True,
     prepared: Prepared | None = None, accept: Callable[[np.ndarray], bool] | None = None,
     certify: Callable[[np.ndarray, float], bool] | None = None,
@@ -373,7 +382,7 @@ class PreparedSolution(NamedTuple):
     prepared: Prepared
 
 
-def solve_prepared(a: sp.csr_matrix, b: np.ndarray, *, tol: float, method: str = "auto",
+def solve_prepared(a: sp.csr_matrix, b: np.ndarray, *, tol: float, method: str = FLOW_METHOD,
                    flowing_fraction: float | None = None,
                    direct_max_flowing_fraction: float | None = None,
                    accept: Callable[[np.ndarray], bool] | None = None,
@@ -397,7 +406,7 @@ def solve_prepared(a: sp.csr_matrix, b: np.ndarray, *, tol: float, method: str =
     fallback = method == "auto" and chosen != "direct"
     # measured before the AMG hierarchy, which is freed before the factorisation; only
     # where it matters
-    fits, need, have = direct_fits(a.shape[0]) if fallback else (True, 0, None)
+    fits, need, have = direct_fits(a.shape[0]) if fallback else DirectFit(True, 0, None)
     prepared = prepare(a, chosen, hint=hint)
     try:
         sol = solve_spd(a, b, tol=tol, prepared=prepared, accept=accept, certify=certify,

@@ -15,7 +15,7 @@ import logging
 import numpy as np
 import xarray as xr
 
-from roughflow import contact
+from roughflow import contact, defaults
 from roughflow.datasets.units import DIMENSIONLESS, LENGTH_UNITS
 from roughflow.percolation import contact_percolates, percolates, percolation_map
 from roughflow.percolation.clusters import PHASE_NAMES
@@ -28,11 +28,8 @@ log = logging.getLogger(__name__)
 
 
 
-#: Largest |a_c - target| of the channels scene's contact.
-AREA_TOL = 2e-3
-
-
-def contact_at_area(surface: Surface, target: float, model: str, *, tol: float = AREA_TOL,
+def contact_at_area(surface: Surface, target: float, model: str, *,
+                    tol: float = defaults.CHANNELS_AREA_TOL,
                     threads: int | None = None) -> contact.ContactResult:
     """Contact result whose area fraction is within ``tol`` of ``target`` (bearing: exact;
     elastic: :class:`roughflow.search.LoadSearch`; the closest solve if none is within)."""

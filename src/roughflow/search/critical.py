@@ -54,6 +54,7 @@ from roughflow.defaults import (
     THRESHOLD_MAX_SOLVES,
     THRESHOLD_PRESSURE_RANGE,
     THRESHOLD_STRATEGIES,
+    THRESHOLD_STRATEGY,
     THRESHOLD_TOL,
     THRESHOLD_TOL_MAX,
 )
@@ -186,7 +187,7 @@ class SearchOptions:
         walls there (False: a non-periodic scan); see :func:`roughflow.percolation.percolates`.
     """
 
-    strategy: str = "predict"
+    strategy: str = THRESHOLD_STRATEGY
     pressure_range: tuple[float, float] = THRESHOLD_PRESSURE_RANGE
     first_pressure: float | None = None
     contact_tol: float = THRESHOLD_CONTACT_TOL

@@ -48,7 +48,7 @@ from scipy.integrate import cumulative_simpson
 from scipy.special import erf, exp1
 
 from roughflow import fft
-from roughflow.defaults import DEFAULT_MODEL
+from roughflow.defaults import DEFAULT_MODEL, PERSSON_ENERGY_FACTOR
 from roughflow.errors import InputError, require_field, require_positive
 from roughflow.surface import (
     Surface,
@@ -63,7 +63,8 @@ from .effective_medium import _wsum
 if TYPE_CHECKING:
     from numpy.typing import ArrayLike
 
-DEFAULT_ENERGY_FACTOR = 0.42
+#: The default gamma_P (one place: :data:`roughflow.defaults.PERSSON_ENERGY_FACTOR`).
+DEFAULT_ENERGY_FACTOR = PERSSON_ENERGY_FACTOR
 
 
 @dataclass(frozen=True)
