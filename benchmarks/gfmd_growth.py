@@ -5,7 +5,7 @@ Usage:
 
 Cases n/L_over_lambda_r: H = 0.8, 4 points per lambda_s (lambda_r/lambda_s = n / (4 L/lambda_r)),
 seed 0, p = 0.2 (a_c about 0.4), tol 1e-6. Each candidate cause is switched off or measured
-in isolation with an instrumented numpy copy of the FIRE loop of ``roughflow.contact.gfmd``
+in isolation with an instrumented numpy copy of the FIRE loop of ``roughflow.contact.fire``
 (same constants, masses, active set and residual; it reproduces the library's step counts):
 
 - max-norm residual: max |G r| / rms |G r| along the run, and the steps to reach the
@@ -37,6 +37,7 @@ import numpy as np
 import scipy.sparse.linalg as sla
 
 from roughflow import fft
+from roughflow.contact import fire as F
 from roughflow.contact import gfmd as G
 from roughflow.contact.elastic import compliance, stiffness
 from roughflow.surface import Surface, SurfaceSpec, generate
@@ -58,7 +59,7 @@ def surface(n: int, l_over_lambda_r: float) -> Surface:
 def fire_trace(h2: np.ndarray, *, z: float = G.Z_MASS, eps_rel: float = 1e-12,
                frozen: np.ndarray | None = None, heavy_ball: tuple[float, float] | None = None,
                stop: str = "max", max_iter: int = 1000) -> tuple[list[dict], np.ndarray]:
-    """The FIRE loop of ``gfmd._fire`` (hard wall) in numpy, every quantity every step.
+    """The FIRE loop of ``fire.fire`` (hard wall) in numpy, every quantity every step.
 
     ``frozen``: hold this active set (u = h on it) instead of the wall; ``heavy_ball``:
     (dt, momentum) instead of FIRE; ``stop``: "max" (the library's residual, checked every
@@ -90,7 +91,7 @@ def fire_trace(h2: np.ndarray, *, z: float = G.Z_MASS, eps_rel: float = 1e-12,
         ft = plan.forward(f.reshape(shape)).copy()
         return f, inv(ft * inv_m), active, inv(ft * comp), abs(ft[0, 0].real) / size / load_scale
 
-    dt, alpha, n_pos = G.DT0, G.ALPHA0, 0
+    dt, alpha, n_pos = F.DT0, F.ALPHA0, 0
     f, a, active, gf, imb = forces(u)
     prev = active.copy()
     hist = []
@@ -117,12 +118,12 @@ def fire_trace(h2: np.ndarray, *, z: float = G.Z_MASS, eps_rel: float = 1e-12,
             if fv > 0 or vv == 0.0:
                 keep = 1.0
                 n_pos += 1
-                if n_pos > G.N_MIN:
-                    dt = min(dt * G.F_INC, G.DT_MAX)
-                    alpha *= G.F_ALPHA
+                if n_pos > F.N_MIN:
+                    dt = min(dt * F.F_INC, F.DT_MAX)
+                    alpha *= F.F_ALPHA
             else:
-                keep, n_pos, alpha = 0.0, 0, G.ALPHA0
-                dt *= G.F_DEC
+                keep, n_pos, alpha = 0.0, 0, F.ALPHA0
+                dt *= F.F_DEC
                 hist[-1]["uphill"] = True
             vnew = math.sqrt(max(keep * vv + 2 * keep * dt * va + dt * dt * aa, 0.0))
             mix = alpha * vnew / math.sqrt(aa) if aa > 0 else 0.0

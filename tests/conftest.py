@@ -50,3 +50,14 @@ def cli_surface_file(tmp_path_factory):
     assert main(["surface", "--points-per-lambda-s", "2", "--seed", "1", "-o", str(path)]) in (
         0, None)
     return path
+
+
+@pytest.fixture(autouse=True)
+def _library_logging_restored():
+    """A test that runs the command line in-process (``main([...])``) leaves its progress
+    handler on the "roughflow" logger, which then stops propagating: a later test's
+    ``caplog`` saw nothing, and its outcome depended on the order the tests ran in."""
+    yield
+    from roughflow.progress import log_progress
+
+    log_progress(None)

@@ -69,3 +69,11 @@ def test_help_documents_every_option():
     for opt in ("--hurst", "--gamma", "--seed", "--nx", "--lambda-s", "--eps-f",
                 "--points-per-lambda-s", "--aspect", "--output"):
         assert opt in r.stdout
+
+
+def test_aspect_sets_the_cell(tmp_path):
+    """--aspect is lx / ly of a unit-area cell: 4 gives lx = 2, ly = 0.5 (exact in binary)."""
+    out = tmp_path / "s.nc"
+    assert main(["surface", "--points-per-lambda-s", "2", "--aspect", "4", "-o", str(out)]) == 0
+    with xr.open_dataset(out) as ds:
+        assert (ds.attrs["spec_lx"], ds.attrs["spec_ly"]) == (2.0, 0.5)

@@ -385,10 +385,10 @@ def test_hard_wall_contact_is_the_gap_below_half_the_range():
 def test_hard_wall_adhesion_q0_mass_ramps_with_the_load():
     # FIRE's q = 0 mass on the hard wall with adhesion: light (1 k_min) where only the
     # adhesive contacts hold the mean separation (zero or negative load), the hard wall's
-    # 3 k_min (Z_MASS) once the load reaches k_min rms(h), linear in between (gfmd module
+    # 3 k_min (Z_MASS) once the load reaches k_min rms(h), linear in between (fire module
     # constants; measured in docs/contact.md "Adhesion")
     from roughflow.contact._gfmd_common import Z_MASS
-    from roughflow.contact.gfmd import ADHESIVE_Q0_MASS, adhesive_q0_mass
+    from roughflow.contact.fire import ADHESIVE_Q0_MASS, adhesive_q0_mass
 
     kmin, hscale = 3.0, 0.01
     assert (ADHESIVE_Q0_MASS, Z_MASS) == (1.0, 3.0)
@@ -554,7 +554,7 @@ def test_johnson_wavy_surface_under_tension_and_the_unloading_hysteresis():
     attraction's stiffness (kappa = 220, against k_min = pi), so a cold solve at -0.04 p*
     failed as "beyond the pull-off force" (Johnson's pull-off: -0.096 p*), and full contact
     was left when the load fell from 0.5 p* to 0.3 p* (a_c 0.60), although it is stable down
-    to -1.25 p*. The time step is now capped for stability (gfmd.stable_step). The contact
+    to -1.25 p*. The time step is now capped for stability (fire.stable_step). The contact
     width may exceed Johnson's by the finite range's adhesive zone: +0.002 to +0.005
     measured at three ranges, so 0.008."""
     from roughflow.contact import solve

@@ -8,6 +8,7 @@ import xarray as xr
 
 from roughflow.cli import main
 from roughflow.contact import solve
+from roughflow.defaults import CONTACT_TOL
 from roughflow.io import read_surface
 
 
@@ -127,3 +128,19 @@ def test_adhesion_range_has_the_same_name_as_in_threshold():
                                           "--model", "adhesive", "--surface-energy", "1e-4",
                                           flag, "0.01"])
         assert args.adhesion_range == 0.01
+
+
+def test_cli_tol_reaches_the_solver_and_the_file(cli_surface_file, tmp_path):
+    """--tol is the solve's (a looser one stops earlier, its residual within it) and the file
+    says which it was; the default is recorded too."""
+    got = {}
+    for tol in (1e-3, None):
+        out = tmp_path / f"c{tol}.nc"
+        main(["contact", str(cli_surface_file), "--pressure", "0.1", "-o", str(out)]
+             + ([] if tol is None else ["--tol", str(tol)]))
+        with xr.open_dataset(out) as ds:
+            got[tol] = dict(ds.attrs)
+    assert got[1e-3]["tol"] == 1e-3 and got[None]["tol"] == CONTACT_TOL
+    for attrs in got.values():
+        assert attrs["residual"] <= attrs["tol"]
+    assert got[1e-3]["iterations"] < got[None]["iterations"]

@@ -13,7 +13,8 @@ import xarray as xr  # noqa: E402
 import roughflow.flow.core as flow_core  # noqa: E402
 from roughflow.cli import main  # noqa: E402
 from roughflow.datasets.units import grid_coords  # noqa: E402
-from roughflow.flow import conductance, plot_flux, solve  # noqa: E402
+from roughflow.figures.flux import plot_flux  # noqa: E402
+from roughflow.flow import conductance, solve  # noqa: E402
 from roughflow.io import write_dataset  # noqa: E402
 
 

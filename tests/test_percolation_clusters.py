@@ -80,6 +80,19 @@ def test_cluster_stats_of_a_contact_state():
     assert 0.5 < st.percolating_fraction_x <= 0.7 and 0.5 < st.percolating_fraction_y <= 0.7
 
 
+def test_cluster_stats_of_a_hand_made_mask():
+    """Exact counts that tell x from y and 4- from 8-connected fluid: one open column along x
+    (8 of 48 cells span x, none spans y) and two pools touching only at a corner (two
+    4-connected fluid clusters, as the paper counts them)."""
+    c = np.ones((8, 6), dtype=bool)
+    c[:, 1] = False
+    c[3, 3] = c[4, 4] = False
+    st = cluster_stats(c)
+    assert st.percolating_fraction_x == 8 / 48
+    assert st.percolating_fraction_y == 0.0
+    assert st.n_fluid_clusters == 3
+
+
 def test_contact_patches_are_4_connected_by_default_as_in_the_paper():
     # two contact cells touching at a corner are two patches (4-connected, the paper's
     # convention for patches); with patch_connectivity=8 they are one

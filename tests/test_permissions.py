@@ -118,7 +118,7 @@ def test_a_checkout_git_refuses_as_another_users_is_reported(tmp_path, monkeypat
 
 def test_a_scan_another_user_may_not_read_stops_the_plan(tmp_path, monkeypatch):
     # it passed planning and failed in the import job, after the other studies' jobs ran
-    from roughflow.scenes.jobs import expand_study
+    from roughflow.scenes.expand import expand_study
 
     np.save(tmp_path / "scan.npy", np.zeros((8, 8)))
     (tmp_path / "scan.npy").chmod(0)

@@ -24,7 +24,7 @@ from roughflow.scenes import (
     estimated_memory,
     expand_study,
 )
-from roughflow.scenes.jobs import check_collisions
+from roughflow.scenes.expand import check_collisions
 from roughflow.scenes.requests import check_plan_memory
 from roughflow.surface import SurfaceSpec, generate
 

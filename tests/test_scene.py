@@ -125,7 +125,7 @@ def test_config_edits_rerun_only_what_they_change():
 
 
 def test_aggregation_records_the_study_without_fit_options_and_labels():
-    from roughflow.scenes.jobs import aggregated_config
+    from roughflow.scenes.expand import aggregated_config
 
     block = {"gamma": [2], "fit": {"bootstrap": 200},
              "series": [{"label": "gamma = 2", "l_over_lambda_r": [8, 16]}]}

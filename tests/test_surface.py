@@ -258,3 +258,29 @@ def test_plateau_rolloff_is_flat_below_q_r_and_self_affine_above():
     above = (qq > qr) & (qq < qs)
     np.testing.assert_allclose(power[above], ref * (qq[above] / qr) ** (-2 * (1 + hurst)),
                                rtol=1e-9)
+
+
+def test_spec_power_scales_with_the_rms_slope_squared():
+    """At rms slope 1 the power's normalisation by gbar and by gbar^2 are one number: 0.3
+    tells them apart. Parseval: sum q^2 power = gbar^2, and the full-contact energy from the
+    spec's power is that of a generated surface; both exact up to round-off (1e-12)."""
+    from dataclasses import replace
+
+    from roughflow.contact.elastic import full_contact_energy, power_contact_energy
+    from roughflow.surface import spec_power
+
+    s = replace(SurfaceSpec.from_sweep(points_per_lambda_s=2, seed=1), rms_slope=0.3)
+    q, power = spec_power(s)
+    assert float((q * q * power).sum()) == pytest.approx(0.09, rel=1e-12)
+    h = generate(s)
+    assert power_contact_energy(q, power) == pytest.approx(
+        full_contact_energy(h.heights, h.lx, h.ly), rel=1e-12)
+
+
+def test_nonperiodic_rms_gradient_of_a_plane():
+    """Forward differences are exact on a plane h = a x + b y: |grad h| = sqrt(a^2 + b^2)
+    at every point (0.5 here), on a rectangular cell, up to round-off."""
+    nx, ny, lx, ly, a, b = 32, 48, 2.0, 3.0, 0.3, -0.4
+    x = (np.arange(nx) * lx / nx)[:, None]
+    y = (np.arange(ny) * ly / ny)[None, :]
+    assert rms_gradient(a * x + b * y, lx, ly, periodic=False) == pytest.approx(0.5, rel=1e-12)

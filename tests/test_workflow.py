@@ -211,7 +211,7 @@ def test_outputs_record_their_provenance(test_run):
         assert "-v scene threshold" in ds.attrs["command"]
     # the study block without what does not change the dataset (fit options, labels: editing
     # them must not re-aggregate); the fit file records its own options
-    from roughflow.scenes.jobs import aggregated_config
+    from roughflow.scenes.expand import aggregated_config
 
     study = cfg["threshold_vs_size"]
     for name in ("dataset", "fit"):

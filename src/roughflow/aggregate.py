@@ -16,7 +16,7 @@ Only job files of one scene (threshold or ladder) combine, and no two of them ma
 same cells: jobs with the same parameters (model, gamma, hurst, eps_t, eps_f) must have
 distinct seeds and equal settings (:func:`check_disjoint`). Anything else would silently
 drop or duplicate data, so it is refused (the workflow refuses such configs at planning,
-``roughflow.scenes.jobs.check_collisions``).
+``roughflow.scenes.expand.check_collisions``).
 """
 
 from __future__ import annotations

@@ -257,7 +257,7 @@ MEASURED_STUDY = "measured"
 STUDIES = ("channels", *THRESHOLD_STUDIES, *FLOW_STUDIES, MEASURED_STUDY)
 #: Parameters of which a study's figure (and fit) shows one value, per model for the flow
 #: studies; and the studies whose figure shows one system size per point. The figures refuse
-#: other datasets, and the planner (roughflow.scenes.jobs) other configs, before any job.
+#: other datasets, and the planner (roughflow.scenes.expand) other configs, before any job.
 STUDY_ONE_VALUE = {"threshold_vs_gamma": ("hurst",),
                    "threshold_vs_size": ("model", "hurst", "eps_f"),
                    "threshold_vs_hurst": ("model", "eps_f"),

@@ -63,7 +63,7 @@ from roughflow.figures import caption as figure_caption  # noqa: E402
 from roughflow.resources import total_bytes, total_source  # noqa: E402
 from roughflow.slurm import job_limits  # noqa: E402
 from roughflow.scenes import expand_study, pool_jobs, study_defaults  # noqa: E402
-from roughflow.scenes.jobs import aggregated_config  # noqa: E402
+from roughflow.scenes.expand import aggregated_config  # noqa: E402
 from roughflow.scenes.requests import (  # noqa: E402
     KEEP_FAILED_LOG,
     RUNTIME_MARGIN,

@@ -104,7 +104,7 @@ def run(args: argparse.Namespace) -> None:
              time.perf_counter() - t0)
     methods = contact_methods(result.model, result.method,
                               None if adhesion is None else adhesion.repulsion)
-    write_dataset(contact_dataset(surface, result, adhesion), args.output,
+    write_dataset(contact_dataset(surface, result, adhesion, tol=args.tol), args.output,
                   provenance=args.provenance.using(*methods))
     print(f"{args.output}: {result.model} contact{load and f', {load}'}: a_c = "
           f"{result.area_fraction:.5f}, mean gap {result.mean_gap:.6g} (lengths in L)")

@@ -125,7 +125,7 @@ def _plot(results: dict, contact: np.ndarray):
     # a Figure without pyplot: no backend is selected or switched (savefig renders with Agg)
     from matplotlib.figure import Figure
 
-    from roughflow.flow import plot_flux
+    from roughflow.figures.flux import plot_flux
 
     fig = Figure(figsize=(5 * len(results), 4.2))
     axes = fig.subplots(1, len(results), squeeze=False)

@@ -1,6 +1,6 @@
 """Fused numba loops of the GFMD iterations (one pass over memory instead of five to eight).
 
-``wall_forces``, ``reductions``, ``step``: the FIRE step (``gfmd._fire``). ``cg_*``: the
+``wall_forces``, ``reductions``, ``step``: the FIRE step (``fire.fire``). ``cg_*``: the
 projected conjugate-gradient iteration of the hard wall (``gfmd._hard_wall``). ``adhesive_*``:
 the line search and the step of the nonlinear CG of the harmonic adhesive model
 (``adhesive_cg``); their potential is the one of ``adhesion.Adhesion`` with amp = its

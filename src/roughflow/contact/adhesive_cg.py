@@ -2,7 +2,7 @@
 
 Minimises the elastic energy, the interaction v(g) of ``adhesion.Adhesion`` (harmonic
 repulsion, cosine attraction) and the load's work over the gap g = u - h, the same energy
-and the same residual as mass-weighted FIRE (``gfmd._fire``), which it replaces for this
+and the same residual as mass-weighted FIRE (``fire.fire``), which it replaces for this
 model. Each iteration:
 
 1. the preconditioned force z = M^-1 f with the GFMD masses lifted by the mean repulsion

@@ -73,9 +73,10 @@ def spec_attrs(surface: Surface | SurfaceSpec) -> dict:
 
 
 def contact_dataset(surface: Surface, result: ContactResult,
-                    adhesion: Adhesion | None = None) -> xr.Dataset:
+                    adhesion: Adhesion | None = None, *, tol: float | None = None) -> xr.Dataset:
     """Gap, contact mask, contact pressure (not for the bearing model, which has none) and
-    heights on (x, y); scalars as attributes.
+    heights on (x, y); scalars as attributes, with ``tol``, the solve's residual tolerance,
+    where given (a ContactResult does not carry it: pass that of the solve).
 
     An adhesive result needs ``adhesion`` (the :class:`~roughflow.contact.Adhesion` it was
     solved with; the result does not record it), whose parameters become ``adhesion_*``
@@ -107,6 +108,8 @@ def contact_dataset(surface: Surface, result: ContactResult,
     )
     if adhesion is not None:
         ds.attrs.update(adhesion_attrs(surface, adhesion))
+    if tol is not None and result.model != "bearing":  # a cut has no solver tolerance
+        ds.attrs["tol"] = float(tol)
     if result.model == "bearing":  # a rigid cut carries no load: its zeros claimed one
         ds = ds.drop_vars("contact_pressure")
     return ds

@@ -5,6 +5,7 @@ caption (Markdown, ``.md``) next to it and returns the caption. Every module has
 ``draw(ds, fit=None) -> matplotlib.figure.Figure``. The figures are made without pyplot,
 so the library never selects or switches a matplotlib backend: in a notebook the returned
 Figure displays inline, and ``fig.savefig`` renders with Agg or the PDF backend.
+``flux.plot_flux`` draws one flow solve's flux over its contact map (``roughflow flow --plot``).
 """
 
 from __future__ import annotations

@@ -15,18 +15,8 @@ from __future__ import annotations
 from importlib import import_module
 from typing import TYPE_CHECKING
 
-from .jobs import (
-    ChannelsJob,
-    LadderJob,
-    SurfaceParams,
-    ThresholdJob,
-    expand_studies,
-    expand_study,
-    grid_points,
-    job_methods,
-    pool_jobs,
-    study_defaults,
-)
+from .expand import expand_studies, expand_study, pool_jobs, study_defaults
+from .jobs import ChannelsJob, LadderJob, SurfaceParams, ThresholdJob, grid_points, job_methods
 from .requests import check_job_memory, estimated_memory
 
 if TYPE_CHECKING:

@@ -1,4 +1,5 @@
-"""Plot of the Reynolds flux magnitude over the contact map."""
+"""Plot of the Reynolds flux magnitude of one flow solve over the contact map (``roughflow
+flow --plot``)."""
 
 from __future__ import annotations
 
@@ -6,11 +7,13 @@ from typing import TYPE_CHECKING
 
 import numpy as np
 
-from .core import FlowResult
-
 if TYPE_CHECKING:
     from matplotlib.axes import Axes
     from numpy.typing import ArrayLike
+
+    from roughflow.flow import FlowResult
+
+__all__ = ["plot_flux"]
 
 
 def plot_flux(result: FlowResult, contact_mask: ArrayLike | None = None, ax: Axes | None = None,

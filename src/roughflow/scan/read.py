@@ -1,15 +1,7 @@
-"""Measured topographies: reading scans into dimensionless :class:`~roughflow.surface.Surface`s.
-
-:func:`read_scan` reads every format that SurfaceTopography reads (the optional extra
-``pip install roughflow[topography]``, imported here only) and prepares the heights in this
-order: crop to a grid window, convert to metres, detrend (fitted to the defined points),
-fill missing points (a scan with missing points is refused unless a fill is chosen), and
-scale to the dimensionless system: lengths in units of L = sqrt(lx ly) of the scan, whose
-value in metres is ``ScanInfo.length_scale``. The scan keeps its own rms gradient, so its
-pressures are in units of E* (not E* gbar).
-
-The array helpers (:func:`detrend`, :func:`level_lines`, :func:`fill_missing`,
-:func:`largest_defined_window`) work on plain numpy arrays.
+"""Reading measured scans (:func:`read_scan`): format detection and SurfaceTopography's
+readers (the optional extra ``pip install roughflow[topography]``, imported here only), the
+data channel, the crop window, units and size; the heights are then prepared with the array
+helpers of :mod:`roughflow.scan.prepare` and scaled to the dimensionless system.
 """
 
 from __future__ import annotations
@@ -25,10 +17,7 @@ from pathlib import Path
 from typing import TYPE_CHECKING
 
 import numpy as np
-import scipy.sparse as sp
-import scipy.sparse.linalg as spla
 
-from roughflow._jit import njit
 from roughflow.defaults import (
     DETREND_MODES,
     FILL_METHODS,
@@ -42,156 +31,20 @@ from roughflow.defaults import (
     SCAN_READER,
     SCAN_READER_EXTRA,
 )
-from roughflow.errors import InputError, check_axis, require_installed
+from roughflow.errors import InputError, require_installed
 from roughflow.files import require_readable
 from roughflow.surface import ScanInfo, Surface, rms_gradient
+
+from .prepare import detrend, fill_missing, largest_defined_window
 
 if TYPE_CHECKING:
     from collections.abc import Sequence
 
-__all__ = ["detrend", "level_lines", "fill_missing", "largest_defined_window", "check_crop",
-           "parse_crop", "length_factor", "scan_size", "is_number", "TEXT_SUFFIXES",
-           "HEIGHT_CHANNEL_NAMES", "MISSING_VALUE_RTOL", "read_scan"]
+__all__ = ["check_crop", "parse_crop", "length_factor", "scan_size", "is_number",
+           "TEXT_SUFFIXES", "HEIGHT_CHANNEL_NAMES", "MISSING_VALUE_RTOL", "read_scan"]
 
-log = logging.getLogger(__name__)
-
-
-def detrend(heights: np.ndarray, lx: float, ly: float, mode: str,
-            defined: np.ndarray | None = None) -> np.ndarray:
-    """``heights`` minus the least-squares fit of ``mode`` over the ``defined`` points:
-    ``"none"`` (nothing removed), ``"plane"`` (mean and tilt), ``"curvature"`` (plane
-    plus x^2, xy, y^2), or ``"lines-x"`` / ``"lines-y"`` (:func:`level_lines` along x / y).
-    Undefined points get the same correction (their values are whatever they hold)."""
-    if mode not in DETREND_MODES:
-        raise InputError(f"detrend must be one of {DETREND_MODES}, got {mode!r}")
-    if mode == "none":
-        return np.array(heights, dtype=np.float64)
-    if mode in ("lines-x", "lines-y"):
-        return level_lines(heights, 0 if mode == "lines-x" else 1, defined)
-    nx, ny = heights.shape
-    # coordinates scaled to [-1, 1] keep the normal equations well conditioned
-    x = np.linspace(-1.0, 1.0, nx)[:, None] * np.ones((1, ny))
-    y = np.ones((nx, 1)) * np.linspace(-1.0, 1.0, ny)[None, :]
-    basis = [np.ones_like(x), x, y]
-    if mode == "curvature":
-        basis += [x * x, x * y, y * y]
-    a = np.stack([b.ravel() for b in basis], axis=1)
-    ok = np.ones(heights.size, dtype=bool) if defined is None else defined.ravel()
-    coef, *_ = np.linalg.lstsq(a[ok], heights.ravel()[ok], rcond=None)
-    return heights - (a @ coef).reshape(heights.shape)
-
-
-def level_lines(heights: np.ndarray, axis: int | str, defined: np.ndarray | None = None
-                ) -> np.ndarray:
-    """``heights`` with every line along ``axis`` (0: x, 1: y) levelled: each line minus
-    the least-squares line (mean and tilt) through its ``defined`` points; a line with one
-    defined point loses its height, one with none is left as it is (it is all missing).
-
-    Scanning probes record a topography line by line, and drift between the lines shifts
-    and tilts each one; the offsets make grooves along the lines that a plane cannot
-    remove. Levelling removes them, and with them whatever the true surface has in the
-    lines' means and tilts (its long waves across the lines): use it only along the scan's
-    fast axis and only where the line artefacts show."""
-    axis = check_axis(axis)
-    h = np.array(heights, dtype=np.float64)
-    if h.ndim != 2:
-        raise InputError(f"heights must be a 2D array, got shape {h.shape}")
-    if defined is not None and np.shape(defined) != h.shape:
-        raise InputError(f"defined has shape {np.shape(defined)} but the heights have "
-                         f"shape {h.shape}")
-    lines = np.moveaxis(h, axis, 0)  # a view: (points along a line, lines)
-    w = (np.ones(lines.shape) if defined is None else
-         np.moveaxis(np.asarray(defined, dtype=bool), axis, 0).astype(np.float64))
-    t = np.linspace(-1.0, 1.0, lines.shape[0])[:, None]  # position along the line
-    n, st, stt = w.sum(0), (w * t).sum(0), (w * t * t).sum(0)
-    known = np.where(w > 0, lines, 0.0)  # undefined points may hold nan
-    sh, sth = known.sum(0), (t * known).sum(0)
-    det = n * stt - st * st
-    tilted = det > 1e-12 * np.maximum(n * n, 1.0)  # at least two distinct defined points
-    slope = np.where(tilted, (n * sth - st * sh) / np.where(tilted, det, 1.0), 0.0)
-    mean = np.where(n > 0, (sh - slope * st) / np.maximum(n, 1.0), 0.0)
-    lines -= mean + slope * t
-    return h
-
-
-def fill_missing(heights: np.ndarray, missing: np.ndarray, method: str) -> np.ndarray:
-    """``heights`` with the ``missing`` points filled: ``"harmonic"`` solves Laplace's
-    equation on them with the defined neighbours as boundary values (non-periodic, smooth;
-    exact for a plane inside the scan, zero normal slope at its edges); ``"min"`` sets them
-    to the lowest defined height (open channels: a conservative choice for leakage)."""
-    if method not in FILL_METHODS or method == "none":
-        raise InputError(f"fill must be one of {FILL_METHODS[1:]}, got {method!r}")
-    h = np.array(heights, dtype=np.float64)
-    miss = np.asarray(missing, dtype=bool)
-    if not miss.any():
-        return h
-    if miss.all():
-        raise InputError("every point of the scan is missing: nothing to fill from")
-    if method == "min":
-        h[miss] = h[~miss].min()
-        return h
-    nx, ny = h.shape
-    idx = np.full(h.shape, -1, dtype=np.int64)
-    cells = np.argwhere(miss)
-    idx[miss] = np.arange(len(cells))
-    rows, cols, vals = [], [], []
-    rhs = np.zeros(len(cells))
-    diag = np.zeros(len(cells))
-    for dx, dy in ((1, 0), (-1, 0), (0, 1), (0, -1)):
-        jx, jy = cells[:, 0] + dx, cells[:, 1] + dy
-        inside = (jx >= 0) & (jx < nx) & (jy >= 0) & (jy < ny)
-        k = np.flatnonzero(inside)
-        diag[k] += 1.0
-        nb = idx[jx[k], jy[k]]
-        unknown = nb >= 0
-        rows.append(k[unknown])
-        cols.append(nb[unknown])
-        vals.append(-np.ones(int(unknown.sum())))
-        np.add.at(rhs, k[~unknown], h[jx[k[~unknown]], jy[k[~unknown]]])
-    rows.append(np.arange(len(cells)))
-    cols.append(np.arange(len(cells)))
-    vals.append(diag)
-    m = sp.csr_matrix((np.concatenate(vals), (np.concatenate(rows), np.concatenate(cols))),
-                      shape=(len(cells), len(cells)))
-    # every 4-connected region of missing points borders a defined point (not all are
-    # missing), so the matrix is non-singular
-    h[miss] = spla.spsolve(m.tocsc(), rhs)
-    return h
-
-
-@njit(cache=True)
-def _largest_rectangle(defined):
-    """(points, i0, i1, j0, j1) of the largest all-True rectangle of ``defined``: row by
-    row, the runs of defined points ending in each row are a histogram, whose largest
-    rectangle a stack of increasing runs finds in one pass (O(nx ny) in all)."""
-    nx, ny = defined.shape
-    run = np.zeros(ny + 1, np.int64)  # run[ny] stays 0: it empties the stack
-    stack = np.empty(ny + 1, np.int64)
-    best, i0, i1, j0, j1 = 0, 0, 0, 0, 0
-    for i in range(nx):
-        for j in range(ny):
-            run[j] = run[j] + 1 if defined[i, j] else 0
-        top = 0
-        for j in range(ny + 1):
-            while top > 0 and run[stack[top - 1]] >= run[j]:
-                top -= 1
-                height = run[stack[top]]
-                left = stack[top - 1] + 1 if top > 0 else 0
-                if height * (j - left) > best:
-                    best, i0, i1, j0, j1 = height * (j - left), i - height + 1, i + 1, left, j
-            stack[top] = j
-            top += 1
-    return best, i0, i1, j0, j1
-
-
-def largest_defined_window(missing: np.ndarray) -> tuple[slice, slice]:
-    """The grid window (slices along x and y) with the most points and no ``missing`` one;
-    of equal ones the first in row order. Empty slices if every point is missing."""
-    miss = np.asarray(missing, dtype=bool)
-    if miss.ndim != 2:
-        raise InputError(f"missing must be a 2D mask, got shape {miss.shape}")
-    _, i0, i1, j0, j1 = _largest_rectangle(np.ascontiguousarray(~miss))
-    return slice(int(i0), int(i1)), slice(int(j0), int(j1))
+#: The package's logger, as before the module was split: its name is in every log line.
+log = logging.getLogger("roughflow.scan")
 
 
 def _window_text(window: tuple[slice, slice], shape: tuple[int, int]) -> str:
@@ -609,6 +462,39 @@ def _channel_label(reader, ch) -> str:
     return str(ch.name) if len(twins) == 1 else f"{ch.name} (channel {ch.index})"
 
 
+def _check_text_scan(path: Path, ch) -> None:
+    """Refuse a plain-text scan read wrongly as a matrix: a list of points whose columns
+    were taken for the scan's lines, or a matrix with dropped lines."""
+    nx, ny = ch.nb_grid_pts
+    if nx <= 4 < ny and ny > 4 * nx and _is_point_list(path):
+        # the coordinate-list reader refused it (a point missing from the grid, a
+        # fourth column) and the matrix reader took its columns for the scan's lines
+        raise InputError(f"{str(path)!r} looks like a list of points ({ny} lines of "
+                         f"{nx} values), not a matrix: SurfaceTopography reads a list "
+                         "of x y z lines (three columns) only where it covers every "
+                         "point of a uniform grid; drop other columns and write missing "
+                         "points with a height of nan")
+    _check_text_complete(path, tuple(ch.nb_grid_pts))
+
+
+def _file_unit_and_size(reader, ch, path: Path) -> tuple[str | None, tuple[float, ...] | None]:
+    """The length unit and physical size the channel's file gives (each None where it gives
+    none); a channel whose data are not heights (its data unit is not its lateral one) is
+    refused."""
+    file_unit, file_size = ch.unit, ch.physical_sizes
+    if isinstance(file_unit, tuple):  # (lateral, data) units: the data are not heights
+        lateral_unit, data_unit = (file_unit + (None, None))[:2]
+        if data_unit is None or data_unit != lateral_unit:
+            raise InputError(f"{str(path)!r} channel {ch.name!r} is not a height map (its "
+                             f"data unit is {data_unit!r}, its lateral unit "
+                             f"{lateral_unit!r}); pick a height channel (channels: "
+                             f"{_channel_list(reader)})")
+        file_unit = lateral_unit
+    if file_size is not None:  # plain floats in messages, not numpy's repr
+        file_size = tuple(float(v) for v in file_size)
+    return file_unit, file_size
+
+
 def read_scan(path: str | os.PathLike, *,
               size: str | float | Sequence[str | float] | None = None, unit: str | None = None,
               height_unit: str | None = None, detrend_mode: str = SCAN_DETREND,
@@ -664,27 +550,8 @@ def read_scan(path: str | os.PathLike, *,
                              "roughflow needs a 2D map on a uniform grid")
         reader_name = type(reader).__name__
         if reader_name == "AscReader":
-            nx, ny = ch.nb_grid_pts
-            if nx <= 4 < ny and ny > 4 * nx and _is_point_list(path):
-                # the coordinate-list reader refused it (a point missing from the grid, a
-                # fourth column) and the matrix reader took its columns for the scan's lines
-                raise InputError(f"{str(path)!r} looks like a list of points ({ny} lines of "
-                                 f"{nx} values), not a matrix: SurfaceTopography reads a list "
-                                 "of x y z lines (three columns) only where it covers every "
-                                 "point of a uniform grid; drop other columns and write missing "
-                                 "points with a height of nan")
-            _check_text_complete(path, tuple(ch.nb_grid_pts))
-        file_unit, file_size = ch.unit, ch.physical_sizes
-        if isinstance(file_unit, tuple):  # (lateral, data) units: the data are not heights
-            lateral_unit, data_unit = (file_unit + (None, None))[:2]
-            if data_unit is None or data_unit != lateral_unit:
-                raise InputError(f"{str(path)!r} channel {ch.name!r} is not a height map (its "
-                                 f"data unit is {data_unit!r}, its lateral unit "
-                                 f"{lateral_unit!r}); pick a height channel (channels: "
-                                 f"{_channel_list(reader)})")
-            file_unit = lateral_unit
-        if file_size is not None:  # plain floats in messages, not numpy's repr
-            file_size = tuple(float(v) for v in file_size)
+            _check_text_scan(path, ch)
+        file_unit, file_size = _file_unit_and_size(reader, ch, path)
         if file_unit is not None and (unit is not None or height_unit is not None):
             raise InputError(f"{str(path)!r} already gives its unit ({file_unit}): drop "
                              f"unit={unit!r} / height_unit={height_unit!r}")
