@@ -77,7 +77,10 @@ def test_cluster_stats_of_a_contact_state():
     assert st.area_fraction == pytest.approx(0.3, abs=1e-4)
     assert st.patch_sizes.sum() == c.sum() and st.fluid_sizes.sum() == (~c).sum()
     assert st.n_patches == st.patch_sizes.size > 10
-    assert 0.5 < st.percolating_fraction_x <= 0.7 and 0.5 < st.percolating_fraction_y <= 0.7
+    # at most the fluid's 0.7; at a_c 0.3, well below the bearing threshold 1/2, the spanning
+    # cluster holds all but a few % of the fluid (this seed: 0.690 along x, 0.692 along y;
+    # seeds 0-5: 0.65-0.69 where one spans). The hand-made mask below tells x from y exactly
+    assert 0.6 < st.percolating_fraction_x <= 0.7 and 0.6 < st.percolating_fraction_y <= 0.7
 
 
 def test_cluster_stats_of_a_hand_made_mask():

@@ -36,6 +36,9 @@ GRID_ROUNDING_SLACK = 1e-9
 #: L / lambda_r in the easy direction when none is given: the paper's
 #: L / lambda_r = PAPER_SIZE_FACTOR max(sqrt(gamma), 1/sqrt(gamma)).
 PAPER_SIZE_FACTOR = 4.0
+#: Target of each numerical error in a_c* (docs/accuracy.md): a third of the standard error
+#: of the paper's 10-seed means, about 0.01.
+A_C_STAR_ERROR_BUDGET = 0.01 / 3
 #: Seeds of the accuracy study (``roughflow accuracy``, the workflow's ``accuracy`` target).
 ACCURACY_SEEDS = (0, 1, 2, 3, 4, 5)
 #: Fewest grid points per lambda_s at which a_c is perimeter-corrected: the constant is
@@ -158,14 +161,14 @@ FLOW_TOL_MAX = 1e-2
 #: a solve whose bound exceeds it raises, whatever its flux balance. On
 #: near-threshold states kept by the stress walks (1024^2 - 2048 x 4096) a direct solve's
 #: r^T A^-1 r / Q was 2e-13 - 2.3e-5, at round-off (a refinement step moves it by its own
-#: size); 1e-3 in sigma is 1e-3 in ln sigma, at least 300 times below its seed-to-seed
-#: spread (0.33 - 1.34 at a_c 0.2 - 0.35, docs/accuracy.md). So a solve raises only where
+#: size); 1e-3 in sigma is 1e-3 in ln sigma, at least 250 times below its seed-to-seed
+#: spread (0.27 - 0.98 at a_c 0.2 - 0.35, docs/accuracy.md). So a solve raises only where
 #: float64 leaves sigma unproven by far more than the paper's numbers can tell (docs/flow.md).
 FLOW_SIGMA_RTOL = 1e-3
 #: Proven relative error of sigma at which the ladder's and ``leak``'s iterative flow solves
 #: stop (``flow.solve(sigma_tol=)``), whatever their residual and flux balance: the ladder's
 #: contact tolerance (1e-6) alone moves sigma by up to 6e-7 (docs/accuracy.md), and the
-#: seed-to-seed sd of ln sigma is 0.33 - 1.34. RS-CG certifies it after 6-9 iterations where
+#: seed-to-seed sd of ln sigma is 0.27 - 0.98. RS-CG certifies it after 6-9 iterations where
 #: the residual and flux criteria take 9-16 (docs/flow.md "Stopping at sigma's accuracy").
 FLOW_SIGMA_TOL = 1e-6
 #: A cell whose local conductivity u^3 / (12 eta) is at most this fraction of the largest

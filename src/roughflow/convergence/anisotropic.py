@@ -20,6 +20,7 @@ from typing import TYPE_CHECKING
 import numpy as np
 
 from roughflow import accuracy
+from roughflow.defaults import A_C_STAR_ERROR_BUDGET
 
 from .dataset import read_records
 from .options import FIT_MIN_PPL
@@ -210,7 +211,7 @@ def _gamma_section(recs: list[dict], g: float, fit_min_ppl: int, rows: _Rows,
                          ls="-" if ax == 0 else "--", marker="o" if ax == 0 else "s",
                          label=f"{d}: {k}")
     ax_.axhline(0, color="gray", lw=0.8)
-    ax_.axhspan(-0.0033, 0.0033, color="gray", alpha=0.15, lw=0)
+    ax_.axhspan(-A_C_STAR_ERROR_BUDGET, A_C_STAR_ERROR_BUDGET, color="gray", alpha=0.15, lw=0)
     ax_.set_xscale("log", base=2)
     ax_.set_xlabel("points per lambda_s (each axis)")
     ax_.set_ylabel("a_c* error (mean over seeds +- SE)")

@@ -17,6 +17,7 @@ from typing import TYPE_CHECKING
 import numpy as np
 
 from roughflow import accuracy
+from roughflow.defaults import A_C_STAR_ERROR_BUDGET
 from roughflow.errors import InputError
 
 from .anisotropic import anisotropic_draft
@@ -218,7 +219,7 @@ def _threshold_section(d: _Resolution, fine: tuple[int, int], md: list[str],
                       "s--", color=col, mfc="none", label=f"{k}: |mean| (bias)")
             for p, t, r, *_ in v:
                 ax.annotate(plot_label(p, (f0, f1), k), (t, max(r, 1e-5)), fontsize=7)
-    ax.axhline(0.01 / 3, color="k", ls=":", label="1/3 of seed SE (0.01)")
+    ax.axhline(A_C_STAR_ERROR_BUDGET, color="k", ls=":", label="1/3 of seed SE (0.01)")
     ax.set_xlabel("wall time per threshold [s]")
     ax.set_ylabel("rms error of a_c*")
     ax.set_title("a_c* (x and y), labels: points per lambda_s\n"
@@ -344,7 +345,7 @@ def _contact_tol_section(tol: list[dict], md: list[str], ax: Axes) -> None:
               f"reference tol {tref:g})\n")
     md.append(md_table(["a_c", "contact tol", "time [s]", "iterations", "max |d a_c|",
                         "max |d gap|/gap", "max |d sigma|/sigma"], rows) + "\n")
-    ax.axhline(0.01 / 3, color="k", ls=":")
+    ax.axhline(A_C_STAR_ERROR_BUDGET, color="k", ls=":")
     ax.set_xlabel("contact solve wall time [s]")
     ax.set_ylabel("max |a_c - a_c(ref)|")
     ax.set_title("contact tolerance (labels: tol)")
@@ -383,7 +384,7 @@ def _threshold_contact_tol_section(tol: list[dict], md: list[str], ax: Axes) -> 
     ax.set_xlabel("threshold wall time [s]")
     ax.set_ylabel("max |a_c* - a_c*(ref)|")
     ax.set_title("contact tol in the threshold")
-    ax.axhline(0.01 / 3, color="k", ls=":")
+    ax.axhline(A_C_STAR_ERROR_BUDGET, color="k", ls=":")
 
 
 def _bisect_tol_section(tol: list[dict], md: list[str], ax: Axes) -> None:
@@ -419,7 +420,7 @@ def _bisect_tol_section(tol: list[dict], md: list[str], ax: Axes) -> None:
     ax.semilogy([t for _, t, _ in pts], [e for *_, e in pts], "o-", label="a_c*")
     for b, t, e in pts:
         ax.annotate(f"{b:g}", (t, e), fontsize=7)
-    ax.axhline(0.01 / 3, color="k", ls=":", label="1/3 of seed SE")
+    ax.axhline(A_C_STAR_ERROR_BUDGET, color="k", ls=":", label="1/3 of seed SE")
     ax.set_xlabel("threshold wall time [s]")
     ax.set_ylabel("rms |a_c* - a_c*(ref)|")
     ax.set_title("bisection tolerance (labels: tol)")
