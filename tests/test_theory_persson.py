@@ -284,11 +284,12 @@ def test_default_energy_factor_is_the_papers():
     # that does not pass energy_factor uses it. (Not the paper's a_c* "0.42 +- 0.02".)
     import inspect
 
-    from roughflow.theory import DEFAULT_ENERGY_FACTOR, predict_conductance
+    from roughflow.defaults import PERSSON_ENERGY_FACTOR
+    from roughflow.theory import predict_conductance
 
-    assert DEFAULT_ENERGY_FACTOR == 0.42
+    assert PERSSON_ENERGY_FACTOR == 0.42
     default = inspect.signature(predict_conductance).parameters["energy_factor"].default
-    assert default == DEFAULT_ENERGY_FACTOR
+    assert default == PERSSON_ENERGY_FACTOR
 
 
 def test_mean_gap_follows_the_log_law_where_t0_squared_underflows():

@@ -27,7 +27,6 @@ from .jobs import ChannelsJob
 log = logging.getLogger(__name__)
 
 
-
 def contact_at_area(surface: Surface, target: float, model: str, *,
                     tol: float = defaults.CHANNELS_AREA_TOL,
                     threads: int | None = None) -> contact.ContactResult:

@@ -35,7 +35,6 @@ from .peklenik import (
     peklenik_number,
 )
 from .persson import (
-    DEFAULT_ENERGY_FACTOR,
     DiscreteSpectrum,
     PerssonPrediction,
     discrete_spectrum,
@@ -47,7 +46,6 @@ from .persson import (
 )
 
 __all__ = [
-    "DEFAULT_ENERGY_FACTOR",
     "EXPONENTS",
     "FORMS",
     "KINDS",

@@ -63,9 +63,6 @@ from .effective_medium import _wsum
 if TYPE_CHECKING:
     from numpy.typing import ArrayLike
 
-#: The default gamma_P (one place: :data:`roughflow.defaults.PERSSON_ENERGY_FACTOR`).
-DEFAULT_ENERGY_FACTOR = PERSSON_ENERGY_FACTOR
-
 
 @dataclass(frozen=True)
 class DiscreteSpectrum:
@@ -202,7 +199,7 @@ def _j(t0: np.ndarray, energy_factor: float) -> np.ndarray:
 
 def persson_mean_gap(
     pressure: ArrayLike, spec: SurfaceSpec | Surface | DiscreteSpectrum, *,
-    energy_factor: float = DEFAULT_ENERGY_FACTOR, modulus: float = 1.0,
+    energy_factor: float = PERSSON_ENERGY_FACTOR, modulus: float = 1.0,
 ) -> np.ndarray | float:
     """Persson's mean gap u(p) (Yang & Persson 2008, see module doc), in units of L.
 
@@ -224,7 +221,7 @@ def persson_mean_gap(
 
 def persson_u0(
     spec: SurfaceSpec | Surface | DiscreteSpectrum, *,
-    energy_factor: float = DEFAULT_ENERGY_FACTOR,
+    energy_factor: float = PERSSON_ENERGY_FACTOR,
 ) -> float:
     """Decay length u0 of p ~ exp(-u/u0) at small p (units of L)."""
     ds = _as_spectrum(spec)
@@ -234,7 +231,7 @@ def persson_u0(
 
 def persson_elastic_energy(
     pressure: ArrayLike, spec: SurfaceSpec | Surface | DiscreteSpectrum, *,
-    energy_factor: float = DEFAULT_ENERGY_FACTOR, modulus: float = 1.0,
+    energy_factor: float = PERSSON_ENERGY_FACTOR, modulus: float = 1.0,
 ) -> np.ndarray | float:
     """Stored elastic energy per unit area U_el(p) (module doc), units E* L.
 
@@ -254,7 +251,7 @@ def persson_elastic_energy(
 def predict_conductance(
     spec: SurfaceSpec | Surface, pressures: ArrayLike, *, a_c_star: float,
     kind: str = DEFAULT_MODEL,
-    eta: float = 1.0, energy_factor: float = DEFAULT_ENERGY_FACTOR, modulus: float = 1.0,
+    eta: float = 1.0, energy_factor: float = PERSSON_ENERGY_FACTOR, modulus: float = 1.0,
 ) -> PerssonPrediction:
     """sigma(p) from the spectrum alone: Persson a_c(p) and u(p) in the closed form Eq. (16).
 
