@@ -117,6 +117,62 @@ def test_numba_and_numpy_kernels_agree():
     np.testing.assert_allclose(a.gap, b.gap, rtol=0, atol=1e-10 * s.heights.std())
 
 
+@pytest.mark.parametrize("numba", [True, False])
+def test_adhesive_wall_forces_are_the_wall_plus_the_potential(numba):
+    # FIRE's force pass on the hard wall with adhesion is Adhesion.pressure at max(u - h, 0)
+    # added to the elastic force before the wall's test and to sigma after it (the numpy
+    # form it replaced), on all three kinds of cell: on the wall and pushed into it, inside
+    # the range, beyond it (tension exactly 0 there: sin(pi) is 1.2e-16). Round-off only:
+    # the compiled sine is a polynomial within 1.5 ulp of libm's (3.3e-16 at 1, measured
+    # on 262144 cells), so 1e-15 of the peak tension leaves a factor 3.
+    from roughflow.contact.adhesion import Adhesion
+
+    ad = Adhesion(surface_energy=2e-3, range=0.05)
+    rng = np.random.default_rng(2)
+    n = 6000
+    h = rng.normal(scale=0.1, size=n)
+    u = h + np.where(rng.random(n) < 0.3, 0.0, rng.uniform(0.0, 0.1, n))
+    fel = rng.normal(scale=0.05, size=n)
+    eps, load = 1e-12, 0.01
+    f, sigma, tension = np.empty(n), np.empty(n), np.empty(n)
+    active = np.empty(n, dtype=bool)
+    kernel = K.adhesive_wall_forces if numba else K.adhesive_wall_forces_np
+    kernel(fel, u, h, eps, load, -ad.max_tension, ad.range, f, sigma, active, tension)
+    expected = ad.pressure(np.maximum(u - h, 0.0))
+    atol = 1e-15 * ad.max_tension
+    np.testing.assert_allclose(tension, expected, rtol=0, atol=atol)
+    beyond = u - h >= ad.range
+    assert beyond.any() and np.all(tension[beyond] == 0.0)
+    f0, sigma0, active0 = np.empty(n), np.empty(n), np.empty(n, dtype=bool)
+    K.wall_forces_np(fel + expected, u, h, eps, load, f0, sigma0, active0)
+    sigma0 += expected
+    np.testing.assert_array_equal(active, active0)
+    assert active.any() and not active.all()
+    np.testing.assert_allclose(f, f0, rtol=0, atol=atol)
+    np.testing.assert_allclose(sigma, sigma0, rtol=0, atol=atol)
+
+
+def test_numba_and_numpy_kernels_agree_for_adhesive_fire():
+    # the paper's adhesive case on a small surface (FIRE on the hard wall): the fused force
+    # pass and its numpy twin take the same steps to the same state (double precision
+    # throughout, forces equal to an ulp of the peak tension, so to round-off: 1e-12 rms(h)
+    # is 1e-4 of the tolerance)
+    from roughflow.contact.adhesion import adhesion_for
+
+    s = generate(SurfaceSpec.from_sweep(l_over_lambda_r=4, eps_f=0.125, points_per_lambda_s=4,
+                                        seed=0))
+    ad = adhesion_for(s.heights, s.lx, s.ly, gamma_over_v_full=0.1,
+                      range=0.8 * s.spec.lambda_s)
+    a = G.gfmd(s.heights, s.lx, s.ly, 0.02, tol=1e-8, max_iter=5000, adhesion=ad)
+    b = G.gfmd(s.heights, s.lx, s.ly, 0.02, tol=1e-8, max_iter=5000, adhesion=ad,
+               use_numba=False)
+    assert a.converged and b.converged
+    assert a.iterations == b.iterations
+    np.testing.assert_array_equal(a.contact, b.contact)
+    np.testing.assert_allclose(a.gap, b.gap, rtol=0, atol=1e-12 * s.heights.std())
+    assert float(a.contact.mean()) > 0.01  # adhesive contacts are there to be tested
+
+
 @pytest.mark.parametrize("shape", [(16, 12), (15, 9)])
 @pytest.mark.parametrize("numba", [True, False])
 def test_spectral_dot_products_are_real_space_ones(shape, numba):

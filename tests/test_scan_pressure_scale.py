@@ -133,11 +133,13 @@ def test_theory_files_keep_the_scan_and_its_units(tmp_path):
 
 
 @pytest.mark.parametrize("argv", [["-v", "-q"], ["-q", "-vv"]])
-def test_quiet_and_verbose_together_are_refused(argv, capsys):
+def test_quiet_and_verbose_together_are_refused(argv, capsys, tmp_path):
+    out = tmp_path / "unused.nc"
     with pytest.raises(SystemExit) as exc:
-        main([argv[0], "surface", "--l-over-lambda-r", "1", argv[1], "-o", "unused.nc"])
+        main([argv[0], "surface", "--l-over-lambda-r", "1", argv[1], "-o", str(out)])
     assert exc.value.code == 2
     assert "-q (errors only) contradicts -v" in capsys.readouterr().err
+    assert not out.exists()  # refused before any work
 
 
 @pytest.mark.parametrize("rms_slope", [20.0, 1e-5])

@@ -66,8 +66,9 @@ def one_cell_scale(shape: tuple[int, int], lx: float, ly: float, hscale: float) 
     mean by ``hscale`` (rms height) against a single cell held in place, 1 / (nx ny
     cell_compliance) times ``hscale``. A body in contact is at least that stiff (every
     further contact stiffens it), while the attraction alone can hold a vanishing pressure:
-    a body lifted out of its range kept a tension of 1e-17 (sin(pi) of the cosine law), and
-    measured against it no solve converged."""
+    a body lifted out of its range kept a tension of 1e-17 (sin(pi) of the cosine law, before
+    ``Adhesion.pressure`` ended exactly at the range), and measured against it no solve
+    converged."""
     return hscale / (shape[0] * shape[1] * cell_compliance(shape, lx, ly))
 
 

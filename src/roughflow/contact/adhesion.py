@@ -140,10 +140,11 @@ class Adhesion:
         return np.where(g < 0, -gs + 0.5 * self.kappa * g * g, v)
 
     def pressure(self, g: np.ndarray) -> np.ndarray:
-        """Contact pressure -dv/dg: positive = repulsion, negative = adhesive tension."""
-        gs, rho = self.surface_energy, self.range
+        """Contact pressure -dv/dg: positive = repulsion, negative = adhesive tension; exactly
+        0 from the range rho on (sin(pi) is 1.2e-16, not 0, in floating point)."""
+        rho = self.range
         x = np.clip(g, 0.0, rho)
-        t = -0.5 * gs * np.pi / rho * np.sin(np.pi * x / rho)
+        t = np.where(x < rho, -self.max_tension * np.sin(np.pi * x / rho), 0.0)
         return np.where(g < 0, -self.kappa * g, t)
 
     def physical_gap(self, gap: np.ndarray, contact: np.ndarray,

@@ -86,8 +86,10 @@ def fire(
     """Mass-weighted FIRE (the adhesive model); arguments as :func:`.gfmd.gfmd`."""
     if use_numba:
         wall_forces, reductions, step = _k.wall_forces, _k.reductions, _k.step
+        adhesive_wall_forces = _k.adhesive_wall_forces
     else:
         wall_forces, reductions, step = _k.wall_forces_np, _k.reductions_np, _k.step_np
+        adhesive_wall_forces = _k.adhesive_wall_forces_np
     shape = heights.shape
     size = heights.size
     plan = fft.plan(shape, threads)
@@ -134,10 +136,8 @@ def fire(
         if adhesion is None:
             wall_forces(fel, u, h, eps, load, f, sigma, active)
         elif not soft:  # hard wall plus cosine tension (<= 0) on the free points
-            tension[...] = adhesion.pressure(np.maximum(u - h, 0.0))
-            np.add(fel, tension, out=fel)
-            wall_forces(fel, u, h, eps, load, f, sigma, active)
-            np.add(sigma, tension, out=sigma)
+            adhesive_wall_forces(fel, u, h, eps, load, -adhesion.max_tension, adhesion.range,
+                                 f, sigma, active, tension)
         else:
             sigma[...] = adhesion.pressure(u - h)
             np.add(fel, sigma - load, out=f)

@@ -137,7 +137,9 @@ COST_ANISOTROPIC_FACTOR = 2.0
 #: and on a slower day of the shared machine).
 COST_FLOW_S = 3.5e-6
 #: The contact solves of a ladder step (warm-started load search), per N log2(N), by model.
-COST_LADDER_CONTACT_S = {"elastic": 7e-8, "adhesive": 1.6e-7, "bearing": 0.0}
+#: Adhesive: 1.6e-7 until FIRE's force pass was compiled (2026-12-07), whose solves then took
+#: 0.64x the time at 512^2 and 0.54x at 1024^2 (docs/contact.md "Adhesive force pass").
+COST_LADDER_CONTACT_S = {"elastic": 7e-8, "adhesive": 1.0e-7, "bearing": 0.0}
 #: The bearing model's exact threshold (one sort and sweep), per grid point and seed.
 COST_BEARING_THRESHOLD_S = 8e-7
 
