@@ -555,10 +555,12 @@ def test_sigterm_removes_the_temporary_files_like_ctrl_c(files, capsys, monkeypa
     from matplotlib.figure import Figure
 
     sig = getattr(signal, name)
+    finished = []
 
     def killed_while_rendering(self, fname, *a, **k):
         open(fname, "wb").write(b"half a figure")
         os.kill(os.getpid(), sig)
+        finished.append(fname)  # the signal waits for the writer (files.signals_held)
 
     before = signal.getsignal(sig)
     monkeypatch.setattr(Figure, "savefig", killed_while_rendering)
@@ -570,4 +572,73 @@ def test_sigterm_removes_the_temporary_files_like_ctrl_c(files, capsys, monkeypa
     else:
         assert code == 128 + int(sig) and f"terminated ({name})" in err, err
         assert list(tmp_path.iterdir()) == []
+        # raised inside the writer, the exception left netCDF's file lock held, and the
+        # write's own cleanup then waited for it forever (a crash audit: 3 of 7 SIGTERMs to
+        # an aggregate hung); now the writer ends first, and nothing is published
+        assert len(finished) == 1
     assert signal.getsignal(sig) is before  # main() restores the handler
+
+
+def test_a_signal_whose_exception_python_dropped_still_stops_the_command(capsys, monkeypatch,
+                                                                         tmp_path):
+    # A SIGTERM handled inside a destructor raises there, and Python drops the exception
+    # ("Exception ignored in ..."): a threshold scene then finished and exited 0 (2 of 8
+    # SIGTERMs, a crash audit). The handler notes the signal: nothing is published, the
+    # status is 143, and a later library call is not stopped by the old note.
+    import os
+    import signal
+    import sys
+
+    import roughflow.surface as surface_module
+    from roughflow.files import Terminated
+    from roughflow.io import write_dataset
+
+    generate = surface_module.generate
+    dropped = []  # what Python hands to sys.unraisablehook instead of raising
+    monkeypatch.setattr(sys, "unraisablehook", lambda u: dropped.append(u.exc_type))
+
+    class SignalOnCollection:
+        def __del__(self):
+            os.kill(os.getpid(), signal.SIGTERM)
+            for _ in range(100):  # Python runs the handler here, inside __del__
+                pass
+
+    def generate_with_a_dropped_signal(spec):
+        SignalOnCollection()  # collected at once: its __del__ gets the signal
+        return generate(spec)
+
+    monkeypatch.setattr(surface_module, "generate", generate_with_a_dropped_signal)
+    out = tmp_path / "s.nc"
+    code, err = run(["surface", "--l-over-lambda-r", "1", "--points-per-lambda-s", "2",
+                     "-o", out], capsys)
+    assert dropped == [Terminated]  # the handler's exception was indeed dropped
+    assert code == 128 + int(signal.SIGTERM) and "terminated (SIGTERM)" in err, err
+    assert list(tmp_path.iterdir()) == []
+    write_dataset(xr.Dataset({"a": ("x", [1.0], {"units": "1", "long_name": "a"})}),
+                  tmp_path / "later.nc")
+    assert (tmp_path / "later.nc").exists()
+
+
+def test_a_killed_writers_leftover_is_removed_by_the_next_write(tmp_path):
+    # SIGKILL (out of memory, KillWait) leaves the temporary file: every command left one
+    # per kill, and a re-run removed none. They are named after their output and removed
+    # once older than files.STALE_TEMPORARY_S; a fresh one (a writer still at work) stays.
+    import os
+    import time
+
+    from roughflow.files import STALE_TEMPORARY_S, part_prefix
+    from roughflow.io import write_dataset
+
+    out = tmp_path / "r.nc"
+    old = tmp_path / f"{part_prefix(out)}abc123.part"
+    fresh = tmp_path / f"{part_prefix(out)}def456.part"
+    other = tmp_path / f"{part_prefix(tmp_path / 'other.nc')}ghi789.part"
+    for p in (old, fresh, other):
+        p.write_bytes(b"half")
+    stale = time.time() - 2 * STALE_TEMPORARY_S
+    for p in (old, other):
+        os.utime(p, (stale, stale))
+    write_dataset(xr.Dataset({"a": ("x", [1.0], {"units": "1", "long_name": "a"})}), out)
+    assert sorted(p.name for p in tmp_path.iterdir()) == sorted(
+        [out.name, fresh.name, other.name])
+    assert out.name.startswith("r.nc") and not fresh.name.endswith(".nc")  # no *.nc glob

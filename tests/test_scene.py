@@ -763,3 +763,8 @@ def test_leak_memory_request_follows_the_imported_grid(tmp_path, monkeypatch):
     assert points >= 3000 * 2000
     assert after == requested_mem_mb(job, 1, points) > before
     assert leak_mem_mb(job, imported, attempt=2) == 2 * after
+    # a damaged file (cut short outside roughflow, whose writes are atomic) stopped the
+    # workflow's planning with a raw HDF error; now an InputError says what to do
+    imported.write_bytes(imported.read_bytes()[:5000])
+    with pytest.raises(InputError, match=r"surface\.nc.*delete it, and snakemake makes it"):
+        leak_mem_mb(job, imported)

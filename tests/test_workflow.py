@@ -353,6 +353,26 @@ def test_a_local_run_shares_the_machines_memory_among_its_jobs(tmp_path):
     assert provided("--resources", "mem_mb=12345") == 12345
 
 
+def test_a_failed_leak_job_keeps_its_log_and_no_half_table(tmp_path):
+    # Every simulation rule keeps a failed attempt's log (KEEP_FAILED_LOG; a retry's log
+    # replaces it). The leak rule's own clean-up of its half-written table ended the shell
+    # with `exit`, before the copy, so its failures left no log (a crash audit).
+    wd = copy_workflow(tmp_path)
+    surface = wd / "results" / "measured" / "surfaces" / "afm.nc"
+    run = snakemake(wd, str(surface.relative_to(wd)), "--configfile", "config/test.yaml",
+                    "--cores", "1")
+    assert run.returncode == 0, run.stderr[-2000:]
+    # a netCDF file with a grid that is no surface: planning passes, `roughflow leak` fails
+    xr.Dataset({"gap": (("x", "y"), np.zeros((8, 8)), {"units": "L", "long_name": "a gap"})}
+               ).to_netcdf(surface)
+    run = snakemake(wd, "results/jobs/leak/afm.nc", "--configfile", "config/test.yaml",
+                    "--cores", "1")
+    assert run.returncode != 0
+    (kept,) = (wd / "results" / "logs" / "jobs" / "leak").glob("afm.log.failed-*")
+    assert "roughflow leak: error" in kept.read_text()
+    assert not list((wd / "results" / "measured").glob("afm.txt*"))
+
+
 def test_paper_config_dry_run_job_counts(tmp_path):
     wd = copy_workflow(tmp_path)
     dry = snakemake(wd, "--configfile", "config/paper.yaml", "-n", timeout=300)
@@ -459,7 +479,11 @@ def test_killed_job_leaves_no_trusted_output(tmp_path):
         "gamma": [1], "l_over_lambda_r": [8], "eps_f": [0.0625], "seeds": [0, 1, 2, 3, 4, 5],
         "seeds_per_job": 6, "points_per_lambda_s": 4, "tol": 0.002}}}
     (wd / "config" / "kill.yaml").write_text(yaml.safe_dump(cfg))
-    env = {**os.environ, "ROUGHFLOW_FFT_THREADS": "1"}
+    # a killed snakemake leaves its runtime cache and temporary folder: in tmp_path, not in
+    # ~/.cache/snakemake and /tmp (one of each per run, a test audit)
+    (tmp_path / "tmp").mkdir()
+    env = {**os.environ, "ROUGHFLOW_FFT_THREADS": "1", "XDG_CACHE_HOME": str(tmp_path / "cache"),
+           "TMPDIR": str(tmp_path / "tmp")}
     proc = subprocess.Popen([str(SNAKEMAKE), "--configfile", "config/kill.yaml", "--cores", "1"],
                             cwd=wd, env=env, stdout=subprocess.DEVNULL,
                             stderr=subprocess.DEVNULL, start_new_session=True)

@@ -10,11 +10,12 @@ read: :func:`publish` gives it 0666 less the umask first, as ``open`` would have
 from __future__ import annotations
 
 import contextlib
+import glob
 import os
 import signal
 import stat
 import time
-from collections.abc import Iterable
+from collections.abc import Iterable, Iterator
 from pathlib import Path
 
 from roughflow.errors import InputError
@@ -26,9 +27,86 @@ STALE_TEMPORARY_S = 3600.0
 #: Signals that end a command, whose default action would stop it where it stands: SIGTERM
 #: (kill, scancel, a time limit), SIGHUP (a closed terminal), SIGUSR1 and SIGUSR2 (what
 #: SLURM's --signal sends ahead of a time limit). The command line turns them into an
-#: exception, so that temporary files are removed on the way out.
+#: exception (:func:`on_terminating_signal`), so that temporary files are removed on the way
+#: out.
 TERMINATING_SIGNALS = tuple(getattr(signal, name) for name in
                             ("SIGTERM", "SIGHUP", "SIGUSR1", "SIGUSR2") if hasattr(signal, name))
+
+
+class Terminated(BaseException):
+    """A terminating signal (:data:`TERMINATING_SIGNALS`), turned into an exception so that
+    temporary files are removed on the way out, as they are for Ctrl-C (the default action
+    ends the process where it stands)."""
+
+    def __init__(self, signum: int):
+        super().__init__(signum)
+        self.signum = signum
+
+
+#: The terminating signals this process has received (signals are delivered to a process:
+#: this is process state by nature), in order; the command line clears it when it starts.
+_RECEIVED: list[int] = []
+
+
+def on_terminating_signal(signum: int, frame: object) -> None:
+    """The handler of :data:`TERMINATING_SIGNALS` that the command line installs: notes the
+    signal and raises :class:`Terminated` where the program stands. Python drops an
+    exception raised inside a destructor or a weakref callback (it prints "Exception
+    ignored"): a command then finished and exited 0 (2 of 8 SIGTERMs to a threshold scene,
+    a crash audit); the note keeps the request, and :func:`check_terminated` raises it again
+    before any output is published."""
+    _RECEIVED.append(signum)
+    raise Terminated(signum)
+
+
+def check_terminated() -> None:
+    """Raise :class:`Terminated` if a terminating signal has arrived since
+    :func:`forget_terminated` (one whose exception was dropped on the way)."""
+    if _RECEIVED:
+        raise Terminated(_RECEIVED[0])
+
+
+def forget_terminated() -> None:
+    """Clear the signals :func:`on_terminating_signal` noted (a command starting afresh)."""
+    _RECEIVED.clear()
+
+
+#: What :func:`signals_held` holds back: the terminating signals and Ctrl-C.
+HELD_SIGNALS = frozenset({*TERMINATING_SIGNALS, signal.SIGINT})
+
+
+@contextlib.contextmanager
+def signals_held() -> Iterator[None]:
+    """Hold :data:`HELD_SIGNALS` back (POSIX, this thread) while netCDF files are read or
+    written and published; a signal that arrives meanwhile is delivered afterwards. Raised
+    inside netCDF4's and HDF5's code, its exception left xarray's file lock held, and the
+    cleanup of the write then waited for that lock forever (3 of 7 SIGTERMs to an
+    ``aggregate`` while it wrote: hung 20 minutes until a second signal)."""
+    if not hasattr(signal, "pthread_sigmask"):
+        yield
+        return
+    old = signal.pthread_sigmask(signal.SIG_BLOCK, HELD_SIGNALS)
+    try:
+        yield
+    finally:
+        signal.pthread_sigmask(signal.SIG_SETMASK, old)
+
+
+def raise_if_stopping() -> None:
+    """Raise what a signal held back by :func:`signals_held` will raise once delivered
+    (:class:`Terminated` under :func:`on_terminating_signal`, KeyboardInterrupt under
+    Python's Ctrl-C handler; another handler's signal is left to it), or a terminating
+    signal whose exception was dropped (:func:`check_terminated`): called before outputs
+    are published, so that a command told to stop publishes nothing."""
+    check_terminated()
+    if not hasattr(signal, "sigpending"):
+        return
+    for signum in sorted(signal.sigpending() & HELD_SIGNALS):
+        handler = signal.getsignal(signum)
+        if handler is on_terminating_signal:
+            raise Terminated(signum)
+        if handler is signal.default_int_handler:
+            raise KeyboardInterrupt
 
 
 def new_file_mode() -> int:
@@ -157,3 +235,16 @@ def remove_stale(paths: Iterable[Path], older_than_s: float = STALE_TEMPORARY_S)
         with contextlib.suppress(OSError):
             if path.stat().st_mtime < old:
                 path.unlink()
+
+
+def part_prefix(path: Path) -> str:
+    """How the name of a temporary file written for ``path`` begins: hidden, and naming the
+    file it will become, so that a killed writer's leftover is known as ``path``'s."""
+    return f".{path.name}."
+
+
+def remove_stale_parts(path: Path) -> None:
+    """Remove the temporary files of ``path`` (:func:`part_prefix`, ``.part``) that a killed
+    writer (SIGKILL, out of memory) left more than :data:`STALE_TEMPORARY_S` ago: every
+    command left one per kill and a re-run removed none (a 2048^2 surface leaves 33 MB)."""
+    remove_stale(path.parent.glob(glob.escape(part_prefix(path)) + "*.part"))

@@ -13,7 +13,6 @@ import errno
 import math
 import os
 import shutil
-import signal
 import tempfile
 from collections.abc import Callable, Sequence
 from dataclasses import MISSING, fields
@@ -27,10 +26,13 @@ from roughflow.datasets.results import spec_attrs
 from roughflow.datasets.units import LENGTH_UNITS, grid_coords
 from roughflow.errors import InputError, OutputError, require_field, require_positive
 from roughflow.files import (
-    TERMINATING_SIGNALS,
     denied,
+    part_prefix,
     publish,
+    raise_if_stopping,
+    remove_stale_parts,
     require_readable,
+    signals_held,
     sticky_owner,
     user_name,
 )
@@ -40,7 +42,8 @@ from roughflow.surface import ScanInfo, Surface, SurfaceSpec
 if TYPE_CHECKING:
     from matplotlib.figure import Figure
 
-__all__ = ["NETCDF_MAGIC", "check_output", "Writer", "figure_writer", "text_writer", "save_figure",
+__all__ = ["NETCDF_MAGIC", "DAMAGED_OUTPUT_ADVICE", "check_output", "Writer", "figure_writer",
+           "text_writer", "save_figure",
            "write_together", "dataset_methods", "default_provenance", "dataset_writer",
            "write_dataset", "read_dataset", "surface_to_dataset", "surface_from_dataset",
            "read_surface"]
@@ -152,20 +155,6 @@ def _write_failure(path: Path, exc: BaseException) -> OutputError | None:
     return None
 
 
-@contextlib.contextmanager
-def _signals_held():
-    """Hold :data:`TERMINATING_SIGNALS` back (POSIX, this thread) for the few renames that
-    publish a set of outputs; a signal that arrives meanwhile is delivered after them."""
-    if not hasattr(signal, "pthread_sigmask"):
-        yield
-        return
-    old = signal.pthread_sigmask(signal.SIG_BLOCK, set(TERMINATING_SIGNALS))
-    try:
-        yield
-    finally:
-        signal.pthread_sigmask(signal.SIG_SETMASK, old)
-
-
 def write_together(writers: Sequence[Writer]) -> list[Path]:
     """Call each ``write(tmp)`` on a temporary file next to its path (missing folders
     created), and only when all have succeeded :func:`publish` them all, so that a command's
@@ -176,13 +165,20 @@ def write_together(writers: Sequence[Writer]) -> list[Path]:
     published: list[Path] = []
     path = None
     try:
-        for path, write in writers:
-            path.parent.mkdir(parents=True, exist_ok=True)
-            fd, tmp = tempfile.mkstemp(suffix=path.suffix + ".part", dir=path.parent)
-            os.close(fd)
-            tmps.append(tmp)
-            write(tmp)
-        with _signals_held():  # a SIGTERM waits until every output is in place
+        # a SIGTERM or Ctrl-C waits until the files are written (the writers hold locks that
+        # an exception raised inside them would leave held: files.signals_held); one that
+        # arrived meanwhile, or whose exception Python dropped in a destructor, publishes
+        # nothing
+        with signals_held():
+            for path, write in writers:
+                path.parent.mkdir(parents=True, exist_ok=True)
+                remove_stale_parts(path)
+                fd, tmp = tempfile.mkstemp(prefix=part_prefix(path), suffix=".part",
+                                           dir=path.parent)
+                os.close(fd)
+                tmps.append(tmp)
+                write(tmp)
+                raise_if_stopping()
             for tmp, (path, _) in zip(tmps, writers, strict=True):
                 publish(tmp, path)
                 published.append(path)
@@ -265,6 +261,12 @@ def write_dataset(ds: xr.Dataset, path: str | os.PathLike, *,
     return write_together([dataset_writer(ds, path, provenance=provenance)])[0]
 
 
+#: What to do with a workflow file that cannot be read (roughflow's own writes are atomic:
+#: damage from outside, a full disk on another writer's side, a copy cut short).
+DAMAGED_OUTPUT_ADVICE = ("(A damaged output of a workflow step: delete it, and snakemake makes "
+                         "it again.)")
+
+
 def read_dataset(path: str | os.PathLike, kinds: str | tuple[str, ...] | None = None, *,
                  what: str = "input") -> xr.Dataset:
     """Load the netCDF file ``path`` into memory, checking that it is one of ``kinds``
@@ -285,15 +287,15 @@ def read_dataset(path: str | os.PathLike, kinds: str | tuple[str, ...] | None = 
                 if "surface" in ((kinds,) if isinstance(kinds, str) else kinds or ()) else "")
         raise InputError(f"{source} is not a netCDF file (it starts with {head!r}){hint}")
     try:
-        with xr.open_dataset(path) as ds:
+        with signals_held(), xr.open_dataset(path) as ds:  # as the writes (files.signals_held)
             ds.load()
     except MemoryError:
         raise
     except Exception as exc:  # netCDF4/HDF5/xarray raise OSError, ValueError, RuntimeError...
         reason = (str(exc).splitlines() or [""])[0][:160]
         raise InputError(f"cannot read {source} as netCDF ({type(exc).__name__}: {reason}); is "
-                         "it a complete file written by roughflow? (A damaged output of a "
-                         "workflow step: delete it, and snakemake makes it again.)") from None
+                         f"it a complete file written by roughflow? {DAMAGED_OUTPUT_ADVICE}"
+                         ) from None
     if kinds is not None:
         check_kind(ds, kinds, source)
     return ds

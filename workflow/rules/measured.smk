@@ -57,4 +57,4 @@ rule leak:
         "ROUGHFLOW_FFT_THREADS={threads} {RF} -v leak {input} {params.args} "
         "--threads {threads} -o {output.data} > {output.table}.part 2> {log} "
         "&& mv {output.table}.part {output.table} || {{ rc=$?; rm -f {output.table}.part; "
-        "exit $rc; }}" + KEEP_FAILED_LOG
+        "(exit $rc); }}" + KEEP_FAILED_LOG  # (exit): the status, and the shell goes on to it

@@ -29,7 +29,13 @@ from pathlib import Path
 
 from roughflow import __version__
 from roughflow.errors import ConvergenceError, InputError, OutputError
-from roughflow.files import TERMINATING_SIGNALS
+from roughflow.files import (
+    TERMINATING_SIGNALS,
+    Terminated,
+    check_terminated,
+    forget_terminated,
+    on_terminating_signal,
+)
 from roughflow.progress import log_progress
 
 from ._common import check_outputs, read_inputs
@@ -48,20 +54,6 @@ EXIT_STATUS = {0: "success", 1: "unexpected error (a bug: please report the trac
                **{128 + int(s): f"terminated by {signal.Signals(s).name}"
                   + (" (kill, scancel, a time limit)" if s == signal.SIGTERM else "")
                   for s in TERMINATING_SIGNALS}}
-
-
-class _Terminated(BaseException):
-    """A terminating signal (:data:`~roughflow.files.TERMINATING_SIGNALS`), turned into an
-    exception so that temporary files are removed on the way out, as they are for Ctrl-C
-    (the default action ends the process where it stands)."""
-
-    def __init__(self, signum: int):
-        super().__init__(signum)
-        self.signum = signum
-
-
-def _on_signal(signum, frame) -> None:
-    raise _Terminated(signum)
 
 
 def build_parser() -> argparse.ArgumentParser:
@@ -182,7 +174,8 @@ def main(argv: list[str] | None = None) -> int:
     # in the main thread only (signal's rule), and not for a signal a launcher set ignored
     handled = ([s for s in TERMINATING_SIGNALS if signal.getsignal(s) is not signal.SIG_IGN]
                if threading.current_thread() is threading.main_thread() else [])
-    previous = {s: signal.signal(s, _on_signal) for s in handled}
+    forget_terminated()
+    previous = {s: signal.signal(s, on_terminating_signal) for s in handled}
     try:
         check_environment()  # FFT settings from the environment, before any work
         check_outputs(args)
@@ -195,6 +188,7 @@ def main(argv: list[str] | None = None) -> int:
         args.provenance = replace(provenance, history=input_history(*single),
                                   references=input_references(*single, *listed))
         args.func(args)
+        check_terminated()  # a signal whose exception Python dropped in a destructor
         _flush_stdout()
         stale = _failed_path(args)
         if stale is not None:  # an earlier failed attempt's inputs no longer apply
@@ -216,12 +210,13 @@ def main(argv: list[str] | None = None) -> int:
         _silence_stdout()
         parser.exit(128 + int(signal.SIGPIPE), f"{name}: the standard output was closed "
                                                 "by its reader\n")
-    except _Terminated as exc:
+    except Terminated as exc:
         parser.exit(128 + int(exc.signum),
                     f"{name}: terminated ({signal.Signals(exc.signum).name})\n")
     finally:
         for s, handler in previous.items():
             signal.signal(s, handler)
+        forget_terminated()  # a library call after main() (a test, a notebook) starts clean
     return 0
 
 

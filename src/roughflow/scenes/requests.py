@@ -69,11 +69,17 @@ def leak_mem_mb(job: LeakJob, surface_file: str | Path, attempt: int = 1) -> int
     import netCDF4
 
     from roughflow.boundary import cell_points
+    from roughflow.errors import InputError
+    from roughflow.io import DAMAGED_OUTPUT_ADVICE
 
     shape = LEAK_GRID_BEFORE_IMPORT
     if Path(surface_file).exists():
-        with netCDF4.Dataset(surface_file) as ds:
-            shape = (len(ds.dimensions["x"]), len(ds.dimensions["y"]))
+        try:
+            with netCDF4.Dataset(surface_file) as ds:
+                shape = (len(ds.dimensions["x"]), len(ds.dimensions["y"]))
+        except (OSError, KeyError) as exc:  # planning stopped on a raw HDF error (an audit)
+            raise InputError(f"cannot read the grid of the imported scan {str(surface_file)!r} "
+                             f"({type(exc).__name__}: {exc}) {DAMAGED_OUTPUT_ADVICE}") from None
     return requested_mem_mb(job, attempt, cell_points(shape, job.boundary))
 
 
