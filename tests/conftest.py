@@ -1,6 +1,6 @@
 """Test-wide settings: one thread for FFTs and BLAS (the test machines have 2 shared cores;
 multi-threaded OpenBLAS on tiny vectors was measured 100x slower than numpy's sum under load),
-a non-interactive matplotlib backend, and a private FFTW wisdom directory."""
+a non-interactive matplotlib backend, and private folders for every cache a test writes."""
 
 import atexit
 import os
@@ -17,11 +17,20 @@ for var, value in (("ROUGHFLOW_FFT_THREADS", "1"), ("OPENBLAS_NUM_THREADS", "1")
                    ("OMP_NUM_THREADS", "1"), ("MPLBACKEND", "Agg")):
     os.environ.setdefault(var, value)
 
-# FFTW wisdom in a directory of this session's own (shared by the processes it starts, so the
-# workflow runs it compares use the same FFT algorithms), not in the user's cache
-if "ROUGHFLOW_FFTW_WISDOM" not in os.environ:
-    os.environ["ROUGHFLOW_FFTW_WISDOM"] = tempfile.mkdtemp(prefix="roughflow-fftw-")
-    atexit.register(shutil.rmtree, os.environ["ROUGHFLOW_FFTW_WISDOM"], ignore_errors=True)
+# Caches in folders of this session's own, shared by the processes it starts (so that the
+# workflow runs it compares use the same FFT algorithms), not in the working directory (the
+# repository in CI) or the user's home: FFTW wisdom; Hypothesis's folder, which it fills
+# with constants from the package whatever its database setting (40 files in the working
+# directory from three property-test files, a test audit); roughflow's numba kernels
+# (271 versions, 595 MB in ~/.cache after a development's test runs; compiling them in a
+# fresh folder took no measurable time of a 6-minute suite); matplotlib's and IPython's.
+for var, name in (("ROUGHFLOW_FFTW_WISDOM", "fftw"), ("HYPOTHESIS_STORAGE_DIRECTORY",
+                                                    "hypothesis"),
+                  ("NUMBA_CACHE_DIR", "numba"), ("MPLCONFIGDIR", "matplotlib"),
+                  ("IPYTHONDIR", "ipython")):
+    if var not in os.environ:
+        os.environ[var] = tempfile.mkdtemp(prefix=f"roughflow-{name}-")
+        atexit.register(shutil.rmtree, os.environ[var], ignore_errors=True)
 
 
 @pytest.fixture(scope="session")
@@ -61,3 +70,14 @@ def _library_logging_restored():
     from roughflow.progress import log_progress
 
     log_progress(None)
+
+
+@pytest.fixture(autouse=True)
+def _global_random_stream_restored():
+    """Tests that check a solver leaves numpy's legacy global stream alone seed it; the
+    tests after them get it back as it was (it stayed seeded, a test audit)."""
+    import numpy as np
+
+    state = np.random.get_state()  # noqa: NPY002
+    yield
+    np.random.set_state(state)  # noqa: NPY002

@@ -51,7 +51,9 @@ def test_contact_line_of_a_digital_disk_is_manhattan_perimeter():
     x, y = np.meshgrid(np.arange(n) - n / 2 + 0.5, np.arange(n) - n / 2 + 0.5, indexing="ij")
     m = x**2 + y**2 < r**2
     length = accuracy.contact_line_length(m, lx=n)
-    assert length == pytest.approx(8 * r, abs=2.0)
+    # R = 40 on cell centres: the widest row and column span 80 cells each, so the face count
+    # is 320 = 8 R exactly (integers times dx = 1; measured 0); round-off only
+    assert length == pytest.approx(8 * r, rel=1e-12)
 
 
 def test_perimeter_corrected_area():

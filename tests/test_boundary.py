@@ -93,7 +93,9 @@ def test_pad_keeps_the_load_on_the_scan():
     seen = emb.observe(res)
     # no contact in the padding, so the scan carries the whole load: nominal pressure 0.2
     assert seen.contact.sum() == res.contact.sum() > 0
-    assert seen.contact_pressure.mean() == pytest.approx(0.2, rel=1e-4)
+    # the solve's residual bounds the load imbalance by tol (1e-6) times the load; measured
+    # 3e-9 (7e-7 the worst over seeds 0-5)
+    assert seen.contact_pressure.mean() == pytest.approx(0.2, rel=1e-6)
     assert seen.pressure == pytest.approx(0.2)
 
 

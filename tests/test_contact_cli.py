@@ -37,7 +37,9 @@ def test_cli_bearing(cli_surface_file, tmp_path):
     main(["contact", str(cli_surface_file), "--model", "bearing", "--area-fraction", "0.4",
           "-o", str(out)])
     with xr.open_dataset(out) as ds:
-        assert ds.attrs["area_fraction"] == pytest.approx(0.4, abs=1e-4)
+        # a_c = round(0.4 N) / N: within half a cell of 0.4 (0.400024 on 128^2; off by one
+        # cell would be 3.7e-5 or 8.5e-5)
+        assert ds.attrs["area_fraction"] == pytest.approx(0.4, abs=0.5 / ds["contact"].size)
         assert ds.attrs["model"] == "bearing"
 
 

@@ -608,12 +608,7 @@ def test_a_sigma_is_certified_or_raises(method, case):
     them to 1e-7 or better, also u^3 spread over 16 decades ("spread", which raised for
     every method before the lower ratios): measured 1.3e-15 - 3.4e-8, bounds up to 1.1e-7."""
     gap, exact = _laminate(*case)
-    try:
-        r = solve(gap, "y", ly=1.0, method=method)
-    except ConvergenceError as exc:
-        assert "error bound" in str(exc)
-        assert method == "cg" and case[3] < 1e-9
-        return
+    r = solve(gap, "y", ly=1.0, method=method)  # none raises since the stripes are lumped
     assert abs(r.sigma / exact - 1) <= min(r.sigma_error, flow_core.FLOW_SIGMA_RTOL)
     # lumped, every method but plain CG bounds sigma to 1.1e-7 or better (measured)
     assert r.sigma_error < (1e-6 if case[3] < 1e-9 and method != "cg"

@@ -74,7 +74,9 @@ def test_cluster_stats_of_a_contact_state():
     h = generate(spec).heights
     c = h > np.quantile(h, 0.7)  # bearing contact at a_c = 0.3: fluid spans both ways
     st = cluster_stats(c)
-    assert st.area_fraction == pytest.approx(0.3, abs=1e-4)
+    # the quantile's cut lies within one cell (1 / N = 6.1e-5 on 128^2) of 0.3 N cells;
+    # measured 0.299988, 0.2 cells low
+    assert st.area_fraction == pytest.approx(0.3, abs=1 / c.size)
     assert st.patch_sizes.sum() == c.sum() and st.fluid_sizes.sum() == (~c).sum()
     assert st.n_patches == st.patch_sizes.size > 10
     # at most the fluid's 0.7; at a_c 0.3, well below the bearing threshold 1/2, the spanning
@@ -128,4 +130,6 @@ def test_helpers_refuse_fields_of_another_grid():
         fft.rfft2(np.ones(8))
     with pytest.raises(InputError, match=r"spectrum of shape \(8, 5\), got \(1, 5\)"):
         fft.irfft2(np.ones((1, 5)), (8, 8))  # a row broadcast over all 8 rows before
-    np.testing.assert_allclose(fft.irfft2(fft.rfft2(gap), gap.shape), gap, atol=1e-15)
+    # the round trip's round-off, O(eps log N): measured 2 ulps (4.4e-16); 1e-14 is 45 ulps
+    # for other FFT builds
+    np.testing.assert_allclose(fft.irfft2(fft.rfft2(gap), gap.shape), gap, atol=1e-14)
