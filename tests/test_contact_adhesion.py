@@ -79,7 +79,9 @@ def test_adhesive_solve_pulls_surfaces_together(repulsion):
     adh = solve(s, 0.05, model="adhesive", adhesion=ad, max_iter=5000)
     assert adh.area_fraction > rep.area_fraction
     assert adh.mean_gap < rep.mean_gap
-    assert adh.contact_pressure.mean() == pytest.approx(0.05, rel=1e-3)
+    # as below: tol (1e-6) times the held pressure; measured at most 1.6e-7 (both walls,
+    # seeds 0-3)
+    assert adh.contact_pressure.mean() == pytest.approx(0.05, rel=2e-6)
     assert adh.contact_pressure.min() < 0  # tension in the adhesive necks
 
 

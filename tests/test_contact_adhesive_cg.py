@@ -109,7 +109,8 @@ def test_lifted_masses_keep_large_grids_cheap(monkeypatch):
     # keeps CG's count down. 1024^2, p = 0.11 (a_c 0.46), tol 1e-4 from the hard wall's
     # contact: measured 30 iterations lifted, 85 without the lift (and 75 FIRE steps).
     # Bounds: <= 40 lifted (a third of headroom for round-off in the iteration path), and
-    # the unlifted run at least 1.4x that (measured 2.8x; 1.5x at 512^2, 1.3x at 256^2).
+    # the unlifted run at least 2x that (measured 2.8x; 1.5x at 512^2 and 1.3x at 256^2,
+    # which is why the test needs 1024^2).
     from roughflow.contact import adhesive_cg as A
 
     s, ad = _papers_case(1024)
@@ -118,7 +119,7 @@ def test_lifted_masses_keep_large_grids_cheap(monkeypatch):
     monkeypatch.setattr(A, "REPULSION_MASS", 0.0)
     bare = solve(s, 0.11, model="adhesive", adhesion=ad, tol=1e-4, init=start)
     assert lifted.iterations <= 40
-    assert bare.iterations >= 1.4 * lifted.iterations
+    assert bare.iterations >= 2 * lifted.iterations
     assert lifted.area_fraction == pytest.approx(bare.area_fraction, abs=1e-4)
 
 

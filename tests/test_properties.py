@@ -167,9 +167,10 @@ def test_flow_mirror_invariance(seed, n, closed, axis, mirror):
     s0 = flow.solve(g, axis, ly=ly)
     s1 = flow.solve(np.flip(g, axis=mirror).copy(), axis, ly=ly)
     # mirror along the flow axis reverses the flow (same conductance); across it, it is a
-    # relabelling of the periodic direction: sigma is unchanged to solver accuracy
+    # relabelling of the periodic direction: sigma is unchanged to solver accuracy (the
+    # direct solve of these small grids, as below: measured at most 4.4e-16)
     assert s1.percolating == s0.percolating
-    assert s1.sigma == pytest.approx(s0.sigma, rel=1e-7, abs=1e-300)
+    assert s1.sigma == pytest.approx(s0.sigma, rel=1e-12, abs=1e-300)
 
 
 @SETTINGS
