@@ -62,19 +62,37 @@ def face_transmissibilities(sigma: np.ndarray, h_flow: float, h_across: float, *
     ``sigma`` must already be zero outside the cells that carry flow. ``periodic=False``
     closes the seam across the flow (faces between column n1 - 1 and column 0).
     """
-    n1 = sigma.shape[1]
     r_along = h_across / h_flow
     r_across = h_flow / h_across
-    t_along = harmonic_mean(sigma[:-1], sigma[1:]) * r_along
-    if n1 > 1:
-        t_across = harmonic_mean(sigma, np.roll(sigma, -1, axis=1)) * r_across
-    else:
-        t_across = np.zeros_like(sigma)  # a cell's face with itself carries nothing
-    if not periodic:
-        t_across[:, -1] = 0.0
+    t_along, t_across = _face_means(np.ascontiguousarray(sigma, dtype=np.float64), r_along,
+                                    r_across, bool(periodic))
     t_in = sigma[0] * (2.0 * r_along)
     t_out = sigma[-1] * (2.0 * r_along)
     return Faces(t_along, t_across, t_in, t_out)
+
+
+@njit(cache=True)
+def _face_means(sigma, r_along, r_across, periodic):  # pragma: no cover (compiled)
+    """Every face's :func:`harmonic_mean` (the same arithmetic, bit for bit) times its
+    length ratio, in one pass: numpy's form took ten passes and temporaries, 3 % of a
+    ladder. A cell's face with itself (one column) and, where not ``periodic``, the seam
+    carry nothing."""
+    n0, n1 = sigma.shape
+    t_along = np.empty((max(n0 - 1, 0), n1))
+    t_across = np.zeros((n0, n1))
+    seam = n1 if periodic else n1 - 1
+    for i in range(n0):
+        for j in range(n1):
+            a = sigma[i, j]
+            if i < n0 - 1:
+                b = sigma[i + 1, j]
+                total = a + b
+                t_along[i, j] = 2.0 * a * (b / total if total > 0 else 0.0) * r_along
+            if n1 > 1 and j < seam:
+                b = sigma[i, j + 1 if j + 1 < n1 else 0]
+                total = a + b
+                t_across[i, j] = 2.0 * a * (b / total if total > 0 else 0.0) * r_across
+    return t_along, t_across
 
 
 @njit(cache=True)
