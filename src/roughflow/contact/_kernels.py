@@ -48,16 +48,27 @@ _SIN_TAYLOR = tuple((-1.0) ** k / math.factorial(2 * k + 1) for k in range(12))
 
 
 @njit(cache=True, inline="always")
-def _sin_half_period(theta):  # pragma: no cover - compiled
-    """sin(theta) for theta in [0, pi], reflected to [0, pi/2] and summed by Horner: within
-    2.2e-16 of libm's sin there (1 ulp near 1), exactly 0 at pi. Unlike a call to libm it
-    vectorizes: libm's (and numpy's) sin costs about 10 ns a cell on the 2-core machines."""
-    t = min(theta, np.pi - theta)
+def _sin_taylor(t):  # pragma: no cover - compiled
+    """sin(t) for |t| <= pi/2 by :data:`_SIN_TAYLOR` (Horner in t^2)."""
     z = t * t
     p = _SIN_TAYLOR[11]
     for k in range(10, -1, -1):
         p = p * z + _SIN_TAYLOR[k]
     return t * p
+
+
+@njit(cache=True, inline="always")
+def _sin_half_period(theta):  # pragma: no cover - compiled
+    """sin(theta) for theta in [0, pi], reflected to [0, pi/2]: within 2.2e-16 of libm's
+    sin there (1 ulp near 1), exactly 0 at pi. Unlike a call to libm it vectorizes: libm's
+    (and numpy's) sin costs about 10 ns a cell on the 2-core machines."""
+    return _sin_taylor(min(theta, np.pi - theta))
+
+
+@njit(cache=True, inline="always")
+def _cos_half_period(theta):  # pragma: no cover - compiled
+    """cos(theta) = sin(pi/2 - theta) for theta in [0, pi], as :func:`_sin_half_period`."""
+    return _sin_taylor(0.5 * np.pi - theta)
 
 
 @njit(cache=True, nogil=True)
@@ -67,10 +78,11 @@ def adhesive_wall_forces(fel, u, h, eps, load, coef, rho, f, sigma, active,
     tension = coef sin(pi g / rho) at the gap g = max(u - h, 0) below rho, 0 beyond
     (``Adhesion.pressure``, coef = -max tension; its sine by :func:`_sin_half_period`),
     added to the elastic force ``fel`` before the wall's test and to sigma after it. One
-    vectorized pass instead of numpy's twelve (docs/contact.md "Adhesive force pass")."""
+    vectorized pass instead of numpy's dozen (docs/contact.md "Adhesive force pass")."""
     for i in range(f.size):
         g = u[i] - h[i]
-        t = coef * _sin_half_period(np.pi * min(max(g, 0.0), rho) / rho)
+        # (pi rho / rho is pi only to an ulp: beyond the range the select gives the 0)
+        t = coef * _sin_half_period(np.pi * min(max(g, 0.0), rho) / rho) if g < rho else 0.0
         tension[i] = t
         fi = fel[i] + t - load
         on = u[i] <= h[i] + eps and fi < 0.0
@@ -453,22 +465,22 @@ def max_abs_free_np(a, active):
 
 @njit(cache=True, nogil=True)
 def adhesive_pressures(g, sigma, amp, w, rho):  # pragma: no cover - compiled
-    """sigma = -dv/dg at the gaps g; return the number of points in contact (g < 0)."""
+    """sigma = -dv/dg at the gaps g; return the number of points in contact (g < 0). The
+    sines of this and the next two kernels are :func:`_sin_half_period`'s and every branch
+    a select, so that the loops vectorize (libm's sine, called only within the range, had
+    made them a quarter of a harmonic adhesive solve's time)."""
     kappa = amp * w
     n_contact = 0
     for i in range(g.size):
         x = g[i]
-        if x < 0.0:
-            sigma[i] = -kappa * x
-            n_contact += 1
-        elif x < rho:
-            sigma[i] = -amp * np.sin(w * x)
-        else:
-            sigma[i] = 0.0
+        # (w rho is pi only to an ulp: beyond the range the select, not the sine, gives 0)
+        tension = -amp * _sin_half_period(w * min(max(x, 0.0), rho)) if x < rho else 0.0
+        sigma[i] = -kappa * x if x < 0.0 else tension
+        n_contact += x < 0.0
     return n_contact
 
 
-@njit(cache=True, nogil=True)
+@njit(cache=True, nogil=True, fastmath=CG_FASTMATH)
 def adhesive_line(g, d, t, amp, w, rho):  # pragma: no cover - compiled
     """sum sigma(g + t d) d and sum v''(g + t d) d^2: the interaction's part of the first
     and second derivative of the energy along d (up to sign)."""
@@ -478,39 +490,29 @@ def adhesive_line(g, d, t, amp, w, rho):  # pragma: no cover - compiled
     for i in range(g.size):
         di = d[i]
         x = g[i] + t * di
-        if x < 0.0:
-            s1 -= kappa * x * di
-            s2 += kappa * di * di
-        elif x < rho:
-            s1 -= amp * np.sin(w * x) * di
-            s2 += kappa * np.cos(w * x) * di * di
+        theta = w * min(max(x, 0.0), rho)
+        p = -kappa * x if x < 0.0 else (-amp * _sin_half_period(theta) if x < rho else 0.0)
+        c = kappa if x < 0.0 else (kappa * _cos_half_period(theta) if x < rho else 0.0)
+        s1 += p * di
+        s2 += c * di * di
     return s1, s2
 
 
-@njit(cache=True, nogil=True)
+@njit(cache=True, nogil=True, fastmath=CG_FASTMATH)
 def adhesive_move(g, d, t, kd, f, sigma, z, amp, w, rho):  # pragma: no cover - compiled
     """g += t d; f += sigma(g) - sigma_old - t K d; sigma = sigma(g); return the number of
     points in contact and f.z with the updated f (the old z: Polak-Ribiere's f_new.z_old)."""
-    # Each branch stores its own result: with one store after the branches LLVM turned them
-    # into selects and evaluated the sine at every point (24 ms instead of 3-5 ms at 1024^2).
     kappa = amp * w
     n_contact = 0
     fz = 0.0
     for i in range(g.size):
         x = g[i] + t * d[i]
         g[i] = x
-        if x < 0.0:
-            s = -kappa * x
-            n_contact += 1
-            fi = f[i] + (s - sigma[i] - t * kd[i])
-            sigma[i] = s
-        elif x < rho:
-            s = -amp * np.sin(w * x)
-            fi = f[i] + (s - sigma[i] - t * kd[i])
-            sigma[i] = s
-        else:
-            fi = f[i] - (sigma[i] + t * kd[i])
-            sigma[i] = 0.0
+        s = -kappa * x if x < 0.0 else (-amp * _sin_half_period(w * min(x, rho)) if x < rho
+                                        else 0.0)
+        n_contact += x < 0.0
+        fi = f[i] + (s - sigma[i] - t * kd[i])
+        sigma[i] = s
         f[i] = fi
         fz += fi * z[i]
     return n_contact, fz
