@@ -137,7 +137,8 @@ def test_adhesive_wall_forces_are_the_wall_plus_the_potential(numba):
     f, sigma, tension = np.empty(n), np.empty(n), np.empty(n)
     active = np.empty(n, dtype=bool)
     kernel = K.adhesive_wall_forces if numba else K.adhesive_wall_forces_np
-    kernel(fel, u, h, eps, load, -ad.max_tension, ad.range, f, sigma, active, tension)
+    kernel(fel, u, h, eps, load, ad.max_tension, np.pi / ad.range, ad.range, f, sigma,
+           active, tension)
     expected = ad.pressure(np.maximum(u - h, 0.0))
     atol = 1e-15 * ad.max_tension
     np.testing.assert_allclose(tension, expected, rtol=0, atol=atol)

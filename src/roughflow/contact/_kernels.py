@@ -71,18 +71,24 @@ def _cos_half_period(theta):  # pragma: no cover - compiled
     return _sin_taylor(0.5 * np.pi - theta)
 
 
+@njit(cache=True, inline="always")
+def _cosine_tension(x, amp, w, rho):  # pragma: no cover - compiled
+    """The cosine law's tension -amp sin(w x) at a gap x (clipped at 0) below the range rho,
+    0 from rho on (``Adhesion.pressure`` without the repulsion; amp its maximum, w = pi /
+    rho): a select gives the 0, since w rho is pi only to an ulp. The compiled adhesive
+    kernels all take it; its sine vectorizes (:func:`_sin_half_period`)."""
+    return -amp * _sin_half_period(w * min(max(x, 0.0), rho)) if x < rho else 0.0
+
+
 @njit(cache=True, nogil=True)
-def adhesive_wall_forces(fel, u, h, eps, load, coef, rho, f, sigma, active,
+def adhesive_wall_forces(fel, u, h, eps, load, amp, w, rho, f, sigma, active,
                          tension):  # pragma: no cover - compiled
-    """:func:`wall_forces` with the cosine attraction on the hard wall (``fire.fire``):
-    tension = coef sin(pi g / rho) at the gap g = max(u - h, 0) below rho, 0 beyond
-    (``Adhesion.pressure``, coef = -max tension; its sine by :func:`_sin_half_period`),
-    added to the elastic force ``fel`` before the wall's test and to sigma after it. One
-    vectorized pass instead of numpy's dozen (docs/contact.md "Adhesive force pass")."""
+    """:func:`wall_forces` with the cosine attraction on the hard wall (``fire.fire``): the
+    tension (:func:`_cosine_tension`) at the gap g = max(u - h, 0), added to the elastic
+    force ``fel`` before the wall's test and to sigma after it. One vectorized pass instead
+    of numpy's dozen (docs/contact.md "Adhesive force pass")."""
     for i in range(f.size):
-        g = u[i] - h[i]
-        # (pi rho / rho is pi only to an ulp: beyond the range the select gives the 0)
-        t = coef * _sin_half_period(np.pi * min(max(g, 0.0), rho) / rho) if g < rho else 0.0
+        t = _cosine_tension(u[i] - h[i], amp, w, rho)
         tension[i] = t
         fi = fel[i] + t - load
         on = u[i] <= h[i] + eps and fi < 0.0
@@ -336,10 +342,10 @@ def wall_forces_np(fel, u, h, eps, load, f, sigma, active):
     f[active] = 0.0
 
 
-def adhesive_wall_forces_np(fel, u, h, eps, load, coef, rho, f, sigma, active, tension):
+def adhesive_wall_forces_np(fel, u, h, eps, load, amp, w, rho, f, sigma, active, tension):
     """numpy version of :func:`adhesive_wall_forces` (same outputs)."""
     g = np.maximum(u - h, 0.0)
-    np.copyto(tension, np.where(g < rho, coef * np.sin(np.pi * g / rho), 0.0))
+    np.copyto(tension, np.where(g < rho, -amp * np.sin(w * g), 0.0))
     wall_forces_np(fel + tension, u, h, eps, load, f, sigma, active)
     np.add(sigma, tension, out=sigma)
 
@@ -465,17 +471,15 @@ def max_abs_free_np(a, active):
 
 @njit(cache=True, nogil=True)
 def adhesive_pressures(g, sigma, amp, w, rho):  # pragma: no cover - compiled
-    """sigma = -dv/dg at the gaps g; return the number of points in contact (g < 0). The
-    sines of this and the next two kernels are :func:`_sin_half_period`'s and every branch
-    a select, so that the loops vectorize (libm's sine, called only within the range, had
-    made them a quarter of a harmonic adhesive solve's time)."""
+    """sigma = -dv/dg at the gaps g; return the number of points in contact (g < 0). In
+    this and the next two kernels every branch is a select and the sine
+    :func:`_cosine_tension`'s, so that the loops vectorize (libm's sine, called only within
+    the range, had made them a quarter of a harmonic adhesive solve's time)."""
     kappa = amp * w
     n_contact = 0
     for i in range(g.size):
         x = g[i]
-        # (w rho is pi only to an ulp: beyond the range the select, not the sine, gives 0)
-        tension = -amp * _sin_half_period(w * min(max(x, 0.0), rho)) if x < rho else 0.0
-        sigma[i] = -kappa * x if x < 0.0 else tension
+        sigma[i] = -kappa * x if x < 0.0 else _cosine_tension(x, amp, w, rho)
         n_contact += x < 0.0
     return n_contact
 
@@ -490,9 +494,9 @@ def adhesive_line(g, d, t, amp, w, rho):  # pragma: no cover - compiled
     for i in range(g.size):
         di = d[i]
         x = g[i] + t * di
-        theta = w * min(max(x, 0.0), rho)
-        p = -kappa * x if x < 0.0 else (-amp * _sin_half_period(theta) if x < rho else 0.0)
-        c = kappa if x < 0.0 else (kappa * _cos_half_period(theta) if x < rho else 0.0)
+        p = -kappa * x if x < 0.0 else _cosine_tension(x, amp, w, rho)
+        c = kappa if x < 0.0 else (kappa * _cos_half_period(w * min(x, rho)) if x < rho
+                                   else 0.0)
         s1 += p * di
         s2 += c * di * di
     return s1, s2
@@ -508,8 +512,7 @@ def adhesive_move(g, d, t, kd, f, sigma, z, amp, w, rho):  # pragma: no cover - 
     for i in range(g.size):
         x = g[i] + t * d[i]
         g[i] = x
-        s = -kappa * x if x < 0.0 else (-amp * _sin_half_period(w * min(x, rho)) if x < rho
-                                        else 0.0)
+        s = -kappa * x if x < 0.0 else _cosine_tension(x, amp, w, rho)
         n_contact += x < 0.0
         fi = f[i] + (s - sigma[i] - t * kd[i])
         sigma[i] = s

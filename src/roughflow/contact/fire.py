@@ -136,8 +136,9 @@ def fire(
         if adhesion is None:
             wall_forces(fel, u, h, eps, load, f, sigma, active)
         elif not soft:  # hard wall plus cosine tension (<= 0) on the free points
-            adhesive_wall_forces(fel, u, h, eps, load, -adhesion.max_tension, adhesion.range,
-                                 f, sigma, active, tension)
+            adhesive_wall_forces(fel, u, h, eps, load, adhesion.max_tension,
+                                 math.pi / adhesion.range, adhesion.range, f, sigma, active,
+                                 tension)
         else:
             sigma[...] = adhesion.pressure(u - h)
             np.add(fel, sigma - load, out=f)
