@@ -234,7 +234,13 @@ def _benchmark(name: str):
     spec = importlib.util.spec_from_file_location(name, path)
     module = importlib.util.module_from_spec(spec)
     sys.modules.setdefault(name, module)  # their `from bench_contact import ...`
-    spec.loader.exec_module(module)
+    # a benchmark puts its folder on sys.path to import its siblings at load time; the
+    # path is given back so that later tests import nothing from benchmarks/ by accident
+    saved = list(sys.path)
+    try:
+        spec.loader.exec_module(module)
+    finally:
+        sys.path[:] = saved
     return module
 
 

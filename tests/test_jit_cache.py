@@ -201,28 +201,41 @@ def test_a_failed_save_leaves_the_kernel_uncached_not_the_computation_failed(
 def test_two_processes_saving_at_once_keep_both_signatures(tmp_path):
     # numba's save reads the index, picks the next data file and rewrites the index: two
     # processes compiling different signatures at once lost one entry in 16 of 20 tries
-    # (and could pair one signature's index entry with the other's machine code)
+    # (and could pair one signature's index entry with the other's machine code). Left to
+    # chance the two saves rarely overlap on a quiet machine, so each process here waits
+    # for the other before it compiles (a barrier of files) and holds the index it read for
+    # 0.3 s before rewriting it: without the lock every run loses an entry.
     import pickle
 
     (tmp_path / "toy_c.py").write_text(TOY)
-    code = ("import sys, time; sys.path.insert(0, {folder!r}); import toy_c\n"
-            "time.sleep(max(0.0, {start} - time.time()))\n"
+    barrier = tmp_path / "ready"
+    barrier.mkdir()
+    code = ("import sys, time, pathlib; sys.path.insert(0, {folder!r}); import toy_c\n"
+            "from numba.core import caching\n"
+            "load = caching.IndexDataCacheFile._load_index\n"
+            "def slow_load(self):\n"
+            "    index = load(self)\n"
+            "    time.sleep(0.3)\n"
+            "    return index\n"
+            "caching.IndexDataCacheFile._load_index = slow_load\n"
+            "here = pathlib.Path({barrier!r})\n"
+            "(here / {arg!r}).touch()\n"
+            "end = time.time() + 120\n"
+            "while len(list(here.iterdir())) < 2 and time.time() < end: time.sleep(0.005)\n"
             "print(toy_c.double({arg}))")
-    for attempt in range(2):  # without the lock the first attempt lost an entry
-        env = {**os.environ, "NUMBA_CACHE_DIR": str(tmp_path / f"numba{attempt}"),
-               "PYTHONPATH": str(PACKAGE.parent)}
-        start = time.time() + 3.0  # both have imported numba and roughflow by then
-        procs = [subprocess.Popen([sys.executable, "-c", code.format(
-            folder=str(tmp_path), start=start, arg=arg)], env=env, stdout=subprocess.PIPE,
-            stderr=subprocess.PIPE, text=True) for arg in ("1.5", "3")]
-        outs = [p.communicate(timeout=300) for p in procs]
-        assert [p.returncode for p in procs] == [0, 0], outs
-        assert [o[0].strip() for o in outs] == ["3.0", "6"]
-        [index] = (tmp_path / f"numba{attempt}").rglob("toy_c.double*.nbi")
-        with index.open("rb") as f:
-            pickle.load(f)  # numba's version
-            _, overloads = pickle.loads(f.read())
-        assert len(overloads) == 2, (attempt, overloads)
+    env = {**os.environ, "NUMBA_CACHE_DIR": str(tmp_path / "numba"),
+           "PYTHONPATH": str(PACKAGE.parent)}
+    procs = [subprocess.Popen([sys.executable, "-c", code.format(
+        folder=str(tmp_path), barrier=str(barrier), arg=arg)], env=env,
+        stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True) for arg in ("1.5", "3")]
+    outs = [p.communicate(timeout=300) for p in procs]
+    assert [p.returncode for p in procs] == [0, 0], outs
+    assert [o[0].strip() for o in outs] == ["3.0", "6"]
+    [index] = (tmp_path / "numba").rglob("toy_c.double*.nbi")
+    with index.open("rb") as f:
+        pickle.load(f)  # numba's version
+        _, overloads = pickle.loads(f.read())
+    assert len(overloads) == 2, overloads
 
 
 def test_the_spare_folder_in_the_temporary_folder_must_be_private(tmp_path):
