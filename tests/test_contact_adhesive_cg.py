@@ -187,3 +187,27 @@ def test_cg_needs_the_harmonic_repulsion():
 
         adhesive_cg(s.heights, s.lx, s.ly, 0.1, tol=1e-4, max_iter=10,
                     adhesion=Adhesion(surface_energy=1e-4, range=1e-2, repulsion="hard"))
+
+
+def test_a_body_pulled_beyond_pull_off_stops_with_finite_gaps():
+    # Past the pull-off force nothing holds the body once every point has left the
+    # attraction's range: each line search pulled it further off, the gaps reached 4e14
+    # in 50 iterations and overflowed to nan, and the error then reported "the largest gap
+    # is nan" and max_iter as the reason. The solver stops at the first residual check
+    # that sees every point beyond the range, and the error says so with finite gaps.
+    s, ad = _papers_case(64)
+    load = -0.3 * ad.max_tension  # a mean tension of 0.3 of the peak: far past pull-off
+    with np.errstate(all="raise"):  # no overflow or invalid value on the way
+        with pytest.raises(ConvergenceError, match="stopped after 5 of max_iter=20000") as err:
+            solve(s, load, model="adhesive", adhesion=ad, max_iter=20000)
+    assert err.value.iterations == 5 and np.isfinite(err.value.residual)
+    assert "the largest gap is" in str(err.value) and "nan" not in str(err.value)
+
+
+def test_a_tensile_load_within_pull_off_still_converges():
+    # the stop above must not catch a body that is held: a small tension converges to an
+    # attached state, with the contact area below that of zero load
+    s, ad = _papers_case(64)
+    free = solve(s, 0.0, model="adhesive", adhesion=ad)
+    pulled = solve(s, -0.01 * ad.max_tension, model="adhesive", adhesion=ad)
+    assert pulled.converged and 0 < pulled.area_fraction < free.area_fraction

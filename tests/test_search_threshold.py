@@ -722,3 +722,40 @@ def test_a_contact_tolerance_too_loose_for_tol_is_named():
                                                r"contact_tol=0.01 .*tighten contact_tol or "
                                                r"loosen tol"):
         threshold(s, None, tol=3e-4, options=SearchOptions(contact_tol=1e-2))
+
+
+def _harmonic_case():
+    from roughflow.contact.adhesion import adhesion_for
+
+    s = generate(SurfaceSpec(nx=64, ny=64, lx=1.0, ly=1.0, hurst=0.8, gamma=16.0,
+                             lambda_r=0.25, lambda_s=3 / 64 * 4, seed=0))
+    ad = adhesion_for(s.heights, s.lx, s.ly, gamma_over_v_full=0.1, range=3 / 64,
+                      repulsion="harmonic")
+    return s, ad
+
+
+def test_the_harmonic_walls_search_stays_within_the_load_it_holds():
+    # The default pressures are set for elastic contact (up to 4 E* gbar); the harmonic wall
+    # holds at most Adhesion.max_load (0.039 here), and the search failed on its own first
+    # pressure 0.054 with the solve's "cannot hold the load", a load the caller never gave.
+    # Capped, it runs and reports what it finds: on this surface the fluid does not span
+    # along y even at the lowest pressure (a_c 0.42 at 1e-4, the adhesion's own contact).
+    s, ad = _harmonic_case()
+    assert ad.max_load < 0.054
+    with pytest.raises(ThresholdNotBracketed, match="does not span along y"):
+        threshold(s, model="adhesive", adhesion=ad, tol=4e-3)
+
+
+def test_a_range_beyond_the_harmonic_wall_is_capped_or_refused(caplog):
+    # a given range is capped as the default is (the CLI always passes one); a range that
+    # starts beyond the wall's largest load is refused before any solve, naming it
+    s, ad = _harmonic_case()
+    with caplog.at_level(logging.INFO, logger="roughflow"):
+        with pytest.raises(InputError, match=r"beyond the largest load the harmonic wall "
+                                             r"holds, 0\.03915"):
+            threshold(s, model="adhesive", adhesion=ad,
+                      options=SearchOptions(pressure_range=(0.05, 0.5)))
+    assert "-> a_c =" not in caplog.text  # the line every contact solve logs
+    with pytest.raises(ThresholdNotBracketed, match=r"does not span along y"):
+        threshold(s, model="adhesive", adhesion=ad, tol=4e-3,
+                  options=SearchOptions(pressure_range=(1e-4, 0.5), first_pressure=0.3))

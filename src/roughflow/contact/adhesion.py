@@ -119,6 +119,15 @@ class Adhesion:
         return math.pi * self.surface_energy / (2 * self.range)
 
     @property
+    def max_load(self) -> float:
+        """The largest mean pressure this repulsion holds (E*): HARMONIC_MAX_OVERLAP kappa rho
+        on the harmonic wall (above it the body sinks through the soft wall), none (inf) on
+        the hard wall."""
+        if self.repulsion != "harmonic":
+            return math.inf
+        return HARMONIC_MAX_OVERLAP * self.kappa * self.range
+
+    @property
     def zone(self) -> float:
         """Width of the adhesive zone at a contact edge, E* gamma_s / max_tension^2 =
         4 E* rho^2 / (pi^2 gamma_s) (E* = 1; units of L): the grid must resolve it."""
@@ -172,7 +181,7 @@ class Adhesion:
         gs, rho = self.surface_energy, self.range
         x = np.clip(g, 0.0, rho)
         c = 0.5 * gs * (np.pi / rho) ** 2 * np.cos(np.pi * x / rho)
-        return np.where(g < 0, self.kappa, np.where(g > rho, 0.0, c))
+        return np.where(g < 0, self.kappa, np.where(g >= rho, 0.0, c))
 
 
 def check_setup(adhesion: Adhesion, heights: np.ndarray, lx: float, ly: float,
@@ -191,14 +200,13 @@ def check_setup(adhesion: Adhesion, heights: np.ndarray, lx: float, ly: float,
             f"contact (a_c = 1 whatever the load); give a range below "
             f"{height_range / adhesion.contact_within:.4g} (short against the roughness) or "
             "contact_within=0 (contact on the wall only)")
-    if adhesion.repulsion == "harmonic" and load > HARMONIC_MAX_OVERLAP * adhesion.kappa * \
-            adhesion.range:
+    if load > adhesion.max_load:
         raise InputError(
             f"the harmonic wall (kappa = pi^2 gamma_s / (2 rho^2) = {adhesion.kappa:.4g}; "
             f"{what}) cannot hold the load {load:.4g}: its overlapping cells would sink into it "
             f"by at least load / kappa = {load / adhesion.kappa / adhesion.range:.3g} ranges on "
             f"average (at most {HARMONIC_MAX_OVERLAP:g}: a soft wall, not a contact); the load "
-            f"may be at most {HARMONIC_MAX_OVERLAP * adhesion.kappa * adhesion.range:.4g}, or "
+            f"may be at most {adhesion.max_load:.4g}, or "
             "use repulsion='hard' (the default), or a larger surface energy")
     if warn and zone < ZONE_RESOLVED:
         log.warning("the adhesive zone 4 rho^2 / (pi^2 gamma_s) = %.3g (%s) spans %.3g grid "

@@ -97,7 +97,7 @@ def fire(
     kmin = float(neg_k[neg_k > 0].min())
     comp_n = spectral_factors(shape, lx, ly).compliance_n
     h0 = float(heights.mean())
-    h = np.ascontiguousarray(heights - h0).ravel()
+    h = np.ascontiguousarray(heights - h0, dtype=np.float64).ravel()
     hscale = height_scale(h)
     # masses m(q) = sqrt((z k_min)^2 + k^2), kept as 1/m
     inv_mass = np.hypot(Z_MASS * kmin, neg_k)

@@ -248,7 +248,7 @@ def hard_wall_setup(heights: np.ndarray, lx: float, ly: float,
     else:
         xp = np
         plan = fft.plan(shape, threads)
-        h = np.ascontiguousarray(heights - h0).ravel()
+        h = np.ascontiguousarray(heights - h0, dtype=np.float64).ravel()
     hscale = height_scale(h, xp)
     plan.real_in.reshape(-1)[:] = h
     ht = plan.execute_forward()

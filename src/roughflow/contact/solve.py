@@ -4,6 +4,7 @@ from __future__ import annotations
 
 import dataclasses
 import logging
+import math
 from typing import TYPE_CHECKING
 
 import numpy as np
@@ -260,13 +261,19 @@ def solve(
             # a tensile load beyond the pull-off force has no equilibrium: the body keeps
             # moving off; without this hint the error names only the residual, after what
             # can be minutes of steps (50000 steps at 256^2 take 85 s)
+            largest = float(out.gap.max())
+            gaps = (f"the largest gap is {largest:.3g}" if math.isfinite(largest)
+                    else "the gaps grew without bound")
             why = (f"; the tensile load {load:g} may lie beyond the pull-off force (no "
-                   f"equilibrium: the surfaces separate), the largest gap is "
-                   f"{float(out.gap.max()):.3g} against the range {adhesion.range:.3g}")
+                   f"equilibrium: the surfaces separate), {gaps} against the range "
+                   f"{adhesion.range:.3g}")
+        # a solver stops before max_iter only where no equilibrium is left to find (every
+        # point beyond the attraction's range under tension) or its iterate is not finite
+        stop = (f"within max_iter={max_iter}" if out.iterations >= max_iter else
+                f"and stopped after {out.iterations} of max_iter={max_iter} iterations")
         raise ConvergenceError(
-            f"contact solve ({model}, {method}) did not reach tol={tol:g} within "
-            f"max_iter={max_iter}{why}", residual=float(out.residual),
-            iterations=int(out.iterations),
+            f"contact solve ({model}, {method}) did not reach tol={tol:g} {stop}{why}",
+            residual=float(out.residual), iterations=int(out.iterations),
         )
     if model == "adhesive":
         check_overlap(adhesion, load, out.pressure)

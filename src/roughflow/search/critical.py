@@ -232,7 +232,9 @@ class Threshold:
     """Critical contact area for fluid flow along ``axis`` (0 = x, 1 = y).
 
     The fluid spans at ``a_lo`` (pressure ``p_lo``) and does not at ``a_hi`` (``p_hi``), so
-    a_c* lies in [a_lo, a_hi]; ``a_c_star`` is the estimate inside it: with the default
+    a_c* lies in [a_lo, a_hi]; both as solved to the search's ``contact_tol`` (a solve to a
+    tighter tolerance can move an end by a cell or two: 20 of 480 ends on grids of 32^2 to
+    48 x 24, a_c* by at most 0.3 cells); ``a_c_star`` is the estimate inside it: with the default
     strategy ``"predict"`` (periodic cells) the root of the first-order predictions of the
     two ends, linear between them (:func:`_weight`), else the midpoint. Pressures are in
     E* (NaN for the bearing model, which is parameterised by the area itself).
@@ -298,6 +300,27 @@ def scaled_options(gbar: float, model: str = DEFAULT_MODEL, **fields) -> SearchO
     elif given is None:
         fields.pop("pressure_range", None)
     return SearchOptions(**fields)
+
+
+def _within_wall(opts: SearchOptions, max_load: float) -> SearchOptions:
+    """``opts`` with the loads the adhesive wall holds (:attr:`Adhesion.max_load`, finite on
+    the harmonic wall only): the pressure range and first pressure capped there. The
+    defaults are set for elastic contact (up to 4 E* gbar), which the soft wall cannot hold:
+    the search failed on its own first pressure with an error about a load the caller never
+    gave. A range that starts at the limit is refused before any solve, naming it."""
+    lo, hi = (float(p) for p in opts.pressure_range)
+    if hi <= max_load:
+        return opts
+    if lo >= max_load:
+        raise InputError(
+            f"pressure_range {opts.pressure_range!r} lies beyond the largest load the "
+            f"harmonic wall holds, {max_load:.4g} (Adhesion.max_load): give a range below it, "
+            "or use repulsion='hard'")
+    log.info("threshold search: pressures capped at %.4g, the largest load the harmonic "
+             "wall holds (pressure_range %r)", max_load, opts.pressure_range)
+    first = opts.first_pressure
+    return dataclasses.replace(opts, pressure_range=(lo, max_load),
+                               first_pressure=None if first is None else min(first, max_load))
 
 
 # -------------------------------------------------------------------------------------------
@@ -697,6 +720,8 @@ def threshold(
                          f"{opts.pressure_range!r}")
     if model == "adhesive" and adhesion is None:
         raise InputError("model='adhesive' needs adhesion=Adhesion(surface_energy=, range=)")
+    if model == "adhesive":
+        opts = _within_wall(opts, adhesion.max_load)
     on_gpu = check_backend(backend, model, opts.method) == "cupy"
     if on_gpu:
         gpu_check_memory(surface.shape, "the contact solves of a threshold search on the GPU")
