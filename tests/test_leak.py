@@ -215,7 +215,7 @@ def test_cli_leak_warns_where_the_fluid_pressure_is_not_small(imported, tmp_path
             "1e+07 Pa")
     assert said in err
     # the table (the workflow's result; its log may go unread) and the dataset say it too
-    assert f"note: {said}" in out
+    assert f"note: {said}" in out and out.count(said) == 1
     assert xr.open_dataset(tmp_path / "b.nc").attrs["fluid_pressure_note"].startswith(said)
     assert xr.open_dataset(tmp_path / "a.nc").attrs["fluid_pressure_note"] == ""
     # equal to the lowest contact pressure (the README's example: 1 MPa against 1MPa:...):
@@ -359,3 +359,56 @@ def test_cli_leak_boundary_reaches_the_curve(imported, tmp_path, boundary):
     assert main(["leak", str(imported), *argv, "--boundary", boundary, "-o", str(out)]) == 0
     with xr.open_dataset(out) as ds:
         assert ds.attrs["boundary"] == boundary
+
+
+@pytest.fixture(scope="module")
+def leak_table_ds(imported, tmp_path_factory):
+    """The leak dataset of the test scan (LEAK), loaded, for format_table."""
+    out = tmp_path_factory.mktemp("table") / "leak.nc"
+    assert main(["leak", str(imported), *LEAK, "-o", str(out)]) == 0
+    with xr.open_dataset(out) as ds:
+        return ds.load()
+
+
+def test_the_table_tells_a_tiny_contact_area_from_none(leak_table_ds):
+    """a_c was printed with 4 decimals: 1e-5 and exactly 0 both read 0.0000."""
+    from roughflow.cli.leak import format_table
+
+    ds = leak_table_ds.copy(deep=True)
+    ds["area_fraction"][0, :2] = [0.0, 1.234e-5]
+    rows = format_table(ds).splitlines()[3:5]
+    assert [r.split()[1] for r in rows] == ["0", "1.234e-05"]
+
+
+def test_a_sealing_pressure_below_the_fluid_pressure_gets_a_caveat(leak_table_ds):
+    """An elastomer-like case printed "sealing pressure along x: between 2.362e+04 Pa and
+    2.376e+04 Pa" under a fluid pressure of 1e5 Pa, which would lift the faces apart."""
+    from roughflow.cli.leak import format_table
+
+    ds = leak_table_ds.copy(deep=True)
+    fluid = ds.attrs["fluid_pressure_Pa"]
+    ds["sealing_pressure_lo"][0, :] = [0.2 * fluid, 10 * fluid]
+    ds["sealing_pressure"][0, :] = [0.3 * fluid, 11 * fluid]
+    lines = [line for line in format_table(ds).splitlines() if line.startswith("sealing")]
+    caveat = "not above the fluid pressure 1e+06 Pa, which would lift the faces apart"
+    assert caveat in lines[0] and "outside the model's assumptions" in lines[0]
+    assert caveat not in lines[1]
+
+
+def test_cli_leak_skips_the_sealing_search_on_request(imported, tmp_path, capsys,
+                                                      monkeypatch):
+    """The library could skip the sealing search (sealing=False), often most of a run's
+    time; the command line could not."""
+    import roughflow.leak as leak
+
+    monkeypatch.setattr(leak, "sealing_search", lambda *a, **k: pytest.fail("it searched"))
+    out = tmp_path / "leak.nc"
+    capsys.readouterr()
+    assert main(["leak", str(imported), *LEAK, "--no-sealing", "-o", str(out)]) == 0
+    text = capsys.readouterr().out
+    assert "sealing pressure: not searched (--no-sealing)" in text
+    assert "between" not in text
+    with xr.open_dataset(out) as ds:
+        assert ds.attrs["sealing_searched"] == 0 and "threshold_tol" not in ds.attrs
+        assert np.isnan(ds["sealing_pressure"].values).all()
+        assert ds["leak_rate"].sizes["pressure"] == 4

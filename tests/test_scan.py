@@ -103,7 +103,8 @@ def test_npy_missing_unit_and_size_are_named_together(tmp_path):
     # lacking unit=, which would have said nothing more
     h = heights()
     np.save(tmp_path / "scan.npy", h)
-    with pytest.raises(InputError, match=r"length unit: pass unit=.*, nor its physical size"):
+    with pytest.raises(InputError, match=r"its length unit, of the heights and sizes: pass "
+                                         r"unit= \(CLI --unit\).*, nor its physical size"):
         read_scan(tmp_path / "scan.npy")
     by_height_unit = read_scan(tmp_path / "scan.npy", size="2mm,1.5mm", height_unit="um",
                                detrend_mode="none")
@@ -113,6 +114,27 @@ def test_npy_missing_unit_and_size_are_named_together(tmp_path):
     assert by_height_unit.scan.length_scale == by_unit.scan.length_scale
     with pytest.raises(InputError, match="has no unit"):  # bare numbers need unit=
         read_scan(tmp_path / "scan.npy", size="2,1.5", height_unit="um")
+
+
+def test_a_size_with_units_and_no_unit_asks_for_the_heights_unit(tmp_path, capsys, caplog):
+    """`import afm-64.npy --size 500nm` said the file "does not give its length unit: pass
+    unit=", blaming the unit the user had just given; the heights' unit is missing."""
+    np.save(tmp_path / "scan.npy", heights())
+    said = ("does not give the unit of its heights (the size '2mm,1.5mm' gives only the "
+            "lateral one): pass it as unit= or height_unit= (CLI --unit or --height-unit)")
+    with pytest.raises(InputError, match=re.escape(said)):
+        read_scan(tmp_path / "scan.npy", size="2mm,1.5mm")
+    # bare numbers in the size still need unit=, which the message names
+    with pytest.raises(InputError, match=r"its length unit, of the heights and sizes"):
+        read_scan(tmp_path / "scan.npy", size="2,1.5")
+    # the warning on an implausible gradient no longer reads the size in the heights' unit
+    with caplog.at_level("WARNING", logger="roughflow.scan"):
+        read_scan(tmp_path / "scan.npy", size="2mm,1.5mm", unit="furlong")
+    assert "read in furlong and the lateral sizes as given ('2mm,1.5mm')" in caplog.text
+    out = tmp_path / "s.nc"
+    with pytest.raises(SystemExit) as exc:
+        main(["import", str(tmp_path / "scan.npy"), "--size", "2mm,1.5mm", "-o", str(out)])
+    assert exc.value.code == 2 and said in capsys.readouterr().err
 
 
 def test_truncated_npy_refused_before_reading(tmp_path):

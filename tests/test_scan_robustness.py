@@ -183,6 +183,28 @@ def test_two_channels_of_one_name_are_refused_listing_their_indices(tmp_path, ca
     assert "channel Height (channel 1)" in capsys.readouterr().out
 
 
+def test_the_default_of_two_channels_of_one_name_is_read_with_a_warning(tmp_path, capsys,
+                                                                         caplog):
+    """Without --channel the file's default, channel 0 of the trace and retrace "Height",
+    was read without a word while `--channel Height` was refused as ambiguous. It is still
+    read (the documented imports of such files give no channel), with a warning naming both
+    and how to pick one; the surface file keeps it, so `roughflow leak` repeats it."""
+    path, _, _ = nanoscope(tmp_path)
+    with caplog.at_level(logging.WARNING, logger="roughflow.scan"):
+        s = read_scan(path, detrend_mode="none")
+    said = ("2 channels are named 'Height' (0: Height, 1: Height; an AFM's trace and "
+            "retrace?): read channel 0, the file's default; choose one by its index with "
+            "channel= (CLI --channel 0 / --channel 1)")
+    assert said in caplog.text and said in s.scan.warnings
+    assert s.scan.channel == "Height (channel 0)"
+    caplog.clear()
+    with caplog.at_level(logging.WARNING, logger="roughflow.scan"):
+        chosen = read_scan(path, channel=1, detrend_mode="none")
+    assert "channels are named" not in caplog.text + chosen.scan.warnings
+    assert main(["import", str(path), "-o", str(tmp_path / "s.nc")]) == 0
+    assert "--channel 0 / --channel 1" in capsys.readouterr().err
+
+
 def _cut_opd(tmp_path: Path) -> Path:
     """A Wyko OPD file cut inside its raster: the OPD reader refuses it (the blocks after
     the raster are missing), and igor2, trying it as an Igor wave (its first two bytes read

@@ -46,7 +46,8 @@ if TYPE_CHECKING:
     from roughflow.units import Scales
 
 __all__ = ["LeakCurve", "check_pressures", "check_seal", "fluid_pressure_note", "default_boundary",
-           "sealing_search", "leak_curve", "pressure_curve"]
+           "sealing_search", "leak_curve", "pressure_curve", "EMPTY_WINDOW_WARNING",
+           "empty_window_pressures"]
 
 log = logging.getLogger(__name__)
 
@@ -70,6 +71,10 @@ class LeakCurve:
     boundary: the non-periodic treatment (:mod:`roughflow.boundary`).
     rms_gradient: of the surface (its pressures are in E*; E* gbar only when it is 1).
     window_lx, window_ly, window_shape: size (L) and grid of the analysed window.
+    settings: the tolerances used, and ``sealing_searched`` (1, or 0 with ``sealing=False``).
+    window_contact_cells: contact cells in the analysed window at each pressure (None for a
+        curve built by hand); 0 marks a row whose window holds no contact
+        (:func:`empty_window_pressures`).
     """
 
     pressure: np.ndarray
@@ -88,6 +93,7 @@ class LeakCurve:
     window_ly: float
     window_shape: tuple[int, int]
     settings: dict = field(default_factory=dict)
+    window_contact_cells: np.ndarray | None = None
 
 
 def check_pressures(pressures: ArrayLike) -> np.ndarray:
@@ -174,7 +180,9 @@ def leak_curve(surface: Surface, pressures: ArrayLike, *, boundary: str | None =
     ``boundary``: :data:`~roughflow.defaults.BOUNDARY_METHODS` (default
     :func:`default_boundary`). ``flow_tol``, ``flow_sigma_tol``: ``tol`` and ``sigma_tol`` of
     :func:`roughflow.flow.solve`. Bad input raises :class:`InputError` before any solve; a
-    contact or flow solve that misses its tolerance raises ``ConvergenceError``.
+    contact or flow solve that misses its tolerance raises ``ConvergenceError``. Pressures
+    at which the analysed window holds no contact cell are logged as a warning
+    (:data:`EMPTY_WINDOW_WARNING`, :func:`empty_window_pressures`).
     """
     p = check_pressures(pressures)
     check_pressure_scale(p)
@@ -195,17 +203,51 @@ def leak_curve(surface: Surface, pressures: ArrayLike, *, boundary: str | None =
     gbar = surface.gbar
     curve = pressure_curve(emb, p, contact_tol=contact_tol, flow_tol=flow_tol,
                            flow_sigma_tol=flow_sigma_tol, threads=threads)
+    empty = empty_window_pressures(p, curve["window_contact_cells"])
+    if empty.size:
+        log.warning(EMPTY_WINDOW_WARNING, method, ", ".join(f"{v:.4g}" for v in empty))
     thresholds = (sealing_search(emb, gbar=gbar, tol=threshold_tol,
                                  contact_tol=threshold_contact_tol, threads=threads)
                   if sealing else {})
+    # the sealing search's tolerances are recorded only where it ran
+    searched = ({"threshold_tol": threshold_tol, "threshold_contact_tol": threshold_contact_tol}
+                if sealing else {})
     return LeakCurve(
         pressure=p, **curve, thresholds=thresholds, boundary=method,
         rms_gradient=float(gbar), window_lx=emb.lx, window_ly=emb.ly,
         window_shape=emb.shape,
         settings={"contact_tol": contact_tol, "flow_tol": flow_tol,
                   **({} if flow_sigma_tol is None else {"flow_sigma_tol": flow_sigma_tol}),
-                  "threshold_tol": threshold_tol,
-                  "threshold_contact_tol": threshold_contact_tol})
+                  **searched, "sealing_searched": int(sealing)})
+
+
+#: Logged by :func:`leak_curve` (arguments: the boundary method, the pressures in E*) where
+#: the analysed window holds no contact cell at some pressures.
+EMPTY_WINDOW_WARNING = (
+    "the analysed window (boundary %r) holds no contact cell at the nominal pressures %s E*: "
+    "all of the contact lies outside it (in the border that 'window' drops), so a_c = 0 "
+    "there and the gap and leak rate are those of a window held open from outside, not a "
+    "property of the seal; start the pressures higher, or use boundary 'mirror' (the whole "
+    "scan analysed)")
+
+
+def empty_window_pressures(pressures: ArrayLike, cells: ArrayLike | None) -> np.ndarray:
+    """The nominal ``pressures`` at which the analysed window holds no contact cell
+    (``cells``: :attr:`LeakCurve.window_contact_cells`; None: not counted, none found).
+
+    The criterion is the smallest one that separates a result from a non-result: with one
+    contact cell or more the window carries part of the load on its own asperities, and
+    its a_c, gap and sigma are its own, however sparse (a_c itself says how few cells that
+    are); with none, a_c is exactly 0 and the gap is set by asperities outside the window
+    (with ``window``: in the dropped border or across the wrap-around seam), which says
+    nothing about the seal. Any cut-off above zero would be a resolution judgement that
+    a_c already shows. Only ``window`` can leave it empty: the whole cell (``periodic``)
+    and the mirrored quadrant always carry contact under a positive load, and ``pad``
+    refuses a state with contact outside the scan."""
+    p = np.asarray(pressures, dtype=np.float64)
+    if cells is None:
+        return p[:0]
+    return p[np.asarray(cells) == 0]
 
 
 def pressure_curve(emb: Embedding, pressures: np.ndarray, *, contact_tol: float = CONTACT_TOL,
@@ -214,9 +256,10 @@ def pressure_curve(emb: Embedding, pressures: np.ndarray, *, contact_tol: float 
     """Contact area, mean gap, percolation and conductances of the window of ``emb`` at
     each nominal pressure (increasing; warm-started solves): the :class:`LeakCurve` fields
     ``area_fraction``, ``mean_gap``, ``percolating``, ``sigma``, ``iterations``,
-    ``residual``, ``flow_imbalance``, ``flow_sigma_error``."""
+    ``residual``, ``flow_imbalance``, ``flow_sigma_error``, ``window_contact_cells``."""
     n = len(pressures)
     area, gap, its, res = (np.zeros(n) for _ in range(4))
+    cells = np.zeros(n, dtype=np.int64)
     spans = np.zeros((n, 2), dtype=bool)
     sigma, imbalance, sigma_error = (np.zeros((n, 2)) for _ in range(3))
     state: ContactResult | None = None
@@ -226,6 +269,7 @@ def pressure_curve(emb: Embedding, pressures: np.ndarray, *, contact_tol: float 
                       threads=threads)
         seen = emb.observe(state)
         area[i], gap[i] = seen.area_fraction, seen.mean_gap
+        cells[i] = np.count_nonzero(seen.contact)
         its[i], res[i] = state.iterations, state.residual
         flows = flow.flow_both_axes(seen.gap, ~seen.contact, lx=emb.lx, ly=emb.ly,
                                     periodic=emb.periodic, previous=flows, tol=flow_tol,
@@ -239,4 +283,4 @@ def pressure_curve(emb: Embedding, pressures: np.ndarray, *, contact_tol: float 
                  area[i], spans[i, 0], spans[i, 1], sigma[i, 0], sigma[i, 1])
     return {"area_fraction": area, "mean_gap": gap, "percolating": spans, "sigma": sigma,
             "iterations": its.astype(np.int64), "residual": res, "flow_imbalance": imbalance,
-            "flow_sigma_error": sigma_error}
+            "flow_sigma_error": sigma_error, "window_contact_cells": cells}

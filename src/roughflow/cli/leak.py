@@ -63,6 +63,9 @@ def register(sub: argparse._SubParsersAction) -> None:
                         f"{THRESHOLD_CONTACT_TOL:g}, as `threshold` does (docs/measured.md)")
     p.add_argument("--threshold-tol", type=float, default=THRESHOLD_TOL,
                    help=f"width of the sealing bracket in contact area ({THRESHOLD_TOL:g})")
+    p.add_argument("--no-sealing", action="store_true",
+                   help="skip the sealing-pressure search (often most of the run time); the "
+                        "sealing variables of the output are then NaN")
     p.add_argument("--threads", type=int, default=None,
                    help="FFT threads (default: env ROUGHFLOW_FFT_THREADS or 1)")
     add_output(p)
@@ -98,7 +101,8 @@ def run(args: argparse.Namespace) -> None:
     check_seal(surface, scales, fluid_pressure=fluid, seal_width=width, seal_length=length)
     p = check_pressures(scales.pressure_from_si(pressures))
     curve = leak_curve(surface, p, boundary=args.boundary, contact_tol=args.contact_tol,
-                       threshold_tol=args.threshold_tol, threads=args.threads)
+                       threshold_tol=args.threshold_tol, sealing=not args.no_sealing,
+                       threads=args.threads)
     name = args.name or Path(args.surface).stem
     ds = leak_dataset(curve, surface, scales=scales, fluid_pressure=fluid, seal_width=width,
                       seal_length=length, name=name)
@@ -108,6 +112,14 @@ def run(args: argparse.Namespace) -> None:
     print(format_table(ds))
 
 
+#: The note under the table for its rows marked "*".
+EMPTY_WINDOW_NOTE = (
+    "* the analysed window holds no contact cell: all of the contact lies outside it (in "
+    "the border that --boundary window drops), so a_c = 0 and the gap and leak rate of the "
+    "row are those of a window held open from outside, not a property of the seal; start "
+    "--pressures higher, or use --boundary mirror (the whole scan analysed)")
+
+
 def format_table(ds: xr.Dataset) -> str:
     """The leak curve of a (one-scan) leak dataset as a text table."""
     d = ds.isel(scan=0)
@@ -115,29 +127,22 @@ def format_table(ds: xr.Dataset) -> str:
              f"{ds.attrs['ref_pressure_Pa']:.4g} Pa, dp = {ds.attrs['fluid_pressure_Pa']:.4g} "
              f"Pa, eta = {ds.attrs['ref_viscosity_Pa_s']:.4g} Pa s, seal w = "
              f"{ds.attrs['seal_width_m']:.4g} m, l = {ds.attrs['seal_length_m']:.4g} m",
-             f"{'p [Pa]':>10} {'a_c':>7} {'perc x':>6} {'perc y':>6} {'sigma_x':>10} "
+             f"{'p [Pa]':>10} {'a_c':>9}  {'perc x':>6} {'perc y':>6} {'sigma_x':>10} "
              f"{'sigma_y':>10} {'Q_x':>10} {'Q_y':>10}",
-             f"{'':>10} {'':>7} {'':>6} {'':>6} {'m^3/(Pa s)':>10} {'m^3/(Pa s)':>10} "
+             f"{'':>10} {'':>9}  {'':>6} {'':>6} {'m^3/(Pa s)':>10} {'m^3/(Pa s)':>10} "
              f"{'m^3/s':>10} {'m^3/s':>10}"]
+    empty = _empty_rows(d)
     for i in range(d.sizes["pressure"]):
         r = d.isel(pressure=i)
         c, q, pc = r["conductance"].values, r["leak_rate"].values, r["percolating"].values
-        lines.append(f"{float(r['pressure']):10.4g} {float(r['area_fraction']):7.4f} "
+        # 4 significant digits, not decimals: a_c = 1e-5 and exactly 0 read apart
+        lines.append(f"{float(r['pressure']):10.4g} {float(r['area_fraction']):9.4g}"
+                     f"{'*' if empty[i] else ' '} "
                      f"{'yes' if pc[0] else 'no':>6} {'yes' if pc[1] else 'no':>6} "
                      f"{c[0]:10.3e} {c[1]:10.3e} {q[0]:10.3e} {q[1]:10.3e}")
-    for k, a in enumerate(("x", "y")):
-        lo, hi = (float(d[v].values[k]) for v in ("sealing_pressure_lo", "sealing_pressure"))
-        star = float(d["a_c_star"].values[k])
-        lines.append(f"sealing pressure along {a}: between {lo:.4g} Pa and {hi:.4g} Pa "
-                     f"(a_c* = {star:.4f})")
-    for k, a in enumerate(("x", "y")):
-        star = float(d["a_c_star"].values[k])
-        if star > SEALING_AREA_NOTE:
-            lines.append(f"note: along {a} the seal closes only at a_c* = {star:.3f} (random "
-                         f"surfaces: about 0.4): a channel the contact hardly closes, such as "
-                         f"one scan line offset from the others (compare an import with "
-                         f"--detrend lines-x or lines-y) or a large region filled with "
-                         f"--fill min (a flat basin)")
+    lines += _sealing_lines(ds, d)
+    if empty.any():
+        lines.append(f"note: {EMPTY_WINDOW_NOTE}")
     warned = str(ds.attrs.get("scan_warnings", ""))
     if warned:  # said in the import's log, which a workflow's user may never read
         lines.append(f"note: the import warned: {warned}")
@@ -148,3 +153,40 @@ def format_table(ds: xr.Dataset) -> str:
     if msg != "none":
         lines.append(f"note: {msg}")
     return "\n".join(lines)
+
+
+def _empty_rows(d: xr.Dataset):
+    """Per row of the one-scan dataset ``d``: whether its analysed window holds no contact
+    cell (False throughout for a file without the count)."""
+    import numpy as np
+
+    if "window_contact_cells" not in d:
+        return np.zeros(d.sizes["pressure"], dtype=bool)
+    return d["window_contact_cells"].values == 0
+
+
+def _sealing_lines(ds: xr.Dataset, d: xr.Dataset) -> list[str]:
+    """The sealing pressure along x and y, each with a caveat where it is not above the
+    fluid pressure, and the note on a seal that closes only at a large a_c*."""
+    if not ds.attrs.get("sealing_searched", 1):
+        return ["sealing pressure: not searched (--no-sealing)"]
+    fluid = float(ds.attrs["fluid_pressure_Pa"])
+    lines = []
+    for k, a in enumerate(("x", "y")):
+        lo, hi = (float(d[v].values[k]) for v in ("sealing_pressure_lo", "sealing_pressure"))
+        star = float(d["a_c_star"].values[k])
+        # a seal that closes at a contact pressure the fluid's pressure exceeds would be
+        # lifted open by it: the model, which leaves the fluid's load out, cannot say
+        caveat = (f"; not above the fluid pressure {fluid:.4g} Pa, which would lift the faces "
+                  "apart: outside the model's assumptions (dp << p)" if lo <= fluid else "")
+        lines.append(f"sealing pressure along {a}: between {lo:.4g} Pa and {hi:.4g} Pa "
+                     f"(a_c* = {star:.4f}){caveat}")
+    for k, a in enumerate(("x", "y")):
+        star = float(d["a_c_star"].values[k])
+        if star > SEALING_AREA_NOTE:
+            lines.append(f"note: along {a} the seal closes only at a_c* = {star:.3f} (random "
+                         f"surfaces: about 0.4): a channel the contact hardly closes, such as "
+                         f"one scan line offset from the others (compare an import with "
+                         f"--detrend lines-x or lines-y) or a large region filled with "
+                         f"--fill min (a flat basin)")
+    return lines

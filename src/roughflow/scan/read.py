@@ -141,6 +141,32 @@ def scan_size(size: str | float | Sequence[str | float], unit: str | None) -> tu
     return out[0], out[1]
 
 
+def _has_bare_number(size: str | float | Sequence[str | float]) -> bool:
+    """Whether ``size`` holds a number without a unit (which ``unit=`` then gives)."""
+    parts = list(size) if isinstance(size, (tuple, list)) else str(size).split(",")
+    return any(is_number(str(p).strip()) for p in parts)
+
+
+def _missing_unit(size) -> str:
+    """What a scan that gives no unit lacks, for :func:`read_scan`'s refusal. A size with
+    its units fixes the lateral one, so only the heights' unit is missing then: blaming
+    "its length unit" misled a user who had just given ``--size 500nm``. Worded for the
+    API's keywords and the command line's options alike."""
+    if size is not None and not _has_bare_number(size):
+        return (f"the unit of its heights (the size {size!r} gives only the lateral one): "
+                "pass it as unit= or height_unit= (CLI --unit or --height-unit), e.g. 'nm'")
+    return ("its length unit, of the heights and sizes: pass unit= (CLI --unit), e.g. 'nm', "
+            "and height_unit= (CLI --height-unit) where the heights' unit differs")
+
+
+def _lateral_units(size, unit: str | None) -> str:
+    """How the lateral sizes were read, for messages: in ``unit``, or as ``size`` gave
+    them with their own units."""
+    if size is None or _has_bare_number(size):
+        return f"in {unit}"
+    return f"as given ({size!r})"
+
+
 def _check_npy_complete(path: Path) -> None:
     """Refuse a .npy file shorter than its header says: SurfaceTopography maps such a file
     and reads whatever memory lies past its end (measured: a different map on every run)."""
@@ -455,11 +481,29 @@ def _channel(reader, channel, path: Path):
                      f"{_channel_list(reader)})")
 
 
+def _twins(reader, ch) -> list:
+    """The other channels of ``reader`` with ``ch``'s name (trace and retrace "Height")."""
+    return [c for c in reader.channels if c.name == ch.name and c.index != ch.index]
+
+
 def _channel_label(reader, ch) -> str:
     """The channel's name, with its index where another channel has the same name (the
     record must say which was read: an AFM file may hold trace and retrace "Height")."""
-    twins = [c for c in reader.channels if c.name == ch.name]
-    return str(ch.name) if len(twins) == 1 else f"{ch.name} (channel {ch.index})"
+    return f"{ch.name} (channel {ch.index})" if _twins(reader, ch) else str(ch.name)
+
+
+def _default_twin_message(reader, ch) -> str:
+    """The warning where the file's default channel shares its name with others: the
+    reader takes the first without a word, as a name that two channels share did before it
+    was refused. Warned, not refused: the file's default is a defined choice, and the
+    imports of such files without a channel (docs/measured.md's AFM example, its
+    benchmark) stay as they were."""
+    same = [ch, *_twins(reader, ch)]
+    listed = ", ".join(f"{c.index}: {c.name}" for c in sorted(same, key=lambda c: c.index))
+    picks = " / ".join(f"--channel {c.index}" for c in sorted(same, key=lambda c: c.index))
+    return (f"{len(same)} channels are named {ch.name!r} ({listed}; an AFM's trace and "
+            f"retrace?): read channel {ch.index}, the file's default; choose one by its "
+            f"index with channel= (CLI {picks})")
 
 
 def _check_text_scan(path: Path, ch) -> None:
@@ -518,7 +562,8 @@ def read_scan(path: str | os.PathLike, *,
         (:func:`largest_defined_window`).
     channel: name or index of the data channel (default: the file's height channel); a
         string is matched to the names first, an int to the indices only. A name that two
-        channels share (trace and retrace "Height") is refused, listing their indices.
+        channels share (trace and retrace "Height") is refused, listing their indices; the
+        default, where another channel shares its name, is read with a warning naming them.
     periodic: the scan is periodic (e.g. a simulated one): no boundary treatment later.
     missing_value: the number that marks missing points in the file (an instrument's
         placeholder such as -999999 or 1e38), in the file's own numbers; matched to a
@@ -541,9 +586,17 @@ def read_scan(path: str | os.PathLike, *,
         if not math.isfinite(missing_value):
             raise InputError(f"missing_value must be finite (nan always counts as missing), "
                              f"got {missing_value!r}")
+    notes: list[str] = []  # logged, and kept with the surface (ScanInfo.warnings)
+
+    def warn(message: str) -> None:
+        log.warning("%s: %s", path, message)
+        notes.append(message)
+
     reader = _open(path)
     try:  # closed on every error path too (an open file per failed import otherwise)
         ch = _channel(reader, channel, path)
+        if channel is None and _twins(reader, ch):
+            warn(_default_twin_message(reader, ch))
         if ch.dim != 2 or not ch.is_uniform:
             raise InputError(f"{str(path)!r} channel {ch.name!r} is a {ch.dim}D "
                              f"{'uniform' if ch.is_uniform else 'non-uniform'} topography; "
@@ -583,8 +636,7 @@ def read_scan(path: str | os.PathLike, *,
             st_unit = height_unit
         missing = []  # named together, not one per run
         if file_unit is None and st_unit is None:
-            missing.append("its length unit: pass unit= (e.g. 'nm'; CLI --unit), or with a size "
-                           "in units the heights' height_unit= (CLI --height-unit)")
+            missing.append(_missing_unit(size))
         if file_size is None and size is None:
             missing.append("its physical size: pass size= (e.g. '500nm' or '0.126mm,0.094mm'; "
                            "CLI --size)")
@@ -650,12 +702,6 @@ def read_scan(path: str | os.PathLike, *,
     from roughflow.units import canonical
 
     lx_m, ly_m = canonical(lx_m), canonical(ly_m)
-    notes: list[str] = []  # logged, and kept with the surface (ScanInfo.warnings)
-
-    def warn(message: str) -> None:
-        log.warning("%s: %s", path, message)
-        notes.append(message)
-
     if min(h.shape) < 4:
         raise InputError(f"{str(path)!r} has {h.shape[0]} x {h.shape[1]} points; at least "
                          "4 x 4 are needed (line scans are not read)")
@@ -718,8 +764,9 @@ def read_scan(path: str | os.PathLike, *,
         warn(f"the rms gradient is {info.rms_gradient:.3g} (rms height "
              f"{float(np.std(h)) * length:.4g} m over {lx_m:.4g} m x {ly_m:.4g} m): measured "
              "surfaces have about 1e-3 to 2. Check the units: the heights were read in "
-             f"{height_unit or file_unit or st_unit} and the lateral sizes in "
-             f"{file_unit or st_unit} (heights in nm read as um are 1000 times too steep), "
+             f"{height_unit or file_unit or st_unit} and the lateral sizes "
+             f"{_lateral_units(size, file_unit or st_unit)} (heights in nm read as um are "
+             "1000 times too steep), "
              "and look for a placeholder value that marks missing points (such as -999999): "
              "name it with missing_value= (CLI --missing-value)")
     if notes:
