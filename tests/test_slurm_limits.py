@@ -8,9 +8,12 @@ from __future__ import annotations
 
 import getpass
 import os
+import subprocess
+import sys
 from pathlib import Path
 
 import pytest
+from workflow_copy import copy_workflow
 
 from roughflow.errors import InputError
 from roughflow.slurm import JobLimits, job_limits, slurm_minutes, tres_mem_mib
@@ -90,9 +93,59 @@ def test_partition_limits(slurm_path):
     assert job_limits("small") is None  # not a SLURM login node
 
 
-def test_no_slurm_commands_at_all(tmp_path, monkeypatch):
+def test_no_slurm_commands_at_all(tmp_path, monkeypatch, caplog):
     monkeypatch.setenv("PATH", str(tmp_path))
-    assert job_limits("small") is None
+    with caplog.at_level("WARNING", logger="roughflow.slurm"):
+        assert job_limits("small") is None
+    # a dry run away from the cluster says what it did not check, in one line
+    assert [r.getMessage() for r in caplog.records] == [
+        "SLURM limits not read (`scontrol show partition` is missing or did not answer): "
+        "partition 'small', the account, the QOS and the per-job memory and time limits not "
+        "checked; run the dry run on the cluster's login node to check them"]
+
+
+def test_what_could_not_be_checked_is_warned_about(slurm_path, caplog):
+    def warned(*args):
+        caplog.clear()
+        with caplog.at_level("WARNING", logger="roughflow.slurm"):
+            job_limits(*args)
+        return [r.getMessage() for r in caplog.records]
+
+    fake(slurm_path, assoc=ASSOC, qos=QOS)
+    assert warned("small", "acct") == []  # everything read
+    fake(slurm_path, assoc=ASSOC, qos=QOS, enforce="associations")
+    assert warned("small", "acct") == []  # limits not enforced: nothing to check
+    fake(slurm_path, assoc=ASSOC, qos=QOS, sacctmgr_fails=True)  # sacctmgr blocked
+    [line] = warned("small", "acct")
+    assert "`sacctmgr` is missing, did not answer" in line
+    assert "the account and the limits of its QOS and association not checked" in line
+    [line] = warned("empty")
+    assert "`sinfo` lists no node of partition empty" in line
+
+
+def test_a_dry_run_without_slurm_says_the_checks_were_skipped(tmp_path):
+    """The README's cluster check (`snakemake -n --profile profiles/slurm`) on a machine
+    whose SLURM commands do not answer: the plan goes on, with the warning in its output."""
+    snakemake = Path(sys.executable).with_name("snakemake")
+    if not snakemake.exists():
+        pytest.skip("snakemake not installed")
+    (tmp_path / "wd").mkdir()
+    wd = copy_workflow(tmp_path / "wd")
+    bin_dir = tmp_path / "bin"
+    bin_dir.mkdir()
+    for name in ("scontrol", "sinfo", "sacctmgr"):
+        (bin_dir / name).write_text("#!/bin/sh\necho 'Unable to contact slurm controller' "
+                                    ">&2; exit 1\n")
+        (bin_dir / name).chmod(0o755)
+    env = {**os.environ, "PATH": f"{bin_dir}{os.pathsep}{os.environ['PATH']}",
+           "ROUGHFLOW_FFT_THREADS": "1"}
+    res = subprocess.run([str(snakemake), "-n", "--profile", "profiles/slurm",
+                          "--configfile", "config/test.yaml"], cwd=wd, env=env,
+                         capture_output=True, text=True, timeout=300)
+    log = res.stdout + res.stderr
+    assert res.returncode == 0, log[-3000:]
+    assert log.count("SLURM limits not read") == 1, log[-3000:]
+    assert "partition 'standard', the account" in log, log[-3000:]
 
 
 # a default QOS with MaxWall 30 min and MaxTRES mem=3G; the association (inherited from

@@ -370,5 +370,15 @@ def surface_from_dataset(ds: xr.Dataset) -> Surface:
 
 
 def read_surface(path: str | os.PathLike) -> Surface:
-    """Read a surface file written by ``roughflow surface`` or ``roughflow import``."""
+    """Read a surface file written by ``roughflow surface`` or ``roughflow import`` (or
+    :func:`write_dataset` of :func:`surface_to_dataset`) back as a
+    :class:`~roughflow.surface.Surface`: its cell ``lx`` x ``ly`` as written (not the
+    square pixels that :meth:`Surface.from_array` assumes without ``ly``), its
+    :class:`~roughflow.surface.SurfaceSpec` where it was generated and, for an imported
+    scan, its physical scale (``surface.scan``). Raises
+    :class:`~roughflow.errors.InputError` for a file of another kind.
+
+    >>> from roughflow.io import read_surface
+    >>> surface = read_surface("s.nc")        # doctest: +SKIP
+    """
     return surface_from_dataset(read_dataset(path, "surface", what="surface file"))

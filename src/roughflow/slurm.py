@@ -19,11 +19,16 @@ job more CPUs to fit its memory, up to the node's). QOS and association limits c
 where the cluster enforces them (``AccountingStorageEnforce`` with ``limits``). Aggregate
 limits (``Grp*``, per user or account) are not read: they bound what runs at once, not one
 job.
+
+Where these limits cannot be read (no SLURM commands, as on a workstation; a controller or
+``sacctmgr`` that does not answer), :func:`job_limits` logs one warning saying what was not
+checked, so that a dry run away from the cluster does not pass for a checked plan.
 """
 
 from __future__ import annotations
 
 import getpass
+import logging
 import subprocess
 from dataclasses import dataclass
 
@@ -33,6 +38,14 @@ __all__ = ["JobLimits", "slurm_minutes", "tres_mem_mib", "job_limits"]
 
 #: what SLURM's memory suffixes mean (its "MB" is a MiB, the unit of ``sbatch --mem``)
 _MEM_UNITS = {"K": 1 / 1024, "M": 1, "G": 1024, "T": 1024**2, "P": 1024**3}
+
+log = logging.getLogger(__name__)
+
+
+def _not_checked(what: str, why: str) -> None:
+    """One warning line: a limit the plan could not check."""
+    log.warning("SLURM limits not read (%s): %s not checked; run the dry run on the "
+                "cluster's login node to check them", why, what)
 
 
 @dataclass(frozen=True)
@@ -102,7 +115,10 @@ def _partition(name: str | None) -> tuple[dict[str, str], list[tuple[int, int]]]
     """``scontrol`` fields of partition ``name`` (None: the default one) and its nodes'
     memory (MiB) and CPUs."""
     shown = _slurm("scontrol", "--all", "--oneliner", "show", "partition")
+    where = f"partition {name!r}" if name is not None else "the default partition"
     if shown is None:
+        _not_checked(f"{where}, the account, the QOS and the per-job memory and time limits",
+                     "`scontrol show partition` is missing or did not answer")
         return None
     names = []
     for line in shown.splitlines():
@@ -115,12 +131,19 @@ def _partition(name: str | None) -> tuple[dict[str, str], list[tuple[int, int]]]
         if name is not None and names:
             raise InputError(f"SLURM partition {name!r} does not exist on this cluster (its "
                              f"partitions: {', '.join(names)})")
+        _not_checked("the account, the QOS and the per-job memory and time limits",
+                     "scontrol lists no partitions" if not names else
+                     "the cluster has no default partition and the profile names none")
         return None
     nodes = _slurm("sinfo", "--noheader", "--Node", f"--partition={found}", "--format=%m %c")
     sizes = [(int(words[0]), int(words[1])) for words in
              (line.split() for line in (nodes or "").splitlines())
              if len(words) == 2 and words[0].isdigit() and words[1].isdigit()]
-    return (fields, sizes) if sizes else None
+    if not sizes:
+        _not_checked("the account, the QOS and the per-job memory and time limits",
+                     f"`sinfo` lists no node of partition {found}")
+        return None
+    return fields, sizes
 
 
 def _rows(text: str | None, names: tuple[str, ...]) -> list[dict[str, str]]:
@@ -133,6 +156,9 @@ def _accounting() -> tuple[str, str] | None:
     limits (``AccountingStorageEnforce`` with ``limits``, or ``safe``/``all`` that imply
     it); else None: such limits are not applied to jobs."""
     config = _slurm("scontrol", "show", "config")
+    if config is None:
+        _not_checked("the account and the limits of its QOS and association",
+                     "`scontrol show config` did not answer")
     settings = {}
     for line in (config or "").splitlines():
         key, sep, value = line.partition("=")
@@ -210,7 +236,7 @@ def _qos_level(name: str, row: dict[str, str] | None) -> _Level | None:
 def _levels(fields: dict[str, str], account: str | None, qos: str | None) -> list[_Level]:
     """The QOS and association levels of a job in partition ``fields``, in SLURM's order
     of precedence; empty where the cluster does not enforce them or sacctmgr does not
-    answer."""
+    answer (the latter with a warning)."""
     accounting = _accounting()
     if accounting is None:
         return []
@@ -219,6 +245,8 @@ def _levels(fields: dict[str, str], account: str | None, qos: str | None) -> lis
     table = _slurm("sacctmgr", "--noheader", "--parsable2", "show", "qos",
                    "format=" + ",".join(_QOS))
     if found is None or table is None:
+        _not_checked("the account and the limits of its QOS and association",
+                     "`sacctmgr` is missing, did not answer or gave no default account")
         return []
     account, association = found
     qos_rows = {row["Name"]: row for row in _rows(table, _QOS)}
@@ -247,7 +275,9 @@ def job_limits(partition: str | None = None, account: str | None = None,
     default QOS) may ask for, from ``scontrol``, ``sinfo`` and ``sacctmgr``. None where
     these are missing or do not answer within 30 s (not a SLURM login node), or there is no
     default partition or no node is listed; QOS and association limits are left out where
-    the cluster does not enforce them or sacctmgr does not answer. Raises
+    the cluster does not enforce them or sacctmgr does not answer. Each of these, except a
+    cluster that does not enforce the limits, logs one warning (logger ``roughflow.slurm``)
+    naming what was not checked. Raises
     :class:`~roughflow.errors.InputError` where the cluster answers and has no partition
     ``partition``, or the user has no association with ``account`` (sbatch would refuse
     every job)."""

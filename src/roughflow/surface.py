@@ -290,9 +290,13 @@ class Surface:
     def from_array(cls, heights: ArrayLike, lx: float = 1.0, ly: float | None = None) -> Surface:
         """Wrap a user height map (validated: 2D, finite, at least 4 x 4) as a periodic
         cell. Heights, ``lx`` and ``ly`` are in one length unit (the solvers take E* = 1,
-        so pressures come out in E*). A measured map is better read with
-        :func:`roughflow.scan.read_scan`: it records the physical units, and leak calculations
-        then treat its edges as non-periodic (docs/measured.md)."""
+        so pressures come out in E*). ``ly=None`` means square pixels,
+        ``ly = lx * ny / nx`` for heights of shape (nx, ny): a 128 x 256 map with ``lx=1``
+        gets a 1 x 2 cell, so give ``ly`` for any other cell. A measured map is better read
+        with :func:`roughflow.scan.read_scan`: it records the physical units, and leak
+        calculations then treat its edges as non-periodic (docs/measured.md). A file
+        written by ``roughflow surface`` or ``roughflow import`` is read back, cell and
+        scale included, with :func:`roughflow.io.read_surface`."""
         from roughflow.errors import require_field
 
         h = require_field("heights", heights)
