@@ -52,7 +52,8 @@ def register(sub: argparse._SubParsersAction) -> None:
                         f"border of missing points; {SCAN_CROP_DEFINED}: the largest window "
                         "without missing points")
     p.add_argument("--channel", default=None,
-                   help="data channel by name or index (default: the file's height channel)")
+                   help="data channel by name or index (default: the file's height "
+                        "channel, with a warning where another channel has its name)")
     p.add_argument("--missing-value", type=float, default=None, metavar="V",
                    help="the number that marks missing points in the file (an instrument's "
                         "placeholder such as -999999 or 1e38; nan always counts); write a "
