@@ -1,7 +1,7 @@
 """Effective-medium and contact theory (paper Sect. 2.3, Eq. 5-16).
 
 * ``bruggeman`` (isotropic, Eq. 5-6), ``bruggeman_anisotropic`` (Persson's Eq. 7-8 and
-  the corrected Eq. 9), ``noncontact_decomposition`` (Eq. 10-15), ``local_conductivity``;
+  the corrected Eq. 9), ``noncontact_decomposition`` (Eq. 10-13), ``local_conductivity``;
 * ``closed_form`` (Eq. 16: elastic, adhesive, bearing);
 * ``persson_area``, ``persson_mean_gap``, ``persson_elastic_energy``,
   ``predict_conductance`` (Persson theory from the height spectrum);

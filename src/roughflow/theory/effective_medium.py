@@ -132,7 +132,7 @@ class AnisotropicResult:
 
 @dataclass(frozen=True)
 class NonContact:
-    """Non-contact decomposition of the isotropic solution (Eq. 10-15).
+    """Non-contact decomposition of the isotropic solution (Eq. 10-13).
 
     sigma_0: full Bruggeman conductance (Eq. 5).
     sigma_nc: characteristic non-contact conductivity, from Eq. (13) solved directly.
@@ -328,7 +328,7 @@ def bruggeman_anisotropic(
 
 def noncontact_decomposition(sigma_values: ArrayLike | Medium, *, a_c_star: float,
                              weights: ArrayLike | None = None) -> NonContact:
-    """Split the isotropic solution into contact and non-contact parts (Eq. 10-15).
+    """Split the isotropic solution into contact and non-contact parts (Eq. 10-13).
 
     sigma_nc solves Eq. (13), 1/sigma_nc = <(1 + Da~)/(sigma + sigma_nc Da~)>_nc with
     Da~ = (a_c* - a_c)/(1 - a_c*) and <...>_nc the average over non-contact cells,
