@@ -16,7 +16,7 @@ PACKAGE = Path(roughflow.__file__).resolve().parent
 #: contact and flow solves and writes through io) and the command line.
 LAYERS = (
     {"defaults", "errors", "files", "progress", "units", "resources", "slurm", "wisdom", "fft",
-     "gpu", "citation", "provenance", "reynolds", "_jit"},
+     "gpu", "citation", "provenance", "reynolds", "_jit", "_repr"},
     {"surface", "scan"},
     {"contact"},
     {"accuracy"},

@@ -254,3 +254,45 @@ def test_aggregation_warns_of_unbracketed_searches(tmp_path, caplog):
     with caplog.at_level(logging.WARNING, logger="roughflow.aggregate"):
         aggregate([job], tmp_path / "study2.nc")
     assert "1 of 4 threshold searches" in caplog.text
+
+
+@pytest.mark.parametrize(("points", "shown"), [
+    ((4, 4), "a_c* perimeter-corrected"),
+    ((2, 2), "a_c* raw (cell counts)"),
+    ((2, 4), "a_c* perimeter-corrected on grids of >= 4 points per lambda_s, raw on the others"),
+])
+def test_the_caption_file_says_what_this_runs_data_hold(points, shown):
+    # the captions describe the paper's study; a custom run's size and whether its a_c* are
+    # corrected were nowhere next to the figure (a run at L/lambda_r = 8 and one at 4 could
+    # not be told apart, and at 2 points per lambda_s the "corrected" values are not used)
+    from roughflow.figures import caption_document, data_summary
+
+    ds = study([1.0, 2.0])
+    ds["a_c_star_corrected"] = ds["a_c_star"] - 0.03
+    grid = ("model", "gamma", "hurst", "eps_t", "eps_f")
+    ds["points_per_lambda_s"] = (grid, np.array(points, float).reshape(1, 2, 1, 1, 1))
+    ds["l_over_lambda_r"] = (grid, np.array([8.0, 11.3137]).reshape(1, 2, 1, 1, 1))
+    summary = data_summary(ds)
+    assert summary.startswith("model elastic; gamma 1, 2; H 0.8; eps_f 0.0625; "
+                              "L/lambda_r 8, 11.31; ")
+    assert "; 3 seeds; " in summary and summary.endswith(shown)
+    document = caption_document("threshold_vs_gamma", ds, "the dataset", "figure.png")
+    assert f"Its data: {summary}." in document
+
+
+def test_the_flux_map_names_its_two_colours_outside_the_colour_bar():
+    # contact (black) and cells without flow (white) were in no key: the colour map's low
+    # end is near-black too, so contact and slow flow could not be told apart
+    from matplotlib.figure import Figure
+
+    from roughflow.figures.flux import plot_flux
+    from roughflow.flow import solve
+
+    gap = np.full((16, 16), 0.1)
+    contact = np.zeros((16, 16), bool)
+    contact[4:8, 4:8] = True
+    gap[contact] = 0.0
+    ax = Figure().subplots()
+    plot_flux(solve(gap, axis=0), contact, ax=ax)
+    assert [t.get_text() for t in ax.get_legend().get_texts()] == [
+        "contact", "no flow (isolated pools)"]

@@ -35,7 +35,9 @@ def test_gap_file(tmp_path, capsys):
     gaps = _gap_file(tmp_path / "r.nc")
     out = tmp_path / "t.nc"
     assert main(["theory", str(tmp_path / "r.nc"), "--a-c-star", "0.5", "-o", str(out)]) == 0
-    assert "closed_form" in capsys.readouterr().out
+    printed = capsys.readouterr().out
+    assert "closed_form" in printed
+    assert "Peklenik number of Eq. 7-9: gamma = 2, the surface's (heights)" in printed
     with xr.open_dataset(out) as ds:
         for name in ds.variables:
             assert ds[name].attrs.get("units") and ds[name].attrs.get("long_name"), name
@@ -181,3 +183,14 @@ def test_gap_file_eta_reaches_every_column(tmp_path):
         assert np.all(got["1"][n].values > 0), n
         np.testing.assert_allclose(got["2"][n].values, got["1"][n].values / 2, rtol=1e-12,
                                    err_msg=n)
+
+
+@pytest.mark.parametrize("gamma", [1.0, 2.0])
+def test_persson_says_its_sigma_is_isotropic(gamma, capsys):
+    # Persson's a_c(p), u(p) and Eq. 16 have no direction: for an anisotropic spec the one
+    # sigma column was printed without a word that gamma does not enter it
+    assert main(["theory", "--gamma", str(gamma), "--points-per-lambda-s", "2",
+                 "--pressures", "0.05,0.1"]) == 0
+    printed = capsys.readouterr().out
+    note = f"sigma is isotropic: the surface's Peklenik number gamma = {gamma:g}"
+    assert (note in printed) == (gamma != 1.0)

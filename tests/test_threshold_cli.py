@@ -37,7 +37,7 @@ def test_cli_threshold_bearing_both_axes(surface_file, tmp_path):
         assert ds.attrs["model"] == "bearing"
 
 
-def test_cli_threshold_elastic_one_axis(surface_file, tmp_path):
+def test_cli_threshold_elastic_one_axis(surface_file, tmp_path, capsys):
     s, path = surface_file
     out = tmp_path / "t.nc"
     assert main(["threshold", str(path), "--axis", "y", "--tol", "4e-3", "-o", str(out)]) == 0
@@ -47,6 +47,13 @@ def test_cli_threshold_elastic_one_axis(surface_file, tmp_path):
         assert 0 < hi - lo <= 4e-3
         assert ds.sizes["solve"] == ds.attrs["n_solves"] >= 2
         assert float(ds["p_lo"][0]) < float(ds["p_hi"][0])
+        raw, corrected = float(ds["a_c_star"][0]), float(ds["a_c_star_corrected"][0])
+    # the summary names both values: they differ by a few hundredths on this coarse grid
+    # (2 points per lambda_s), more than the search's tolerance
+    printed = capsys.readouterr().out
+    assert f"a_c* (raw contact area) y {raw:.4f}" in printed
+    assert f"perimeter-corrected y {corrected:.4f}" in printed
+    assert abs(raw - corrected) > 4e-3
 
 
 def test_scouts_are_marked_and_full_solves_meet_the_contact_tol(surface_file, tmp_path):

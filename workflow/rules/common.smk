@@ -20,16 +20,13 @@ def _validate_config(config):
     documentation only (tests/test_defaults.py keeps them equal to roughflow's): missing
     keys are filled by roughflow.scenes.study_defaults, the one source.
     """
-    import jsonschema
     import yaml
 
-    schema = yaml.safe_load(SCHEMA.read_text())
-    error = jsonschema.exceptions.best_match(
-        jsonschema.Draft202012Validator(schema).iter_errors(config)
-    )
-    if error is not None:
-        key = ".".join(str(p) for p in error.absolute_path) or "<top level>"
-        raise WorkflowError(f"invalid config: key {key!r} = {error.instance!r}: {error.message}")
+    from roughflow.scenes.config_file import schema_error
+
+    message = schema_error(config, yaml.safe_load(SCHEMA.read_text()))
+    if message is not None:
+        raise WorkflowError(f"invalid config: {message}")
     validate(config, "../schemas/config.schema.yaml", set_default=False)
 
 

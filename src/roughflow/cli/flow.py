@@ -127,7 +127,7 @@ def _plot(results: dict, contact: np.ndarray):
 
     from roughflow.figures.flux import plot_flux
 
-    fig = Figure(figsize=(5 * len(results), 4.2))
+    fig = Figure(figsize=(5 * len(results), 4.6))
     axes = fig.subplots(1, len(results), squeeze=False)
     for ax, r in zip(axes[0], results.values(), strict=True):
         plot_flux(r, contact, ax=ax)

@@ -186,6 +186,11 @@ def _run_persson(args: argparse.Namespace, src, *, source: str, surface=None) ->
     )
     out = sys.stdout
     out.write(f"# Persson theory + Eq. 16 ({kind}, a_c* = {a_star:g}) from {source}\n")
+    gamma = getattr(getattr(src, "spec", src), "gamma", 1.0)
+    if gamma != 1.0:  # Persson's a_c(p), u(p) and Eq. 16 know no direction
+        out.write(f"# sigma is isotropic: the surface's Peklenik number gamma = {gamma:g} "
+                  "enters only through its spectrum; sigma_x and sigma_y come from the "
+                  "anisotropic Bruggeman forms of a gap file (roughflow theory GAP.nc)\n")
     out.write(f"{'pressure':>12} {'a_c':>10} {'mean_gap':>12} {'sigma':>12}\n")
     for p_, a, u, sg in zip(pred.pressure, pred.area_fraction, pred.mean_gap, pred.sigma,
                              strict=True):
@@ -328,8 +333,9 @@ def _run_gap(args: argparse.Namespace, ds) -> None:
     cols.update(reynolds)
     out = sys.stdout
     out.write(f"# Bruggeman (a_c* = {a_star}, D = {effective_dimension(a_star):.4f}) and "
-              f"Eq. 16 ({kind}); "
-              f"Peklenik: {args.peklenik}\n")
+              f"Eq. 16 ({kind}); Peklenik number of Eq. 7-9: "
+              + (f"gamma = {gamma:g}, the surface's (heights)" if args.peklenik == "height"
+                 else "each gap field's, from its conductivity's autocorrelation") + "\n")
     heads = ("a_c", "mean_gap", "sigma_iso", "sx_corr", "sy_corr", "sx_pers", "sy_pers",
              "closed_form")
     keys = ("area_fraction", "mean_gap", "sigma_bruggeman", "sigma_x_corrected",

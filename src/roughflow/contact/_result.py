@@ -6,6 +6,8 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from roughflow._repr import summary_repr
+
 
 @dataclass(frozen=True, eq=False)
 class SolverOutput:
@@ -17,6 +19,8 @@ class SolverOutput:
     iterations, residual, converged: the method's diagnostics (residual in units of the
     rms height, see ``roughflow.contact.solve``).
     """
+
+    __repr__ = summary_repr
 
     pressure: np.ndarray
     gap: np.ndarray
@@ -57,6 +61,8 @@ class ContactResult:
     Warm starts (``solve(..., init=result)``) use ``contact_pressure`` (cg) or
     ``heights + gap`` (gfmd), so any result on the same surface can seed any method.
     """
+
+    __repr__ = summary_repr
 
     gap: np.ndarray
     contact_pressure: np.ndarray

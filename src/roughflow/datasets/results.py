@@ -13,7 +13,7 @@ from typing import TYPE_CHECKING
 import numpy as np
 import xarray as xr
 
-from roughflow.defaults import AXIS_NAMES, PERSSON_ENERGY_FACTOR
+from roughflow.defaults import AXIS_NAMES, CORRECTION_MIN_POINTS, PERSSON_ENERGY_FACTOR
 from roughflow.errors import InputError, check_axis
 
 from .units import (
@@ -160,7 +160,10 @@ THRESHOLD_FIELDS = {
                                           "area (first-order grid bias removed, elastic "
                                           "model; the bearing model's cell count is unbiased: "
                                           "= a_c*; adhesive: not calibrated, NaN; "
-                                          "docs/accuracy.md)"),
+                                          "calibrated on grids of at least "
+                                          f"{CORRECTION_MIN_POINTS:g} points per lambda_s, "
+                                          "over-shoots on coarser ones, where the figures "
+                                          "take the raw a_c*; docs/accuracy.md)"),
     "a_lo": (DIMENSIONLESS, "largest contact area at which the fluid still percolates"),
     "a_hi": (DIMENSIONLESS, "smallest contact area at which the fluid no longer percolates"),
     "p_lo": (PRESSURE_UNITS, "pressure of a_lo"),

@@ -23,7 +23,7 @@ if TYPE_CHECKING:
 
     import xarray as xr
 
-__all__ = ["module", "caption", "make_figure", "caption_document"]
+__all__ = ["module", "caption", "make_figure", "caption_document", "data_summary"]
 
 
 def module(study: str) -> ModuleType:
@@ -83,6 +83,9 @@ def caption_document(study: str, dataset: xr.Dataset, source: str, image: str) -
     lines and area scales mean and where the figure departs from the paper."""
     lines = [f"# {study}", "", f"![{study}]({image})", "", caption(study), "",
              f"Drawn from {source}."]
+    data = data_summary(dataset)
+    if data:  # the caption describes the paper's study; this says what this run holds
+        lines.append(f"Its data: {data}.")
     block = dataset.attrs.get("study_config")
     if block:
         lines.append(f"Its study block (config): `{block}`.")
@@ -90,3 +93,46 @@ def caption_document(study: str, dataset: xr.Dataset, source: str, image: str) -
     if commit:
         lines.append(f"roughflow commit of the dataset: {commit}.")
     return "\n".join(lines) + "\n"
+
+
+#: The sweep parameters a caption file states, as (dataset name, label).
+_PARAMETERS = (("model", "model"), ("gamma", "gamma"), ("hurst", "H"), ("eps_f", "eps_f"),
+               ("l_over_lambda_r", "L/lambda_r"),
+               ("points_per_lambda_s", "points per lambda_s"))
+
+
+def data_summary(dataset: xr.Dataset) -> str:
+    """The values of the sweep parameters a study dataset holds, its number of seeds, and
+    which a_c* a threshold study's figure shows (perimeter-corrected or raw, by grid)."""
+    import numpy as np
+
+    from roughflow.defaults import CORRECTION_MIN_POINTS
+
+    parts = []
+    for name, label in _PARAMETERS:
+        if name not in dataset.variables:
+            continue
+        values = np.asarray(dataset[name].values).ravel()
+        if values.dtype.kind == "f":
+            values = values[np.isfinite(values)]
+            shown = [f"{v:.4g}" for v in np.unique(values)]
+        else:
+            shown = [str(v) for v in dict.fromkeys(values.tolist())]
+        if shown:
+            parts.append(f"{label} {', '.join(shown)}")
+    if "seed" in dataset.sizes:
+        parts.append(f"{dataset.sizes['seed']} seed{'s' if dataset.sizes['seed'] != 1 else ''}")
+    if "a_c_star" in dataset:
+        from roughflow.datasets.sweep import corrected_taken
+
+        taken = corrected_taken(dataset)  # over a_c_star's dims, like notnull() below
+        counted = (np.zeros(0, bool) if taken is None
+                   else taken.values[dataset["a_c_star"].notnull().values])
+        if not counted.any():
+            parts.append("a_c* raw (cell counts)")
+        elif counted.all():
+            parts.append("a_c* perimeter-corrected")
+        else:
+            parts.append(f"a_c* perimeter-corrected on grids of >= {CORRECTION_MIN_POINTS:g} "
+                         "points per lambda_s, raw on the others")
+    return "; ".join(parts)

@@ -22,6 +22,7 @@ from typing import TYPE_CHECKING, NamedTuple
 import numpy as np
 import scipy.sparse as sp
 
+from roughflow._repr import summary_repr
 from roughflow.defaults import (
     AXIS_NAMES,
     DROPPED_FLOW_RESOLVE,
@@ -112,6 +113,8 @@ class FlowResult:
         :mod:`roughflow.flow.lump`, docs/flow.md "Unresolved gaps").
     """
 
+    __repr__ = summary_repr
+
     sigma: float
     pressure: np.ndarray
     flux_x: np.ndarray
@@ -145,6 +148,8 @@ class CellOrdering:
     order, in the frame where the flow runs along axis 0 (C order; -1: not a flowing cell;
     int32 below 2^31 cells, so that a 2048 x 4096 ladder holds 34 MB per axis for it);
     flops: the floating point operations of the factorisation it came from."""
+
+    __repr__ = summary_repr
 
     axis: int
     shape: tuple[int, int]

@@ -13,6 +13,7 @@ from typing import TYPE_CHECKING
 
 import numpy as np
 
+from roughflow._repr import summary_repr
 from roughflow.errors import InputError, require_mask
 
 from .labels import label
@@ -80,6 +81,8 @@ def fisher_exponent(sizes: ArrayLike, *, s_min: float = 4.0, s_max: float | None
 @dataclass(frozen=True)
 class ClusterStats:
     """Cluster statistics of one contact mask (sizes in grid cells, largest first)."""
+
+    __repr__ = summary_repr
 
     area_fraction: float
     n_patches: int

@@ -48,6 +48,7 @@ from scipy.integrate import cumulative_simpson
 from scipy.special import erf, exp1
 
 from roughflow import fft
+from roughflow._repr import summary_repr
 from roughflow.defaults import DEFAULT_MODEL, PERSSON_ENERGY_FACTOR
 from roughflow.errors import InputError, require_field, require_positive
 from roughflow.surface import (
@@ -81,6 +82,8 @@ class PerssonPrediction:
 
     pressure (E*), area_fraction, mean_gap (L), sigma (L^3/eta), kind, a_c_star.
     """
+
+    __repr__ = summary_repr
 
     pressure: np.ndarray
     area_fraction: np.ndarray
