@@ -136,3 +136,32 @@ def test_long_options_are_never_taken_by_a_prefix(tmp_path, capsys):
     assert exc.value.code == 2
     assert "unrecognized arguments: --surface-energy" in capsys.readouterr().err
     assert not (tmp_path / "x.nc").exists()
+
+
+@pytest.mark.parametrize(("argv", "usage"), [
+    (["leak", "S", "--modulus", "1GPa", "--pressures", "1MPa:10MPa:2", "--fluid-pressure",
+      "1kPa", "--viscosity", "1mPa.s", "--seal-width", "2mm", "--seal-length", "6mm",
+      "--no-such"], "usage: roughflow leak "),
+    (["contact", "S", "--pressure", "0.1", "--bogus", "1"], "usage: roughflow contact "),
+    (["scene", "threshold", "--bogus"], "usage: roughflow scene threshold "),
+])
+def test_an_unknown_option_gets_its_commands_usage(files, argv, usage, capsys):
+    # argparse reported an unknown option of a subcommand with the main parser's usage
+    # ("roughflow [-h] [--version] ... COMMAND ..."), which lists no option of the command
+    argv = [files["surface"] if a == "S" else a for a in argv]
+    with pytest.raises(SystemExit) as stop:
+        main([*argv, "-o", _out(files, "unknown.nc")])
+    err = capsys.readouterr().err
+    assert stop.value.code == 2 and err.startswith(usage)
+    assert "error: unrecognized arguments: " in err
+
+
+@pytest.mark.parametrize(("argv", "says"), [
+    (["--model", "elastic"], "--model elastic needs --pressure"),
+    (["--area-fraction", "0.3"], "--model elastic needs --pressure"),
+    (["--model", "bearing"], "--model bearing needs --area-fraction"),
+])
+def test_a_missing_load_is_named_by_its_option(files, argv, says, capsys):
+    # the library's words reached the command line: "the elastic model needs pressure="
+    err = refused(["contact", files["surface"], *argv, "-o", _out(files)], capsys, says)
+    assert "pressure=" not in err and "area_fraction=" not in err

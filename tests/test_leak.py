@@ -412,3 +412,18 @@ def test_cli_leak_skips_the_sealing_search_on_request(imported, tmp_path, capsys
         assert ds.attrs["sealing_searched"] == 0 and "threshold_tol" not in ds.attrs
         assert np.isnan(ds["sealing_pressure"].values).all()
         assert ds["leak_rate"].sizes["pressure"] == 4
+
+
+def test_the_mean_gap_is_given_in_metres_too(leak_table_ds):
+    """The gap in nm is the first thing a seal engineer checks; it was only in units of L,
+    to be converted through units.registry by hand."""
+    from roughflow.cli.leak import format_table
+
+    ds = leak_table_ds
+    np.testing.assert_allclose(ds["mean_gap_si"], ds["mean_gap"] * ds.attrs["ref_length_m"],
+                               rtol=1e-15)
+    assert ds["mean_gap_si"].attrs["units"] == "m"
+    rows = format_table(ds).splitlines()
+    assert rows[1].split()[:4] == ["p", "[Pa]", "a_c", "gap"] and rows[2].split()[0] == "m"
+    first = float(ds["mean_gap_si"].values[0, 0])
+    assert rows[3].split()[2] == f"{first:.3e}"

@@ -22,7 +22,8 @@ def test_results_show_scalars_and_the_shapes_of_their_arrays():
     assert f"sigma={f.sigma!r}" in repr(f) and "flux_x=array(float64, 64 x 64)" in repr(f)
     stats = cluster_stats(r.contact)
     assert f"patch_sizes=array(int64, {stats.n_patches})" in repr(stats)
-    for shown in (text, repr(f), repr(stats)):
+    assert repr(s).startswith("Surface(heights=array(float64, 64 x 64), lx=1.0, ly=1.0, ")
+    for shown in (text, repr(f), repr(stats), repr(s)):
         assert len(shown) < 1000
 
 

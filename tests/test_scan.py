@@ -601,8 +601,13 @@ def test_a_channel_that_is_not_a_height_map_is_named(monkeypatch, tmp_path):
     with pytest.raises(InputError, match="channel 'Phase' is not a height map.*0: Height"):
         read_scan(path, channel="Phase")
     # the file's size is quoted as plain numbers, not numpy's repr
-    with pytest.raises(InputError, match=r"already gives its size 500 x 500 nm"):
+    with pytest.raises(InputError, match=r"already gives its size 500 x 500 nm: drop "
+                                         r"size='1um' \(CLI --size\)"):
         read_scan(path, size="1um")
+    # the option to drop is named for the command line too, and only the one given
+    with pytest.raises(InputError, match=r"already gives its unit \(nm\): drop "
+                                         r"height_unit='um' \(CLI --height-unit\)$"):
+        read_scan(path, height_unit="um")
 
 
 def test_channel_label_says_which_of_two_same_named_channels():

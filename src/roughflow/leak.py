@@ -22,6 +22,7 @@ from typing import TYPE_CHECKING
 import numpy as np
 
 from roughflow import flow
+from roughflow._repr import summary_repr
 from roughflow.boundary import Embedding, embed
 from roughflow.contact import ContactResult, check_contact_tol, check_pressure_scale, solve
 from roughflow.defaults import (
@@ -76,6 +77,8 @@ class LeakCurve:
         curve built by hand); 0 marks a row whose window holds no contact
         (:func:`empty_window_pressures`).
     """
+
+    __repr__ = summary_repr
 
     pressure: np.ndarray
     area_fraction: np.ndarray

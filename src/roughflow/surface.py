@@ -28,6 +28,7 @@ from typing import TYPE_CHECKING
 import numpy as np
 
 from roughflow import defaults, fft
+from roughflow._repr import summary_repr
 from roughflow.defaults import ROLLOFF_FORMS
 from roughflow.errors import (
     MAX_SEED,
@@ -236,6 +237,8 @@ class Surface:
     ``heights`` is held as a read-only view, so the surface cannot be changed through it
     (a prepared solver setup or a recorded gbar would then describe another surface). The
     constructor does not copy the array it is given; :meth:`from_array` does."""
+
+    __repr__ = summary_repr
 
     heights: np.ndarray
     lx: float

@@ -91,6 +91,17 @@ def _add_verbosity(parser: argparse.ArgumentParser, *, default: bool) -> None:
                    **({"default": False} if default else kw))
 
 
+def _innermost(parser: argparse.ArgumentParser,
+               args: argparse.Namespace) -> argparse.ArgumentParser:
+    """The parser of the (sub)command that ``args`` chose (``scene ladder``: ladder's)."""
+    for action in parser._actions:
+        if isinstance(action, argparse._SubParsersAction):
+            chosen = action.choices.get(getattr(args, action.dest, None))
+            if chosen is not None:
+                return _innermost(chosen, args)
+    return parser
+
+
 def _subparsers(parser: argparse.ArgumentParser):
     for action in parser._actions:
         if isinstance(action, argparse._SubParsersAction):
@@ -165,7 +176,9 @@ def main(argv: list[str] | None = None) -> int:
     argv = sys.argv[1:] if argv is None else list(argv)
     provenance = Provenance.for_command(argv)
     parser = build_parser()
-    args = parser.parse_args(argv)
+    args, unknown = parser.parse_known_args(argv)
+    if unknown:  # said by the subcommand's parser, with its usage, not the main one's
+        _innermost(parser, args).error(f"unrecognized arguments: {' '.join(unknown)}")
     if args.quiet and args.verbose:  # before or after the subcommand alike
         parser.exit(2, f"roughflow {args.command}: error: -q (errors only) contradicts "
                        f"-{'v' * args.verbose} (progress)\n")

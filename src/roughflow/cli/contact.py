@@ -111,10 +111,17 @@ def run(args: argparse.Namespace) -> None:
 
 
 def _check_model_options(args: argparse.Namespace) -> None:
-    """Refuse options that the chosen model does not use (they would be ignored)."""
+    """Refuse options that the chosen model does not use (they would be ignored), and a
+    missing load in the command's words (the library's says ``pressure=``)."""
     if args.model != "bearing":
+        if args.pressure is None:
+            raise InputError(f"--model {args.model} needs --pressure (the mean pressure in "
+                             "E* gbar); --area-fraction is the bearing model's")
         return
     if args.pressure is not None:
         raise InputError("--model bearing takes --area-fraction, not --pressure")
+    if args.area_fraction is None:
+        raise InputError("--model bearing needs --area-fraction (the contact area it cuts "
+                         "the heights at)")
     refuse_given(args, ("--method", "--tol", "--max-iter"), "to --model bearing: it has no "
                  "solver (it cuts the heights at the level of --area-fraction)")

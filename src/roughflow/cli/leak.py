@@ -127,17 +127,17 @@ def format_table(ds: xr.Dataset) -> str:
              f"{ds.attrs['ref_pressure_Pa']:.4g} Pa, dp = {ds.attrs['fluid_pressure_Pa']:.4g} "
              f"Pa, eta = {ds.attrs['ref_viscosity_Pa_s']:.4g} Pa s, seal w = "
              f"{ds.attrs['seal_width_m']:.4g} m, l = {ds.attrs['seal_length_m']:.4g} m",
-             f"{'p [Pa]':>10} {'a_c':>9}  {'perc x':>6} {'perc y':>6} {'sigma_x':>10} "
-             f"{'sigma_y':>10} {'Q_x':>10} {'Q_y':>10}",
-             f"{'':>10} {'':>9}  {'':>6} {'':>6} {'m^3/(Pa s)':>10} {'m^3/(Pa s)':>10} "
-             f"{'m^3/s':>10} {'m^3/s':>10}"]
+             f"{'p [Pa]':>10} {'a_c':>9}  {'gap':>9} {'perc x':>6} {'perc y':>6} "
+             f"{'sigma_x':>10} {'sigma_y':>10} {'Q_x':>10} {'Q_y':>10}",
+             f"{'':>10} {'':>9}  {'m':>9} {'':>6} {'':>6} {'m^3/(Pa s)':>10} "
+             f"{'m^3/(Pa s)':>10} {'m^3/s':>10} {'m^3/s':>10}"]
     empty = _empty_rows(d)
     for i in range(d.sizes["pressure"]):
         r = d.isel(pressure=i)
         c, q, pc = r["conductance"].values, r["leak_rate"].values, r["percolating"].values
         # 4 significant digits, not decimals: a_c = 1e-5 and exactly 0 read apart
         lines.append(f"{float(r['pressure']):10.4g} {float(r['area_fraction']):9.4g}"
-                     f"{'*' if empty[i] else ' '} "
+                     f"{'*' if empty[i] else ' '} {_mean_gap_m(ds, r):9.3e} "
                      f"{'yes' if pc[0] else 'no':>6} {'yes' if pc[1] else 'no':>6} "
                      f"{c[0]:10.3e} {c[1]:10.3e} {q[0]:10.3e} {q[1]:10.3e}")
     lines += _sealing_lines(ds, d)
@@ -153,6 +153,14 @@ def format_table(ds: xr.Dataset) -> str:
     if msg != "none":
         lines.append(f"note: {msg}")
     return "\n".join(lines)
+
+
+def _mean_gap_m(ds: xr.Dataset, row: xr.Dataset) -> float:
+    """The mean gap of a row in metres (files written before ``mean_gap_si``: from the
+    reference length)."""
+    if "mean_gap_si" in row:
+        return float(row["mean_gap_si"])
+    return float(row["mean_gap"]) * float(ds.attrs["ref_length_m"])
 
 
 def _empty_rows(d: xr.Dataset):

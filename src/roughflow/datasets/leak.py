@@ -103,6 +103,9 @@ def leak_dataset(curve: LeakCurve, surface: Surface, *, scales: Scales, fluid_pr
             "units": DIMENSIONLESS, "long_name": "relative contact area a_c"}),
         "mean_gap": (sp, curve.mean_gap[None], {
             "units": LENGTH_UNITS, "long_name": "mean interfacial gap"}),
+        "mean_gap_si": (sp, scales.length_to_si(curve.mean_gap)[None], {
+            "units": METRES, "long_name": "mean interfacial gap in metres (mean_gap times "
+                                          "the reference length)"}),
         "percolating": _int(spa, curve.percolating[None], {
             "units": DIMENSIONLESS, "long_name": "1 if the fluid spans the analysed window "
                                                  "along axis (the seal leaks)",

@@ -606,13 +606,15 @@ def read_scan(path: str | os.PathLike, *,
             _check_text_scan(path, ch)
         file_unit, file_size = _file_unit_and_size(reader, ch, path)
         if file_unit is not None and (unit is not None or height_unit is not None):
+            given = [f"{k}={v!r} (CLI --{k.replace('_', '-')})"
+                     for k, v in (("unit", unit), ("height_unit", height_unit)) if v is not None]
             raise InputError(f"{str(path)!r} already gives its unit ({file_unit}): drop "
-                             f"unit={unit!r} / height_unit={height_unit!r}")
+                             f"{' and '.join(given)}")
         if file_size is not None and size is not None:
             given_in = file_unit or _header_size_unit(ch, path)
             raise InputError(f"{str(path)!r} already gives its size {file_size[0]:g} x "
                              f"{file_size[1]:g}{' ' + given_in if given_in else ''}: drop "
-                             f"size={size!r}")
+                             f"size={size!r} (CLI --size)")
         header_unit = _header_size_unit(ch, path) if file_unit is None and file_size else None
         if header_unit is not None:
             # a text header that gives the size with its unit ("Width: 20 um") but not the
