@@ -64,3 +64,11 @@ def test_a_long_value_is_shortened():
     message = schema_error(config, SCHEMA)
     assert "key 'studies.threshold_vs_gamma.gamma' = {'a': [0, 1, 2" in message
     assert " ...:" in message and len(message) < 3 * SHOWN_VALUE + 200
+
+
+def test_a_value_given_twice_in_a_sweep_list_is_refused():
+    # [1, 3, 3] was planned as [1, 3] without a word, likely a typo for another value
+    config = _with(lambda c: c["studies"]["threshold_vs_gamma"].update(gamma=[1, 3, 3]))
+    message = schema_error(config, SCHEMA)
+    assert message.startswith("key 'studies.threshold_vs_gamma.gamma' = [1, 3, 3]: ")
+    assert "non-unique" in message

@@ -58,8 +58,7 @@ _LADDER = {**_SMALL, "area_fraction": [0.2, 0.4]}
     ("threshold_vs_size", {**_SMALL, "hurst": [0.5, 0.8]}, "one hurst"),
     ("threshold_vs_hurst", {**_SMALL, "eps_f": [0.25, 0.125]}, "one eps_f"),
     ("threshold_vs_gamma", {**_SMALL, "hurst": [0.5, 0.8]}, "one hurst"),
-    ("flow_isotropic", {**_LADDER, "hurst": [0.3, 0.8]}, "one hurst for model elastic"),
-    ("flow_anisotropic", {**_LADDER, "gamma": [2, 4]}, "one gamma for model elastic"),
+    # (the flow studies draw a row of panels per setting: tests/test_flow_sweeps.py)
     # the gamma and H figures took a per-seed maximum over several sizes
     ("threshold_vs_gamma", {**_SMALL, "l_over_lambda_r": [4, 8]}, "one system size"),
     ("threshold_vs_hurst", {**_SMALL, "l_over_lambda_r": [4, 8]}, "one system size"),

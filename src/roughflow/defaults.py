@@ -258,13 +258,13 @@ FLOW_STUDIES = ("flow_isotropic", "flow_anisotropic")
 MEASURED_STUDY = "measured"
 #: Every study, one figure each (channels: paper Fig. 1).
 STUDIES = ("channels", *THRESHOLD_STUDIES, *FLOW_STUDIES, MEASURED_STUDY)
-#: Parameters of which a study's figure (and fit) shows one value, per model for the flow
-#: studies; and the studies whose figure shows one system size per point. The figures refuse
-#: other datasets, and the planner (roughflow.scenes.expand) other configs, before any job.
+#: Parameters of which a threshold study's figure (and fit) shows one value; and the studies
+#: whose figure shows one system size per point. The figures refuse other datasets, and the
+#: planner (roughflow.scenes.expand) other configs, before any job. The flow studies draw a
+#: row of panels per setting instead (roughflow.scenes.expand.flow_rows).
 STUDY_ONE_VALUE = {"threshold_vs_gamma": ("hurst",),
                    "threshold_vs_size": ("model", "hurst", "eps_f"),
-                   "threshold_vs_hurst": ("model", "eps_f"),
-                   **{s: ("gamma", "hurst", "eps_t", "eps_f") for s in FLOW_STUDIES}}
+                   "threshold_vs_hurst": ("model", "eps_f")}
 STUDY_ONE_SIZE = ("threshold_vs_gamma", "threshold_vs_hurst")
 #: Values a study's figure requires (the isotropic flow figure averages x and y), checked
 #: by the planner and the figure alike; the study that draws other values.

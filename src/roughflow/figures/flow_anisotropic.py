@@ -8,7 +8,7 @@ from matplotlib.ticker import LogFormatter
 
 from roughflow.datasets.sweep import area_values
 
-from ._flow import curve, ladder, mark_edge, points, sealed, sigma_ref
+from ._flow import Row, curve, grid, mark_edge, not_run, points, rows, sealed, sigma_ref, tag
 from ._style import EASY, HARD
 from .captions import CAPTIONS
 
@@ -19,12 +19,24 @@ MODEL_MARKER = {"elastic": "o", "bearing": "s", "adhesive": "^"}
 def draw(ds: xr.Dataset, fit: xr.Dataset | None = None) -> Figure:
     models = [m for m in ("elastic", "bearing", "adhesive") if m in ds["model"].values]
     n = len(models) + 1
-    fig = Figure(figsize=(4.6 * n, 4.2), layout="constrained")
-    axes = fig.subplots(1, n)
-    gamma = float(ds["gamma"].values[0])
+    table = rows(ds, models)
+    fig = Figure(figsize=(4.6 * n, 4.2 * len(table)), layout="constrained")
+    for i, (row, axes) in enumerate(zip(table, grid(fig, table, n), strict=True)):
+        _row(row, axes, models, i, len(table))
+    return fig
+
+
+def _row(row: Row, axes: list, models: list[str], i: int, nrows: int) -> None:
+    """One row: a panel per model (sigma_x, sigma_y) and the ratio panel."""
     rax = axes[-1]
-    for ax, model, tag in zip(axes[:-1], models, "abc", strict=False):
-        sub = ladder(ds, model)
+    gammas = []
+    for j, (ax, model) in enumerate(zip(axes[:-1], models, strict=True)):
+        if model not in row.ladders:
+            not_run(ax, model)
+            continue
+        sub = row.ladders[model]
+        gamma = float(sub["gamma"])
+        gammas.append(gamma)
         ref = sigma_ref(sub)
         a = area_values(sub)
         emt = sub["sigma_emt"]
@@ -43,7 +55,7 @@ def draw(ds: xr.Dataset, fit: xr.Dataset | None = None) -> Figure:
         ax.set_yscale("log")
         ax.set_xlabel("relative contact area a_c")
         ax.set_ylabel("sigma / sigma_ref")
-        ax.set_title(f"({tag}) {model}, gamma = {gamma:g}", fontsize=10)
+        ax.set_title(f"{tag(j, i, nrows)} {model}, gamma = {gamma:g}", fontsize=10)
         ax.grid(alpha=0.3, which="both")
         ax.legend(fontsize=6.5)
         # ratio panel
@@ -60,7 +72,11 @@ def draw(ds: xr.Dataset, fit: xr.Dataset | None = None) -> Figure:
         x, y = curve(a, ex / ey.where(ey > 0))
         rax.plot(x, y, "-", lw=1, label=f"Bruggeman Eq. 9, {model}",
                  color="tab:blue" if model == "elastic" else "tab:orange")
-    rax.axhline(gamma**2, color="gray", ls=":", label="gamma^2")
+    # the limit chi -> gamma^2 at a_c -> 0; models at different gammas: one line each
+    shown = sorted(set(gammas))
+    for gamma in shown:
+        rax.axhline(gamma**2, color="gray", ls=":",
+                    label="gamma^2" if len(shown) == 1 else f"gamma^2, gamma = {gamma:g}")
     rax.set_yscale("log")
     # chi spans about one decade, where matplotlib labels the minor ticks too: plain
     # numbers instead of "2 x 10^0"
@@ -68,7 +84,6 @@ def draw(ds: xr.Dataset, fit: xr.Dataset | None = None) -> Figure:
     rax.yaxis.set_minor_formatter(LogFormatter())
     rax.set_xlabel("relative contact area a_c")
     rax.set_ylabel("chi = sigma_x / sigma_y")
-    rax.set_title(f"({'abcd'[n - 1]}) conductance ratio", fontsize=10)
+    rax.set_title(f"{tag(len(models), i, nrows)} conductance ratio", fontsize=10)
     rax.grid(alpha=0.3, which="both")
     rax.legend(fontsize=6.5)
-    return fig

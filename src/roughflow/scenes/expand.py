@@ -231,24 +231,76 @@ def _check_one_series(name: str, jobs) -> None:
                                  f"per point, {shown} has {len(found)} (eps_t "
                                  f"{', '.join(f'{e:g}' for e in sorted(found))}); "
                                  "threshold_vs_size draws the sizes")
+    if name in FLOW_STUDIES:  # one row of panels per setting (flow_rows), up to a limit
+        combos: dict[str, set[tuple]] = {}
+        for job in jobs:
+            combos.setdefault(job.model, set()).add(flow_combo(job))
+        params, rows = flow_rows(combos)
+        if len(rows) > FLOW_FIGURE_MAX_ROWS:
+            raise InputError(f"config studies.{name}: its figure draws one row of panels per "
+                             f"combination of {flow_row_names(params)}, at most "
+                             f"{FLOW_FIGURE_MAX_ROWS}; the study has {len(rows)}: sweep fewer "
+                             "values, or split the sweep over several configs (each with its "
+                             "own results folder)")
+        return
     dims = STUDY_ONE_VALUE.get(name)
     if dims is None:
         return
-    per_model = name in FLOW_STUDIES
-    seen: dict[str, dict[str, set]] = {}
+    seen: dict[str, set] = {}
     for job in jobs:
         key = dict(zip(PARAM_DIMS, job.key, strict=True))
-        values = seen.setdefault(key["model"] if per_model else "", {})
         for dim in dims:
-            values.setdefault(dim, set()).add(key[dim])
-    for model, values in seen.items():
-        for dim, found in values.items():
-            if len(found) > 1:
-                where = f" for model {model}" if per_model else ""
-                shown = ", ".join(f"{v:g}" if isinstance(v, float) else str(v)
-                                  for v in sorted(found, key=str))
-                raise InputError(f"config studies.{name}: its figure shows one {dim}"
-                                 f"{where}, the study has {len(found)}: {shown}")
+            seen.setdefault(dim, set()).add(key[dim])
+    for dim, found in seen.items():
+        if len(found) > 1:
+            shown = ", ".join(f"{v:g}" if isinstance(v, float) else str(v)
+                              for v in sorted(found, key=str))
+            raise InputError(f"config studies.{name}: its figure shows one {dim}, the study "
+                             f"has {len(found)}: {shown}")
+
+
+#: The sweep parameters of the flow figures' rows, as the config names them (the size as
+#: L / lambda_r, not the dataset's dimension eps_t, which also moves with gamma), and their
+#: labels in the figures' row titles and in messages.
+FLOW_ROW_PARAMS = ("gamma", "hurst", "l_over_lambda_r", "eps_f")
+FLOW_ROW_LABELS = ("gamma", "H", "L/lambda_r", "eps_f")
+#: The most rows of panels a flow figure draws (4.2 inches each).
+FLOW_FIGURE_MAX_ROWS = 16
+
+
+def flow_row_names(params: tuple[int, ...]) -> str:
+    """``gamma, H and eps_f``: the labels of the parameters (indices into
+    :data:`FLOW_ROW_PARAMS`) that rows differ in, for messages."""
+    names = [FLOW_ROW_LABELS[i] for i in params]
+    return " and ".join([", ".join(names[:-1]), names[-1]] if len(names) > 1 else names)
+
+
+def flow_combo(job: LadderJob) -> tuple[float, float, float, float]:
+    """The :data:`FLOW_ROW_PARAMS` of a ladder job, rounded as its dataset stores them."""
+    from roughflow.datasets.sweep import rnd
+
+    p = job.surface
+    return (rnd(p.gamma), rnd(p.hurst), rnd(p.size), rnd(p.eps_f))
+
+
+def flow_rows(combos: dict[str, Iterable[tuple]]) -> tuple[tuple[int, ...], list[tuple]]:
+    """The rows of a flow figure from the settings (values of :data:`FLOW_ROW_PARAMS`) that
+    each model ran: (the indices of the parameters the rows differ in, the rows' values of
+    them, sorted).
+
+    A parameter sets the rows where some model ran several values of it. One that each model
+    runs at a single value, even a different one per model (the bearing model on a smaller
+    cell, as in config/test.yaml), sets none: every row then holds each model's panel, as
+    the figures did before they drew sweeps. A row shows each model at its setting with
+    the row's values; a model that did not run them leaves its panel empty. With no
+    parameter that sets rows there is one row, ``[()]``: the paper's figure. The planner
+    (:func:`expand_study`) and the figures (:mod:`roughflow.figures._flow`) share this rule.
+    """
+    combos = {model: set(found) for model, found in combos.items()}
+    params = tuple(i for i in range(len(FLOW_ROW_PARAMS))
+                   if any(len({c[i] for c in found}) > 1 for found in combos.values()))
+    rows = sorted({tuple(c[i] for i in params) for found in combos.values() for c in found})
+    return params, rows or [()]
 
 
 def _check_keys_apply(name: str, block: dict) -> None:
