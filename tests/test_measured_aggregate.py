@@ -35,10 +35,11 @@ def _threshold(axis: int, p_lo: float, p_hi: float) -> Threshold:
 
 
 def leak_file(name: str, pressures_pa, *, boundary: str = "window",
-              length: float = 1e-5, source: str = "scan.opd") -> xr.Dataset:
+              length: float = 1e-5, source: str = "scan.opd",
+              modulus: float = MODULUS) -> xr.Dataset:
     """A one-scan leak dataset of a 16 x 16 'scan' at ``pressures_pa`` (Pa), built by
     :func:`roughflow.datasets.leak_dataset` from a synthetic curve."""
-    p = np.asarray(pressures_pa, dtype=float) / MODULUS
+    p = np.asarray(pressures_pa, dtype=float) / modulus
     n = p.size
     area = np.linspace(0.1, 0.3, n)
     sigma = np.outer(np.linspace(2e-3, 1e-3, n), [1.0, 0.8])
@@ -56,7 +57,7 @@ def leak_file(name: str, pressures_pa, *, boundary: str = "window",
                     crop="0:16,0:16")
     surface = Surface(heights=np.zeros((16, 16)), lx=1.0, ly=1.0, scan=info)
     return leak_dataset(curve, surface,
-                        scales=Scales(length=length, modulus=MODULUS, viscosity=1e-3),
+                        scales=Scales(length=length, modulus=modulus, viscosity=1e-3),
                         fluid_pressure=1e6, seal_width=2e-3, seal_length=60e-3, name=name)
 
 
@@ -212,3 +213,25 @@ def test_scans_are_sorted_by_name_whatever_the_order_of_the_files(tmp_path):
     ds = _study(tmp_path, {"B": b, "A": a})  # files listed b first
     assert ds["scan"].values.tolist() == ["a", "b"]
     assert ds["length_scale"].values.tolist() == [1e-5, 2e-5]
+
+
+def test_the_legend_names_each_scans_modulus_where_they_differ(tmp_path):
+    # a study of faces of different materials (scan entries may set their own modulus):
+    # the figure said nothing of which face was the stiffer one
+    ds = _study(tmp_path, {"A": leak_file("steel", [1e7, 1e8]),
+                           "B": leak_file("sic", [1e7, 1e8], modulus=400e9)})
+    fig = measured.draw(ds)
+    try:
+        labels = [t.get_text() for t in fig.legends[0].get_texts()]
+        assert "sic (E* = 400 GPa)" in labels and "steel (E* = 200 GPa)" in labels
+    finally:
+        plt.close(fig)
+    other = tmp_path / "same"
+    other.mkdir()
+    same = _study(other, {"A": leak_file("steel", [1e7, 1e8]),
+                          "B": leak_file("sic", [1e7, 1e8])})
+    fig = measured.draw(same)
+    try:
+        assert not any("E* =" in t.get_text() for t in fig.legends[0].get_texts())
+    finally:
+        plt.close(fig)

@@ -376,3 +376,30 @@ def test_a_cluster_run_plans_against_what_its_partition_allows(tmp_path, monkeyp
     moved = dry_run(wd, *cluster, "--set-resources", "scene:slurm_partition=big")
     assert moved.returncode == 0, (moved.stdout + moved.stderr)[-2000:]
     assert 935 in _resources(moved.stdout, "mem_mb") and "ask for more time" not in moved.stderr
+
+
+def test_each_scan_of_the_measured_study_may_have_its_own_material(tmp_path):
+    # faces of different materials (steel against SiC) took one config each: the scan
+    # entries refused modulus, viscosity, pressures and boundary, which the study sets
+    wd = copy_workflow(tmp_path)
+    write_case(wd, studies=("measured",))
+    cfg = yaml.safe_load((wd / "config" / "case.yaml").read_text())
+    study = cfg["studies"]["measured"]
+    first = study["scans"][0]
+    study["scans"] = [first, {**first, "name": "sic", "modulus": "400GPa",
+                              "viscosity": "2mPa.s", "pressures": "2MPa:200GPa:4",
+                              "boundary": "mirror"}]
+    (wd / "config" / "case.yaml").write_text(yaml.safe_dump(cfg))
+    res = dry_run(wd)
+    assert res.returncode == 0, res.stderr[-2000:]
+    leaks = {cmd[cmd.index("-o") + 1]: cmd for cmd in shell_commands(res.stdout, " leak ")}
+    steel, sic = (next(c for o, c in leaks.items() if o.endswith(f"{n}.nc"))
+                  for n in (first["name"], "sic"))
+
+    def option(cmd, flag):
+        return cmd[cmd.index(flag) + 1]
+
+    assert option(sic, "--boundary") == "mirror" and option(steel, "--boundary") == "window"
+    assert option(sic, "--pressures") != option(steel, "--pressures")
+    assert option(sic, "--modulus") != option(steel, "--modulus")
+    assert option(sic, "--viscosity") != option(steel, "--viscosity")

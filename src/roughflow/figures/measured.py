@@ -32,6 +32,17 @@ def boundaries(ds: xr.Dataset) -> list[str]:
     return [str(ds.attrs.get("boundary", "unknown"))] * n
 
 
+def moduli(ds: xr.Dataset) -> list[str] | None:
+    """Each scan's contact modulus E* for the legend where the scans differ in it (faces of
+    different materials), else None."""
+    if "modulus" not in ds.variables or ds["modulus"].ndim != 1:
+        return None
+    values = np.asarray(ds["modulus"].values, dtype=float)
+    if len(set(values.tolist())) < 2:
+        return None
+    return [f"E* = {v / 1e9:.3g} GPa" for v in values]
+
+
 def draw(ds: xr.Dataset, fit: xr.Dataset | None = None) -> plt.Figure:
     """Left: leak rate per scan (a colour and marker each; flow along x solid, y dashed) and
     the sealing brackets (shaded, hatched for y; a line where it is sealed). Right: a_c. The
@@ -40,6 +51,7 @@ def draw(ds: xr.Dataset, fit: xr.Dataset | None = None) -> plt.Figure:
     p = ds["pressure"].values
     bounds = boundaries(ds)
     shared = len(set(bounds)) == 1
+    stiff = moduli(ds)
     ncol = min(4, max(2, len(scans)))
     rows = -(-(len(scans) + 3) // ncol)  # the scans, two line styles and the band
     fig, (ax_q, ax_a) = plt.subplots(1, 2, figsize=(10, 4.2 + 0.22 * rows),
@@ -49,7 +61,8 @@ def draw(ds: xr.Dataset, fit: xr.Dataset | None = None) -> plt.Figure:
     for k, scan in enumerate(scans):
         d = ds.sel(scan=scan)
         marker, color = MARKERS[k % len(MARKERS)], colors[k % len(colors)]
-        label = str(scan) if shared else f"{scan} ({bounds[k]})"
+        notes = ([] if shared else [bounds[k]]) + ([] if stiff is None else [stiff[k]])
+        label = f"{scan} ({', '.join(notes)})" if notes else str(scan)
         for axis, style, hatch in (("x", "-", None), ("y", "--", "//")):
             q = d["leak_rate"].sel(axis=axis).values
             leaking = q > 0
