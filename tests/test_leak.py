@@ -427,3 +427,16 @@ def test_the_mean_gap_is_given_in_metres_too(leak_table_ds):
     assert rows[1].split()[:4] == ["p", "[Pa]", "a_c", "gap"] and rows[2].split()[0] == "m"
     first = float(ds["mean_gap_si"].values[0, 0])
     assert rows[3].split()[2] == f"{first:.3e}"
+
+
+def test_the_table_states_the_pressure_the_contacts_carry(leak_table_ds):
+    """The model is purely elastic and the documented examples reach GPa on the contacts,
+    beyond most metals' hardness, without a word on it."""
+    from roughflow.cli.leak import format_table
+
+    ds = leak_table_ds
+    p = ds["pressure"].values
+    a = ds["area_fraction"].values[0]
+    held = p[a > 0] / a[a > 0]
+    [line] = [ln for ln in format_table(ds).splitlines() if ln.startswith("mean pressure")]
+    assert f"p/a_c: {held.min():.3g} - {held.max():.3g} Pa" in line and "hardness" in line

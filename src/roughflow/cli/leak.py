@@ -141,6 +141,7 @@ def format_table(ds: xr.Dataset) -> str:
                      f"{'yes' if pc[0] else 'no':>6} {'yes' if pc[1] else 'no':>6} "
                      f"{c[0]:10.3e} {c[1]:10.3e} {q[0]:10.3e} {q[1]:10.3e}")
     lines += _sealing_lines(ds, d)
+    lines += _contact_pressure_line(d)
     if empty.any():
         lines.append(f"note: {EMPTY_WINDOW_NOTE}")
     warned = str(ds.attrs.get("scan_warnings", ""))
@@ -161,6 +162,23 @@ def _mean_gap_m(ds: xr.Dataset, row: xr.Dataset) -> float:
     if "mean_gap_si" in row:
         return float(row["mean_gap_si"])
     return float(row["mean_gap"]) * float(ds.attrs["ref_length_m"])
+
+
+def _contact_pressure_line(d: xr.Dataset) -> list[str]:
+    """The range of the mean pressure on the contacts, p / a_c, over the table's rows: the
+    model is purely elastic, and the examples reach GPa, beyond most metals' hardness (a seal
+    engineer has to compare; nothing here knows the hardness)."""
+    import numpy as np
+
+    p = np.asarray(d["pressure"].values, dtype=float)
+    a = np.asarray(d["area_fraction"].values, dtype=float)
+    touching = np.isfinite(p) & np.isfinite(a) & (a > 0)
+    if not touching.any():
+        return []
+    held = p[touching] / a[touching]
+    return [f"mean pressure on the contacts p/a_c: {held.min():.3g} - {held.max():.3g} Pa "
+            "(the model is purely elastic: where this exceeds the softer face's hardness, "
+            "the faces yield)"]
 
 
 def _empty_rows(d: xr.Dataset):
