@@ -146,3 +146,40 @@ def test_cli_tol_reaches_the_solver_and_the_file(cli_surface_file, tmp_path):
     for attrs in got.values():
         assert attrs["residual"] <= attrs["tol"]
     assert got[1e-3]["iterations"] < got[None]["iterations"]
+
+
+def test_a_pressure_with_its_unit_and_the_modulus(tmp_path, capsys):
+    # "a contact map of my face at 400 MPa against steel" meant dividing by E* by hand:
+    # --pressure takes a unit with --modulus, and the file records E*, so that
+    # units.registry converts its pressures back to Pa
+    from roughflow.units import registry
+
+    s = tmp_path / "s.nc"
+    assert main(["surface", "--l-over-lambda-r", "2", "--points-per-lambda-s", "2",
+                 "-o", str(s)]) == 0
+    out, ref = tmp_path / "c.nc", tmp_path / "ref.nc"
+    assert main(["contact", str(s), "--pressure", "20GPa", "--modulus", "200GPa",
+                 "-o", str(out)]) == 0
+    assert "p = 0.1 (2e+10 Pa)" in capsys.readouterr().out
+    assert main(["contact", str(s), "--pressure", "0.1", "-o", str(ref)]) == 0
+    with xr.open_dataset(out) as ds, xr.open_dataset(ref) as plain:
+        assert ds.attrs["ref_pressure_Pa"] == 200e9 and "ref_pressure_Pa" not in plain.attrs
+        xr.testing.assert_equal(ds["gap"], plain["gap"])
+        ureg = registry(ds.attrs)
+        mean = ureg.Quantity(float(ds["contact_pressure"].mean()),
+                             ds["contact_pressure"].attrs["units"]).to("GPa").magnitude
+        assert mean == pytest.approx(20, rel=1e-5)  # the load balance of gfmd's tol 1e-6
+
+
+@pytest.mark.parametrize(("argv", "says"), [
+    (["--pressure", "400MPa"], "has a unit: give --modulus"),
+    (["--pressure", "0.1", "--modulus", "200GPa"], "is a number in E*"),
+    (["--pressure", "400mm", "--modulus", "200GPa"], "--pressure"),
+])
+def test_a_pressure_and_modulus_that_do_not_fit_are_refused(tmp_path, capsys, argv, says):
+    from cli_checks import refused
+
+    s = tmp_path / "s.nc"
+    assert main(["surface", "--l-over-lambda-r", "2", "--points-per-lambda-s", "2",
+                 "-o", str(s)]) == 0
+    refused(["contact", str(s), *argv, "-o", str(tmp_path / "c.nc")], capsys, says)

@@ -49,8 +49,13 @@ def register(sub: argparse._SubParsersAction) -> None:
     track_given(p)  # the bearing model refuses the solver's options (_check_model_options)
     add_input(p, "surface", kinds="surface", what="surface file", metavar="SURFACE.nc",
               help="surface file ('roughflow surface')")
-    p.add_argument("--pressure", type=float, default=None,
-                   help=f"mean applied pressure (elastic, adhesive) in {PRESSURE_UNIT}")
+    p.add_argument("--pressure", type=_number_or_quantity, default=None,
+                   help=f"mean applied pressure (elastic, adhesive) in {PRESSURE_UNIT}, or "
+                        "with its unit (400MPa) and --modulus")
+    p.add_argument("--modulus", default=None,
+                   help="contact modulus E* of the pair (e.g. 200GPa): --pressure may then "
+                        "carry its unit, and the output records E* (ref_pressure_Pa) so "
+                        "that roughflow.units.registry converts its pressures to Pa")
     p.add_argument("--model", choices=MODELS, default=DEFAULT_MODEL,
                    help="elastic (hard wall), adhesive (short-range adhesion) or bearing "
                         "(overlap model, no elasticity) (elastic)")
@@ -84,6 +89,7 @@ def run(args: argparse.Namespace) -> None:
 
     on_backend(args)  # CuPy and a GPU, before any work
     _check_model_options(args)
+    pressure, modulus = _load(args)
     surface = surface_from_dataset(args.data["surface"])
     if args.model != "bearing":  # the bearing model is local: no edges to join
         warn_if_nonperiodic_scan(args.data["surface"], args.surface, "contact")
@@ -92,7 +98,7 @@ def run(args: argparse.Namespace) -> None:
                                 repulsion=args.repulsion)
     t0 = time.perf_counter()
     result = solve(
-        surface, args.pressure, model=args.model, method=args.method,
+        surface, pressure, model=args.model, method=args.method,
         area_fraction=args.area_fraction, tol=args.tol, max_iter=args.max_iter,
         adhesion=adhesion, backend=args.backend,
     )
@@ -104,10 +110,41 @@ def run(args: argparse.Namespace) -> None:
              time.perf_counter() - t0)
     methods = contact_methods(result.model, result.method,
                               None if adhesion is None else adhesion.repulsion)
-    write_dataset(contact_dataset(surface, result, adhesion, tol=args.tol), args.output,
-                  provenance=args.provenance.using(*methods))
+    ds = contact_dataset(surface, result, adhesion, tol=args.tol)
+    if modulus is not None:
+        from roughflow.units import REF_PRESSURE, REFERENCE_ATTRS
+
+        ds.attrs[REFERENCE_ATTRS[REF_PRESSURE][0]] = modulus
+        load += f" ({result.pressure * modulus:.6g} Pa)"
+    write_dataset(ds, args.output, provenance=args.provenance.using(*methods))
     print(f"{args.output}: {result.model} contact{load and f', {load}'}: a_c = "
           f"{result.area_fraction:.5f}, mean gap {result.mean_gap:.6g} (lengths in L)")
+
+
+def _number_or_quantity(text: str) -> float | str:
+    """--pressure: a number (in E*), else the text of a quantity with its unit."""
+    try:
+        return float(text)
+    except ValueError:
+        return text
+
+
+def _load(args: argparse.Namespace) -> tuple[float | None, float | None]:
+    """(the load in E*, the modulus in Pa or None) from --pressure and --modulus."""
+    from roughflow.units import parse_quantity
+
+    modulus = (None if args.modulus is None
+               else parse_quantity(args.modulus, "pressure", "--modulus"))
+    if isinstance(args.pressure, str):
+        if modulus is None:
+            raise InputError(f"--pressure {args.pressure!r} has a unit: give --modulus (the "
+                             "pair's contact modulus E*, e.g. 200GPa) to express it in E*")
+        return parse_quantity(args.pressure, "pressure", "--pressure") / modulus, modulus
+    if modulus is not None:
+        raise InputError(f"--modulus converts a --pressure given with its unit (e.g. "
+                         f"400MPa); --pressure {args.pressure!r} is a number in E*: give its "
+                         "unit, or leave --modulus out")
+    return args.pressure, None
 
 
 def _check_model_options(args: argparse.Namespace) -> None:
@@ -123,5 +160,6 @@ def _check_model_options(args: argparse.Namespace) -> None:
     if args.area_fraction is None:
         raise InputError("--model bearing needs --area-fraction (the contact area it cuts "
                          "the heights at)")
-    refuse_given(args, ("--method", "--tol", "--max-iter"), "to --model bearing: it has no "
+    refuse_given(args, ("--method", "--tol", "--max-iter", "--modulus"), "to --model "
+                 "bearing: it has no load and no "
                  "solver (it cuts the heights at the level of --area-fraction)")
