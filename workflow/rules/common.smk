@@ -118,7 +118,8 @@ try:  # a partition or account the cluster lacks: sbatch would refuse every job,
         if RUNS_ON_CLUSTER and not _OWN_LIMITS else None
 except InputError as exc:
     raise WorkflowError(f"invalid SLURM settings in the profile's default-resources "
-                        f"(profiles/slurm/config.yaml): {exc}") from None
+                        f"(the config.yaml of the --profile folder, a copy of "
+                        f"profiles/slurm): {exc}") from None
 # The memory a job may need, checked at planning before any job runs: the config's
 # max_mem_mb; on a SLURM cluster what a job may ask of it less the job's Snakemake
 # (WRAPPER_MB), so that every planned first request runs; else the memory of this

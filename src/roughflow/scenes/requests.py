@@ -178,8 +178,8 @@ def plan_cost(jobs: Iterable[Job]) -> str:
     hours starts (``workflow/scripts/estimate_cost.py`` itemises it by kind and model).
     Measured-scan jobs are not among ``jobs``: their cost is known only after the import."""
     seconds = sorted((estimated_seconds(job), job.job_id) for job in jobs)
-    if not seconds:
-        return "no sweep jobs planned"
+    if not seconds:  # a measured-only config still runs its scans' import and leak jobs
+        return "no sweep jobs planned (measured scans are costed once imported)"
     total = sum(s for s, _ in seconds)
     return (f"{len(seconds)} sweep jobs planned, about {total / 3600:.2g} core-hours by the "
             f"cost model (the longest, {seconds[-1][1]}, about {seconds[-1][0] / 60:.2g} min)")
