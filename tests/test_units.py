@@ -182,3 +182,21 @@ def test_a_scan_has_one_size_whatever_the_units(tmp_path):
     a = read_scan(tmp_path / "h.npy", size="0.125um", unit="um")
     b = read_scan(tmp_path / "h.npy", size="125nm", height_unit="um")
     assert a.scan.length_scale == b.scan.length_scale == 1.25e-7
+
+
+def test_the_scales_of_a_scan_take_its_own_length_and_quantities_with_units():
+    # Scales(length=...) had to repeat the scan's own L, the only one leak_dataset accepts
+    from roughflow.surface import ScanInfo, Surface
+
+    info = ScanInfo(source="s.opd", reader="test", channel="h", length_scale=1.26e-4,
+                    rms_gradient=0.02, detrend="plane", fill="none", filled=0,
+                    crop="0:16,0:16")
+    scan = Surface(heights=np.zeros((16, 16)), lx=1.0, ly=1.0, scan=info)
+    scales = Scales.of_scan(scan, modulus="200GPa", viscosity="1mPa.s")
+    assert (scales.length, scales.modulus, scales.viscosity) == (1.26e-4, 200e9, 1e-3)
+    assert Scales.of_scan(scan, modulus=2e11, viscosity=1e-3) == scales
+    with pytest.raises(InputError, match="needs an imported scan"):
+        Scales.of_scan(Surface(heights=np.zeros((16, 16)), lx=1.0, ly=1.0),
+                       modulus="200GPa", viscosity="1mPa.s")
+    with pytest.raises(InputError, match="modulus"):
+        Scales.of_scan(scan, modulus="200mm", viscosity="1mPa.s")

@@ -221,6 +221,21 @@ class Scales:
             if not (isinstance(v, (int, float)) and math.isfinite(v) and v > 0):
                 raise InputError(f"{name} scale must be a positive number, got {v!r}")
 
+    @classmethod
+    def of_scan(cls, surface: object, *, modulus: str | float,
+                viscosity: str | float) -> Scales:
+        """The scales of an imported scan (:func:`roughflow.scan.read_scan`): its own L
+        (``surface.scan.length_scale``, the only length its leak rates may use), and E* and
+        eta as SI numbers or with their units ("200GPa", "1mPa.s")."""
+        scan = getattr(surface, "scan", None)
+        if scan is None:
+            raise InputError("Scales.of_scan needs an imported scan (roughflow.scan.read_scan "
+                             "or `roughflow import`); a generated surface has no physical "
+                             "length: give Scales(length=..., modulus=..., viscosity=...)")
+        return cls(length=float(scan.length_scale),
+                   modulus=parse_quantity(modulus, "pressure", "modulus"),
+                   viscosity=parse_quantity(viscosity, "viscosity", "viscosity"))
+
     def pressure_to_si(self, p: ArrayLike) -> np.ndarray | float:
         """Pressure in E* -> Pa."""
         return np.asarray(p, dtype=float) * self.modulus
