@@ -183,3 +183,16 @@ def test_a_pressure_and_modulus_that_do_not_fit_are_refused(tmp_path, capsys, ar
     assert main(["surface", "--l-over-lambda-r", "2", "--points-per-lambda-s", "2",
                  "-o", str(s)]) == 0
     refused(["contact", str(s), *argv, "-o", str(tmp_path / "c.nc")], capsys, says)
+
+
+def test_a_tension_with_its_unit_and_zero_load_take_the_modulus_too(tmp_path, capsys):
+    # the adhesive model's tension as a quantity was refused ("must be a positive
+    # pressure"), although the same tension as a number in E* runs; zero is zero in any unit
+    s = tmp_path / "s.nc"
+    assert main(["surface", "--l-over-lambda-r", "2", "--points-per-lambda-s", "2",
+                 "-o", str(s)]) == 0
+    capsys.readouterr()
+    for load, shown in (("-2MPa", "p = -1e-05 (-2e+06 Pa)"), ("0", "p = 0 (0 Pa)")):
+        assert main(["contact", str(s), "--model", "adhesive", f"--pressure={load}",
+                     "--modulus", "200GPa", "-o", str(tmp_path / "a.nc")]) == 0
+        assert shown in capsys.readouterr().out

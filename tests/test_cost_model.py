@@ -111,7 +111,16 @@ def test_plan_cost_names_the_total_and_the_longest_job(paper_jobs):
     longest = max(paper_jobs.values(), key=estimated_seconds)
     assert line.startswith(f"{len(paper_jobs)} sweep jobs planned, about {hours:.2g} core-hours")
     assert f"{estimated_seconds(longest) / 60:.2g} min" in line
-    assert plan_cost([]).startswith("no sweep jobs planned (measured scans are costed once")
+    assert plan_cost([]) == "no sweep jobs planned"
+    # a measured-only plan still runs its scans' jobs, and says so
+    from roughflow.scenes.jobs import LeakJob
+
+    scan = LeakJob(name="a", file="a.npy", modulus="200GPa", pressures="1MPa:1GPa:3",
+                   fluid_pressure="1MPa", viscosity="1mPa.s", seal_width="2mm",
+                   seal_length="60mm")
+    assert plan_cost([scan]) == "no sweep jobs planned; 1 measured scan, costed once imported"
+    assert plan_cost([*paper_jobs.values(), scan]) == line + "; 1 measured scan, costed once " \
+        "imported"
 
 # job id of config/paper.yaml -> measured peak resident memory in MB (1e6 bytes; the
 # process's ru_maxrss from os.wait4, one run each, benchmarks/bench_cost_model.py, the runs

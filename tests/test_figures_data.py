@@ -278,6 +278,9 @@ def test_the_caption_file_says_what_this_runs_data_hold(points, shown):
     assert "; 3 seeds; " in summary and summary.endswith(shown)
     document = caption_document("threshold_vs_gamma", ds, "the dataset", "figure.png")
     assert f"Its data: {summary}." in document
+    # no search bracketed a threshold: not "raw"
+    ds["a_c_star"][:] = np.nan
+    assert data_summary(ds).endswith("no a_c* (no search bracketed it)")
 
 
 def test_the_flux_map_names_its_two_colours_outside_the_colour_bar():

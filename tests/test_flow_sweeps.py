@@ -157,3 +157,14 @@ def test_the_workflow_plans_a_flow_study_of_two_gammas(tmp_path):
         gammas.add(float(cmd[cmd.index("--gamma") + 1]))
     assert gammas == {2.0, 4.0}
     assert "results/flow_anisotropic/figure.png" in output
+
+
+def test_a_dataset_without_the_size_variable_gets_its_size_from_eps_t(two_hurst):
+    # datasets from before l_over_lambda_r was written: the row values took eps_t itself
+    # for L/lambda_r (0.5 here instead of 2)
+    from roughflow.figures import _flow
+
+    old = two_hurst.drop_vars("l_over_lambda_r")
+    for model in ("elastic", "bearing"):
+        assert (_flow._settings(old.sel(model=model))
+                == _flow._settings(two_hurst.sel(model=model)))

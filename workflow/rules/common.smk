@@ -190,7 +190,7 @@ POOL = {kind: {job_id: job for job_id, job in _POOLED.items() if job.kind == kin
 if workflow.is_main_process:  # a paper-sized plan runs for hours: say so before it starts
     from snakemake.logging import logger
 
-    logger.info(plan_cost(job for job in _POOLED.values() if job.kind != "leak"))
+    logger.info(plan_cost(_POOLED.values()))
 
 # A sweep job whose request exceeds the time a job may ask for asks for that instead
 # (job_runtime_min); say so before anything runs, since such a job may end TIMEOUT.

@@ -139,12 +139,16 @@ def _load(args: argparse.Namespace) -> tuple[float | None, float | None]:
         if modulus is None:
             raise InputError(f"--pressure {args.pressure!r} has a unit: give --modulus (the "
                              "pair's contact modulus E*, e.g. 200GPa) to express it in E*")
-        return parse_quantity(args.pressure, "pressure", "--pressure") / modulus, modulus
-    if modulus is not None:
+        # a tension (the adhesive model) keeps its sign; parse_quantity takes magnitudes
+        text = args.pressure.strip()
+        sign = -1.0 if text.startswith("-") else 1.0
+        size = parse_quantity(text.lstrip("+-"), "pressure", "--pressure")
+        return sign * size / modulus, modulus
+    if modulus is not None and args.pressure != 0:  # zero is zero in any unit
         raise InputError(f"--modulus converts a --pressure given with its unit (e.g. "
                          f"400MPa); --pressure {args.pressure!r} is a number in E*: give its "
                          "unit, or leave --modulus out")
-    return args.pressure, None
+    return args.pressure, modulus
 
 
 def _check_model_options(args: argparse.Namespace) -> None:

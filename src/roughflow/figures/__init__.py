@@ -128,7 +128,9 @@ def data_summary(dataset: xr.Dataset) -> str:
         taken = corrected_taken(dataset)  # over a_c_star's dims, like notnull() below
         counted = (np.zeros(0, bool) if taken is None
                    else taken.values[dataset["a_c_star"].notnull().values])
-        if not counted.any():
+        if not counted.size:
+            parts.append("no a_c* (no search bracketed it)")
+        elif not counted.any():
             parts.append("a_c* raw (cell counts)")
         elif counted.all():
             parts.append("a_c* perimeter-corrected")

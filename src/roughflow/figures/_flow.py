@@ -15,6 +15,7 @@ import numpy as np
 import xarray as xr
 
 from roughflow.datasets.sweep import PARAM_DIMS, rnd
+from roughflow.defaults import PAPER_SIZE_FACTOR
 from roughflow.errors import InputError
 from roughflow.scenes.expand import (
     FLOW_FIGURE_MAX_ROWS,
@@ -23,6 +24,7 @@ from roughflow.scenes.expand import (
     flow_row_names,
     flow_rows,
 )
+from roughflow.surface import paper_l_over_lambda_r
 
 if TYPE_CHECKING:
     from matplotlib.axes import Axes
@@ -62,8 +64,12 @@ def _settings(sub: xr.Dataset) -> list[tuple[dict, tuple]]:
         values = []
         for name in FLOW_ROW_PARAMS:
             if name == "l_over_lambda_r" and name not in one:
-                name = "eps_t"  # a dataset without the size variable: its dimension
-            v = one[name].values if name in one else np.nan
+                # a dataset without the size variable: L / lambda_r from its dimension,
+                # eps_t = max(sqrt(gamma), 1/sqrt(gamma)) lambda_r / L
+                stretch = paper_l_over_lambda_r(float(one["gamma"])) / PAPER_SIZE_FACTOR
+                v = stretch / np.asarray(one["eps_t"].values, dtype=float)
+            else:
+                v = one[name].values if name in one else np.nan
             values.append(rnd(float(np.nanmax(v))) if np.isfinite(v).any() else np.nan)
         out.append((at, tuple(values)))
     return out

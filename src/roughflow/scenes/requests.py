@@ -173,16 +173,24 @@ def estimated_seconds(job: Job) -> float:
 
 
 def plan_cost(jobs: Iterable[Job]) -> str:
-    """One line on the cost of a plan: its number of jobs and their estimated core-hours
-    (:func:`estimated_seconds`), and the longest job; said at planning, before a run of
-    hours starts (``workflow/scripts/estimate_cost.py`` itemises it by kind and model).
-    Measured-scan jobs are not among ``jobs``: their cost is known only after the import."""
-    seconds = sorted((estimated_seconds(job), job.job_id) for job in jobs)
-    if not seconds:  # a measured-only config still runs its scans' import and leak jobs
-        return "no sweep jobs planned (measured scans are costed once imported)"
+    """One line on the cost of a plan: its number of sweep jobs and their estimated
+    core-hours (:func:`estimated_seconds`), and the longest job; said at planning, before a
+    run of hours starts (``workflow/scripts/estimate_cost.py`` itemises it by kind and
+    model). Measured-scan (leak) jobs are counted apart: their cost is known only after the
+    import."""
+    jobs = list(jobs)
+    scans = sum(job.kind == "leak" for job in jobs)
+    # a measured-only config still runs its scans' jobs: "no sweep jobs" must not read as
+    # "nothing to run"
+    measured = (f"; {scans} measured scan{'s' if scans != 1 else ''}, costed once imported"
+                if scans else "")
+    seconds = sorted((estimated_seconds(job), job.job_id) for job in jobs if job.kind != "leak")
+    if not seconds:
+        return "no sweep jobs planned" + measured
     total = sum(s for s, _ in seconds)
     return (f"{len(seconds)} sweep jobs planned, about {total / 3600:.2g} core-hours by the "
-            f"cost model (the longest, {seconds[-1][1]}, about {seconds[-1][0] / 60:.2g} min)")
+            f"cost model (the longest, {seconds[-1][1]}, about {seconds[-1][0] / 60:.2g} min)"
+            + measured)
 
 
 #: Snakemake ``runtime`` of a job: this many times its estimate (the model is fitted to
