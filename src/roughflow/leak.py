@@ -73,9 +73,8 @@ class LeakCurve:
     rms_gradient: of the surface (its pressures are in E*; E* gbar only when it is 1).
     window_lx, window_ly, window_shape: size (L) and grid of the analysed window.
     settings: the tolerances used, and ``sealing_searched`` (1, or 0 with ``sealing=False``).
-    window_contact_cells: contact cells in the analysed window at each pressure (None for a
-        curve built by hand); 0 marks a row whose window holds no contact
-        (:func:`empty_window_pressures`).
+    An ``area_fraction`` of exactly 0 marks a row whose analysed window holds no contact
+    (:func:`empty_window_pressures`).
     """
 
     __repr__ = summary_repr
@@ -96,7 +95,6 @@ class LeakCurve:
     window_ly: float
     window_shape: tuple[int, int]
     settings: dict = field(default_factory=dict)
-    window_contact_cells: np.ndarray | None = None
 
 
 def check_pressures(pressures: ArrayLike) -> np.ndarray:
@@ -206,7 +204,7 @@ def leak_curve(surface: Surface, pressures: ArrayLike, *, boundary: str | None =
     gbar = surface.gbar
     curve = pressure_curve(emb, p, contact_tol=contact_tol, flow_tol=flow_tol,
                            flow_sigma_tol=flow_sigma_tol, threads=threads)
-    empty = empty_window_pressures(p, curve["window_contact_cells"])
+    empty = empty_window_pressures(p, curve["area_fraction"])
     if empty.size:
         log.warning(EMPTY_WINDOW_WARNING, method, ", ".join(f"{v:.4g}" for v in empty))
     thresholds = (sealing_search(emb, gbar=gbar, tol=threshold_tol,
@@ -234,9 +232,9 @@ EMPTY_WINDOW_WARNING = (
     "scan analysed)")
 
 
-def empty_window_pressures(pressures: ArrayLike, cells: ArrayLike | None) -> np.ndarray:
-    """The nominal ``pressures`` at which the analysed window holds no contact cell
-    (``cells``: :attr:`LeakCurve.window_contact_cells`; None: not counted, none found).
+def empty_window_pressures(pressures: ArrayLike, area_fraction: ArrayLike) -> np.ndarray:
+    """The nominal ``pressures`` at which the analysed window holds no contact cell: its
+    ``area_fraction`` (a count of the window's contact cells over its size) is exactly 0.
 
     The criterion is the smallest one that separates a result from a non-result: with one
     contact cell or more the window carries part of the load on its own asperities, and
@@ -248,9 +246,7 @@ def empty_window_pressures(pressures: ArrayLike, cells: ArrayLike | None) -> np.
     and the mirrored quadrant always carry contact under a positive load, and ``pad``
     refuses a state with contact outside the scan."""
     p = np.asarray(pressures, dtype=np.float64)
-    if cells is None:
-        return p[:0]
-    return p[np.asarray(cells) == 0]
+    return p[np.asarray(area_fraction) == 0]
 
 
 def pressure_curve(emb: Embedding, pressures: np.ndarray, *, contact_tol: float = CONTACT_TOL,
@@ -259,10 +255,9 @@ def pressure_curve(emb: Embedding, pressures: np.ndarray, *, contact_tol: float 
     """Contact area, mean gap, percolation and conductances of the window of ``emb`` at
     each nominal pressure (increasing; warm-started solves): the :class:`LeakCurve` fields
     ``area_fraction``, ``mean_gap``, ``percolating``, ``sigma``, ``iterations``,
-    ``residual``, ``flow_imbalance``, ``flow_sigma_error``, ``window_contact_cells``."""
+    ``residual``, ``flow_imbalance``, ``flow_sigma_error``."""
     n = len(pressures)
     area, gap, its, res = (np.zeros(n) for _ in range(4))
-    cells = np.zeros(n, dtype=np.int64)
     spans = np.zeros((n, 2), dtype=bool)
     sigma, imbalance, sigma_error = (np.zeros((n, 2)) for _ in range(3))
     state: ContactResult | None = None
@@ -272,7 +267,6 @@ def pressure_curve(emb: Embedding, pressures: np.ndarray, *, contact_tol: float 
                       threads=threads)
         seen = emb.observe(state)
         area[i], gap[i] = seen.area_fraction, seen.mean_gap
-        cells[i] = np.count_nonzero(seen.contact)
         its[i], res[i] = state.iterations, state.residual
         flows = flow.flow_both_axes(seen.gap, ~seen.contact, lx=emb.lx, ly=emb.ly,
                                     periodic=emb.periodic, previous=flows, tol=flow_tol,
@@ -286,4 +280,4 @@ def pressure_curve(emb: Embedding, pressures: np.ndarray, *, contact_tol: float 
                  area[i], spans[i, 0], spans[i, 1], sigma[i, 0], sigma[i, 1])
     return {"area_fraction": area, "mean_gap": gap, "percolating": spans, "sigma": sigma,
             "iterations": its.astype(np.int64), "residual": res, "flow_imbalance": imbalance,
-            "flow_sigma_error": sigma_error, "window_contact_cells": cells}
+            "flow_sigma_error": sigma_error}

@@ -183,12 +183,8 @@ def _contact_pressure_line(d: xr.Dataset) -> list[str]:
 
 def _empty_rows(d: xr.Dataset):
     """Per row of the one-scan dataset ``d``: whether its analysed window holds no contact
-    cell (False throughout for a file without the count)."""
-    import numpy as np
-
-    if "window_contact_cells" not in d:
-        return np.zeros(d.sizes["pressure"], dtype=bool)
-    return d["window_contact_cells"].values == 0
+    cell (:func:`roughflow.leak.empty_window_pressures`' criterion, a_c exactly 0)."""
+    return d["area_fraction"].values == 0
 
 
 def _sealing_lines(ds: xr.Dataset, d: xr.Dataset) -> list[str]:

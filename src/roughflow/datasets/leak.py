@@ -156,11 +156,6 @@ def leak_dataset(curve: LeakCurve, surface: Surface, *, scales: Scales, fluid_pr
             "units": PASCAL, "long_name": "nominal contact pressure"}),
         "axis": ("axis", list(AXIS_NAMES[:2]), AXIS_COORD[2]),
     }
-    if curve.window_contact_cells is not None:
-        data["window_contact_cells"] = _int(sp, np.asarray(curve.window_contact_cells)[None], {
-            "units": DIMENSIONLESS,
-            "long_name": "contact cells in the analysed window (0: all of the contact lies "
-                         "outside it; a_c, gap and leak rate of the row are not the seal's)"})
     ds = xr.Dataset(data, coords=coords)
     ds["pressure"].encoding["_FillValue"] = None
     messages = " | ".join(t.message for t in th if t is not None and t.message) or "none"
