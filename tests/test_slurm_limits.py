@@ -133,7 +133,10 @@ def test_a_dry_run_without_slurm_says_the_checks_were_skipped(tmp_path):
     wd = copy_workflow(tmp_path / "wd")
     bin_dir = tmp_path / "bin"
     bin_dir.mkdir()
-    for name in ("scontrol", "sinfo", "sacctmgr"):
+    # sacct and squeue too: the SLURM executor plugin (2.8) refuses to start without
+    # either on the PATH, as on a cluster whose tools are installed but whose controller
+    # does not answer
+    for name in ("scontrol", "sinfo", "sacctmgr", "sacct", "squeue"):
         (bin_dir / name).write_text("#!/bin/sh\necho 'Unable to contact slurm controller' "
                                     ">&2; exit 1\n")
         (bin_dir / name).chmod(0o755)
