@@ -239,6 +239,16 @@ SCAN_GRADIENT_WARN = (1e-5, 10.0)
 #: AFM scan sealed at 0.99 along x because one scan line lay 4 nm below its neighbours
 #: (0.50 with its lines levelled).
 SEALING_AREA_NOTE = 0.8
+#: A leak-curve row whose analysed window holds contact, but fewer cells of it than this, is
+#: flagged as under-resolved (roughflow.leak.few_cell_pressures; no contact at all has its
+#: own flag). a_c converges to first order: the grid over-counts contact by c = 0.105 cell
+#: areas per contact/non-contact face (accuracy.PERIMETER_C, docs/accuracy.md), and n cells
+#: have at least about 4 sqrt(n) faces (one compact spot), so a_c is off by 0.42 / sqrt(n)
+#: of itself or more: about 42 % for one cell, 10 % at 16. 16 cells are also a 4 x 4 square,
+#: one shortest wavelength at the fewest points per lambda_s that a_c is corrected at
+#: (CORRECTION_MIN_POINTS). The gap and leak rate such spots hold open are no better
+#: resolved than the spots themselves.
+LEAK_MIN_CONTACT_CELLS = 16
 #: How a non-periodic scan meets the periodic solvers (roughflow.boundary): mirror-tiled,
 #: padded by a flat region far below it, an interior window of the scan solved as periodic,
 #: or the scan taken as periodic.

@@ -30,6 +30,7 @@ from roughflow.defaults import (
     CONTACT_TOL,
     FLOW_SIGMA_TOL,
     FLOW_TOL,
+    LEAK_MIN_CONTACT_CELLS,
     THRESHOLD_CONTACT_TOL,
     THRESHOLD_TOL,
 )
@@ -48,7 +49,8 @@ if TYPE_CHECKING:
 
 __all__ = ["LeakCurve", "check_pressures", "check_seal", "fluid_pressure_note", "default_boundary",
            "sealing_search", "leak_curve", "pressure_curve", "EMPTY_WINDOW_WARNING",
-           "empty_window_pressures"]
+           "empty_window_rows", "empty_window_pressures", "FEW_CELLS_WARNING", "contact_cells",
+           "few_cell_rows", "few_cell_pressures"]
 
 log = logging.getLogger(__name__)
 
@@ -74,7 +76,9 @@ class LeakCurve:
     window_lx, window_ly, window_shape: size (L) and grid of the analysed window.
     settings: the tolerances used, and ``sealing_searched`` (1, or 0 with ``sealing=False``).
     An ``area_fraction`` of exactly 0 marks a row whose analysed window holds no contact
-    (:func:`empty_window_pressures`).
+    (:func:`empty_window_pressures`), one of fewer than
+    :data:`~roughflow.defaults.LEAK_MIN_CONTACT_CELLS` window cells an under-resolved one
+    (:func:`few_cell_pressures`; the count is :func:`contact_cells`).
     """
 
     __repr__ = summary_repr
@@ -182,8 +186,9 @@ def leak_curve(surface: Surface, pressures: ArrayLike, *, boundary: str | None =
     :func:`default_boundary`). ``flow_tol``, ``flow_sigma_tol``: ``tol`` and ``sigma_tol`` of
     :func:`roughflow.flow.solve`. Bad input raises :class:`InputError` before any solve; a
     contact or flow solve that misses its tolerance raises ``ConvergenceError``. Pressures
-    at which the analysed window holds no contact cell are logged as a warning
-    (:data:`EMPTY_WINDOW_WARNING`, :func:`empty_window_pressures`).
+    at which the analysed window holds no contact cell, or too few to resolve the contact,
+    are logged as warnings (:data:`EMPTY_WINDOW_WARNING`, :func:`empty_window_pressures`;
+    :data:`FEW_CELLS_WARNING`, :func:`few_cell_pressures`).
     """
     p = check_pressures(pressures)
     check_pressure_scale(p)
@@ -204,9 +209,7 @@ def leak_curve(surface: Surface, pressures: ArrayLike, *, boundary: str | None =
     gbar = surface.gbar
     curve = pressure_curve(emb, p, contact_tol=contact_tol, flow_tol=flow_tol,
                            flow_sigma_tol=flow_sigma_tol, threads=threads)
-    empty = empty_window_pressures(p, curve["area_fraction"])
-    if empty.size:
-        log.warning(EMPTY_WINDOW_WARNING, method, ", ".join(f"{v:.4g}" for v in empty))
+    _warn_sparse_rows(p, curve["area_fraction"], emb.shape, method)
     thresholds = (sealing_search(emb, gbar=gbar, tol=threshold_tol,
                                  contact_tol=threshold_contact_tol, threads=threads)
                   if sealing else {})
@@ -231,22 +234,80 @@ EMPTY_WINDOW_WARNING = (
     "property of the seal; start the pressures higher, or use boundary 'mirror' (the whole "
     "scan analysed)")
 
+#: Logged by :func:`leak_curve` (arguments: :data:`~roughflow.defaults.LEAK_MIN_CONTACT_CELLS`,
+#: the pressures in E*, their contact cells, the window's cells along x and y) where the
+#: analysed window holds contact at some pressures, but too few cells of it to resolve it.
+FEW_CELLS_WARNING = (
+    "the analysed window holds fewer than %d contact cells at the nominal pressures %s E* "
+    "(%s of its %d x %d cells): no contact spot spans more than a few grid cells, so a_c "
+    "(over-counted by about 10 %% of itself or more) and the gap and leak rate those spots "
+    "hold open are under-resolved; start the pressures higher, or check these rows on the "
+    "scan interpolated to a finer grid")
+
+
+def empty_window_rows(area_fraction: ArrayLike) -> np.ndarray:
+    """Per row: whether the analysed window holds no contact cell (its ``area_fraction``, a
+    count of the window's contact cells over its size, is exactly 0;
+    :func:`empty_window_pressures` gives the reasons)."""
+    return np.asarray(area_fraction) == 0
+
 
 def empty_window_pressures(pressures: ArrayLike, area_fraction: ArrayLike) -> np.ndarray:
     """The nominal ``pressures`` at which the analysed window holds no contact cell: its
     ``area_fraction`` (a count of the window's contact cells over its size) is exactly 0.
 
-    The criterion is the smallest one that separates a result from a non-result: with one
-    contact cell or more the window carries part of the load on its own asperities, and
-    its a_c, gap and sigma are its own, however sparse (a_c itself says how few cells that
-    are); with none, a_c is exactly 0 and the gap is set by asperities outside the window
-    (with ``window``: in the dropped border or across the wrap-around seam), which says
-    nothing about the seal. Any cut-off above zero would be a resolution judgement that
-    a_c already shows. Only ``window`` can leave it empty: the whole cell (``periodic``)
-    and the mirrored quadrant always carry contact under a positive load, and ``pad``
-    refuses a state with contact outside the scan."""
+    The criterion separates a result from a non-result: with one contact cell or more the
+    window carries part of the load on its own asperities, and its a_c, gap and sigma are
+    its own, if under-resolved below :data:`~roughflow.defaults.LEAK_MIN_CONTACT_CELLS`
+    cells (:func:`few_cell_pressures`); with none, a_c is exactly 0 and the gap is set by
+    asperities outside the window (with ``window``: in the dropped border or across the
+    wrap-around seam), which says nothing about the seal. Only ``window`` can leave it
+    empty: the whole cell (``periodic``) and the mirrored quadrant always carry contact
+    under a positive load, and ``pad`` refuses a state with contact outside the scan."""
     p = np.asarray(pressures, dtype=np.float64)
-    return p[np.asarray(area_fraction) == 0]
+    return p[empty_window_rows(area_fraction)]
+
+
+def contact_cells(area_fraction: ArrayLike, window_shape: tuple[int, int]) -> np.ndarray:
+    """The analysed window's contact cells per row: ``area_fraction`` (the window's contact
+    mask averaged) times the cells of ``window_shape``, rounded off to whole cells."""
+    cells = int(window_shape[0]) * int(window_shape[1])
+    return np.rint(np.asarray(area_fraction, dtype=np.float64) * cells).astype(np.int64)
+
+
+def few_cell_rows(area_fraction: ArrayLike, window_shape: tuple[int, int],
+                  min_cells: int = LEAK_MIN_CONTACT_CELLS) -> np.ndarray:
+    """Per row: whether the analysed window of ``window_shape`` holds contact (not
+    :func:`empty_window_rows`, which have none) on fewer than ``min_cells`` cells
+    (:func:`contact_cells`), too few to resolve it
+    (:data:`~roughflow.defaults.LEAK_MIN_CONTACT_CELLS` gives the reasons)."""
+    require_positive("min_cells", min_cells)
+    return (~empty_window_rows(area_fraction)
+            & (contact_cells(area_fraction, window_shape) < min_cells))
+
+
+def few_cell_pressures(pressures: ArrayLike, area_fraction: ArrayLike,
+                       window_shape: tuple[int, int],
+                       min_cells: int = LEAK_MIN_CONTACT_CELLS) -> np.ndarray:
+    """The nominal ``pressures`` of the rows :func:`few_cell_rows` flags: contact on fewer
+    than ``min_cells`` cells of the analysed window, an under-resolved result."""
+    p = np.asarray(pressures, dtype=np.float64)
+    return p[few_cell_rows(area_fraction, window_shape, min_cells)]
+
+
+def _warn_sparse_rows(pressures: np.ndarray, area_fraction: np.ndarray,
+                      window_shape: tuple[int, int], boundary: str) -> None:
+    """Log :data:`EMPTY_WINDOW_WARNING` and :data:`FEW_CELLS_WARNING` for the rows they
+    concern, if any."""
+    empty = empty_window_pressures(pressures, area_fraction)
+    if empty.size:
+        log.warning(EMPTY_WINDOW_WARNING, boundary, ", ".join(f"{v:.4g}" for v in empty))
+    few = few_cell_rows(area_fraction, window_shape)
+    if few.any():
+        cells = contact_cells(area_fraction, window_shape)[few]
+        log.warning(FEW_CELLS_WARNING, LEAK_MIN_CONTACT_CELLS,
+                    ", ".join(f"{v:.4g}" for v in pressures[few]),
+                    ", ".join(str(n) for n in cells), *window_shape)
 
 
 def pressure_curve(emb: Embedding, pressures: np.ndarray, *, contact_tol: float = CONTACT_TOL,

@@ -33,7 +33,7 @@ if TYPE_CHECKING:
 
 __all__ = ["REF_LENGTH", "REF_PRESSURE", "REF_VISCOSITY", "REFERENCE_ATTRS", "REFERENCE_VARIABLES",
            "DIMENSIONS", "registry", "SI_DIGITS", "canonical", "parse_quantity", "parse_range",
-           "Scales", "leak_rate"]
+           "RATE_UNITS", "parse_rate_unit", "Scales", "leak_rate"]
 
 #: The reference units of the dimensionless system (roughflow.datasets.units describes them;
 #: they live here, below the datasets, because scan import and the leak question use them).
@@ -60,6 +60,7 @@ DIMENSIONS = {
     "length": ("[length]", "m"),
     "pressure": ("[pressure]", "Pa"),
     "viscosity": ("[pressure] * [time]", "Pa*s"),
+    "volume rate": ("[length] ** 3 / [time]", "m^3/s"),
 }
 
 
@@ -178,7 +179,32 @@ def parse_quantity(text: str | float, kind: str, name: str) -> float:
     return canonical(value)
 
 
-_EXAMPLES = {"length": "2mm", "pressure": "1MPa", "viscosity": "1mPa.s"}
+_EXAMPLES = {"length": "2mm", "pressure": "1MPa", "viscosity": "1mPa.s",
+             "volume rate": "1mL/min"}
+
+#: The powers of a unit expression ("m^3", "m**3", "mm3", "s-1"): the only digits a unit
+#: without a number holds.
+_POWERS = re.compile(r"(?:\^|\*\*)\s*[-+]?\d+|(?<=[^\W\d_])[-+]?\d+")
+
+#: Common units of a leak rate, named where a rate unit is refused (``roughflow leak
+#: --rate-unit``); any other volume per time that :func:`parse_quantity` reads is taken too.
+RATE_UNITS = ("m^3/s", "mm^3/s", "cm^3/min", "L/min", "L/h", "mL/min", "mL/h", "uL/min",
+              "uL/h")
+
+
+def parse_rate_unit(text: str, name: str = "rate_unit") -> float:
+    """SI value (m^3/s) of one ``text``, a unit of volume per time without a number
+    ("mL/min": 1.667e-8), parsed as :func:`parse_quantity` parses; :class:`InputError`
+    naming ``name``, the value and :data:`RATE_UNITS` for anything else."""
+    s = str(text).strip()
+    accepted = f"give a unit of volume per time such as {', '.join(RATE_UNITS)}"
+    if not s or re.search(r"\d", _POWERS.sub("", s)):  # a number would scale every rate
+        raise InputError(f"{name}: {text!r} is not a unit alone (the rates are converted to "
+                         f"it, a number would scale them); {accepted}")
+    try:
+        return parse_quantity(s, "volume rate", name)
+    except InputError as exc:
+        raise InputError(f"{exc}; {accepted}") from None
 
 
 def parse_range(text: str, kind: str, name: str) -> np.ndarray:

@@ -10,6 +10,7 @@ from roughflow.defaults import (
     BOUNDARY,
     BOUNDARY_METHODS,
     CONTACT_TOL,
+    LEAK_MIN_CONTACT_CELLS,
     SEALING_AREA_NOTE,
     THRESHOLD_CONTACT_TOL,
     THRESHOLD_TOL,
@@ -63,6 +64,10 @@ def register(sub: argparse._SubParsersAction) -> None:
                         f"{THRESHOLD_CONTACT_TOL:g}, as `threshold` does (docs/measured.md)")
     p.add_argument("--threshold-tol", type=float, default=THRESHOLD_TOL,
                    help=f"width of the sealing bracket in contact area ({THRESHOLD_TOL:g})")
+    p.add_argument("--rate-unit", default=None, metavar="UNIT",
+                   help="unit of the table's leak rates Q_x, Q_y: a volume per time such as "
+                        "mm^3/s, mL/min, uL/h or L/min (default: the output file's m^3/s; the "
+                        "file keeps m^3/s whatever this says)")
     p.add_argument("--no-sealing", action="store_true",
                    help="skip the sealing-pressure search (often most of the run time); the "
                         "sealing variables of the output are then NaN")
@@ -77,7 +82,7 @@ def run(args: argparse.Namespace) -> None:
     from roughflow.datasets import leak_dataset
     from roughflow.io import surface_from_dataset, write_dataset
     from roughflow.leak import check_pressures, check_seal, leak_curve
-    from roughflow.units import Scales, parse_quantity, parse_range
+    from roughflow.units import Scales, parse_quantity, parse_range, parse_rate_unit
 
     # every quantity is checked before any solve (the surface file was read and checked by
     # the shared input layer)
@@ -87,6 +92,8 @@ def run(args: argparse.Namespace) -> None:
     eta = parse_quantity(args.viscosity, "viscosity", "--viscosity")
     width = parse_quantity(args.seal_width, "length", "--seal-width")
     length = parse_quantity(args.seal_length, "length", "--seal-length")
+    if args.rate_unit is not None:  # format_table converts; checked here, before any solve
+        parse_rate_unit(args.rate_unit, "--rate-unit")
     given = (None if args.length_scale is None
              else parse_quantity(args.length_scale, "length", "--length-scale"))
     surface = surface_from_dataset(args.data["surface"])
@@ -109,7 +116,7 @@ def run(args: argparse.Namespace) -> None:
     ds.attrs["surface_file"] = str(args.surface)
     write_dataset(ds, args.output,
                   provenance=args.provenance.using(*LEAK_METHODS))
-    print(format_table(ds))
+    print(format_table(ds, rate_unit=args.rate_unit))
 
 
 #: The note under the table for its rows marked "*".
@@ -119,31 +126,55 @@ EMPTY_WINDOW_NOTE = (
     "row are those of a window held open from outside, not a property of the seal; start "
     "--pressures higher, or use --boundary mirror (the whole scan analysed)")
 
+#: The note under the table for its rows marked "~" (a template: the window's cells along
+#: x and y, ``nx`` and ``ny``).
+FEW_CELLS_NOTE = (
+    f"~ the analysed window holds contact on fewer than {LEAK_MIN_CONTACT_CELLS} of its "
+    "{nx} x {ny} cells (a_c times its cells): no contact spot spans more than a few grid "
+    "cells, so a_c (over-counted by about 10 % of itself or more) and the gap and leak rate "
+    "those spots hold open are under-resolved; start --pressures higher, or check the row "
+    "on the scan interpolated to a finer grid")
 
-def format_table(ds: xr.Dataset) -> str:
-    """The leak curve of a (one-scan) leak dataset as a text table."""
+
+def format_table(ds: xr.Dataset, rate_unit: str | None = None) -> str:
+    """The leak curve of a (one-scan) leak dataset as a text table, its leak rates in
+    ``rate_unit`` (a volume per time, :func:`roughflow.units.parse_rate_unit`; default: the
+    dataset's own, m^3/s). Rows are marked after a_c where the analysed window holds no
+    contact cell ("*") or too few to resolve the contact ("~"), with a note under the
+    table for each mark used."""
+    from roughflow.units import parse_rate_unit
+
+    stored = str(ds["leak_rate"].attrs["units"])
+    unit = stored if rate_unit is None else str(rate_unit).strip()
+    per_unit = (parse_rate_unit(stored, "the dataset's leak_rate units")
+                / parse_rate_unit(unit, "rate_unit"))
+    qw = max(10, len(unit))  # a long unit widens the leak-rate columns
     d = ds.isel(scan=0)
     lines = [f"{d['scan'].item()}: boundary {ds.attrs['boundary']}, E* = "
              f"{ds.attrs['ref_pressure_Pa']:.4g} Pa, dp = {ds.attrs['fluid_pressure_Pa']:.4g} "
              f"Pa, eta = {ds.attrs['ref_viscosity_Pa_s']:.4g} Pa s, seal w = "
              f"{ds.attrs['seal_width_m']:.4g} m, l = {ds.attrs['seal_length_m']:.4g} m",
              f"{'p [Pa]':>10} {'a_c':>9}  {'gap':>9} {'perc x':>6} {'perc y':>6} "
-             f"{'sigma_x':>10} {'sigma_y':>10} {'Q_x':>10} {'Q_y':>10}",
+             f"{'sigma_x':>10} {'sigma_y':>10} {'Q_x':>{qw}} {'Q_y':>{qw}}",
              f"{'':>10} {'':>9}  {'m':>9} {'':>6} {'':>6} {'m^3/(Pa s)':>10} "
-             f"{'m^3/(Pa s)':>10} {'m^3/s':>10} {'m^3/s':>10}"]
-    empty = _empty_rows(d)
+             f"{'m^3/(Pa s)':>10} {unit:>{qw}} {unit:>{qw}}"]
+    marks = _row_marks(ds, d)
     for i in range(d.sizes["pressure"]):
         r = d.isel(pressure=i)
-        c, q, pc = r["conductance"].values, r["leak_rate"].values, r["percolating"].values
+        c, pc = r["conductance"].values, r["percolating"].values
+        q = r["leak_rate"].values * per_unit
         # 4 significant digits, not decimals: a_c = 1e-5 and exactly 0 read apart
         lines.append(f"{float(r['pressure']):10.4g} {float(r['area_fraction']):9.4g}"
-                     f"{'*' if empty[i] else ' '} {_mean_gap_m(ds, r):9.3e} "
+                     f"{marks[i]} {_mean_gap_m(ds, r):9.3e} "
                      f"{'yes' if pc[0] else 'no':>6} {'yes' if pc[1] else 'no':>6} "
-                     f"{c[0]:10.3e} {c[1]:10.3e} {q[0]:10.3e} {q[1]:10.3e}")
+                     f"{c[0]:10.3e} {c[1]:10.3e} {q[0]:{qw}.3e} {q[1]:{qw}.3e}")
     lines += _sealing_lines(ds, d)
     lines += _contact_pressure_line(d)
-    if empty.any():
+    if "*" in marks:
         lines.append(f"note: {EMPTY_WINDOW_NOTE}")
+    if "~" in marks:
+        nx, ny = _window_shape(ds)
+        lines.append(f"note: {FEW_CELLS_NOTE.format(nx=nx, ny=ny)}")
     warned = str(ds.attrs.get("scan_warnings", ""))
     if warned:  # said in the import's log, which a workflow's user may never read
         lines.append(f"note: the import warned: {warned}")
@@ -181,10 +212,20 @@ def _contact_pressure_line(d: xr.Dataset) -> list[str]:
             "the faces yield)"]
 
 
-def _empty_rows(d: xr.Dataset):
-    """Per row of the one-scan dataset ``d``: whether its analysed window holds no contact
-    cell (:func:`roughflow.leak.empty_window_pressures`' criterion, a_c exactly 0)."""
-    return d["area_fraction"].values == 0
+def _window_shape(ds: xr.Dataset) -> tuple[int, int]:
+    """The analysed window's cells along x and y."""
+    return int(ds.attrs["window_nx"]), int(ds.attrs["window_ny"])
+
+
+def _row_marks(ds: xr.Dataset, d: xr.Dataset) -> list[str]:
+    """Per row of the one-scan dataset ``d``: "*" where its analysed window holds no contact
+    cell (:func:`roughflow.leak.empty_window_rows`), "~" where it holds too few to resolve
+    the contact (:func:`roughflow.leak.few_cell_rows`), else " "."""
+    from roughflow.leak import empty_window_rows, few_cell_rows
+
+    area = d["area_fraction"].values
+    empty, few = empty_window_rows(area), few_cell_rows(area, _window_shape(ds))
+    return ["*" if e else "~" if f else " " for e, f in zip(empty, few, strict=True)]
 
 
 def _sealing_lines(ds: xr.Dataset, d: xr.Dataset) -> list[str]:
