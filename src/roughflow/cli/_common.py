@@ -173,19 +173,55 @@ def read_inputs(args: argparse.Namespace) -> None:
             args.data[dest] = read_dataset(value, kinds, what=what)
 
 
-def warn_if_nonperiodic_scan(ds, source: str, command: str) -> None:
+def warn_if_nonperiodic_scan(ds, source: str, command: str, treat: str | None = None) -> None:
     """Warn that ``command`` solves the measured scan of dataset ``ds`` (a surface file or a
     contact file made from one, with the scan's ``scan_periodic`` attribute) as a periodic
-    cell when the scan is not periodic: only ``roughflow leak`` treats its edges."""
+    cell when the scan is not periodic; ``treat``: the command's own option that treats
+    the edges (else only ``roughflow leak`` does)."""
     periodic = ds.attrs.get("scan_periodic")
     if periodic is None or bool(periodic):
         return
+    how = (f"`roughflow {command} {treat} {defaults.BOUNDARY}` treats the edges as "
+           "`roughflow leak` does" if treat else
+           f"`roughflow leak` treats the edges (--boundary, default {defaults.BOUNDARY})")
     logging.getLogger("roughflow.cli").warning(
         "%s holds a non-periodic scan: `roughflow %s` solves it as a periodic cell, whose "
         "wrap-around joins opposite edges with a step (on test windows that moved a_c* by "
-        "0.05 and ln sigma by 0.45 rms, docs/measured.md, 'Non-periodic scans'); "
-        "`roughflow leak` treats the edges (--boundary, default %s)",
-        source, command, defaults.BOUNDARY)
+        "0.05 and ln sigma by 0.45 rms, docs/measured.md, 'Non-periodic scans'); %s",
+        source, command, how)
+
+
+def number_or_quantity(text: str) -> float | str:
+    """A pressure option's value: a number (in E*), else the text of a quantity with its
+    unit (400MPa), converted with the modulus by :func:`pressure_in_e_star`."""
+    try:
+        return float(text)
+    except ValueError:
+        return text
+
+
+def pressure_in_e_star(value: float | str | None, modulus: float | None,
+                       flag: str) -> float | None:
+    """A pressure option ``flag`` (:func:`number_or_quantity`) in E*: a number is in E*
+    (refused next to ``--modulus``, which asks for units, except zero, zero in any unit), a
+    quantity is divided by ``modulus`` (Pa; refused without one) and keeps its sign (a
+    tension of the adhesive model). None stays None."""
+    from roughflow.units import parse_quantity
+
+    if value is None:
+        return None
+    if isinstance(value, str):
+        if modulus is None:
+            raise InputError(f"{flag} {value!r} has a unit: give --modulus (the pair's "
+                             "contact modulus E*, e.g. 200GPa) to express it in E*")
+        text = value.strip()  # parse_quantity takes magnitudes
+        sign = -1.0 if text.startswith("-") else 1.0
+        return sign * parse_quantity(text.lstrip("+-"), "pressure", flag) / modulus
+    if modulus is not None and value != 0:
+        raise InputError(f"{flag} {value!r} is a number in E*, but --modulus asks for "
+                         "pressures with their unit: give it with its unit (e.g. 400MPa), or "
+                         "leave --modulus out")
+    return value
 
 
 def add_backend(parser: argparse.ArgumentParser) -> None:

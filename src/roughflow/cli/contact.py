@@ -24,7 +24,9 @@ from ._common import (
     add_output,
     add_repulsion,
     adhesion_help,
+    number_or_quantity,
     on_backend,
+    pressure_in_e_star,
     refuse_given,
     resolve_adhesion,
     track_given,
@@ -49,7 +51,7 @@ def register(sub: argparse._SubParsersAction) -> None:
     track_given(p)  # the bearing model refuses the solver's options (_check_model_options)
     add_input(p, "surface", kinds="surface", what="surface file", metavar="SURFACE.nc",
               help="surface file ('roughflow surface')")
-    p.add_argument("--pressure", type=_number_or_quantity, default=None,
+    p.add_argument("--pressure", type=number_or_quantity, default=None,
                    help=f"mean applied pressure (elastic, adhesive) in {PRESSURE_UNIT}, or "
                         "with its unit (400MPa) and --modulus")
     p.add_argument("--modulus", default=None,
@@ -121,34 +123,13 @@ def run(args: argparse.Namespace) -> None:
           f"{result.area_fraction:.5f}, mean gap {result.mean_gap:.6g} (lengths in L)")
 
 
-def _number_or_quantity(text: str) -> float | str:
-    """--pressure: a number (in E*), else the text of a quantity with its unit."""
-    try:
-        return float(text)
-    except ValueError:
-        return text
-
-
 def _load(args: argparse.Namespace) -> tuple[float | None, float | None]:
     """(the load in E*, the modulus in Pa or None) from --pressure and --modulus."""
     from roughflow.units import parse_quantity
 
     modulus = (None if args.modulus is None
                else parse_quantity(args.modulus, "pressure", "--modulus"))
-    if isinstance(args.pressure, str):
-        if modulus is None:
-            raise InputError(f"--pressure {args.pressure!r} has a unit: give --modulus (the "
-                             "pair's contact modulus E*, e.g. 200GPa) to express it in E*")
-        # a tension (the adhesive model) keeps its sign; parse_quantity takes magnitudes
-        text = args.pressure.strip()
-        sign = -1.0 if text.startswith("-") else 1.0
-        size = parse_quantity(text.lstrip("+-"), "pressure", "--pressure")
-        return sign * size / modulus, modulus
-    if modulus is not None and args.pressure != 0:  # zero is zero in any unit
-        raise InputError(f"--modulus converts a --pressure given with its unit (e.g. "
-                         f"400MPa); --pressure {args.pressure!r} is a number in E*: give its "
-                         "unit, or leave --modulus out")
-    return args.pressure, modulus
+    return pressure_in_e_star(args.pressure, modulus, "--pressure"), modulus
 
 
 def _check_model_options(args: argparse.Namespace) -> None:

@@ -4,6 +4,7 @@ from __future__ import annotations
 
 import argparse
 import logging
+import math
 from typing import TYPE_CHECKING
 
 from roughflow.defaults import (
@@ -32,14 +33,23 @@ def register(sub: argparse._SubParsersAction) -> None:
             "`roughflow contact`, solve div(u^3/(12 eta) grad p) = 0 with a unit pressure "
             "drop between reservoirs at the two ends of each requested axis (periodic "
             "across it), and write sigma_x / sigma_y (scalar variables and attributes), "
-            "the pressure and the flux fields. sigma = 0 when the gap does not percolate."
+            "the pressure and the flux fields. sigma = 0 when the gap does not percolate. "
+            "sigma is in L^3/eta; for a contact of an imported scan (which records its L in "
+            "metres) --viscosity 1mPa.s also gives it in m^3/(Pa s)."
         ),
     )
     add_input(p, "input", kinds="contact", what="contact file", metavar="CONTACT.nc",
               help="contact file with a gap(x, y) variable (roughflow contact)")
     p.add_argument("--axis", type=axis_arg, default=None, metavar="{x,y,both}",
                    help="flow direction(s): x, y or both (both)")
-    p.add_argument("--eta", type=float, default=1.0, help="viscosity eta (1)")
+    p.add_argument("--eta", type=float, default=None,
+                   help="viscosity eta as a bare number (1): sigma is in L^3 / eta")
+    p.add_argument("--viscosity", default=None,
+                   help="instead of --eta: the fluid's viscosity with its unit (e.g. 1mPa.s), "
+                        "for a contact file that records its length L in metres (a scan from "
+                        "roughflow import): the output records it (ref_viscosity_Pa_s, "
+                        "eta = 1 in its units) so that roughflow.units.registry converts "
+                        "sigma to m^3/(Pa s), and the summary prints sigma in m^3/(Pa s)")
     p.add_argument("--tol", type=float, default=FLOW_TOL,
                    help=f"relative residual of the linear solve ({FLOW_TOL:g})")
     p.add_argument("--sigma-tol", type=float, default=None, metavar="RTOL",
@@ -87,21 +97,22 @@ def run(args: argparse.Namespace) -> None:
 
     sigma_tol = check_sigma_tol(args.sigma_tol)
     ds_in = args.data["input"]
+    eta, viscosity = _viscosity(args, ds_in)
     gap, contact, lx, ly = _read_gap(ds_in)
     warn_if_nonperiodic_scan(ds_in, args.input, "flow")
     axes = (0, 1) if args.axis is None else (args.axis,)
     results = {}
     for ax in axes:
-        results[ax] = solve(gap, ax, lx=lx, ly=ly, eta=args.eta, tol=args.tol,
+        results[ax] = solve(gap, ax, lx=lx, ly=ly, eta=eta, tol=args.tol,
                             method=args.method, sigma_tol=sigma_tol)
         r = results[ax]
         log.info("sigma_%s = %.6e (%s, %d iterations, residual %.1e, sigma's error at most "
                  "%.1e)", AXIS_NAMES[ax], r.sigma, r.method, r.iterations, r.residual,
                  r.sigma_error)
-    out = flow_dataset(results, contact, lx=lx, ly=ly, eta=args.eta, tol=args.tol,
+    out = flow_dataset(results, contact, lx=lx, ly=ly, eta=eta, tol=args.tol,
                        sigma_tol=sigma_tol)
     out.attrs["source"] = str(args.input)
-    from roughflow.units import REFERENCE_ATTRS
+    from roughflow.units import REF_VISCOSITY, REFERENCE_ATTRS
 
     # the SI values of the reference units hold for this file's lengths too (a scan's L):
     # kept under their own names, so that units.registry(ds.attrs) converts the flow file
@@ -112,13 +123,58 @@ def run(args: argparse.Namespace) -> None:
             out.attrs[k] = v
         elif k not in ("title", "lx", "ly", *PROVENANCE_ATTRS):
             out.attrs[f"contact_{k}"] = v
+    if viscosity is not None:  # the unit of this file's eta (= 1) and sigma
+        out.attrs[REFERENCE_ATTRS[REF_VISCOSITY][0]] = viscosity
     writers = [dataset_writer(out, args.output, provenance=args.provenance.using("reynolds"))]
     if args.plot:
         writers.append(figure_writer(_plot(results, contact), args.plot, dpi=120))
     write_together(writers)  # the flow file and its plot appear together or not at all
     print(f"{args.output}: " + ", ".join(f"sigma_{AXIS_NAMES[ax]} = {r.sigma:.6e}"
                                          for ax, r in results.items())
-          + f" (L^3 / eta, eta = {args.eta:g})")
+          + f" (L^3 / eta, eta = {eta:g})" + ("" if viscosity is None else _in_si(out, results)))
+
+
+def _viscosity(args: argparse.Namespace, ds) -> tuple[float, float | None]:
+    """(eta of the solve, --viscosity in Pa s or None), after refusing --viscosity with
+    --eta, or for a contact file without a physical length (ref_length_m): its sigma, in
+    L^3/eta, has no SI value there."""
+    from roughflow.errors import InputError
+
+    if args.viscosity is None:
+        return (1.0 if args.eta is None else args.eta), None
+    if args.eta is not None:
+        raise InputError(f"--eta {args.eta:g} and --viscosity {args.viscosity!r}: give one "
+                         "(--viscosity sets eta = 1 in its units)")
+    from roughflow.units import REF_LENGTH, REFERENCE_ATTRS, parse_quantity
+
+    viscosity = parse_quantity(args.viscosity, "viscosity", "--viscosity")
+    key = REFERENCE_ATTRS[REF_LENGTH][0]
+    try:
+        length = float(ds.attrs.get(key, float("nan")))
+    except (TypeError, ValueError):
+        length = float("nan")
+    if not (math.isfinite(length) and length > 0):
+        raise InputError(
+            f"--viscosity {args.viscosity!r}: {args.input} records no length in metres "
+            f"({key}: a contact of a scan from `roughflow import`), so its sigma in L^3/eta "
+            "has no value in m^3/(Pa s) (a modulus, ref_pressure_Pa, does not fix L); give "
+            "--eta, in the units of your viscosity, instead")
+    return 1.0, viscosity
+
+
+def _in_si(out, results: dict) -> str:
+    """The summary's sigmas in m^3/(Pa s), converted as roughflow.units.registry converts
+    the flow file's (its ref_length_m and ref_viscosity_Pa_s)."""
+    from roughflow.datasets.units import CONDUCTANCE_SI, SIGMA_UNITS
+    from roughflow.units import REF_LENGTH, REF_VISCOSITY, registry
+
+    ureg = registry(out.attrs)
+    scales = (f"L = {ureg.Quantity(1, REF_LENGTH).to('m').magnitude:.4g} m, eta = "
+              f"{ureg.Quantity(1, REF_VISCOSITY).to('Pa*s').magnitude:.4g} Pa s")
+    return f"; in SI ({scales}): " + ", ".join(
+        f"sigma_{AXIS_NAMES[ax]} = "
+        f"{ureg.Quantity(r.sigma, SIGMA_UNITS).to(CONDUCTANCE_SI).magnitude:.6e}"
+        for ax, r in results.items()) + " m^3/(Pa s)"
 
 
 def _plot(results: dict, contact: np.ndarray):
