@@ -340,7 +340,7 @@ def test_docs_reference_list_is_the_citation_module():
     entries = [" ".join(e.split()) for e in re.split(r"\n- ", docs) if e.startswith("[")]
     assert entries == [" ".join(e.split()) for e in re.split(r"\n- ", "\n" + markdown())
                        if e.startswith("[")]
-    assert len(entries) == 16
+    assert len(entries) == 17
 
 
 def test_citation_cff_and_license_are_current():

@@ -111,6 +111,9 @@ REFERENCES = {r.key: r for r in (
               "A numerical method for solving rough contact problems based on the multi-level "
               "multi-summation and conjugate gradient techniques", "Wear", 1999,
               "10.1016/S0043-1648(99)00113-1", volume="231", pages="206"),
+    Reference("A07", ("A. Almqvist", "F. Sahlin", "R. Larsson", "S. Glavatskih"),
+              "On the dry elasto-plastic contact of nominally flat surfaces", "Tribol. Int.",
+              2007, "10.1016/j.triboint.2005.11.008", volume="40", pages="574"),
     Reference("HK76", ("J. Hoshen", "R. Kopelman"), "Percolation and cluster distribution",
               "Phys. Rev. B", 1976, "10.1103/PhysRevB.14.3438", volume="14", pages="3438"),
     Reference("Br35", ("D. A. G. Bruggeman",),
@@ -151,6 +154,7 @@ METHODS = {
     "gfmd": ("CM06", "ZMM19", "PK99"),       # GFMD, mass weighting, constrained CG (hard wall)
     "fire": ("B06",),                        # FIRE: the hard wall with adhesion
     "cg": ("PK99",),                         # constrained conjugate gradients
+    "hardness": ("A07",),                    # pressure capped at the hardness (cg)
     "adhesion": ("WM21",),                   # the paper's short-range adhesion
     "bearing": ("WM21",),                    # bearing-area (overlap) model
     "percolation": ("HK76", "D12", "WM21"),  # cluster labels, a_c*

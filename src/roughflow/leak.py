@@ -74,7 +74,10 @@ class LeakCurve:
     boundary: the non-periodic treatment (:mod:`roughflow.boundary`).
     rms_gradient: of the surface (its pressures are in E*; E* gbar only when it is 1).
     window_lx, window_ly, window_shape: size (L) and grid of the analysed window.
-    settings: the tolerances used, and ``sealing_searched`` (1, or 0 with ``sealing=False``).
+    settings: the tolerances used, and ``sealing_searched`` (1, or 0 with ``sealing=False``);
+        ``hardness`` (E*) where the rows were solved with one.
+    plastic_fraction: with a ``hardness``, the plastic share of the analysed window per
+        row (cells at the cap; part of ``area_fraction``); None without.
     An ``area_fraction`` of exactly 0 marks a row whose analysed window holds no contact
     (:func:`empty_window_pressures`), one of fewer than
     :data:`~roughflow.defaults.LEAK_MIN_CONTACT_CELLS` window cells an under-resolved one
@@ -99,6 +102,7 @@ class LeakCurve:
     window_ly: float
     window_shape: tuple[int, int]
     settings: dict = field(default_factory=dict)
+    plastic_fraction: np.ndarray | None = None
 
 
 def check_pressures(pressures: ArrayLike) -> np.ndarray:
@@ -177,7 +181,8 @@ def leak_curve(surface: Surface, pressures: ArrayLike, *, boundary: str | None =
                flow_sigma_tol: float | None = FLOW_SIGMA_TOL,
                threshold_tol: float = THRESHOLD_TOL,
                threshold_contact_tol: float = THRESHOLD_CONTACT_TOL,
-               sealing: bool = True, threads: int | None = None) -> LeakCurve:
+               sealing: bool = True, threads: int | None = None,
+               hardness: float | None = None) -> LeakCurve:
     """Contact, percolation along x and y, and Reynolds conductances of ``surface`` at each
     nominal pressure (E*, increasing; each solve warm-starts from the previous one), and
     the sealing thresholds (:func:`sealing_search`, skipped with ``sealing=False``).
@@ -189,6 +194,11 @@ def leak_curve(surface: Surface, pressures: ArrayLike, *, boundary: str | None =
     at which the analysed window holds no contact cell, or too few to resolve the contact,
     are logged as warnings (:data:`EMPTY_WINDOW_WARNING`, :func:`empty_window_pressures`;
     :data:`FEW_CELLS_WARNING`, :func:`few_cell_pressures`).
+
+    ``hardness`` (E*, as the pressures): every row's contact is solved with the pressure
+    capped there (elastic-perfectly-plastic, ``contact.solve(..., hardness=)``, by cg); the
+    sealing search is elastic, so a hardness needs ``sealing=False``, and each row's cell
+    pressure must lie below it.
     """
     p = check_pressures(pressures)
     check_pressure_scale(p)
@@ -200,15 +210,27 @@ def leak_curve(surface: Surface, pressures: ArrayLike, *, boundary: str | None =
     for name, v in (("flow_tol", flow_tol), ("threshold_tol", threshold_tol)):
         require_positive(name, v)
     check_sigma_tol(flow_sigma_tol)
+    if hardness is not None:
+        if sealing:
+            raise InputError("hardness= caps the rows' contact pressures, but the sealing "
+                             "search is elastic (its threshold would not be the capped "
+                             "contact's): give sealing=False (roughflow leak --no-sealing)")
+        hardness = require_positive("hardness", hardness)
     method = default_boundary(surface) if boundary is None else boundary
     emb = embed(surface, method)
+    if hardness is not None and emb.cell_pressure(p[-1]) >= hardness:
+        raise InputError(
+            f"the nominal pressure {p[-1]:.4g} E* is not below the hardness {hardness:.4g} "
+            f"E* (on the solver cell of boundary {method!r}: {emb.cell_pressure(p[-1]):.4g} "
+            "E*): every cell would be plastic; give pressures below the hardness")
     if sealing:  # the sealing search's check, before the curve's solves
         check_area_tol(threshold_tol, emb.shape)
     # a leak curve holds what a pressure ladder holds, on the embedded grid
     check_memory("ladder", emb.surface.heights.shape, what="a leak curve")
     gbar = surface.gbar
     curve = pressure_curve(emb, p, contact_tol=contact_tol, flow_tol=flow_tol,
-                           flow_sigma_tol=flow_sigma_tol, threads=threads)
+                           flow_sigma_tol=flow_sigma_tol, threads=threads, hardness=hardness)
+    plastic = curve.pop("plastic_fraction")
     _warn_sparse_rows(p, curve["area_fraction"], emb.shape, method)
     thresholds = (sealing_search(emb, gbar=gbar, tol=threshold_tol,
                                  contact_tol=threshold_contact_tol, threads=threads)
@@ -222,7 +244,9 @@ def leak_curve(surface: Surface, pressures: ArrayLike, *, boundary: str | None =
         window_shape=emb.shape,
         settings={"contact_tol": contact_tol, "flow_tol": flow_tol,
                   **({} if flow_sigma_tol is None else {"flow_sigma_tol": flow_sigma_tol}),
-                  **searched, "sealing_searched": int(sealing)})
+                  **searched, "sealing_searched": int(sealing),
+                  **({} if hardness is None else {"hardness": hardness})},
+        plastic_fraction=plastic)
 
 
 #: Logged by :func:`leak_curve` (arguments: the boundary method, the pressures in E*) where
@@ -312,22 +336,27 @@ def _warn_sparse_rows(pressures: np.ndarray, area_fraction: np.ndarray,
 
 def pressure_curve(emb: Embedding, pressures: np.ndarray, *, contact_tol: float = CONTACT_TOL,
                    flow_tol: float = FLOW_TOL, flow_sigma_tol: float | None = FLOW_SIGMA_TOL,
-                   threads: int | None = None) -> dict:
+                   threads: int | None = None, hardness: float | None = None) -> dict:
     """Contact area, mean gap, percolation and conductances of the window of ``emb`` at
     each nominal pressure (increasing; warm-started solves): the :class:`LeakCurve` fields
     ``area_fraction``, ``mean_gap``, ``percolating``, ``sigma``, ``iterations``,
-    ``residual``, ``flow_imbalance``, ``flow_sigma_error``."""
+    ``residual``, ``flow_imbalance``, ``flow_sigma_error``, and ``plastic_fraction`` (of the
+    window; None without a ``hardness``, the cap of the contact pressure in E*)."""
     n = len(pressures)
     area, gap, its, res = (np.zeros(n) for _ in range(4))
+    plastic = None if hardness is None else np.zeros(n)
     spans = np.zeros((n, 2), dtype=bool)
     sigma, imbalance, sigma_error = (np.zeros((n, 2)) for _ in range(3))
     state: ContactResult | None = None
     flows = None  # the last pressure's, whose orderings the next solves reuse
     for i, pn in enumerate(pressures):
         state = solve(emb.surface, emb.cell_pressure(pn), tol=contact_tol, init=state,
-                      threads=threads)
+                      threads=threads, hardness=hardness,
+                      method=None if hardness is None else "cg")  # the cap's method
         seen = emb.observe(state)
         area[i], gap[i] = seen.area_fraction, seen.mean_gap
+        if plastic is not None:
+            plastic[i] = float(state.plastic[emb.window].mean())
         its[i], res[i] = state.iterations, state.residual
         flows = flow.flow_both_axes(seen.gap, ~seen.contact, lx=emb.lx, ly=emb.ly,
                                     periodic=emb.periodic, previous=flows, tol=flow_tol,
@@ -341,4 +370,4 @@ def pressure_curve(emb: Embedding, pressures: np.ndarray, *, contact_tol: float 
                  area[i], spans[i, 0], spans[i, 1], sigma[i, 0], sigma[i, 1])
     return {"area_fraction": area, "mean_gap": gap, "percolating": spans, "sigma": sigma,
             "iterations": its.astype(np.int64), "residual": res, "flow_imbalance": imbalance,
-            "flow_sigma_error": sigma_error}
+            "flow_sigma_error": sigma_error, "plastic_fraction": plastic}

@@ -58,6 +58,11 @@ def register(sub: argparse._SubParsersAction) -> None:
                    help="contact modulus E* of the pair (e.g. 200GPa): --pressure may then "
                         "carry its unit, and the output records E* (ref_pressure_Pa) so "
                         "that roughflow.units.registry converts its pressures to Pa")
+    p.add_argument("--hardness", type=number_or_quantity, default=None,
+                   help=f"elastic model: cap the local pressure at this hardness (elastic-"
+                        f"perfectly-plastic; in {PRESSURE_UNIT}, or with its unit, e.g. "
+                        "2GPa, and --modulus); solved by cg; writes the plastic mask and "
+                        "depth (docs/contact.md, 'Hardness')")
     p.add_argument("--model", choices=MODELS, default=DEFAULT_MODEL,
                    help="elastic (hard wall), adhesive (short-range adhesion) or bearing "
                         "(overlap model, no elasticity) (elastic)")
@@ -91,7 +96,7 @@ def run(args: argparse.Namespace) -> None:
 
     on_backend(args)  # CuPy and a GPU, before any work
     _check_model_options(args)
-    pressure, modulus = _load(args)
+    pressure, modulus, hardness = _load(args)
     surface = surface_from_dataset(args.data["surface"])
     if args.model != "bearing":  # the bearing model is local: no edges to join
         warn_if_nonperiodic_scan(args.data["surface"], args.surface, "contact")
@@ -102,7 +107,7 @@ def run(args: argparse.Namespace) -> None:
     result = solve(
         surface, pressure, model=args.model, method=args.method,
         area_fraction=args.area_fraction, tol=args.tol, max_iter=args.max_iter,
-        adhesion=adhesion, backend=args.backend,
+        adhesion=adhesion, backend=args.backend, hardness=hardness,
     )
     # the bearing model cuts the heights: it has no pressure to report (NaN in the result)
     load = "" if result.model == "bearing" else f"p = {result.pressure:.6g}"
@@ -112,29 +117,53 @@ def run(args: argparse.Namespace) -> None:
              time.perf_counter() - t0)
     methods = contact_methods(result.model, result.method,
                               None if adhesion is None else adhesion.repulsion)
+    if hardness is not None:
+        methods += ("hardness",)
     ds = contact_dataset(surface, result, adhesion, tol=args.tol)
     if modulus is not None:
         from roughflow.units import REF_PRESSURE, REFERENCE_ATTRS
 
         ds.attrs[REFERENCE_ATTRS[REF_PRESSURE][0]] = modulus
         load += f" ({result.pressure * modulus:.6g} Pa)"
+    plastic = ""
+    if hardness is not None:
+        cap = f"{hardness:.6g}" + ("" if modulus is None else f" ({hardness * modulus:.6g} Pa)")
+        plastic = f", plastic {result.plastic_fraction:.5f} (hardness {cap})"
     write_dataset(ds, args.output, provenance=args.provenance.using(*methods))
     print(f"{args.output}: {result.model} contact{load and f', {load}'}: a_c = "
-          f"{result.area_fraction:.5f}, mean gap {result.mean_gap:.6g} (lengths in L)")
+          f"{result.area_fraction:.5f}{plastic}, mean gap {result.mean_gap:.6g} (lengths in L)")
 
 
-def _load(args: argparse.Namespace) -> tuple[float | None, float | None]:
-    """(the load in E*, the modulus in Pa or None) from --pressure and --modulus."""
+def _load(args: argparse.Namespace) -> tuple[float | None, float | None, float | None]:
+    """(the load in E*, the modulus in Pa or None, the hardness in E* or None) from
+    --pressure, --modulus and --hardness; a load not below the hardness is refused here, in
+    the options' words and units."""
     from roughflow.units import parse_quantity
 
     modulus = (None if args.modulus is None
                else parse_quantity(args.modulus, "pressure", "--modulus"))
-    return pressure_in_e_star(args.pressure, modulus, "--pressure"), modulus
+    load = pressure_in_e_star(args.pressure, modulus, "--pressure")
+    hardness = pressure_in_e_star(args.hardness, modulus, "--hardness")
+    if hardness is not None:
+        if not hardness > 0:  # a tension or zero has no meaning as a cap (nan included)
+            raise InputError(f"--hardness must be positive, got {args.hardness}")
+        if load is not None and load >= hardness:
+            raise InputError(f"--pressure {args.pressure} is not below --hardness "
+                             f"{args.hardness}: every cell would be plastic; give a "
+                             "hardness above the mean pressure")
+    return load, modulus, hardness
 
 
 def _check_model_options(args: argparse.Namespace) -> None:
     """Refuse options that the chosen model does not use (they would be ignored), and a
     missing load in the command's words (the library's says ``pressure=``)."""
+    if args.hardness is not None and args.model != "elastic":
+        raise InputError(f"--hardness applies to --model elastic only, not --model "
+                         f"{args.model}" + (": it cuts the heights and has no pressure to cap"
+                                            if args.model == "bearing" else ""))
+    if args.hardness is not None and (args.method == "gfmd" or args.backend != "cpu"):
+        raise InputError("--hardness is solved by --method cg on the CPU (gfmd has no "
+                         "pressure cap): leave --method and --backend out")
     if args.model != "bearing":
         if args.pressure is None:
             raise InputError(f"--model {args.model} needs --pressure (the mean pressure in "

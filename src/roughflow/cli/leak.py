@@ -17,7 +17,7 @@ from roughflow.defaults import (
 )
 from roughflow.errors import InputError
 
-from ._common import add_input, add_output
+from ._common import add_input, add_output, number_or_quantity, pressure_in_e_star
 
 if TYPE_CHECKING:  # xarray is imported when the command runs, not for --help
     import xarray as xr
@@ -68,6 +68,11 @@ def register(sub: argparse._SubParsersAction) -> None:
                    help="unit of the table's leak rates Q_x, Q_y: a volume per time such as "
                         "mm^3/s, mL/min, uL/h or L/min (default: the output file's m^3/s; the "
                         "file keeps m^3/s whatever this says)")
+    p.add_argument("--hardness", type=number_or_quantity, default=None,
+                   help="hardness of the softer face, with its unit (e.g. 2GPa): the rows' "
+                        "contact pressures are capped there (elastic-perfectly-plastic; "
+                        "docs/contact.md, 'Hardness'); the sealing search is elastic, so "
+                        "this needs --no-sealing")
     p.add_argument("--no-sealing", action="store_true",
                    help="skip the sealing-pressure search (often most of the run time); the "
                         "sealing variables of the output are then NaN")
@@ -94,6 +99,19 @@ def run(args: argparse.Namespace) -> None:
     length = parse_quantity(args.seal_length, "length", "--seal-length")
     if args.rate_unit is not None:  # format_table converts; checked here, before any solve
         parse_rate_unit(args.rate_unit, "--rate-unit")
+    if not isinstance(args.hardness, str | None):  # leak's pressures all carry units
+        raise InputError(f"--hardness {args.hardness:g} needs its unit, e.g. 2GPa")
+    hardness = pressure_in_e_star(args.hardness, modulus, "--hardness")
+    if hardness is not None:
+        if not hardness > 0:
+            raise InputError(f"--hardness must be positive, got {args.hardness}")
+        if not args.no_sealing:
+            raise InputError("--hardness caps the rows' contact pressures, but the sealing "
+                             "search is elastic (its sealing pressure would not be the capped "
+                             "contact's): add --no-sealing")
+        if pressures.max() >= hardness * modulus:
+            raise InputError(f"--pressures reach {pressures.max():.4g} Pa, not below "
+                             f"--hardness {args.hardness}: every cell would be plastic")
     given = (None if args.length_scale is None
              else parse_quantity(args.length_scale, "length", "--length-scale"))
     surface = surface_from_dataset(args.data["surface"])
@@ -109,13 +127,14 @@ def run(args: argparse.Namespace) -> None:
     p = check_pressures(scales.pressure_from_si(pressures))
     curve = leak_curve(surface, p, boundary=args.boundary, contact_tol=args.contact_tol,
                        threshold_tol=args.threshold_tol, sealing=not args.no_sealing,
-                       threads=args.threads)
+                       threads=args.threads, hardness=hardness)
     name = args.name or Path(args.surface).stem
     ds = leak_dataset(curve, surface, scales=scales, fluid_pressure=fluid, seal_width=width,
                       seal_length=length, name=name)
     ds.attrs["surface_file"] = str(args.surface)
     write_dataset(ds, args.output,
-                  provenance=args.provenance.using(*LEAK_METHODS))
+                  provenance=args.provenance.using(
+                      *LEAK_METHODS, *(("cg", "hardness") if hardness is not None else ())))
     print(format_table(ds, rate_unit=args.rate_unit))
 
 
@@ -170,6 +189,7 @@ def format_table(ds: xr.Dataset, rate_unit: str | None = None) -> str:
                      f"{c[0]:10.3e} {c[1]:10.3e} {q[0]:{qw}.3e} {q[1]:{qw}.3e}")
     lines += _sealing_lines(ds, d)
     lines += _contact_pressure_line(d)
+    lines += _plastic_lines(ds)
     if "*" in marks:
         lines.append(f"note: {EMPTY_WINDOW_NOTE}")
     if "~" in marks:
@@ -195,10 +215,21 @@ def _mean_gap_m(ds: xr.Dataset, row: xr.Dataset) -> float:
     return float(row["mean_gap"]) * float(ds.attrs["ref_length_m"])
 
 
+def _plastic_lines(ds: xr.Dataset) -> list[str]:
+    """With --hardness: the cap and the plastic share of each row's contact area."""
+    if "hardness_Pa" not in ds.attrs:
+        return []
+    import numpy as np
+
+    shares = ", ".join(f"{v:.4g}" for v in np.ravel(ds["plastic_fraction"].values))
+    return [f"hardness {float(ds.attrs['hardness_Pa']):.4g} Pa caps the contact pressure "
+            f"(elastic-perfectly-plastic); plastic area fraction per row: {shares}"]
+
+
 def _contact_pressure_line(d: xr.Dataset) -> list[str]:
     """The range of the mean pressure on the contacts, p / a_c, over the table's rows: the
     model is purely elastic, and the examples reach GPa, beyond most metals' hardness (a seal
-    engineer has to compare; nothing here knows the hardness)."""
+    engineer has to compare; without --hardness nothing here knows the hardness)."""
     import numpy as np
 
     p = np.asarray(d["pressure"].values, dtype=float)
@@ -207,6 +238,12 @@ def _contact_pressure_line(d: xr.Dataset) -> list[str]:
     if not touching.any():
         return []
     held = p[touching] / a[touching]
+    if "hardness_Pa" in d.attrs:
+        # the local pressure is at most the hardness, but the mean over a window's contact
+        # is not the cell's (the window's share of the load is not its share of the area)
+        return [f"mean pressure on the contacts p/a_c: {held.min():.3g} - {held.max():.3g} "
+                f"Pa (local pressures capped at the hardness "
+                f"{float(d.attrs['hardness_Pa']):.4g} Pa)"]
     return [f"mean pressure on the contacts p/a_c: {held.min():.3g} - {held.max():.3g} Pa "
             "(the model is purely elastic: where this exceeds the softer face's hardness, "
             "the faces yield)"]

@@ -17,7 +17,9 @@ class SolverOutput:
     gap: interfacial separation >= 0; contact: boolean contact mask;
     separation: mean plane of the elastic body relative to the surface's mean plane;
     iterations, residual, converged: the method's diagnostics (residual in units of the
-    rms height, see ``roughflow.contact.solve``).
+    rms height, see ``roughflow.contact.solve``);
+    plastic, plastic_depth: a solve with a hardness (``polonsky_keer(hardness=)``) only,
+    else None: the mask of the cells at the cap and their plastic depth (0 elsewhere).
     """
 
     __repr__ = summary_repr
@@ -29,6 +31,8 @@ class SolverOutput:
     iterations: int
     residual: float
     converged: bool
+    plastic: np.ndarray | None = None
+    plastic_depth: np.ndarray | None = None
 
 
 @dataclass(frozen=True, eq=False)
@@ -57,6 +61,14 @@ class ContactResult:
     model, method: what produced the result.
     separation: position of the elastic body's mean plane relative to the surface's mean
         plane (the "d" of the bearing model).
+    hardness: the pressure cap H of an elastic-perfectly-plastic solve (``solve(...,
+        hardness=)``, units of ``pressure``), else None; then also
+    plastic: boolean mask of the plastic cells (contact_pressure == hardness; part of
+        ``contact``, gap 0);
+    plastic_depth: how far the rigid surface penetrates the elastic body's surface there
+        (units L, >= 0; 0 off the plastic cells): the permanent indentation the model
+        leaves out of the elastic field;
+    plastic_fraction: plastic.mean() (NaN without a hardness).
 
     Warm starts (``solve(..., init=result)``) use ``contact_pressure`` (cg) or
     ``heights + gap`` (gfmd), so any result on the same surface can seed any method.
@@ -76,10 +88,15 @@ class ContactResult:
     model: str
     method: str
     separation: float = float("nan")
+    hardness: float | None = None
+    plastic: np.ndarray | None = None
+    plastic_depth: np.ndarray | None = None
+    plastic_fraction: float = float("nan")
 
     def scalars(self) -> dict:
         """Every scalar field, for netCDF attributes; no ``pressure`` for the bearing model
-        (a rigid cut, no load: a NaN there read as a failed solve)."""
+        (a rigid cut, no load: a NaN there read as a failed solve), ``hardness`` and
+        ``plastic_fraction`` only for a solve with a hardness."""
         out = {
             "area_fraction": self.area_fraction,
             "mean_gap": self.mean_gap,
@@ -93,4 +110,7 @@ class ContactResult:
         }
         if self.model == "bearing":
             del out["pressure"]
+        if self.hardness is not None:
+            out["hardness"] = self.hardness
+            out["plastic_fraction"] = self.plastic_fraction
         return out

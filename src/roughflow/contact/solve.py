@@ -67,6 +67,7 @@ def solve(
     setup: HardWallSetup | None = None,
     work: HardWallWork | None = None,
     backend: str = DEFAULT_BACKEND,
+    hardness: float | None = None,
 ) -> ContactResult:
     """Contact of the rigid rough ``surface`` with a flat elastic half-space (E* = 1).
 
@@ -128,12 +129,25 @@ def solve(
       ``"cpu"`` (default) or ``"cupy"``: the elastic gfmd solve on a CUDA GPU through CuPy
       (:mod:`roughflow.gpu`), the same algorithm and tolerance; the result's arrays are
       numpy. Not with ``work=`` (its arrays live on the CPU).
+    hardness:
+      the elastic model only: cap H of the local pressure (same units as ``pressure``,
+      finite, above it), the elastic-perfectly-plastic (saturated pressure) model: 0 <= p
+      <= H, cells at H are plastic, count as contact with gap 0, and the rigid surface
+      penetrates the elastic body there by the result's ``plastic_depth``
+      (docs/contact.md, "Hardness"). Solved by ``cg`` (Polonsky-Keer stages on the
+      plastic set, ``contact/cg.py``): ``method=None`` then means ``"cg"`` (logged),
+      ``method="gfmd"`` and ``backend="cupy"`` (gfmd's), ``setup=`` and ``work=`` are
+      refused. A hardness above every pressure of the elastic cg solve gives its result
+      bit for bit; ``max_iter`` bounds the iterations of all stages together.
     """
     if model not in MODELS:
         raise InputError(f"model must be one of {MODELS}, got {model!r}")
     if not isinstance(surface, Surface):
         raise InputError(f"surface must be a roughflow Surface, got {type(surface).__name__}")
     heights = require_field("surface heights", surface.heights)
+    if hardness is not None:
+        method = _check_hardness(hardness, model, method, backend, setup, work)
+        hardness = float(hardness)
     if check_backend(backend, model, method, work is not None) == "cupy":
         gpu_check_memory(heights.shape, "an elastic contact solve on the GPU")
     check_memory("bearing" if model == "bearing" else "contact", heights.shape,
@@ -159,6 +173,11 @@ def solve(
         if adhesion is not None:
             raise InputError("adhesion= is only for model='adhesive'")
         check_resolved_load(load, surface.gbar, heights.shape)
+        if hardness is not None and load >= hardness:
+            raise InputError(
+                f"pressure {load:g} E* is not below hardness={hardness:g} E*: every cell "
+                "would be plastic (a cap H carries a mean pressure below H only with some "
+                "cells free); give a pressure below the hardness")
     else:
         load = require_finite("pressure", pressure)
         if not isinstance(adhesion, Adhesion):
@@ -218,7 +237,8 @@ def solve(
         if init is not None and init.model != "bearing":
             p0 = init.contact_pressure
         out = polonsky_keer(
-            heights, lx, ly, load, tol=tol, max_iter=int(max_iter), p0=p0, threads=threads
+            heights, lx, ly, load, tol=tol, max_iter=int(max_iter), p0=p0, threads=threads,
+            hardness=hardness,
         )
     else:
         from .gfmd import gfmd
@@ -290,6 +310,11 @@ def solve(
         model=model,
         method=method,
         separation=float(out.separation),
+        hardness=hardness,
+        plastic=out.plastic,
+        plastic_depth=out.plastic_depth,
+        plastic_fraction=(float("nan") if out.plastic is None
+                          else float(np.count_nonzero(out.plastic)) / out.plastic.size),
     )
 
 
@@ -342,6 +367,37 @@ def check_resolved_load(pressure: float, gbar: float, shape: tuple[int, int]) ->
             f"{CONTACT_MIN_CELLS:g} of one cell in contact there, the contact is a single "
             "cell from about a thousand times that load down, and the solver's load balance "
             "reaches round-off")
+
+
+def _check_hardness(hardness, model: str, method: str | None, backend: str, setup,
+                    work) -> str:
+    """The method of a solve with ``hardness=``: a positive finite number, for the elastic
+    model, solved by cg, the only method with the pressure cap (``method=None`` becomes
+    "cg", logged; an explicit "gfmd" is refused rather than overridden, and so are gfmd's
+    ``backend="cupy"``, ``setup=`` and ``work=``)."""
+    if isinstance(hardness, (bool, np.bool_)):
+        raise InputError(f"hardness must be a pressure (E*), got {hardness!r}")
+    h = require_positive("hardness", hardness)
+    if h > CONTACT_PRESSURE_MAX:
+        raise InputError(
+            f"hardness {h:g} E* is above {CONTACT_PRESSURE_MAX:g} E*: hardnesses here are in "
+            "units of the contact modulus E* (a steel's 2 GPa against E* = 115 GPa is "
+            "0.017); from Python, convert pascals with roughflow.units.Scales.pressure_from_si")
+    if model != "elastic":
+        why = ("it cuts the heights and has no pressure to cap" if model == "bearing" else
+               "the cap is implemented for the hard-wall elastic model only")
+        raise InputError(f"hardness= is for model='elastic', got model={model!r}: {why}")
+    if method == "gfmd":
+        raise InputError("hardness= is solved by method='cg' (Polonsky-Keer with the pressure "
+                         "cap); gfmd has no cap: leave method out or give method='cg'")
+    for name, value in (("backend='cupy'", backend == "cupy"), ("setup=", setup is not None),
+                        ("work=", work is not None)):
+        if value:
+            raise InputError(f"{name} serves gfmd solves; hardness= solves with method='cg'")
+    if method is None:
+        log.info("hardness=%g: solving with method='cg' (the method with the pressure cap)",
+                 h)
+    return "cg"
 
 
 def _check_method(method: str | None) -> str:

@@ -150,6 +150,11 @@ def leak_dataset(curve: LeakCurve, surface: Surface, *, scales: Scales, fluid_pr
         "rms_gradient": ("scan", [curve.rms_gradient], {
             "units": DIMENSIONLESS, "long_name": "rms gradient gbar of the surface"}),
     }
+    if curve.plastic_fraction is not None:  # rows solved with a hardness (leak_curve)
+        data["plastic_fraction"] = (sp, curve.plastic_fraction[None], {
+            "units": DIMENSIONLESS, "long_name": "plastic share of the analysed window: cells "
+                                                 "whose pressure is at the hardness (part of "
+                                                 "area_fraction)"})
     coords = {
         "scan": ("scan", [name], {"long_name": "scan"}),
         "pressure": ("pressure", pressures_si, {
@@ -172,6 +177,8 @@ def leak_dataset(curve: LeakCurve, surface: Surface, *, scales: Scales, fluid_pr
         "lx": surface.lx, "ly": surface.ly, "sealing_messages": messages,
         **curve.settings,
     }
+    if "hardness" in curve.settings:  # E*, as the curve's pressures
+        ds.attrs["hardness_Pa"] = float(scales.pressure_to_si(curve.settings["hardness"]))
     return ds
 
 

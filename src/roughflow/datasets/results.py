@@ -72,11 +72,17 @@ def spec_attrs(surface: Surface | SurfaceSpec) -> dict:
     return out
 
 
+#: Flags of the plastic mask of a contact file (stored as int8).
+PLASTIC_FLAGS = flags("not_plastic plastic", np.int8)
+
+
 def contact_dataset(surface: Surface, result: ContactResult,
                     adhesion: Adhesion | None = None, *, tol: float | None = None) -> xr.Dataset:
     """Gap, contact mask, contact pressure (not for the bearing model, which has none) and
     heights on (x, y); scalars as attributes, with ``tol``, the solve's residual tolerance,
-    where given (a ContactResult does not carry it: pass that of the solve).
+    where given (a ContactResult does not carry it: pass that of the solve). A result with
+    a hardness adds the ``plastic`` mask and ``plastic_depth`` on (x, y) and the attributes
+    ``hardness`` (in the units of ``pressure``) and ``plastic_fraction``.
 
     An adhesive result needs ``adhesion`` (the :class:`~roughflow.contact.Adhesion` it was
     solved with; the result does not record it), whose parameters become ``adhesion_*``
@@ -112,6 +118,15 @@ def contact_dataset(surface: Surface, result: ContactResult,
         ds.attrs["tol"] = float(tol)
     if result.model == "bearing":  # a rigid cut carries no load: its zeros claimed one
         ds = ds.drop_vars("contact_pressure")
+    if result.hardness is not None:  # elastic-perfectly-plastic (attrs from scalars())
+        ds["plastic"] = (("x", "y"), result.plastic.astype(np.int8),
+                         {"units": DIMENSIONLESS, **PLASTIC_FLAGS,
+                          "long_name": "plastic cells (contact pressure at the hardness; "
+                                       "part of the contact, gap 0)"})
+        ds["plastic_depth"] = (("x", "y"), result.plastic_depth,
+                               {"units": LENGTH_UNITS,
+                                "long_name": "penetration of the rigid surface into the "
+                                             "elastic surface on plastic cells (0 elsewhere)"})
     return ds
 
 
