@@ -88,6 +88,7 @@ def test_threshold_pressures_with_units_are_the_same_search_in_e_star(files, tmp
     (["--modulus", MODULUS, "--p-guess", "5kg"], ["--p-guess", "'5kg' is not a pressure"]),
     (["--modulus", MODULUS, "--p-min", "1GPa", "--p-max", "500MPa"],
      ["--p-min 1GPa is not below --p-max 500MPa"]),
+    (["--modulus", MODULUS, "--p-min=-1GPa"], ["--p-min -1GPa is not a positive"]),
     (["--model", "bearing", "--modulus", MODULUS], ["--modulus 200GPa", "--model bearing"]),
     (["--boundary", "window", "--p-min", "0.01"], ["--p-min 0.01", "--boundary window"]),
     (["--boundary", "mirror", "--model", "bearing"], ["--model bearing", "--boundary mirror"]),

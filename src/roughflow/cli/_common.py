@@ -14,6 +14,7 @@ from __future__ import annotations
 
 import argparse
 import logging
+import math
 from collections.abc import Callable
 from pathlib import Path
 
@@ -222,6 +223,22 @@ def pressure_in_e_star(value: float | str | None, modulus: float | None,
                          "pressures with their unit: give it with its unit (e.g. 400MPa), or "
                          "leave --modulus out")
     return value
+
+
+def hardness_in_e_star(value: float | str | None, modulus: float | None) -> float | None:
+    """--hardness (:func:`number_or_quantity`) in E*, as :func:`pressure_in_e_star`, refused
+    unless positive, finite and at most ``CONTACT_PRESSURE_MAX`` E* (a larger one is a
+    hardness in pascals given as a number)."""
+    hardness = pressure_in_e_star(value, modulus, "--hardness")
+    if hardness is None:
+        return None
+    if not (math.isfinite(hardness) and hardness > 0):  # nan, inf, zero or a tension
+        raise InputError(f"--hardness must be a positive, finite pressure, got {value}")
+    if hardness > defaults.CONTACT_PRESSURE_MAX:
+        raise InputError(f"--hardness {value} is {hardness:g} E*, above "
+                         f"{defaults.CONTACT_PRESSURE_MAX:g} E*: give it in E*, or with its "
+                         "unit and --modulus (e.g. --hardness 2GPa --modulus 200GPa)")
+    return hardness
 
 
 def add_backend(parser: argparse.ArgumentParser) -> None:

@@ -24,6 +24,7 @@ from ._common import (
     add_output,
     add_repulsion,
     adhesion_help,
+    hardness_in_e_star,
     number_or_quantity,
     on_backend,
     pressure_in_e_star,
@@ -143,10 +144,8 @@ def _load(args: argparse.Namespace) -> tuple[float | None, float | None, float |
     modulus = (None if args.modulus is None
                else parse_quantity(args.modulus, "pressure", "--modulus"))
     load = pressure_in_e_star(args.pressure, modulus, "--pressure")
-    hardness = pressure_in_e_star(args.hardness, modulus, "--hardness")
+    hardness = hardness_in_e_star(args.hardness, modulus)
     if hardness is not None:
-        if not hardness > 0:  # a tension or zero has no meaning as a cap (nan included)
-            raise InputError(f"--hardness must be positive, got {args.hardness}")
         if load is not None and load >= hardness:
             raise InputError(f"--pressure {args.pressure} is not below --hardness "
                              f"{args.hardness}: every cell would be plastic; give a "

@@ -17,7 +17,7 @@ from roughflow.defaults import (
 )
 from roughflow.errors import InputError
 
-from ._common import add_input, add_output, number_or_quantity, pressure_in_e_star
+from ._common import add_input, add_output, hardness_in_e_star, number_or_quantity
 
 if TYPE_CHECKING:  # xarray is imported when the command runs, not for --help
     import xarray as xr
@@ -101,10 +101,8 @@ def run(args: argparse.Namespace) -> None:
         parse_rate_unit(args.rate_unit, "--rate-unit")
     if not isinstance(args.hardness, str | None):  # leak's pressures all carry units
         raise InputError(f"--hardness {args.hardness:g} needs its unit, e.g. 2GPa")
-    hardness = pressure_in_e_star(args.hardness, modulus, "--hardness")
+    hardness = hardness_in_e_star(args.hardness, modulus)
     if hardness is not None:
-        if not hardness > 0:
-            raise InputError(f"--hardness must be positive, got {args.hardness}")
         if not args.no_sealing:
             raise InputError("--hardness caps the rows' contact pressures, but the sealing "
                              "search is elastic (its sealing pressure would not be the capped "

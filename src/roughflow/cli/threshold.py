@@ -180,9 +180,14 @@ _SEALING_FIXED = ("--strategy", "--p-min", "--p-max", "--p-guess", "--method")
 
 
 def _check_order(args: argparse.Namespace, pressures: dict[str, float | None]) -> None:
-    """InputError naming the given values where --p-min, --p-guess, --p-max (in E*) are out
-    of order (SearchOptions would name them in E*, not as given)."""
+    """InputError naming the given values where --p-min, --p-guess, --p-max (in E*) are not
+    positive and finite or are out of order (SearchOptions would name them in E*, not as
+    given)."""
     order = [f for f in ("--p-min", "--p-guess", "--p-max") if pressures[f] is not None]
+    for flag in order:
+        if not (math.isfinite(pressures[flag]) and pressures[flag] > 0):
+            raise InputError(f"{flag} {getattr(args, dest_of(flag))} is not a positive, "
+                             "finite pressure")
     for lo, hi in pairwise(order):
         equal_refused = (lo, hi) == ("--p-min", "--p-max")  # the guess may be an end
         if pressures[lo] > pressures[hi] or equal_refused and pressures[lo] == pressures[hi]:

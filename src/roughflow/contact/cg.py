@@ -74,7 +74,8 @@ def polonsky_keer(
     ``plastic`` and ``plastic_depth`` (gbar - g on the plastic cells, >= 0) are set; its
     gap is 0 on every contact cell, plastic ones included; ``iterations`` counts those of
     every stage (:func:`_capped`). Where no pressure of the elastic solve reaches the
-    hardness, the result is the elastic one bit for bit.
+    hardness, a cold solve's result is the elastic one bit for bit (a warm start ``p0`` is
+    rescaled otherwise, so it differs at the tolerance).
     """
     cap = None
     if hardness is not None:
@@ -166,6 +167,12 @@ def _iterate(plan: fft.RealFFT2, kern: np.ndarray, h: np.ndarray, hscale: float,
             ol &= movable
         if ol.any():
             delta = 0.0
+            if tau == 0.0:
+                # no step (one active cell, whose centred gap is 0, or no descent): the
+                # overlapping cells would never join; each takes the pressure that alone
+                # closes its overlap. Seen with a hardness: 20 cells at the cap left the
+                # load to one cell, and the residual stayed at 9e-4 for 20000 iterations
+                tau = 1.0 / _cell_compliance(kern, h.shape)
             p[ol] -= tau * g[ol]
         else:
             delta = 1.0
@@ -182,6 +189,13 @@ def _iterate(plan: fft.RealFFT2, kern: np.ndarray, h: np.ndarray, hscale: float,
         else:
             p *= load / mp
     return it, residual, gbar
+
+
+def _cell_compliance(kern: np.ndarray, shape: tuple[int, int]) -> float:
+    """Displacement of one cell under unit pressure on it alone: the mean of the compliance
+    ``kern`` (the rfft2 half spectrum of a grid of ``shape``) over the full spectrum, as
+    ``elastic.cell_compliance`` computes it from the cell's sizes."""
+    return float((fft.rfft_weights(shape[1]) * kern).sum()) / (shape[0] * shape[1])
 
 
 def _capped(plan: fft.RealFFT2, kern: np.ndarray, h: np.ndarray, hscale: float,

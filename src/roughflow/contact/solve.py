@@ -137,8 +137,8 @@ def solve(
       (docs/contact.md, "Hardness"). Solved by ``cg`` (Polonsky-Keer stages on the
       plastic set, ``contact/cg.py``): ``method=None`` then means ``"cg"`` (logged),
       ``method="gfmd"`` and ``backend="cupy"`` (gfmd's), ``setup=`` and ``work=`` are
-      refused. A hardness above every pressure of the elastic cg solve gives its result
-      bit for bit; ``max_iter`` bounds the iterations of all stages together.
+      refused. A hardness above every pressure of the elastic cg solve gives, from a cold
+      start, its result bit for bit; ``max_iter`` bounds the iterations of all stages together.
     """
     if model not in MODELS:
         raise InputError(f"model must be one of {MODELS}, got {model!r}")
@@ -291,6 +291,8 @@ def solve(
         # point beyond the attraction's range under tension) or its iterate is not finite
         stop = (f"within max_iter={max_iter}" if out.iterations >= max_iter else
                 f"and stopped after {out.iterations} of max_iter={max_iter} iterations")
+        if hardness is not None:  # the capped solve's stages: name the cap and the load
+            why += f"; pressure {load:g} capped at the hardness {hardness:g} (same units)"
         raise ConvergenceError(
             f"contact solve ({model}, {method}) did not reach tol={tol:g} {stop}{why}",
             residual=float(out.residual), iterations=int(out.iterations),
