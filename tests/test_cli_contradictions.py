@@ -90,7 +90,10 @@ def test_threshold_bearing_refuses_search_options(files, capsys, extra):
 def test_threshold_first_pressure_outside_the_range_is_refused(files, capsys):
     from roughflow.search import SearchOptions
 
+    # the command names its option and the value as given; the library, its own words
     refused(["threshold", files["surface"], "--p-guess", "-1", "-o", _out(files)], capsys,
+            "--p-guess -1.0 is not a positive")
+    refused(["threshold", files["surface"], "--p-guess", "5", "-o", _out(files)], capsys,
             "first_pressure must lie in pressure_range")
     with pytest.raises(InputError, match="first_pressure"):
         SearchOptions(first_pressure=-1)
