@@ -26,7 +26,7 @@ from roughflow.errors import InputError, require_positive
 from ._linalg import dot as _dot
 from ._linalg import height_scale
 from ._result import SolverOutput
-from .elastic import compliance
+from .elastic import compliance, spectrum_mean
 
 log = logging.getLogger(__name__)
 
@@ -172,7 +172,7 @@ def _iterate(plan: fft.RealFFT2, kern: np.ndarray, h: np.ndarray, hscale: float,
                 # overlapping cells would never join; each takes the pressure that alone
                 # closes its overlap. Seen with a hardness: 20 cells at the cap left the
                 # load to one cell, and the residual stayed at 9e-4 for 20000 iterations
-                tau = 1.0 / _cell_compliance(kern, h.shape)
+                tau = 1.0 / spectrum_mean(kern, h.shape)  # 1 / cell_compliance
             p[ol] -= tau * g[ol]
         else:
             delta = 1.0
@@ -189,13 +189,6 @@ def _iterate(plan: fft.RealFFT2, kern: np.ndarray, h: np.ndarray, hscale: float,
         else:
             p *= load / mp
     return it, residual, gbar
-
-
-def _cell_compliance(kern: np.ndarray, shape: tuple[int, int]) -> float:
-    """Displacement of one cell under unit pressure on it alone: the mean of the compliance
-    ``kern`` (the rfft2 half spectrum of a grid of ``shape``) over the full spectrum, as
-    ``elastic.cell_compliance`` computes it from the cell's sizes."""
-    return float((fft.rfft_weights(shape[1]) * kern).sum()) / (shape[0] * shape[1])
 
 
 def _capped(plan: fft.RealFFT2, kern: np.ndarray, h: np.ndarray, hscale: float,

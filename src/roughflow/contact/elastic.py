@@ -51,8 +51,13 @@ def cell_compliance(shape: tuple[int, int], lx: float, ly: float, e_star: float 
     the mean of 2/(|q| E*) over the full spectrum (about 1.76 * 2 dx / (pi E*) on square
     cells)."""
     nx, ny = int(shape[0]), int(shape[1])
-    c = compliance((nx, ny), lx, ly, e_star)
-    return float((fft.rfft_weights(ny) * c).sum()) / (nx * ny)
+    return spectrum_mean(compliance((nx, ny), lx, ly, e_star), (nx, ny))
+
+
+def spectrum_mean(half: np.ndarray, shape: tuple[int, int]) -> float:
+    """Mean over the full spectrum of a real grid of ``shape`` of a field given on its rfft2
+    half spectrum ``half`` (of a kernel: its real-space value at the origin)."""
+    return float((fft.rfft_weights(int(shape[1])) * half).sum()) / (int(shape[0]) * int(shape[1]))
 
 
 def full_contact_energy(heights: np.ndarray, lx: float, ly: float, e_star: float = 1.0) -> float:
