@@ -24,7 +24,13 @@ import numpy as np
 from roughflow import flow
 from roughflow._repr import summary_repr
 from roughflow.boundary import Embedding, embed
-from roughflow.contact import ContactResult, check_contact_tol, check_pressure_scale, solve
+from roughflow.contact import (
+    ContactResult,
+    check_contact_tol,
+    check_pressure_scale,
+    require_below_hardness,
+    solve,
+)
 from roughflow.defaults import (
     BOUNDARY,
     CONTACT_TOL,
@@ -218,11 +224,12 @@ def leak_curve(surface: Surface, pressures: ArrayLike, *, boundary: str | None =
         hardness = require_positive("hardness", hardness)
     method = default_boundary(surface) if boundary is None else boundary
     emb = embed(surface, method)
-    if hardness is not None and emb.cell_pressure(p[-1]) >= hardness:
-        raise InputError(
-            f"the nominal pressure {p[-1]:.4g} E* is not below the hardness {hardness:.4g} "
-            f"E* (on the solver cell of boundary {method!r}: {emb.cell_pressure(p[-1]):.4g} "
-            "E*): every cell would be plastic; give pressures below the hardness")
+    if hardness is not None:
+        require_below_hardness(
+            emb.cell_pressure(p[-1]), hardness,
+            load_text=(f"the nominal pressure {p[-1]:.4g} E* (on the solver cell of boundary "
+                       f"{method!r}: {emb.cell_pressure(p[-1]):.4g} E*)"),
+            hardness_text=f"the hardness {hardness:.4g} E*")
     if sealing:  # the sealing search's check, before the curve's solves
         check_area_tol(threshold_tol, emb.shape)
     # a leak curve holds what a pressure ladder holds, on the embedded grid

@@ -139,6 +139,7 @@ def _load(args: argparse.Namespace) -> tuple[float | None, float | None, float |
     """(the load in E*, the modulus in Pa or None, the hardness in E* or None) from
     --pressure, --modulus and --hardness; a load not below the hardness is refused here, in
     the options' words and units."""
+    from roughflow.contact import require_below_hardness
     from roughflow.units import parse_quantity
 
     modulus = (None if args.modulus is None
@@ -146,10 +147,9 @@ def _load(args: argparse.Namespace) -> tuple[float | None, float | None, float |
     load = pressure_in_e_star(args.pressure, modulus, "--pressure")
     hardness = hardness_in_e_star(args.hardness, modulus)
     if hardness is not None:
-        if load is not None and load >= hardness:
-            raise InputError(f"--pressure {args.pressure} is not below --hardness "
-                             f"{args.hardness}: every cell would be plastic; give a "
-                             "hardness above the mean pressure")
+        if load is not None:
+            require_below_hardness(load, hardness, load_text=f"--pressure {args.pressure}",
+                                   hardness_text=f"--hardness {args.hardness}")
     return load, modulus, hardness
 
 

@@ -84,6 +84,7 @@ def register(sub: argparse._SubParsersAction) -> None:
 
 def run(args: argparse.Namespace) -> None:
     from roughflow.citation import LEAK_METHODS
+    from roughflow.contact import require_below_hardness
     from roughflow.datasets import leak_dataset
     from roughflow.io import surface_from_dataset, write_dataset
     from roughflow.leak import check_pressures, check_seal, leak_curve
@@ -107,9 +108,9 @@ def run(args: argparse.Namespace) -> None:
             raise InputError("--hardness caps the rows' contact pressures, but the sealing "
                              "search is elastic (its sealing pressure would not be the capped "
                              "contact's): add --no-sealing")
-        if pressures.max() >= hardness * modulus:
-            raise InputError(f"--pressures reach {pressures.max():.4g} Pa, not below "
-                             f"--hardness {args.hardness}: every cell would be plastic")
+        require_below_hardness(pressures.max(), hardness * modulus,
+                               load_text=f"--pressures reach {pressures.max():.4g} Pa, which",
+                               hardness_text=f"--hardness {args.hardness}")
     given = (None if args.length_scale is None
              else parse_quantity(args.length_scale, "length", "--length-scale"))
     surface = surface_from_dataset(args.data["surface"])

@@ -9,6 +9,7 @@ law a_c(p) that load searches start from.
 
 from ._result import ContactResult
 from .adhesion import Adhesion, adhesion_summary, tabor_parameter
+from .cg import require_below_hardness
 from .elastic import cell_compliance, full_contact_energy
 from .law import ContactLaw
 from .solve import (
@@ -35,6 +36,7 @@ __all__ = [
     "check_resolved_load",
     "full_contact_energy",
     "prepare",
+    "require_below_hardness",
     "solve",
     "tabor_parameter",
     "workspace",

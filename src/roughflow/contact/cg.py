@@ -42,6 +42,20 @@ _PLASTIC_STAGE_TOL = 1e-3
 _RESTART_SCALE = 2.0
 
 
+def require_below_hardness(load: float, hardness: float, *, load_text: str | None = None,
+                           hardness_text: str | None = None) -> None:
+    """Refuse a mean pressure ``load`` not below the cap ``hardness`` (the same units): every
+    cell would be plastic, and a cap H carries a mean pressure below H only with some cells
+    free. ``load_text``, ``hardness_text``: how the caller's user gave the two (an option and
+    its value, a pressure in pascals); default the numbers."""
+    if load >= hardness:
+        raise InputError(
+            f"{load_text or f'the mean pressure {load:g}'} is not below "
+            f"{hardness_text or f'the hardness {hardness:g}'}: every cell would be plastic "
+            "(a cap H carries a mean pressure below H only with some cells free); give a "
+            "pressure below the hardness")
+
+
 def _convolve(plan: fft.RealFFT2, kernel: np.ndarray, a: np.ndarray, out: np.ndarray) -> None:
     c = plan.forward(a)
     c *= kernel
@@ -80,11 +94,7 @@ def polonsky_keer(
     cap = None
     if hardness is not None:
         cap = require_positive("hardness", hardness)
-        if load >= cap:
-            raise InputError(
-                f"the mean pressure {load:g} is not below the hardness {cap:g}: every cell "
-                "would be plastic (a cap H carries a mean pressure below H only with some "
-                "cells free); give a load below the hardness")
+        require_below_hardness(load, cap)
     shape = heights.shape
     plan = fft.plan(shape, threads)
     kern = compliance(shape, lx, ly)

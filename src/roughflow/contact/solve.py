@@ -36,6 +36,7 @@ from roughflow.surface import Surface
 from ._result import ContactResult
 from .adhesion import Adhesion, check_overlap, check_setup
 from .bearing import solve_bearing
+from .cg import require_below_hardness
 from .law import elastic_load_for_cells
 
 if TYPE_CHECKING:  # gfmd (numba) is imported on first use: the CLI starts faster
@@ -173,11 +174,9 @@ def solve(
         if adhesion is not None:
             raise InputError("adhesion= is only for model='adhesive'")
         check_resolved_load(load, surface.gbar, heights.shape)
-        if hardness is not None and load >= hardness:
-            raise InputError(
-                f"pressure {load:g} E* is not below hardness={hardness:g} E*: every cell "
-                "would be plastic (a cap H carries a mean pressure below H only with some "
-                "cells free); give a pressure below the hardness")
+        if hardness is not None:
+            require_below_hardness(load, hardness, load_text=f"pressure {load:g} E*",
+                                   hardness_text=f"hardness={hardness:g} E*")
     else:
         load = require_finite("pressure", pressure)
         if not isinstance(adhesion, Adhesion):
