@@ -17,3 +17,9 @@ def refused(argv: list[str], capsys, *names: str) -> str:
     for name in names:
         assert name in err, (name, err)
     return err
+
+
+#: A seal's physical parameters for ``roughflow leak`` on a scan (steel pair, water, 2 mm x
+#: 60 mm), three rows from 10 MPa to 1 GPa.
+LEAK_ARGS = ["--modulus", "200GPa", "--pressures", "10MPa:1GPa:3", "--fluid-pressure", "1MPa",
+             "--viscosity", "1mPa.s", "--seal-width", "2mm", "--seal-length", "60mm"]

@@ -61,6 +61,19 @@ def cli_surface_file(tmp_path_factory):
     return path
 
 
+@pytest.fixture(scope="session")
+def afm_scan_file(tmp_path_factory):
+    """The AFM test scan tests/data/afm-64.npy imported by ``roughflow import`` (64^2 over
+    500 nm, heights in nm), shared read-only by the hardness tests of a session."""
+    from roughflow.cli import main
+
+    out = tmp_path_factory.mktemp("afm_scan") / "afm.nc"
+    data = Path(__file__).resolve().parent / "data" / "afm-64.npy"
+    assert main(["-q", "import", str(data), "--size", "500nm", "--unit", "nm", "-o",
+                 str(out)]) == 0
+    return out
+
+
 @pytest.fixture(autouse=True)
 def _library_logging_restored():
     """A test that runs the command line in-process (``main([...])``) leaves its progress

@@ -8,7 +8,7 @@ import logging
 import numpy as np
 import pytest
 import xarray as xr
-from cli_checks import refused
+from cli_checks import LEAK_ARGS, refused
 
 from roughflow.cli import main
 from roughflow.contact import solve, workspace
@@ -263,44 +263,38 @@ def test_cli_refusals(cli_surface_file, tmp_path, capsys, argv, says):
     assert not out.exists()
 
 
-# `roughflow leak --hardness`: the rows solved with the cap, the sealing search refused
-LEAK = ["--modulus", "200GPa", "--pressures", "10MPa:1GPa:3", "--fluid-pressure", "1MPa",
-        "--viscosity", "1mPa.s", "--seal-width", "2mm", "--seal-length", "60mm"]
-
-
-@pytest.fixture(scope="module")
-def scan_file(tmp_path_factory):
-    from pathlib import Path
-
-    out = tmp_path_factory.mktemp("hard_leak") / "afm.nc"
-    data = Path(__file__).resolve().parent / "data" / "afm-64.npy"
-    assert main(["-q", "import", str(data), "--size", "500nm", "--unit", "nm", "-o",
-                 str(out)]) == 0
-    return out
+# `roughflow leak --hardness`: the rows and the sealing search solved with the cap
 
 
 def test_leak_curve_rows_are_the_capped_solves(small):
     from roughflow.leak import leak_curve
+    from roughflow.search import scaled_options, threshold
 
     rough = small  # 64^2: the flow solves of the rows are most of the time
     pressures, cap = [0.02, 0.05], 0.2
-    curve = leak_curve(rough, pressures, hardness=cap, sealing=False)
-    assert curve.settings["hardness"] == cap
+    curve = leak_curve(rough, pressures, hardness=cap)
+    assert curve.settings["hardness"] == cap and curve.settings["sealing_searched"] == 1
     for i, p in enumerate(pressures):
         # a periodic surface is its own window; the curve warm-starts its second row, a
         # solve to the same tol (1e-6): the same state up to a marginal cell
         r = solve(rough, p, hardness=cap)
         assert abs(curve.area_fraction[i] - r.area_fraction) <= 2 / r.gap.size
         assert abs(curve.plastic_fraction[i] - r.plastic_fraction) <= 2 / r.gap.size
-    with pytest.raises(InputError, match="sealing=False"):
-        leak_curve(rough, pressures, hardness=cap)
+    # the sealing search is the capped contact's: the threshold search with the same cap (a
+    # periodic surface is its own window, the same pressures; the leak's search keeps its
+    # states whole, the plain one compact, the same warm starts and predictions)
+    capped = threshold(rough, options=scaled_options(rough.gbar, hardness=cap))
+    for ax, t in curve.thresholds.items():
+        assert t.hardness == cap and t.bracketed
+        assert t.a_lo < capped[ax].a_hi and capped[ax].a_lo < t.a_hi
+        assert t.p_hi < cap
     with pytest.raises(InputError, match="not below the hardness"):
         leak_curve(rough, pressures, hardness=0.05, sealing=False)
 
 
-def test_cli_leak_with_hardness(scan_file, tmp_path, capsys):
+def test_cli_leak_with_hardness(afm_scan_file, tmp_path, capsys):
     out = tmp_path / "leak.nc"
-    assert main(["leak", str(scan_file), *LEAK, "--hardness", "2GPa", "--no-sealing", "-o",
+    assert main(["leak", str(afm_scan_file), *LEAK_ARGS, "--hardness", "2GPa", "--no-sealing", "-o",
                  str(out)]) == 0
     text = capsys.readouterr().out
     assert "hardness 2e+09 Pa caps the contact pressure" in text
@@ -317,18 +311,17 @@ def test_cli_leak_with_hardness(scan_file, tmp_path, capsys):
 @pytest.mark.parametrize(
     ("argv", "says"),
     [
-        (["--hardness", "2GPa"], ("--no-sealing",)),
-        (["--hardness", "0.01", "--no-sealing"], ("--hardness", "unit")),
-        (["--hardness", "0.5GPa", "--no-sealing"], ("not below --hardness",)),
+        (["--hardness", "0.01"], ("--hardness", "unit")),
+        (["--hardness", "0.5GPa"], ("not below --hardness",)),
     ],
 )
-def test_cli_leak_hardness_refusals(scan_file, tmp_path, capsys, argv, says):
+def test_cli_leak_hardness_refusals(afm_scan_file, tmp_path, capsys, argv, says):
     out = tmp_path / "x.nc"
-    refused(["leak", str(scan_file), *LEAK, *argv, "-o", str(out)], capsys, *says)
+    refused(["leak", str(afm_scan_file), *LEAK_ARGS, *argv, "-o", str(out)], capsys, *says)
     assert not out.exists()
 
 
-def test_the_load_left_to_one_elastic_cell_still_spreads(scan_file):
+def test_the_load_left_to_one_elastic_cell_still_spreads(afm_scan_file):
     # The AFM test scan at E* = 115 GPa, 10 MPa under a 2 GPa cap: the staged solve puts 20
     # cells at the cap and leaves the rest of the load to one cell, whose centred gap is 0,
     # so the iteration's step was 0 and the overlapping free cells never joined (residual
@@ -337,7 +330,7 @@ def test_the_load_left_to_one_elastic_cell_still_spreads(scan_file):
     # (68 iterations). Allowed: the sets exactly (no cell lies near a switch here: the
     # smaller elastic pressure is 3 % of the cap), the pressures to 1e-8 E*, the last
     # digit of the reference quoted (the two solvers' own difference is below it).
-    surface = read_surface(scan_file)
+    surface = read_surface(afm_scan_file)
     load, cap = 1e7 / 115e9, 2e9 / 115e9
     r = solve(surface, load, tol=1e-10, hardness=cap)
     assert int(r.plastic.sum()) == 20 and int(r.contact.sum()) == 22

@@ -27,6 +27,7 @@ from roughflow.boundary import Embedding, embed
 from roughflow.contact import (
     ContactResult,
     check_contact_tol,
+    check_hardness,
     check_pressure_scale,
     require_below_hardness,
     solve,
@@ -43,7 +44,7 @@ from roughflow.defaults import (
 from roughflow.errors import InputError, require_positive
 from roughflow.flow import check_sigma_tol
 from roughflow.resources import check_memory
-from roughflow.search import Threshold, scaled_options, threshold
+from roughflow.search import SearchOptions, Threshold, scaled_options, threshold
 from roughflow.search.critical import check_area_tol
 from roughflow.surface import Surface
 from roughflow.units import canonical
@@ -81,7 +82,7 @@ class LeakCurve:
     rms_gradient: of the surface (its pressures are in E*; E* gbar only when it is 1).
     window_lx, window_ly, window_shape: size (L) and grid of the analysed window.
     settings: the tolerances used, and ``sealing_searched`` (1, or 0 with ``sealing=False``);
-        ``hardness`` (E*) where the rows were solved with one.
+        ``hardness`` (E*) where the rows (and the sealing search) were solved with one.
     plastic_fraction: with a ``hardness``, the plastic share of the analysed window per
         row (cells at the cap; part of ``area_fraction``); None without.
     An ``area_fraction`` of exactly 0 marks a row whose analysed window holds no contact
@@ -166,16 +167,25 @@ def default_boundary(surface: Surface) -> str:
     return "periodic" if surface.periodic else BOUNDARY
 
 
+def _sealing_options(emb: Embedding, *, gbar: float, contact_tol: float,
+                     hardness: float | None) -> SearchOptions:
+    """The options of :func:`sealing_search` (checked as they are made)."""
+    return scaled_options(gbar * emb.load_factor, "elastic", contact_tol=contact_tol,
+                          on_unbracketed="nan", observe=emb.observe, observed_shape=emb.shape,
+                          periodic=emb.periodic, hardness=hardness)
+
+
 def sealing_search(emb: Embedding, *, gbar: float, tol: float = THRESHOLD_TOL,
-                   contact_tol: float = THRESHOLD_CONTACT_TOL,
-                   threads: int | None = None) -> dict[int, Threshold]:
+                   contact_tol: float = THRESHOLD_CONTACT_TOL, threads: int | None = None,
+                   hardness: float | None = None) -> dict[int, Threshold]:
     """Percolation thresholds of the analysed window along x and y, with the bracketing
     pressures converted to nominal ones. The search's pressure range and first pressure
     (:mod:`roughflow.defaults`, in E* gbar) are scaled by the surface's rms gradient
-    ``gbar`` and the embedding's load factor; an unbracketed axis gets NaN and a message."""
-    opts = scaled_options(gbar * emb.load_factor, "elastic", contact_tol=contact_tol,
-                          on_unbracketed="nan", observe=emb.observe, observed_shape=emb.shape,
-                          periodic=emb.periodic)
+    ``gbar`` and the embedding's load factor; an unbracketed axis gets NaN and a message.
+    ``hardness`` (E*): the solver cell's contact pressure capped there
+    (:attr:`roughflow.search.SearchOptions.hardness`: elastic-perfectly-plastic, by cg; the
+    range's cell pressures end below it), so the thresholds are the capped contact's."""
+    opts = _sealing_options(emb, gbar=gbar, contact_tol=contact_tol, hardness=hardness)
     res = threshold(emb.surface, None, tol=tol, options=opts, threads=threads)
     return {ax: dataclasses.replace(t, p_lo=emb.nominal_pressure(t.p_lo),
                                     p_hi=emb.nominal_pressure(t.p_hi))
@@ -201,9 +211,9 @@ def leak_curve(surface: Surface, pressures: ArrayLike, *, boundary: str | None =
     are logged as warnings (:data:`EMPTY_WINDOW_WARNING`, :func:`empty_window_pressures`;
     :data:`FEW_CELLS_WARNING`, :func:`few_cell_pressures`).
 
-    ``hardness`` (E*, as the pressures): every row's contact is solved with the pressure
-    capped there (elastic-perfectly-plastic, ``contact.solve(..., hardness=)``, by cg); the
-    sealing search is elastic, so a hardness needs ``sealing=False``, and each row's cell
+    ``hardness`` (E*, as the pressures): every row's contact, and every solve of the
+    sealing search, is solved with the pressure capped there (elastic-perfectly-plastic,
+    ``contact.solve(..., hardness=)``, by cg; the thresholds carry it); each row's cell
     pressure must lie below it.
     """
     p = check_pressures(pressures)
@@ -217,11 +227,7 @@ def leak_curve(surface: Surface, pressures: ArrayLike, *, boundary: str | None =
         require_positive(name, v)
     check_sigma_tol(flow_sigma_tol)
     if hardness is not None:
-        if sealing:
-            raise InputError("hardness= caps the rows' contact pressures, but the sealing "
-                             "search is elastic (its threshold would not be the capped "
-                             "contact's): give sealing=False (roughflow leak --no-sealing)")
-        hardness = require_positive("hardness", hardness)
+        hardness = check_hardness(hardness)
     method = default_boundary(surface) if boundary is None else boundary
     emb = embed(surface, method)
     if hardness is not None:
@@ -230,17 +236,19 @@ def leak_curve(surface: Surface, pressures: ArrayLike, *, boundary: str | None =
             load_text=(f"the nominal pressure {p[-1]:.4g} E* (on the solver cell of boundary "
                        f"{method!r}: {emb.cell_pressure(p[-1]):.4g} E*)"),
             hardness_text=f"the hardness {hardness:.4g} E*")
-    if sealing:  # the sealing search's check, before the curve's solves
+    gbar = surface.gbar
+    if sealing:  # the sealing search's checks, before the curve's solves
         check_area_tol(threshold_tol, emb.shape)
+        _sealing_options(emb, gbar=gbar, contact_tol=threshold_contact_tol, hardness=hardness)
     # a leak curve holds what a pressure ladder holds, on the embedded grid
     check_memory("ladder", emb.surface.heights.shape, what="a leak curve")
-    gbar = surface.gbar
     curve = pressure_curve(emb, p, contact_tol=contact_tol, flow_tol=flow_tol,
                            flow_sigma_tol=flow_sigma_tol, threads=threads, hardness=hardness)
     plastic = curve.pop("plastic_fraction")
     _warn_sparse_rows(p, curve["area_fraction"], emb.shape, method)
     thresholds = (sealing_search(emb, gbar=gbar, tol=threshold_tol,
-                                 contact_tol=threshold_contact_tol, threads=threads)
+                                 contact_tol=threshold_contact_tol, threads=threads,
+                                 hardness=hardness)
                   if sealing else {})
     # the sealing search's tolerances are recorded only where it ran
     searched = ({"threshold_tol": threshold_tol, "threshold_contact_tol": threshold_contact_tol}

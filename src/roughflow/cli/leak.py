@@ -69,10 +69,10 @@ def register(sub: argparse._SubParsersAction) -> None:
                         "mm^3/s, mL/min, uL/h or L/min (default: the output file's m^3/s; the "
                         "file keeps m^3/s whatever this says)")
     p.add_argument("--hardness", type=number_or_quantity, default=None,
-                   help="hardness of the softer face, with its unit (e.g. 2GPa): the rows' "
-                        "contact pressures are capped there (elastic-perfectly-plastic; "
-                        "docs/contact.md, 'Hardness'); the sealing search is elastic, so "
-                        "this needs --no-sealing")
+                   help="hardness of the softer face, with its unit (e.g. 2GPa): the contact "
+                        "pressures of the rows and of the sealing search are capped there "
+                        "(elastic-perfectly-plastic, solved by cg; docs/contact.md, "
+                        "'Hardness')")
     p.add_argument("--no-sealing", action="store_true",
                    help="skip the sealing-pressure search (often most of the run time); the "
                         "sealing variables of the output are then NaN")
@@ -104,10 +104,6 @@ def run(args: argparse.Namespace) -> None:
         raise InputError(f"--hardness {args.hardness:g} needs its unit, e.g. 2GPa")
     hardness = hardness_in_e_star(args.hardness, modulus)
     if hardness is not None:
-        if not args.no_sealing:
-            raise InputError("--hardness caps the rows' contact pressures, but the sealing "
-                             "search is elastic (its sealing pressure would not be the capped "
-                             "contact's): add --no-sealing")
         require_below_hardness(pressures.max(), hardness * modulus,
                                load_text=f"--pressures reach {pressures.max():.4g} Pa, which",
                                hardness_text=f"--hardness {args.hardness}")
@@ -215,14 +211,17 @@ def _mean_gap_m(ds: xr.Dataset, row: xr.Dataset) -> float:
 
 
 def _plastic_lines(ds: xr.Dataset) -> list[str]:
-    """With --hardness: the cap and the plastic share of each row's contact area."""
+    """With --hardness: the cap and the plastic share of each row's contact area (and that
+    the sealing pressures are the capped contact's)."""
     if "hardness_Pa" not in ds.attrs:
         return []
     import numpy as np
 
     shares = ", ".join(f"{v:.4g}" for v in np.ravel(ds["plastic_fraction"].values))
-    return [f"hardness {float(ds.attrs['hardness_Pa']):.4g} Pa caps the contact pressure "
-            f"(elastic-perfectly-plastic); plastic area fraction per row: {shares}"]
+    sealing = (" and of the sealing search" if ds.attrs.get("sealing_searched", 1) else "")
+    return [f"hardness {float(ds.attrs['hardness_Pa']):.4g} Pa caps the contact pressure of "
+            f"the rows{sealing} (elastic-perfectly-plastic); plastic area fraction per row: "
+            f"{shares}"]
 
 
 def _contact_pressure_line(d: xr.Dataset) -> list[str]:

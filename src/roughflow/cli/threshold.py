@@ -33,6 +33,7 @@ from ._common import (
     axis_arg,
     dest_of,
     given,
+    hardness_in_e_star,
     number_or_quantity,
     on_backend,
     pressure_in_e_star,
@@ -91,7 +92,13 @@ def register(sub: argparse._SubParsersAction) -> None:
                    help="contact modulus E* of the pair (e.g. 200GPa): the output records "
                         "it (ref_pressure_Pa) so that roughflow.units.registry converts "
                         "p_lo, p_hi to Pa, the summary prints them in Pa, and --p-min, "
-                        "--p-max, --p-guess are then given with their unit")
+                        "--p-max, --p-guess, --hardness are then given with their unit")
+    p.add_argument("--hardness", type=number_or_quantity, default=None,
+                   help=f"elastic model: cap the local contact pressure of every solve at "
+                        f"this hardness (elastic-perfectly-plastic, solved by cg; in "
+                        f"{PRESSURE_UNIT}, or with its unit, e.g. 2GPa, and --modulus): the "
+                        "threshold of the capped contact; the pressure range ends below it "
+                        "(docs/contact.md, 'Hardness')")
     p.add_argument("--boundary", choices=BOUNDARY_METHODS, default="periodic",
                    help="non-periodic treatment of a scan (docs/measured.md, 'Non-periodic "
                         "scans'). periodic (default): the cell as it is (a non-periodic scan "
@@ -125,7 +132,8 @@ def run(args: argparse.Namespace) -> None:
     on_backend(args)  # CuPy and a GPU, before any work
     surface = surface_from_dataset(args.data["surface"])
     modulus = _modulus(args)
-    options = _search_options(args, surface.gbar, modulus)
+    hardness = _hardness(args, modulus)
+    options = _search_options(args, surface.gbar, modulus, hardness)
     adhesion = resolve_adhesion(args.model, args.surface_energy, args.adhesion_range, surface,
                                 flags=("--surface-energy", "--adhesion-range"),
                                 source=args.surface, repulsion=args.repulsion)
@@ -138,7 +146,7 @@ def run(args: argparse.Namespace) -> None:
         if args.axis is not None:
             res = {args.axis: res}
     else:
-        res = _window_thresholds(args, surface)
+        res = _window_thresholds(args, surface, hardness)
     for ax, r in res.items():
         log.info("a_c*(%s) = %.4f in [%.4f, %.4f] after %d contact solves", AXIS_NAMES[ax],
                  r.a_c_star, r.a_lo, r.a_hi, r.n_solves)
@@ -151,13 +159,17 @@ def run(args: argparse.Namespace) -> None:
         from roughflow.units import REF_PRESSURE, REFERENCE_ATTRS, registry
 
         ds.attrs[REFERENCE_ATTRS[REF_PRESSURE][0]] = modulus
+        if hardness is not None:  # as roughflow leak records it
+            ds.attrs["hardness_Pa"] = hardness * modulus
         ureg = registry(ds.attrs)  # what a reader of the file gets: p_lo, p_hi in Pa
         in_pa = "; p_lo, p_hi in Pa: " + ", ".join(
             f"{AXIS_NAMES[ax]} [" + ", ".join(
                 f"{ureg.Quantity(p, PRESSURE_UNITS).to('Pa').magnitude:.4g}"
                 for p in (r.p_lo, r.p_hi)) + "]" for ax, r in res.items())
-    methods = threshold_methods(args.model, args.method,
+    methods = threshold_methods(args.model, args.method if hardness is None else "cg",
                                 None if adhesion is None else adhesion.repulsion)
+    if hardness is not None:
+        methods += ("hardness",)
     write_dataset(ds, args.output, provenance=args.provenance.using(*methods))
     n_solves = max(r.n_solves for r in res.values())
     # the raw value is the cells' count; the corrected one (elastic model) differs by a few
@@ -165,6 +177,9 @@ def run(args: argparse.Namespace) -> None:
     corrected = [f"{AXIS_NAMES[ax]} {r.a_c_star_corrected:.4f}" for ax, r in res.items()
                  if args.model == "elastic" and math.isfinite(r.a_c_star_corrected)]
     window = "" if args.boundary == "periodic" else f", boundary {args.boundary}"
+    if hardness is not None:
+        window += f", hardness {hardness:.6g}" + (
+            "" if modulus is None else f" ({hardness * modulus:.6g} Pa)")
     print(f"{args.output}: {args.model} a_c* (raw contact area{window}) " + ", ".join(
         f"{AXIS_NAMES[ax]} {r.a_c_star:.4f} in [{r.a_lo:.4f}, {r.a_hi:.4f}]"
         for ax, r in res.items()) + (f" ({n_solves} contact solves)" if n_solves else
@@ -203,17 +218,34 @@ def _modulus(args: argparse.Namespace) -> float | None:
                                                             "--modulus")
 
 
-def _window_thresholds(args: argparse.Namespace, surface) -> dict:
+def _hardness(args: argparse.Namespace, modulus: float | None) -> float | None:
+    """--hardness in E* (None where not given), refused with --model bearing or adhesive,
+    gfmd or the GPU (a --p-min, --p-max, --p-guess not below it: :func:`_search_options`)."""
+    if args.hardness is None:
+        return None
+    if args.model != "elastic":
+        raise InputError(f"--hardness {args.hardness} applies to --model elastic only, not "
+                         f"--model {args.model}" + (
+                             ": it cuts the heights and has no pressure to cap"
+                             if args.model == "bearing" else ""))
+    if args.method == "gfmd" or args.backend != "cpu":
+        raise InputError(f"--hardness {args.hardness} is solved by --method cg on the CPU "
+                         "(gfmd has no pressure cap): leave --method and --backend out")
+    return hardness_in_e_star(args.hardness, modulus)
+
+
+def _window_thresholds(args: argparse.Namespace, surface, hardness: float | None) -> dict:
     """The thresholds of the window of ``surface`` analysed by ``--boundary`` (window,
     mirror, pad): :func:`roughflow.leak.sealing_search` on :func:`roughflow.boundary.embed`,
-    as ``roughflow leak`` finds its sealing pressures (nominal pressures in E*). An axis
-    that the default range does not bracket is an error unless --allow-unbracketed."""
+    as ``roughflow leak`` finds its sealing pressures (nominal pressures in E*; capped at
+    ``hardness``, E*, where given). An axis that the default range does not bracket is an
+    error unless --allow-unbracketed."""
     from roughflow.boundary import embed
     from roughflow.leak import sealing_search
     from roughflow.search import ThresholdNotBracketed
 
     res = sealing_search(embed(surface, args.boundary), gbar=surface.gbar, tol=args.tol,
-                         contact_tol=args.contact_tol)
+                         contact_tol=args.contact_tol, hardness=hardness)
     if args.axis is not None:
         res = {args.axis: res[args.axis]}
     missed = [r.message for r in res.values() if not r.bracketed]
@@ -222,11 +254,12 @@ def _window_thresholds(args: argparse.Namespace, surface) -> dict:
     return res
 
 
-def _search_options(args: argparse.Namespace, gbar: float, modulus: float | None = None):
+def _search_options(args: argparse.Namespace, gbar: float, modulus: float | None = None,
+                    hardness: float | None = None):
     """The :class:`~roughflow.search.SearchOptions` of the arguments for a surface of rms
     gradient ``gbar`` (the default pressures, in E* gbar, scaled to it: a scan's pressures
-    are in E*; given ones in E*, or in Pa with ``modulus``), after refusing those that the
-    model or the boundary does not use (they would be ignored)."""
+    are in E*; given ones in E*, or in Pa with ``modulus``; ``hardness`` in E*), after
+    refusing those that the model or the boundary does not use (they would be ignored)."""
     from roughflow.search import scaled_options
 
     if args.model == "bearing":
@@ -244,9 +277,18 @@ def _search_options(args: argparse.Namespace, gbar: float, modulus: float | None
         refuse_given(args, _SEALING_FIXED, why)
         return None
     _check_order(args, pressures)
+    if hardness is not None:  # refused in the options' words, not SearchOptions' (E*)
+        from roughflow.contact import require_below_hardness
+
+        for flag, value in pressures.items():
+            if value is not None:
+                require_below_hardness(value, hardness,
+                                       load_text=f"{flag} {getattr(args, dest_of(flag))}",
+                                       hardness_text=f"--hardness {args.hardness}")
     # a --p-guess outside the default range is refused by SearchOptions (first_pressure)
     return scaled_options(
         gbar, args.model, strategy=args.strategy,
         pressure_range=(pressures["--p-min"], pressures["--p-max"]),
         first_pressure=pressures["--p-guess"], contact_tol=args.contact_tol,
-        method=args.method, on_unbracketed="nan" if args.allow_unbracketed else "raise")
+        method=args.method, on_unbracketed="nan" if args.allow_unbracketed else "raise",
+        hardness=hardness)

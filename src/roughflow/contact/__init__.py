@@ -9,7 +9,7 @@ law a_c(p) that load searches start from.
 
 from ._result import ContactResult
 from .adhesion import Adhesion, adhesion_summary, tabor_parameter
-from .cg import require_below_hardness
+from .cg import check_hardness, require_below_hardness
 from .elastic import cell_compliance, full_contact_energy
 from .law import ContactLaw
 from .solve import (
@@ -32,6 +32,7 @@ __all__ = [
     "adhesion_summary",
     "cell_compliance",
     "check_contact_tol",
+    "check_hardness",
     "check_pressure_scale",
     "check_resolved_load",
     "full_contact_energy",

@@ -20,7 +20,7 @@ import logging
 import numpy as np
 
 from roughflow import fft
-from roughflow.defaults import SOLVER_LOG_EVERY
+from roughflow.defaults import CONTACT_PRESSURE_MAX, SOLVER_LOG_EVERY
 from roughflow.errors import InputError, require_positive
 
 from ._linalg import dot as _dot
@@ -40,6 +40,25 @@ _PLASTIC_STAGE_TOL = 1e-3
 #: the cap could be few (one cell carried the load of 138 capped ones and the iteration
 #: stalled on it).
 _RESTART_SCALE = 2.0
+
+
+def check_hardness(hardness, model: str = "elastic") -> float:
+    """``hardness`` as a float: a pressure cap H in E*, positive, finite and at most
+    ``CONTACT_PRESSURE_MAX`` (a larger one is a hardness in pascals), for the elastic model
+    (the only one with a pressure to cap); :class:`InputError` naming the value otherwise."""
+    if isinstance(hardness, (bool, np.bool_)):  # True would pass as 1 E*
+        raise InputError(f"hardness must be a pressure (E*), got {hardness!r}")
+    h = require_positive("hardness", hardness)
+    if h > CONTACT_PRESSURE_MAX:
+        raise InputError(
+            f"hardness {h:g} E* is above {CONTACT_PRESSURE_MAX:g} E*: hardnesses here are in "
+            "units of the contact modulus E* (a steel's 2 GPa against E* = 115 GPa is "
+            "0.017); from Python, convert pascals with roughflow.units.Scales.pressure_from_si")
+    if model != "elastic":
+        why = ("it cuts the heights and has no pressure to cap" if model == "bearing" else
+               "the cap is implemented for the hard-wall elastic model only")
+        raise InputError(f"hardness={h:g} is for model='elastic', got model={model!r}: {why}")
+    return h
 
 
 def require_below_hardness(load: float, hardness: float, *, load_text: str | None = None,
@@ -93,7 +112,7 @@ def polonsky_keer(
     """
     cap = None
     if hardness is not None:
-        cap = require_positive("hardness", hardness)
+        cap = check_hardness(hardness)
         require_below_hardness(load, cap)
     shape = heights.shape
     plan = fft.plan(shape, threads)

@@ -36,7 +36,7 @@ from roughflow.surface import Surface
 from ._result import ContactResult
 from .adhesion import Adhesion, check_overlap, check_setup
 from .bearing import solve_bearing
-from .cg import require_below_hardness
+from .cg import check_hardness, require_below_hardness
 from .law import elastic_load_for_cells
 
 if TYPE_CHECKING:  # gfmd (numba) is imported on first use: the CLI starts faster
@@ -376,18 +376,7 @@ def _check_hardness(hardness, model: str, method: str | None, backend: str, setu
     model, solved by cg, the only method with the pressure cap (``method=None`` becomes
     "cg", logged; an explicit "gfmd" is refused rather than overridden, and so are gfmd's
     ``backend="cupy"``, ``setup=`` and ``work=``)."""
-    if isinstance(hardness, (bool, np.bool_)):
-        raise InputError(f"hardness must be a pressure (E*), got {hardness!r}")
-    h = require_positive("hardness", hardness)
-    if h > CONTACT_PRESSURE_MAX:
-        raise InputError(
-            f"hardness {h:g} E* is above {CONTACT_PRESSURE_MAX:g} E*: hardnesses here are in "
-            "units of the contact modulus E* (a steel's 2 GPa against E* = 115 GPa is "
-            "0.017); from Python, convert pascals with roughflow.units.Scales.pressure_from_si")
-    if model != "elastic":
-        why = ("it cuts the heights and has no pressure to cap" if model == "bearing" else
-               "the cap is implemented for the hard-wall elastic model only")
-        raise InputError(f"hardness= is for model='elastic', got model={model!r}: {why}")
+    h = check_hardness(hardness, model)
     if method == "gfmd":
         raise InputError("hardness= is solved by method='cg' (Polonsky-Keer with the pressure "
                          "cap); gfmd has no cap: leave method out or give method='cg'")

@@ -93,6 +93,12 @@ def leak_dataset(curve: LeakCurve, surface: Surface, *, scales: Scales, fluid_pr
     def thr(field: str) -> np.ndarray:
         return np.array([[np.nan if t is None else float(getattr(t, field)) for t in th]])
 
+    # a sealing search capped at a hardness (leak_curve(..., hardness=)) says so in the
+    # names of its variables: its thresholds are not the elastic contact's
+    capped = next((t.hardness for t in th if t is not None and t.hardness is not None), None)
+    of = ("" if capped is None else
+          " (elastic-perfectly-plastic contact, pressure capped at the hardness: hardness_Pa)")
+
     sp, spa = ("scan", "pressure"), ("scan", "pressure", "axis")
     sa = ("scan", "axis")
     data = {
@@ -131,14 +137,15 @@ def leak_dataset(curve: LeakCurve, surface: Surface, *, scales: Scales, fluid_pr
             "units": DIMENSIONLESS, "long_name": FLOW_SIGMA_ERROR_LONG_NAME}),
         "a_c_star": (sa, thr("a_c_star"), {
             "units": DIMENSIONLESS, "long_name": "critical contact area a_c* where the fluid "
-                                                 "stops spanning along axis"}),
+                                                 f"stops spanning along axis{of}"}),
         "sealing_pressure": (sa, scales.pressure_to_si(thr("p_hi")), {
             "units": PASCAL, "long_name": "sealing pressure along axis: lowest nominal "
-                                          "pressure found sealed (the fluid no longer spans)"}),
+                                          "pressure found sealed (the fluid no longer "
+                                          f"spans){of}"}),
         "sealing_pressure_lo": (sa, scales.pressure_to_si(thr("p_lo")), {
             "units": PASCAL, "long_name": "highest nominal pressure found leaking along axis "
                                           "(the seal closes between this and "
-                                          "sealing_pressure)"}),
+                                          f"sealing_pressure){of}"}),
         "bracketed": _int(sa, np.array([[0 if t is None else int(t.bracketed) for t in th]]), {
             "units": DIMENSIONLESS, "long_name": "1 if the sealing search found both sides "
                                                  "within its pressure range",

@@ -174,7 +174,8 @@ THRESHOLD_FIELDS = {
     "a_c_star_corrected": (DIMENSIONLESS, "a_c* with the perimeter correction of the contact "
                                           "area (first-order grid bias removed, elastic "
                                           "model; the bearing model's cell count is unbiased: "
-                                          "= a_c*; adhesive: not calibrated, NaN; "
+                                          "= a_c*; adhesive or capped at a hardness: not "
+                                          "calibrated, NaN; "
                                           "calibrated on grids of at least "
                                           f"{CORRECTION_MIN_POINTS:g} points per lambda_s, "
                                           "over-shoots on coarser ones, where the figures "
@@ -222,7 +223,9 @@ def threshold_dataset(results: Mapping[int | str, Threshold] | Threshold,
     ``"x"``, 1 or ``"y"``) to :class:`~roughflow.search.Threshold` or a single one (one
     axis); each key must be the threshold's own ``axis`` (:class:`InputError` if not).
     With ``solve_log`` the contact solves of the search are listed over ``solve``; with
-    ``adhesion`` (and ``surface``) its parameters are attributes, as for a contact.
+    ``adhesion`` (and ``surface``) its parameters are attributes, as for a contact; a search
+    capped at a hardness (``Threshold.hardness``) records it as the attribute ``hardness``
+    (E*, the units of ``p_lo`` and ``p_hi``), as a contact file does.
     """
     from roughflow.search import Threshold
 
@@ -250,6 +253,8 @@ def threshold_dataset(results: Mapping[int | str, Threshold] | Threshold,
                "tol": r[0].tol, "n_solves": r[0].n_solves,
                "messages": " | ".join(t.message for t in r if t.message) or "none"},
     )
+    if r[0].hardness is not None:
+        ds.attrs["hardness"] = r[0].hardness
     if surface is not None:
         ds.attrs.update({"lx": surface.lx, "ly": surface.ly, **spec_attrs(surface)})
         if adhesion is not None:

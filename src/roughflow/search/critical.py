@@ -39,7 +39,15 @@ from typing import TYPE_CHECKING, NamedTuple
 import numpy as np
 
 from roughflow.accuracy import PERIMETER_C, perimeter_term
-from roughflow.contact import ContactResult, check_contact_tol, prepare, solve, workspace
+from roughflow.contact import (
+    ContactResult,
+    check_contact_tol,
+    check_hardness,
+    prepare,
+    require_below_hardness,
+    solve,
+    workspace,
+)
 from roughflow.contact.bearing import solve_bearing
 from roughflow.contact.law import ContactLaw
 from roughflow.defaults import (
@@ -133,6 +141,13 @@ SCOUT_TOL_FACTOR = 30.0
 #: ends measured 0.67-1.27 times the law's slope (285 brackets: 1024^2 tol 2e-3, 512^2 tol
 #: 8e-3, 256^2 tol 2e-3); those with a stale scout end 4-300 times.
 SCOUT_SLOPE_FACTOR = 2.0
+#: With a hardness H, a pressure range that reaches H ends at this fraction of it instead (a
+#: load of H would make every cell plastic, which ``contact.solve`` refuses). A capped
+#: contact carries a mean pressure p only on an area of at least p / H, so at 0.95 H at
+#: least 95 % of the cell is in contact: every threshold below that is bracketed, and the
+#: solves nearer to H cost the most (contact/cg.py: up to 22 x the elastic iterations at
+#: H = 1.05 x the load).
+HARDNESS_RANGE_FRACTION = 0.95
 
 # What the search's ConvergenceErrors say, named once: benchmarks/stress_threshold.py sorts
 # failed searches by them.
@@ -185,6 +200,11 @@ class SearchOptions:
         surface's grid).
     periodic: the observed state is periodic across the flow (default), or closed by
         walls there (False: a non-periodic scan); see :func:`roughflow.percolation.percolates`.
+    hardness: the elastic model only: cap H of the local contact pressure (E*, as
+        ``pressure_range``), every contact solved elastic-perfectly-plastic by cg
+        (``contact.solve(..., hardness=H)``; docs/contact.md, "Hardness"); a range that
+        reaches H ends at :data:`HARDNESS_RANGE_FRACTION` x H (:func:`threshold`). None:
+        purely elastic.
     """
 
     strategy: str = THRESHOLD_STRATEGY
@@ -199,6 +219,7 @@ class SearchOptions:
     observe: Callable[[ContactResult], ContactResult] | None = None
     observed_shape: tuple[int, int] | None = None
     periodic: bool = True
+    hardness: float | None = None
 
     def __post_init__(self) -> None:
         if self.strategy not in STRATEGIES:
@@ -225,6 +246,24 @@ class SearchOptions:
             if not p_min <= first <= p_max:
                 raise InputError(f"first_pressure must lie in pressure_range [{p_min:g}, "
                                  f"{p_max:g}], got {self.first_pressure!r}")
+        if self.hardness is not None:
+            self._check_hardness(p_min)
+
+    def _check_hardness(self, p_min: float) -> None:
+        """:class:`InputError` naming the value where ``hardness`` is no pressure cap the
+        searched solves can take: not a positive finite number, one in pascals, with gfmd
+        (which has no cap), or not above the lowest pressure of the range or the first one
+        (a range reaching above it is clipped by :func:`threshold`)."""
+        cap = check_hardness(self.hardness)
+        if self.method == "gfmd":
+            raise InputError(f"hardness={cap:g} is solved by method='cg' (gfmd has no "
+                             "pressure cap): leave method out or give method='cg'")
+        require_below_hardness(p_min, cap, load_text=f"pressure_range's lowest pressure "
+                               f"{p_min:g} E*", hardness_text=f"hardness={cap:g} E*")
+        if self.first_pressure is not None:
+            require_below_hardness(float(self.first_pressure), cap,
+                                   load_text=f"first_pressure {self.first_pressure:g} E*",
+                                   hardness_text=f"hardness={cap:g} E*")
 
 
 @dataclass(frozen=True)
@@ -248,7 +287,10 @@ class Threshold:
     (:func:`roughflow.accuracy.perimeter_corrected_area`, the perimeter taken between the two
     bracketing states with the weight of ``a_c_star``; docs/accuracy.md). For the bearing
     model the cell count of a level set is unbiased and it equals ``a_c_star``; for the
-    adhesive model the constant is not calibrated: NaN.
+    adhesive model and a search with a hardness the constant is not calibrated: NaN.
+    ``hardness``: the cap H (E*) of the search's contact solves
+    (:attr:`SearchOptions.hardness`): a_c* and the pressures are those of the
+    elastic-perfectly-plastic contact; None for the purely elastic (or bearing, adhesive) one.
     """
 
     axis: int
@@ -264,6 +306,7 @@ class Threshold:
     message: str = ""
     solves: tuple[SolveRecord, ...] = field(default=(), repr=False)
     a_c_star_corrected: float = float("nan")
+    hardness: float | None = None
 
     @property
     def width(self) -> float:
@@ -275,10 +318,20 @@ def first_pressure(model: str = DEFAULT_MODEL) -> float:
     return ContactLaw(model).control(A_C_STAR_PAPER)
 
 
+def _capped_first(first: float, hardness: float | None) -> float:
+    """The first pressure ``first`` of a search, at most A_C_STAR_PAPER x ``hardness``
+    where there is one: a capped contact carries a mean pressure p on an area of at least
+    p / H and at least the elastic one, so its load for a_c* lies below both the elastic
+    law's and a_c* H (the rigid-plastic limit); the elastic law's alone overshot a small
+    H's range (every cell plastic)."""
+    return first if hardness is None else min(first, A_C_STAR_PAPER * hardness)
+
+
 def scaled_options(gbar: float, model: str = DEFAULT_MODEL, **fields) -> SearchOptions:
     """:class:`SearchOptions` for a surface whose pressures are in E* and whose rms gradient
     is ``gbar`` (a scan; :attr:`roughflow.surface.Surface.gbar`): the default pressure range
-    and first pressure, in E* gbar, scaled by ``gbar``. ``fields``: the other options, and
+    and first pressure, in E* gbar, scaled by ``gbar`` (with a ``hardness``, the first
+    pressure at most a_c* H, :func:`_capped_first`). ``fields``: the other options, and
     a ``pressure_range`` or ``first_pressure`` in E* that replaces the scaled default (an
     end of the range given as None keeps its scaled default). The bearing model's loads
     are areas: nothing is scaled."""
@@ -296,10 +349,34 @@ def scaled_options(gbar: float, model: str = DEFAULT_MODEL, **fields) -> SearchO
                                     if hi is None else hi)
         if fields.get("first_pressure") is None:  # within a range given in E*
             lo, hi = (float(p) for p in fields["pressure_range"])
-            fields["first_pressure"] = min(max(gbar * first_pressure(model), lo), hi)
+            first = gbar * first_pressure(model)
+            if fields.get("hardness") is not None:  # SearchOptions refuses a bad one below
+                first = _capped_first(first, require_positive("hardness", fields["hardness"]))
+            fields["first_pressure"] = min(max(first, lo), hi)
     elif given is None:
         fields.pop("pressure_range", None)
     return SearchOptions(**fields)
+
+
+def _below_hardness(opts: SearchOptions) -> tuple[SearchOptions, str]:
+    """``opts`` with a pressure range that stays below its hardness H (no capped contact
+    carries a load of H: every cell would be plastic, and ``contact.solve`` refuses it): a
+    range that reaches H ends at :data:`HARDNESS_RANGE_FRACTION` x H instead (halfway from
+    its start to H where it starts above that), its first pressure with it; and the note for
+    a fluid still spanning at that top, which names the hardness as its bound ("" where the
+    range was left as it was). A range starting at H or above was refused by the options."""
+    cap = opts.hardness
+    lo, hi = (float(p) for p in opts.pressure_range)
+    if hi < cap:
+        return opts, ""
+    top = max(HARDNESS_RANGE_FRACTION * cap, 0.5 * (lo + cap))
+    log.info("threshold search: pressures capped at %.4g, %.3g x the hardness %.4g "
+             "(pressure_range %r)", top, top / cap, cap, opts.pressure_range)
+    first = opts.first_pressure
+    note = (f", {top / cap:.3g} x the hardness {cap:g}, which bounds the range (no capped "
+            "contact carries a load of H: every cell would be plastic)")
+    return dataclasses.replace(opts, pressure_range=(lo, top),
+                               first_pressure=None if first is None else min(first, top)), note
 
 
 def _within_wall(opts: SearchOptions, max_load: float) -> SearchOptions:
@@ -368,8 +445,9 @@ class _Work(NamedTuple):
 
 
 def _pending(samples: list[_Sample], axes, tol: float, load_range, strategy: str,
-             unbracketed: dict) -> list[_Work]:
-    """Axes whose bracket is still wider than ``tol``; records unbracketable axes."""
+             unbracketed: dict, top_note: str = "") -> list[_Work]:
+    """Axes whose bracket is still wider than ``tol``; records unbracketable axes
+    (``top_note``: what bounds the range's top, said where the fluid still spans there)."""
     todo = []
     for ax in axes:
         if ax in unbracketed:
@@ -384,8 +462,8 @@ def _pending(samples: list[_Sample], axes, tol: float, load_range, strategy: str
                                f"(a_c = {hi.area:.4g})")
         elif hi is None and lo is not None and lo.load >= load_range[1]:
             unbracketed[ax] = (lo, hi, f"the fluid still spans along {AXIS_NAMES[ax]} at the "
-                               f"highest allowed pressure {load_range[1]:g} "
-                               f"(a_c = {lo.area:.4g})")
+                               f"highest allowed pressure {load_range[1]:g}"
+                               f"{top_note} (a_c = {lo.area:.4g})")
         else:
             q = lo if lo is not None else hi
             dist = abs(q.pred(ax) - q.area) if strategy == "predict" else 0.0
@@ -539,11 +617,13 @@ def _refine(evaluate: Callable[[float, ContactResult | None, bool], _Sample], ax
             options: SearchOptions, model: str, loads_are_pressures: bool,
             compliance: float | None = None, scouts: bool = False,
             start_out: tuple[np.ndarray, np.ndarray, np.ndarray] | None = None,
-            tie: Callable[[_Sample, _Sample], tuple[int, float] | None] | None = None):
+            tie: Callable[[_Sample, _Sample], tuple[int, float] | None] | None = None,
+            top_note: str = ""):
     """Refine brackets until each is at most ``tol`` wide (the loop: module docstring).
     ``tie(lo, hi)``: (count, height) where nothing but one group of cells of equal height
     lies between two states, so no load can split their bracket (the bearing model); such
-    an axis is reported as unbracketed, as the exact sweep reports it."""
+    an axis is reported as unbracketed, as the exact sweep reports it. ``top_note``: see
+    :func:`_pending`."""
     samples: list[_Sample] = []  # the current states (a re-solved scout replaces its own)
     history: list[_Sample] = []  # every solve in order
     misses = dict.fromkeys(axes, 0)  # consecutive solves that missed the intended side
@@ -570,7 +650,8 @@ def _refine(evaluate: Callable[[float, ContactResult | None, bool], _Sample], ax
                                  out=start_out)
                 samples[i] = evaluate(samples[i].load, own, False)
                 history.append(samples[i])
-        todo = _pending(samples, axes, tol, load_range, options.strategy, unbracketed)
+        todo = _pending(samples, axes, tol, load_range, options.strategy, unbracketed,
+                        top_note)
         if tie is not None:
             for w in todo:
                 if w.lo is not None and w.hi is not None \
@@ -699,6 +780,8 @@ def threshold(
     scaled to the surface's rms gradient (a_c* does not depend on it). Every contact solve
     logs one line (load, area, iterations, residual, seconds) at INFO.
     ``backend="cupy"``: the elastic gfmd solves on a CUDA GPU (``contact.solve``'s backend).
+    With ``options.hardness`` H (elastic model, CPU) every solve is capped at H, by cg, and
+    the pressure range ends below H (:func:`_below_hardness`); the results carry H.
     """
     if not isinstance(surface, Surface):
         raise InputError(f"surface must be a roughflow Surface, got {type(surface).__name__}")
@@ -722,6 +805,14 @@ def threshold(
         raise InputError("model='adhesive' needs adhesion=Adhesion(surface_energy=, range=)")
     if model == "adhesive":
         opts = _within_wall(opts, adhesion.max_load)
+    cap = opts.hardness
+    top_note = ""
+    if cap is not None:
+        check_hardness(cap, model)
+        if backend != "cpu":
+            raise InputError(f"options.hardness={cap!r} is solved by cg on the CPU; "
+                             f"backend={backend!r} serves the gfmd solves")
+        opts, top_note = _below_hardness(opts)
     on_gpu = check_backend(backend, model, opts.method) == "cupy"
     if on_gpu:
         gpu_check_memory(surface.shape, "the contact solves of a threshold search on the GPU")
@@ -745,7 +836,14 @@ def threshold(
     def sample(r: ContactResult, load: float, open_first: np.ndarray | None,
                pressure: np.ndarray | None) -> _Sample:
         seen = r if opts.observe is None else opts.observe(r)
-        if seen is not r:
+        if r.plastic_depth is not None and not lean:
+            # the prediction key ranks a plastic cell by its depth, below every elastic
+            # contact cell, as a compact state's q does (CompactState)
+            pressure = r.contact_pressure + r.plastic_depth / compliance
+            if seen is not r:
+                pressure = opts.observe(dataclasses.replace(
+                    r, contact_pressure=pressure)).contact_pressure
+        elif seen is not r:
             pressure = seen.contact_pressure
         area = float(seen.area_fraction)
         spans = percolates_along(~seen.contact, axes, periodic=opts.periodic, work=sweeps)
@@ -790,8 +888,10 @@ def threshold(
 
     kwargs = {"model": model, "method": opts.method, "adhesion": adhesion, "threads": threads,
               "tol": opts.contact_tol, "backend": backend}
+    if cap is not None:  # cg, the method with the cap, named: no log line per solve
+        kwargs.update(method="cg", hardness=cap)
     start_out = None
-    if model == "elastic" and opts.method in (None, "gfmd"):  # built once for all solves
+    if model == "elastic" and kwargs["method"] in (None, "gfmd"):  # built once for all solves
         kwargs["setup"] = prepare(surface, threads, backend)
         if lean:
             if not on_gpu:  # on the GPU the solver's arrays come from CuPy's memory pool
@@ -807,13 +907,14 @@ def threshold(
                         what=f"threshold ({model}) solve")  # a scout shows its residual
         return dataclasses.replace(sample(r, p, None, r.contact_pressure), scout=scout)
 
-    first = first_pressure(model) if opts.first_pressure is None else float(opts.first_pressure)
+    first = (_capped_first(first_pressure(model), cap) if opts.first_pressure is None
+             else float(opts.first_pressure))
     try:
         res = _refine(evaluate, axes, tol=tol, first=first, load_range=opts.pressure_range,
                       law=law, options=opts, model=model, loads_are_pressures=True,
                       compliance=compliance,
                       scouts=model == "elastic" and scout_tol > opts.contact_tol,
-                      start_out=start_out)
+                      start_out=start_out, top_note=top_note)
     except ThresholdNotBracketed as exc:
         if options is None or not gbar > 0 or 0.5 <= gbar <= 2.0:
             raise
@@ -821,4 +922,7 @@ def threshold(
             f"{exc}; the surface's rms gradient is {gbar:.3g}, and the given "
             "options' pressures are in E*: search.scaled_options(surface.gbar, model, ...) "
             "scales the default range to it") from None
+    if cap is not None:  # the perimeter correction is calibrated on elastic contacts only
+        res = {ax: dataclasses.replace(t, hardness=cap, a_c_star_corrected=float("nan"))
+               for ax, t in res.items()}
     return res if axis is None else res[axes[0]]
