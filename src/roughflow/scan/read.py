@@ -362,6 +362,32 @@ def _is_point_list(path: Path) -> bool:
     return u0 < len(rows) and u1 < len(rows) and u0 * u1 >= len(rows)
 
 
+def _refuse_own_file(path: Path) -> None:
+    """Refuse a netCDF file that roughflow wrote (global attribute ``roughflow_version``):
+    a surface file is read by the commands as it is, and any other is a result, not a
+    scan (read as plain HDF5, both gave a misleading "does not give its length unit")."""
+    if path.suffix.lower() != ".nc":
+        return
+    import netCDF4
+
+    try:
+        with netCDF4.Dataset(str(path)) as nc:
+            attrs = set(nc.ncattrs())
+            if "roughflow_version" not in attrs:
+                return
+            made = str(nc.getncattr("command")) if "command" in attrs else None
+            names = set(nc.variables)
+    except OSError:
+        return
+    by = f" (written by {made!r})" if made else ""
+    if "heights" in names and names <= {"heights", "x", "y"}:
+        raise InputError(f"{str(path)!r} is already a roughflow surface file{by}: pass it "
+                         "to roughflow contact, leak or threshold as it is (import reads "
+                         "instrument files and height arrays)")
+    raise InputError(f"{str(path)!r} is a roughflow result{by}, not a scan: import reads "
+                     "instrument files and height arrays")
+
+
 def _netcdf_y_first(path: Path) -> bool:
     """Whether ``path`` is a netCDF file whose ``heights`` are stored over (y, x): the
     order of xarray and CF-style files, which SurfaceTopography reads as (x, y) (measured:
@@ -574,6 +600,7 @@ def read_scan(path: str | os.PathLike, *,
     """
     path = Path(path)
     require_readable(path, f"scan file {str(path)!r}")
+    _refuse_own_file(path)
     if detrend_mode not in DETREND_MODES:
         raise InputError(f"detrend must be one of {DETREND_MODES}, got {detrend_mode!r}")
     if fill not in FILL_METHODS:
