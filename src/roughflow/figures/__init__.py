@@ -103,7 +103,13 @@ _PARAMETERS = (("model", "model"), ("gamma", "gamma"), ("hurst", "H"), ("eps_f",
 
 def data_summary(dataset: xr.Dataset) -> str:
     """The values of the sweep parameters a study dataset holds, its number of seeds, and
-    which a_c* a threshold study's figure shows (perimeter-corrected or raw, by grid)."""
+    which a_c* a threshold study's figure shows (perimeter-corrected or raw, by grid); for
+    a measured study (leak rates over scans) its scans' sealing pressures and the rows the
+    figure draws as not resolved (:func:`roughflow.figures.measured.summary`)."""
+    if "leak_rate" in dataset.variables:  # scans, not a sweep: no a_c* of seed means
+        from .measured import summary
+
+        return summary(dataset)
     import numpy as np
 
     from roughflow.defaults import CORRECTION_MIN_POINTS

@@ -10,6 +10,7 @@ from roughflow.defaults import (
     A_C_STAR_PAPER,
     A_C_STAR_THEORY,
     CORRECTION_MIN_POINTS,
+    LEAK_MIN_CONTACT_CELLS,
 )
 
 _CORRECTED = (
@@ -161,7 +162,13 @@ CAPTIONS: dict[str, str] = {
         "Q = 0 once the fluid no longer percolates; the shaded bands in the scan's colour mark "
         "its sealing pressure along x (plain) and y (hatched), between the highest pressure "
         "found leaking and the lowest found sealed (a line where it is sealed). Right: the "
-        "relative contact area a_c. Each scan's non-periodic treatment is "
+        "relative contact area a_c. Hollow markers, off the lines: rows whose analysed "
+        "window holds no contact cell or contact on fewer than "
+        f"{LEAK_MIN_CONTACT_CELLS} cells (the leak table's '*' and '~'), not resolved: an "
+        "empty window is held open from outside, a few cells under-resolve a_c, the gap and "
+        "Q; the figure's caption file (.md) counts them and states each scan's sealing "
+        "pressures. "
+        "Each scan's non-periodic treatment is "
         "in the dataset's per-scan 'boundary' variable (the title names it where all scans "
         "share it, the legend per scan where they differ); the seal, fluid and scan provenance "
         "are per-scan variables too. Scans with different pressure grids are each drawn at "
