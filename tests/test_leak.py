@@ -308,7 +308,9 @@ def test_the_import_s_warnings_reach_the_leak_table(tmp_path, capsys):
     assert read_surface(tmp_path / "old.nc").scan.warnings == ""
     capsys.readouterr()
     assert main(["leak", str(surf), *LEAK, "-o", str(tmp_path / "l.nc")]) == 0
-    assert "note: the import warned: the pixels are" in capsys.readouterr().out
+    # (one size for the 64 x 48 grid: taken for both sides, rectangular pixels)
+    assert ("note: the import warned: one size ('500nm') was given for the 64 x 48 grid"
+            in capsys.readouterr().out)
     with xr.open_dataset(tmp_path / "l.nc") as ds:
         assert "the pixels are" in ds.attrs["scan_warnings"]
 
@@ -378,8 +380,9 @@ def test_the_table_tells_a_tiny_contact_area_from_none(leak_table_ds):
     ds["area_fraction"][0, :2] = [0.0, 1.234e-5]
     rows = format_table(ds).splitlines()[3:5]
     # (exactly 0: a window without contact, marked "*"; 1.234e-5 of its 48 x 48 cells, less
-    # than one: contact too sparse to resolve, marked "~", tests/test_leak_units_flags.py)
-    assert [r.split()[1] for r in rows] == ["0*", "1.234e-05~"]
+    # than one: contact too sparse to resolve, marked "~", tests/test_leak_units_flags.py;
+    # the first row's 1 MPa is also the fluid pressure, "!", tests/test_leak_validity_flags.py)
+    assert [r.split()[1] for r in rows] == ["0*!", "1.234e-05~"]
 
 
 def test_a_sealing_pressure_below_the_fluid_pressure_gets_a_caveat(leak_table_ds):

@@ -249,6 +249,14 @@ SEALING_AREA_NOTE = 0.8
 #: (CORRECTION_MIN_POINTS). The gap and leak rate such spots hold open are no better
 #: resolved than the spots themselves.
 LEAK_MIN_CONTACT_CELLS = 16
+#: A nominal pressure (E*) from which a leak-curve row, a sealing pressure or a contact
+#: solve is flagged (roughflow.leak.large_strain): at p ~ E* the elastic strains are of
+#: order one, outside the linear-elastic half-space (small strains, small slopes) that every
+#: solver here assumes. Flagged, not refused: the library takes up to CONTACT_PRESSURE_MAX
+#: on purpose (full contact is an answer). In E*, not E* gbar: the strain under the
+#: nominal load is p / E* whatever the rigid rough face's slopes. Seals run far below it
+#: (an elastomer at about 0.1 E*), so nothing lower is flagged.
+LARGE_STRAIN_PRESSURE = 1.0
 #: How a non-periodic scan meets the periodic solvers (roughflow.boundary): mirror-tiled,
 #: padded by a flat region far below it, an interior window of the scan solved as periodic,
 #: or the scan taken as periodic.

@@ -29,7 +29,9 @@ from roughflow.contact import (
     check_contact_tol,
     check_hardness,
     check_pressure_scale,
+    check_resolved_load,
     require_below_hardness,
+    resolved_load_floor,
     solve,
 )
 from roughflow.defaults import (
@@ -37,6 +39,7 @@ from roughflow.defaults import (
     CONTACT_TOL,
     FLOW_SIGMA_TOL,
     FLOW_TOL,
+    LARGE_STRAIN_PRESSURE,
     LEAK_MIN_CONTACT_CELLS,
     THRESHOLD_CONTACT_TOL,
     THRESHOLD_TOL,
@@ -54,12 +57,18 @@ if TYPE_CHECKING:
 
     from roughflow.units import Scales
 
-__all__ = ["LeakCurve", "check_pressures", "check_seal", "fluid_pressure_note", "default_boundary",
-           "sealing_search", "leak_curve", "pressure_curve", "EMPTY_WINDOW_WARNING",
-           "empty_window_rows", "empty_window_pressures", "FEW_CELLS_WARNING", "contact_cells",
-           "few_cell_rows", "few_cell_pressures"]
+__all__ = ["LeakCurve", "check_pressures", "check_seal", "fluid_pressure_note", "fluid_lifted_rows",
+           "default_boundary", "lowest_resolved_pressure", "sealing_search", "leak_curve",
+           "pressure_curve", "EMPTY_WINDOW_WARNING", "empty_window_rows",
+           "empty_window_pressures", "FEW_CELLS_WARNING", "contact_cells", "few_cell_rows",
+           "few_cell_pressures", "LARGE_STRAIN_WARNING", "large_strain"]
 
 log = logging.getLogger(__name__)
+
+#: Relative slack of the pressure comparisons below: pressures come back from units of E*
+#: an ulp off (1 MPa as 1000000.0000000001 Pa), and a pressure equal to a bound counts as
+#: at it.
+_ROUND_OFF = 1e-9
 
 
 @dataclass(frozen=True, eq=False)
@@ -144,16 +153,27 @@ def check_seal(surface: Surface, scales: Scales, *, fluid_pressure: float,
             f"cube): use Scales(length=surface.scan.length_scale, ...)")
 
 
+def fluid_lifted_rows(pressures: ArrayLike, fluid_pressure: float) -> np.ndarray:
+    """Per row: whether the nominal contact pressure (``pressures``, in the unit of
+    ``fluid_pressure``) is at or below the fluid's pressure drop: on the seal's high-pressure
+    side the fluid would push the faces apart, and the model, which leaves the fluid's load
+    on the faces out, does not hold. A pressure equal to the fluid's but for round-off
+    counts as at it."""
+    p = np.asarray(pressures, dtype=np.float64)
+    return p * (1.0 - _ROUND_OFF) <= float(fluid_pressure)
+
+
 def fluid_pressure_note(fluid_pressure: float, pressures: ArrayLike, unit: str = "") -> str:
     """A note where the fluid's pressure drop ``fluid_pressure`` is not small against the
     lowest nominal contact pressure of ``pressures`` (both in ``unit``), else "".
 
     The Reynolds flow here leaves the fluid's own load on the surfaces out, which holds for
-    dp << p; at the pressures where it does not, the leak rates overstate the contact. A
-    fluid pressure equal to the lowest one but for round-off counts as not below it (the
-    pressures come back from units of E* one ulp off: 1 MPa as 1000000.0000000001 Pa)."""
+    dp << p; at the pressures where it does not, the leak rates overstate the contact. The
+    note is there where some row is at or below the fluid pressure
+    (:func:`fluid_lifted_rows`, which the leak table marks), and is about the rows above
+    it."""
     lowest = float(np.min(pressures))
-    if fluid_pressure < lowest * (1.0 - 1e-9):
+    if not fluid_lifted_rows(pressures, fluid_pressure).any():
         return ""
     u = f" {unit}" if unit else ""
     return (f"the fluid pressure {fluid_pressure:.4g}{u} is not small against the lowest "
@@ -165,6 +185,39 @@ def fluid_pressure_note(fluid_pressure: float, pressures: ArrayLike, unit: str =
 def default_boundary(surface: Surface) -> str:
     """:data:`~roughflow.defaults.BOUNDARY` for a non-periodic scan, ``"periodic"`` else."""
     return "periodic" if surface.periodic else BOUNDARY
+
+
+def large_strain(pressure: ArrayLike) -> np.ndarray:
+    """Whether a nominal pressure (E*; a number or an array of them, e.g. a leak curve's
+    rows or a sealing pressure) is at or above
+    :data:`~roughflow.defaults.LARGE_STRAIN_PRESSURE` E*: strains of order one, outside the
+    linear-elastic contact model (the reasons are there). Solved all the same; the leak
+    table and ``roughflow contact`` flag it."""
+    return np.asarray(pressure, dtype=np.float64) >= LARGE_STRAIN_PRESSURE * (1.0 - _ROUND_OFF)
+
+
+def lowest_resolved_pressure(surface: Surface, boundary: str | None = None) -> float:
+    """The lowest nominal pressure (E*) :func:`leak_curve` takes on ``surface`` with
+    ``boundary`` (default :func:`default_boundary`): the solver cell's
+    :func:`~roughflow.contact.solve.resolved_load_floor` as a pressure on the analysed
+    part (a lower one is refused, as ``contact.solve`` refuses it)."""
+    return _lowest_resolved(embed(surface, default_boundary(surface) if boundary is None
+                                  else boundary))
+
+
+def _lowest_resolved(emb: Embedding) -> float:
+    """:func:`lowest_resolved_pressure` of the embedding ``emb``."""
+    return emb.nominal_pressure(resolved_load_floor(emb.surface.gbar, emb.surface.shape))
+
+
+def _pressures_text(pressures: ArrayLike, modulus: float | None, sep: str = ", ") -> str:
+    """Nominal pressures (E*) for a message, "0.0001, 0.001 E*"; with ``modulus`` (E* in
+    Pa) also in pascals, "0.0001, 0.001 E* = 1e+05, 1e+06 Pa"."""
+    p = np.atleast_1d(np.asarray(pressures, dtype=np.float64))
+    text = sep.join(f"{v:.4g}" for v in p) + " E*"
+    if modulus is not None:
+        text += " = " + sep.join(f"{v * modulus:.4g}" for v in p) + " Pa"
+    return text
 
 
 def _sealing_options(emb: Embedding, *, gbar: float, contact_tol: float,
@@ -198,7 +251,7 @@ def leak_curve(surface: Surface, pressures: ArrayLike, *, boundary: str | None =
                threshold_tol: float = THRESHOLD_TOL,
                threshold_contact_tol: float = THRESHOLD_CONTACT_TOL,
                sealing: bool = True, threads: int | None = None,
-               hardness: float | None = None) -> LeakCurve:
+               hardness: float | None = None, modulus: float | None = None) -> LeakCurve:
     """Contact, percolation along x and y, and Reynolds conductances of ``surface`` at each
     nominal pressure (E*, increasing; each solve warm-starts from the previous one), and
     the sealing thresholds (:func:`sealing_search`, skipped with ``sealing=False``).
@@ -209,7 +262,11 @@ def leak_curve(surface: Surface, pressures: ArrayLike, *, boundary: str | None =
     contact or flow solve that misses its tolerance raises ``ConvergenceError``. Pressures
     at which the analysed window holds no contact cell, or too few to resolve the contact,
     are logged as warnings (:data:`EMPTY_WINDOW_WARNING`, :func:`empty_window_pressures`;
-    :data:`FEW_CELLS_WARNING`, :func:`few_cell_pressures`).
+    :data:`FEW_CELLS_WARNING`, :func:`few_cell_pressures`), and so are rows and sealing
+    pressures at or above E* (:data:`LARGE_STRAIN_WARNING`, :func:`large_strain`). A first
+    pressure below what the solver cell resolves (:func:`lowest_resolved_pressure`) is
+    refused before any solve. ``modulus``: E* in Pa where known, for the messages only
+    (their pressures then in Pa too).
 
     ``hardness`` (E*, as the pressures): every row's contact, and every solve of the
     sealing search, is solved with the pressure capped there (elastic-perfectly-plastic,
@@ -228,8 +285,12 @@ def leak_curve(surface: Surface, pressures: ArrayLike, *, boundary: str | None =
     check_sigma_tol(flow_sigma_tol)
     if hardness is not None:
         hardness = check_hardness(hardness)
+    if modulus is not None:
+        require_positive("modulus", modulus)
     method = default_boundary(surface) if boundary is None else boundary
     emb = embed(surface, method)
+    # the first solve's own check, made here: before the sealing search's checks and any solve
+    check_resolved_load(emb.cell_pressure(p[0]), emb.surface.gbar, emb.surface.shape)
     if hardness is not None:
         require_below_hardness(
             emb.cell_pressure(p[-1]), hardness,
@@ -245,11 +306,19 @@ def leak_curve(surface: Surface, pressures: ArrayLike, *, boundary: str | None =
     curve = pressure_curve(emb, p, contact_tol=contact_tol, flow_tol=flow_tol,
                            flow_sigma_tol=flow_sigma_tol, threads=threads, hardness=hardness)
     plastic = curve.pop("plastic_fraction")
-    _warn_sparse_rows(p, curve["area_fraction"], emb.shape, method)
+    _warn_sparse_rows(p, curve["area_fraction"], emb.shape, method, modulus)
+    strained = large_strain(p)
+    if strained.any():
+        log.warning(LARGE_STRAIN_WARNING, "the nominal pressures",
+                    _pressures_text(p[strained], modulus))
     thresholds = (sealing_search(emb, gbar=gbar, tol=threshold_tol,
                                  contact_tol=threshold_contact_tol, threads=threads,
                                  hardness=hardness)
                   if sealing else {})
+    for ax, t in thresholds.items():
+        if large_strain(t.p_hi):  # the seal closes at or above E*, if at all (NaN: no bracket)
+            log.warning(LARGE_STRAIN_WARNING, f"the sealing pressure along {'xy'[ax]}",
+                        _pressures_text([t.p_lo, t.p_hi], modulus, sep=" - "))
     # the sealing search's tolerances are recorded only where it ran
     searched = ({"threshold_tol": threshold_tol, "threshold_contact_tol": threshold_contact_tol}
                 if sealing else {})
@@ -264,24 +333,34 @@ def leak_curve(surface: Surface, pressures: ArrayLike, *, boundary: str | None =
         plastic_fraction=plastic)
 
 
-#: Logged by :func:`leak_curve` (arguments: the boundary method, the pressures in E*) where
-#: the analysed window holds no contact cell at some pressures.
+#: Logged by :func:`leak_curve` (arguments: the boundary method, the pressures: "... E*", or
+#: with the modulus "... E* = ... Pa") where the analysed window holds no contact cell at
+#: some pressures.
 EMPTY_WINDOW_WARNING = (
-    "the analysed window (boundary %r) holds no contact cell at the nominal pressures %s E*: "
+    "the analysed window (boundary %r) holds no contact cell at the nominal pressures %s: "
     "all of the contact lies outside it (in the border that 'window' drops), so a_c = 0 "
     "there and the gap and leak rate are those of a window held open from outside, not a "
     "property of the seal; start the pressures higher, or use boundary 'mirror' (the whole "
     "scan analysed)")
 
 #: Logged by :func:`leak_curve` (arguments: :data:`~roughflow.defaults.LEAK_MIN_CONTACT_CELLS`,
-#: the pressures in E*, their contact cells, the window's cells along x and y) where the
-#: analysed window holds contact at some pressures, but too few cells of it to resolve it.
+#: the pressures as for :data:`EMPTY_WINDOW_WARNING`, their contact cells, the window's cells
+#: along x and y) where the analysed window holds contact at some pressures, but too few
+#: cells of it to resolve it.
 FEW_CELLS_WARNING = (
-    "the analysed window holds fewer than %d contact cells at the nominal pressures %s E* "
+    "the analysed window holds fewer than %d contact cells at the nominal pressures %s "
     "(%s of its %d x %d cells): no contact spot spans more than a few grid cells, so a_c "
     "(over-counted by about 10 %% of itself or more) and the gap and leak rate those spots "
     "hold open are under-resolved; start the pressures higher, or check these rows on the "
     "scan interpolated to a finer grid")
+
+#: Logged by :func:`leak_curve` (arguments: what, "the nominal pressures" or "the sealing
+#: pressure along x", and its pressures as for :data:`EMPTY_WINDOW_WARNING`) where a row or
+#: a sealing pressure is at or above E* (:func:`large_strain`).
+LARGE_STRAIN_WARNING = (
+    "%s at or above E* (%s): strains of order one, outside the linear-elastic contact model "
+    "(small strains and slopes), whose results there are not the seal's; seals run far "
+    "below E* (check the modulus, and the pressures' unit)")
 
 
 def empty_window_rows(area_fraction: ArrayLike) -> np.ndarray:
@@ -335,17 +414,18 @@ def few_cell_pressures(pressures: ArrayLike, area_fraction: ArrayLike,
 
 
 def _warn_sparse_rows(pressures: np.ndarray, area_fraction: np.ndarray,
-                      window_shape: tuple[int, int], boundary: str) -> None:
+                      window_shape: tuple[int, int], boundary: str,
+                      modulus: float | None = None) -> None:
     """Log :data:`EMPTY_WINDOW_WARNING` and :data:`FEW_CELLS_WARNING` for the rows they
-    concern, if any."""
+    concern, if any (their pressures in Pa too where the ``modulus`` is known)."""
     empty = empty_window_pressures(pressures, area_fraction)
     if empty.size:
-        log.warning(EMPTY_WINDOW_WARNING, boundary, ", ".join(f"{v:.4g}" for v in empty))
+        log.warning(EMPTY_WINDOW_WARNING, boundary, _pressures_text(empty, modulus))
     few = few_cell_rows(area_fraction, window_shape)
     if few.any():
         cells = contact_cells(area_fraction, window_shape)[few]
         log.warning(FEW_CELLS_WARNING, LEAK_MIN_CONTACT_CELLS,
-                    ", ".join(f"{v:.4g}" for v in pressures[few]),
+                    _pressures_text(pressures[few], modulus),
                     ", ".join(str(n) for n in cells), *window_shape)
 
 

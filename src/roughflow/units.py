@@ -169,7 +169,7 @@ def parse_quantity(text: str | float, kind: str, name: str) -> float:
             raise InputError(f"{name}: cannot parse {text!r} as a {kind} ({exc})") from None
         if isinstance(q, (int, float)) or q.dimensionless:
             raise InputError(f"{name}: {text!r} has no unit; give a {kind} such as "
-                             f"'{_EXAMPLES[kind]}'")
+                             f"'{_example(kind, name)}'")
         if q.dimensionality != ureg.get_dimensionality(dim):
             raise InputError(f"{name}: {text!r} is not a {kind} (its dimension is "
                              f"{q.dimensionality}, expected {dim})")
@@ -181,6 +181,16 @@ def parse_quantity(text: str | float, kind: str, name: str) -> float:
 
 _EXAMPLES = {"length": "2mm", "pressure": "1MPa", "viscosity": "1mPa.s",
              "volume rate": "1mL/min"}
+#: Examples for quantities whose usual size is far from their kind's example: for a
+#: modulus, "1MPa" suggested a value 2e5 times below a steel pair's E*.
+_NAMED_EXAMPLES = {"modulus": "200GPa"}
+
+
+def _example(kind: str, name: str) -> str:
+    """An example value of the quantity ``name`` (an option, "--modulus", or a key,
+    "modulus") of ``kind``, for messages."""
+    return _NAMED_EXAMPLES.get(name.strip().lstrip("-").replace("-", "_"), _EXAMPLES[kind])
+
 
 #: The powers of a unit expression ("m^3", "m**3", "mm3", "s-1"): the only digits a unit
 #: without a number holds.
@@ -220,8 +230,9 @@ def parse_range(text: str, kind: str, name: str) -> np.ndarray:
         if not re.fullmatch(r"\s*\d+\s*", parts[2]) or int(parts[2]) < 2:
             raise InputError(f"{name}: the count in {text!r} must be an integer >= 2")
         if not lo < hi:
+            si = DIMENSIONS[kind][1]
             raise InputError(f"{name}: the range {text!r} is in the wrong order (low end "
-                             f"{lo:g} {DIMENSIONS[kind][1]} >= high end {hi:g})")
+                             f"{lo:g} {si} >= high end {hi:g} {si})")
         return np.array([canonical(v) for v in np.geomspace(lo, hi, int(parts[2]))])
     values = np.array([parse_quantity(p, kind, name) for p in s.split(",") if p.strip()])
     if values.size == 0:

@@ -225,6 +225,21 @@ def pressure_in_e_star(value: float | str | None, modulus: float | None,
     return value
 
 
+def require_resolved_pressure(option: str, pressure: float, floor: float, modulus: str,
+                              shape: tuple[int, int], gbar: float) -> None:
+    """Refuse the pressure ``option`` (its lowest value ``pressure``, Pa) below ``floor``
+    (Pa), the lowest the ``shape`` grid of rms gradient ``gbar`` resolves (the library's
+    :func:`~roughflow.contact.solve.resolved_load_floor` times E*, the ``--modulus``
+    as given), in the options' words; the library refuses it too, in E*."""
+    if pressure < floor:
+        raise InputError(
+            f"{option} {pressure:.4g} Pa is below what the {shape[0]} x {shape[1]} grid "
+            f"resolves: {floor:.3g} Pa for its rms gradient {gbar:.3g} and --modulus "
+            f"{modulus} (the elastic law puts {defaults.CONTACT_MIN_CELLS:g} of one cell in "
+            "contact there; below, the contact is a single cell and the solver's load "
+            f"balance reaches round-off); give {option} of {floor:.3g} Pa or more")
+
+
 def hardness_in_e_star(value: float | str | None, modulus: float | None) -> float | None:
     """--hardness (:func:`number_or_quantity`) in E*, as :func:`pressure_in_e_star`, refused
     unless positive, finite and at most ``CONTACT_PRESSURE_MAX`` E* (a larger one is a

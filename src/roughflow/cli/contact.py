@@ -5,6 +5,7 @@ from __future__ import annotations
 import argparse
 import logging
 import time
+from typing import TYPE_CHECKING
 
 from roughflow.citation import contact_methods
 from roughflow.defaults import (
@@ -29,10 +30,14 @@ from ._common import (
     on_backend,
     pressure_in_e_star,
     refuse_given,
+    require_resolved_pressure,
     resolve_adhesion,
     track_given,
     warn_if_nonperiodic_scan,
 )
+
+if TYPE_CHECKING:  # xarray is imported when the command runs, not for --help
+    import xarray as xr
 
 log = logging.getLogger(__name__)
 
@@ -101,6 +106,14 @@ def run(args: argparse.Namespace) -> None:
     surface = surface_from_dataset(args.data["surface"])
     if args.model != "bearing":  # the bearing model is local: no edges to join
         warn_if_nonperiodic_scan(args.data["surface"], args.surface, "contact")
+        _warn_if_large_strain(args.pressure, pressure, modulus)
+    # the elastic solve's floor in Pa (a load that is not positive: the solve's own refusal)
+    if args.model == "elastic" and modulus is not None and pressure > 0:
+        from roughflow.contact.solve import resolved_load_floor
+
+        require_resolved_pressure("--pressure", pressure * modulus,
+                                  resolved_load_floor(surface.gbar, surface.shape) * modulus,
+                                  args.modulus, surface.shape, surface.gbar)
     adhesion = resolve_adhesion(args.model, args.surface_energy, args.adhesion_range, surface,
                                 flags=("--surface-energy", "--adhesion-range"), source=args.surface,
                                 repulsion=args.repulsion)
@@ -132,7 +145,33 @@ def run(args: argparse.Namespace) -> None:
         plastic = f", plastic {result.plastic_fraction:.5f} (hardness {cap})"
     write_dataset(ds, args.output, provenance=args.provenance.using(*methods))
     print(f"{args.output}: {result.model} contact{load and f', {load}'}: a_c = "
-          f"{result.area_fraction:.5f}{plastic}, mean gap {result.mean_gap:.6g} (lengths in L)")
+          f"{result.area_fraction:.5f}{plastic}, mean gap {_gap_text(result.mean_gap, ds)}")
+
+
+def _gap_text(gap: float, ds: xr.Dataset) -> str:
+    """The mean gap (in L) for the summary line, in metres too where the contact file
+    records L (``ref_length_m``, as that of an imported scan does)."""
+    from roughflow.units import REF_LENGTH, REFERENCE_ATTRS
+
+    length = ds.attrs.get(REFERENCE_ATTRS[REF_LENGTH][0])
+    if length is None:
+        return f"{gap:.6g} (lengths in L)"
+    return f"{gap:.6g} L = {gap * float(length):.6g} m (L = {float(length):.6g} m)"
+
+
+def _warn_if_large_strain(given: float | str, pressure: float, modulus: float | None) -> None:
+    """Warn where --pressure (``given``; ``pressure`` in E*, the ``modulus`` in Pa or None)
+    is at or above E* (:func:`roughflow.leak.large_strain`): solved all the same, but
+    strains of order one are outside the linear-elastic model."""
+    from roughflow.leak import large_strain
+
+    if not large_strain(pressure):
+        return
+    said = (f"--pressure {given:g} E* is at or above E*" if modulus is None else
+            f"--pressure {given} ({pressure:.4g} E*) is at or above E* = {modulus:.4g} Pa")
+    log.warning("%s: strains of order one, outside the linear-elastic contact model (small "
+                "strains and slopes), whose contact there is not the surfaces'; check "
+                "--pressure and --modulus", said)
 
 
 def _load(args: argparse.Namespace) -> tuple[float | None, float | None, float | None]:

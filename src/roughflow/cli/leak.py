@@ -17,9 +17,16 @@ from roughflow.defaults import (
 )
 from roughflow.errors import InputError
 
-from ._common import add_input, add_output, hardness_in_e_star, number_or_quantity
+from ._common import (
+    add_input,
+    add_output,
+    hardness_in_e_star,
+    number_or_quantity,
+    require_resolved_pressure,
+)
 
-if TYPE_CHECKING:  # xarray is imported when the command runs, not for --help
+if TYPE_CHECKING:  # numpy and xarray are imported when the command runs, not for --help
+    import numpy as np
     import xarray as xr
 
 
@@ -87,7 +94,7 @@ def run(args: argparse.Namespace) -> None:
     from roughflow.contact import require_below_hardness
     from roughflow.datasets import leak_dataset
     from roughflow.io import surface_from_dataset, write_dataset
-    from roughflow.leak import check_pressures, check_seal, leak_curve
+    from roughflow.leak import check_pressures, check_seal, leak_curve, lowest_resolved_pressure
     from roughflow.units import Scales, parse_quantity, parse_range, parse_rate_unit
 
     # every quantity is checked before any solve (the surface file was read and checked by
@@ -120,9 +127,12 @@ def run(args: argparse.Namespace) -> None:
                     modulus=modulus, viscosity=eta)
     check_seal(surface, scales, fluid_pressure=fluid, seal_width=width, seal_length=length)
     p = check_pressures(scales.pressure_from_si(pressures))
+    require_resolved_pressure("--pressures", pressures[0],
+                              lowest_resolved_pressure(surface, args.boundary) * modulus,
+                              args.modulus, surface.shape, surface.gbar)
     curve = leak_curve(surface, p, boundary=args.boundary, contact_tol=args.contact_tol,
                        threshold_tol=args.threshold_tol, sealing=not args.no_sealing,
-                       threads=args.threads, hardness=hardness)
+                       threads=args.threads, hardness=hardness, modulus=modulus)
     name = args.name or Path(args.surface).stem
     ds = leak_dataset(curve, surface, scales=scales, fluid_pressure=fluid, seal_width=width,
                       seal_length=length, name=name)
@@ -149,13 +159,31 @@ FEW_CELLS_NOTE = (
     "those spots hold open are under-resolved; start --pressures higher, or check the row "
     "on the scan interpolated to a finer grid")
 
+#: The note under the table for its rows marked "!" (a template: the fluid pressure and the
+#: rows' pressures, in Pa).
+FLUID_LIFT_NOTE = (
+    "! the fluid pressure {fluid} Pa is at or above the contact pressure of these rows "
+    "({rows} Pa): on the high-pressure side of the seal it would push the faces apart, and "
+    "the model, which leaves the fluid's load on the faces out, does not hold there")
+
+#: The note under the table for its rows marked "^" (a template: E* and the rows' pressures,
+#: in Pa).
+LARGE_STRAIN_NOTE = (
+    "^ the nominal pressure of these rows ({rows} Pa) is at or above E* = {modulus} Pa: "
+    "strains of order one, outside the linear-elastic contact model (small strains and "
+    "slopes), so their a_c, gap and leak rate are not the seal's; seals run far below E* "
+    "(check --modulus, the pair's contact modulus, and the unit of --pressures)")
+
 
 def format_table(ds: xr.Dataset, rate_unit: str | None = None) -> str:
     """The leak curve of a (one-scan) leak dataset as a text table, its leak rates in
     ``rate_unit`` (a volume per time, :func:`roughflow.units.parse_rate_unit`; default: the
     dataset's own, m^3/s). Rows are marked after a_c where the analysed window holds no
-    contact cell ("*") or too few to resolve the contact ("~"), with a note under the
-    table for each mark used."""
+    contact cell ("*") or too few to resolve the contact ("~"), where the fluid pressure
+    is at or above the row's ("!") and where the row's is at or above E* ("^"), with a note
+    under the table for each mark used (:func:`_row_flags`)."""
+    import numpy as np
+
     from roughflow.units import parse_rate_unit
 
     stored = str(ds["leak_rate"].attrs["units"])
@@ -164,32 +192,44 @@ def format_table(ds: xr.Dataset, rate_unit: str | None = None) -> str:
                 / parse_rate_unit(unit, "rate_unit"))
     qw = max(10, len(unit))  # a long unit widens the leak-rate columns
     d = ds.isel(scan=0)
+    flags = _row_flags(ds, d)
+    marks = ["".join(m for m, rows in flags.items() if rows[i])
+             for i in range(d.sizes["pressure"])]
+    mw = max([1, *(len(m) for m in marks)])  # a row may carry several marks
     lines = [f"{d['scan'].item()}: boundary {ds.attrs['boundary']}, E* = "
              f"{ds.attrs['ref_pressure_Pa']:.4g} Pa, dp = {ds.attrs['fluid_pressure_Pa']:.4g} "
              f"Pa, eta = {ds.attrs['ref_viscosity_Pa_s']:.4g} Pa s, seal w = "
              f"{ds.attrs['seal_width_m']:.4g} m, l = {ds.attrs['seal_length_m']:.4g} m",
-             f"{'p [Pa]':>10} {'a_c':>9}  {'gap':>9} {'perc x':>6} {'perc y':>6} "
+             f"{'p [Pa]':>10} {'a_c':>9}{'':{mw}} {'gap':>9} {'perc x':>6} {'perc y':>6} "
              f"{'sigma_x':>10} {'sigma_y':>10} {'Q_x':>{qw}} {'Q_y':>{qw}}",
-             f"{'':>10} {'':>9}  {'m':>9} {'':>6} {'':>6} {'m^3/(Pa s)':>10} "
+             f"{'':>10} {'':>9}{'':{mw}} {'m':>9} {'':>6} {'':>6} {'m^3/(Pa s)':>10} "
              f"{'m^3/(Pa s)':>10} {unit:>{qw}} {unit:>{qw}}"]
-    marks = _row_marks(ds, d)
     for i in range(d.sizes["pressure"]):
         r = d.isel(pressure=i)
         c, pc = r["conductance"].values, r["percolating"].values
         q = r["leak_rate"].values * per_unit
         # 4 significant digits, not decimals: a_c = 1e-5 and exactly 0 read apart
         lines.append(f"{float(r['pressure']):10.4g} {float(r['area_fraction']):9.4g}"
-                     f"{marks[i]} {_mean_gap_m(ds, r):9.3e} "
+                     f"{marks[i]:{mw}} {_mean_gap_m(ds, r):9.3e} "
                      f"{'yes' if pc[0] else 'no':>6} {'yes' if pc[1] else 'no':>6} "
                      f"{c[0]:10.3e} {c[1]:10.3e} {q[0]:{qw}.3e} {q[1]:{qw}.3e}")
     lines += _sealing_lines(ds, d)
     lines += _contact_pressure_line(d)
     lines += _plastic_lines(ds)
-    if "*" in marks:
+    if flags["*"].any():
         lines.append(f"note: {EMPTY_WINDOW_NOTE}")
-    if "~" in marks:
+    if flags["~"].any():
         nx, ny = _window_shape(ds)
         lines.append(f"note: {FEW_CELLS_NOTE.format(nx=nx, ny=ny)}")
+    p = np.asarray(d["pressure"].values, dtype=float)
+    if flags["!"].any():
+        lines.append("note: " + FLUID_LIFT_NOTE.format(
+            fluid=f"{float(ds.attrs['fluid_pressure_Pa']):.4g}",
+            rows=", ".join(f"{v:.4g}" for v in p[flags["!"]])))
+    if flags["^"].any():
+        lines.append("note: " + LARGE_STRAIN_NOTE.format(
+            modulus=f"{float(ds.attrs['ref_pressure_Pa']):.4g}",
+            rows=", ".join(f"{v:.4g}" for v in p[flags["^"]])))
     warned = str(ds.attrs.get("scan_warnings", ""))
     if warned:  # said in the import's log, which a workflow's user may never read
         lines.append(f"note: the import warned: {warned}")
@@ -252,23 +292,34 @@ def _window_shape(ds: xr.Dataset) -> tuple[int, int]:
     return int(ds.attrs["window_nx"]), int(ds.attrs["window_ny"])
 
 
-def _row_marks(ds: xr.Dataset, d: xr.Dataset) -> list[str]:
-    """Per row of the one-scan dataset ``d``: "*" where its analysed window holds no contact
-    cell (:func:`roughflow.leak.empty_window_rows`), "~" where it holds too few to resolve
-    the contact (:func:`roughflow.leak.few_cell_rows`), else " "."""
-    from roughflow.leak import empty_window_rows, few_cell_rows
+def _row_flags(ds: xr.Dataset, d: xr.Dataset) -> dict[str, np.ndarray]:
+    """Per mark of the table, in the order a row shows them, its rows of the one-scan
+    dataset ``d``: "*" where the analysed window holds no contact cell
+    (:func:`roughflow.leak.empty_window_rows`), "~" where it holds too few to resolve the
+    contact (:func:`roughflow.leak.few_cell_rows`), "!" where the fluid pressure is at or
+    above the row's (:func:`roughflow.leak.fluid_lifted_rows`), "^" where the row's is at or
+    above E* (:func:`roughflow.leak.large_strain`)."""
+    import numpy as np
+
+    from roughflow.leak import empty_window_rows, few_cell_rows, fluid_lifted_rows, large_strain
 
     area = d["area_fraction"].values
-    empty, few = empty_window_rows(area), few_cell_rows(area, _window_shape(ds))
-    return ["*" if e else "~" if f else " " for e, f in zip(empty, few, strict=True)]
+    p = np.asarray(d["pressure"].values, dtype=float)
+    return {"*": empty_window_rows(area), "~": few_cell_rows(area, _window_shape(ds)),
+            "!": fluid_lifted_rows(p, float(ds.attrs["fluid_pressure_Pa"])),
+            "^": large_strain(p / float(ds.attrs["ref_pressure_Pa"]))}
 
 
 def _sealing_lines(ds: xr.Dataset, d: xr.Dataset) -> list[str]:
     """The sealing pressure along x and y, each with a caveat where it is not above the
-    fluid pressure, and the note on a seal that closes only at a large a_c*."""
+    fluid pressure, the note on a seal that closes only at a large a_c*, and the note on
+    one at or above E* (:func:`roughflow.leak.large_strain`)."""
+    from roughflow.leak import large_strain
+
     if not ds.attrs.get("sealing_searched", 1):
         return ["sealing pressure: not searched (--no-sealing)"]
     fluid = float(ds.attrs["fluid_pressure_Pa"])
+    modulus = float(ds.attrs["ref_pressure_Pa"])
     lines = []
     for k, a in enumerate(("x", "y")):
         lo, hi = (float(d[v].values[k]) for v in ("sealing_pressure_lo", "sealing_pressure"))
@@ -287,4 +338,10 @@ def _sealing_lines(ds: xr.Dataset, d: xr.Dataset) -> list[str]:
                          f"one scan line offset from the others (compare an import with "
                          f"--detrend lines-x or lines-y) or a large region filled with "
                          f"--fill min (a flat basin)")
+        lo, hi = (float(d[v].values[k]) for v in ("sealing_pressure_lo", "sealing_pressure"))
+        if large_strain(hi / modulus):  # the seal closes there or above, if at all
+            lines.append(f"note: the sealing pressure along {a} (between {lo:.4g} Pa and "
+                         f"{hi:.4g} Pa) is at or above E* = {modulus:.4g} Pa: strains of order "
+                         "one, outside the linear-elastic contact model (small strains and "
+                         "slopes), which does not tell whether the seal closes there")
     return lines

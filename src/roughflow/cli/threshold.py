@@ -127,6 +127,7 @@ def register(sub: argparse._SubParsersAction) -> None:
 def run(args: argparse.Namespace) -> None:
     from roughflow.datasets import threshold_dataset
     from roughflow.io import surface_from_dataset, write_dataset
+    from roughflow.leak import LARGE_STRAIN_WARNING, large_strain
     from roughflow.search import threshold
 
     on_backend(args)  # CuPy and a GPU, before any work
@@ -150,6 +151,10 @@ def run(args: argparse.Namespace) -> None:
     for ax, r in res.items():
         log.info("a_c*(%s) = %.4f in [%.4f, %.4f] after %d contact solves", AXIS_NAMES[ax],
                  r.a_c_star, r.a_lo, r.a_hi, r.n_solves)
+        if large_strain(r.p_hi):  # as roughflow leak flags a sealing pressure (NaN: bearing)
+            log.warning(LARGE_STRAIN_WARNING, f"p_hi along {AXIS_NAMES[ax]}",
+                        f"{r.p_hi:.4g} E*" + ("" if modulus is None
+                                               else f" = {r.p_hi * modulus:.4g} Pa"))
     ds = threshold_dataset(res, surface, adhesion=adhesion)
     ds.attrs["surface_file"] = str(args.surface)
     ds.attrs["boundary"] = args.boundary

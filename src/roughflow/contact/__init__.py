@@ -19,6 +19,7 @@ from .solve import (
     check_pressure_scale,
     check_resolved_load,
     prepare,
+    resolved_load_floor,
     solve,
     workspace,
 )
@@ -38,6 +39,7 @@ __all__ = [
     "full_contact_energy",
     "prepare",
     "require_below_hardness",
+    "resolved_load_floor",
     "solve",
     "tabor_parameter",
     "workspace",

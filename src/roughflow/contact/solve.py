@@ -357,10 +357,18 @@ def check_pressure_scale(pressure: ArrayLike) -> None:
             f"(from Python, convert pascals with roughflow.units.Scales.pressure_from_si)")
 
 
+def resolved_load_floor(gbar: float, shape: tuple[int, int]) -> float:
+    """The lowest elastic load (E*) a grid of ``shape`` resolves for a surface of rms
+    gradient ``gbar``: where the small-load law puts :data:`CONTACT_MIN_CELLS` cells in
+    contact (:func:`check_resolved_load` refuses a load below it)."""
+    return gbar * elastic_load_for_cells(CONTACT_MIN_CELLS, shape[0] * shape[1])
+
+
 def check_resolved_load(pressure: float, gbar: float, shape: tuple[int, int]) -> None:
-    """:class:`InputError` where an elastic load is below what the grid resolves: the
-    small-load law puts fewer than :data:`CONTACT_MIN_CELLS` cells in contact."""
-    floor = gbar * elastic_load_for_cells(CONTACT_MIN_CELLS, shape[0] * shape[1])
+    """:class:`InputError` where an elastic load is below what the grid resolves
+    (:func:`resolved_load_floor`): the small-load law puts fewer than
+    :data:`CONTACT_MIN_CELLS` cells in contact."""
+    floor = resolved_load_floor(gbar, shape)
     if pressure < floor:
         raise InputError(
             f"pressure {pressure:g} E* is below what a {shape[0]} x {shape[1]} grid resolves "

@@ -122,7 +122,7 @@ def scan_size(size: str | float | Sequence[str | float], unit: str | None) -> tu
     numbers in ``unit``)."""
     from roughflow.units import parse_quantity
 
-    parts = list(size) if isinstance(size, (tuple, list)) else str(size).split(",")
+    parts = _size_parts(size)
     if len(parts) == 1:
         parts = parts * 2
     if len(parts) != 2:
@@ -141,10 +141,14 @@ def scan_size(size: str | float | Sequence[str | float], unit: str | None) -> tu
     return out[0], out[1]
 
 
+def _size_parts(size: str | float | Sequence[str | float]) -> list:
+    """The lengths ``size`` gives: one (both sides) or two (lx, ly)."""
+    return list(size) if isinstance(size, (tuple, list)) else str(size).split(",")
+
+
 def _has_bare_number(size: str | float | Sequence[str | float]) -> bool:
     """Whether ``size`` holds a number without a unit (which ``unit=`` then gives)."""
-    parts = list(size) if isinstance(size, (tuple, list)) else str(size).split(",")
-    return any(is_number(str(p).strip()) for p in parts)
+    return any(is_number(str(p).strip()) for p in _size_parts(size))
 
 
 def _missing_unit(size) -> str:
@@ -740,20 +744,29 @@ def read_scan(path: str | os.PathLike, *,
             log.info("%s: pixels of %.4g m along x and %.4g m along y, as the file states",
                      path, dx, dy)
     elif abs(dx / dy - 1) > SCAN_PIXEL_ASPECT_WARN:
-        warn(f"the pixels are {dx:.4g} m along x and {dy:.4g} m along y ({h.shape[0]} x "
-             f"{h.shape[1]} points, {lx_m:.4g} m x {ly_m:.4g} m). If the instrument's pixels "
-             "are square, the axes are swapped: roughflow's first index is x; a plain-text "
-             "matrix is read with each row a line along x (its first index is y), a .npy "
-             "array as it is (np.savetxt(f, h.T) writes an [x, y] array h for the text "
-             "reader)")
+        if size is not None and len(_size_parts(size)) == 1:
+            # one size is both sides (scan_size): a grid that is not square then has
+            # rectangular pixels, and nothing was swapped
+            warn(f"one size ({size!r}) was given for the {nx0} x {ny0} grid and taken for "
+                 f"both sides, so the pixels are {dx:.4g} m along x and {dy:.4g} m along y. "
+                 "If the instrument's pixels are square, give both sides, lx,ly (size=, CLI "
+                 f"--size), with lx:ly = {nx0}:{ny0}")
+        else:
+            warn(f"the pixels are {dx:.4g} m along x and {dy:.4g} m along y ({h.shape[0]} x "
+                 f"{h.shape[1]} points, {lx_m:.4g} m x {ly_m:.4g} m). If the instrument's "
+                 "pixels are square, the axes are swapped: roughflow's first index is x; a "
+                 "plain-text matrix is read with each row a line along x (its first index is "
+                 "y), a .npy array as it is (np.savetxt(f, h.T) writes an [x, y] array h for "
+                 "the text reader)")
     n_missing = int(missing.sum())
     if n_missing == missing.size:
         raise InputError(f"{str(path)!r} has no defined point in the window kept")
     if n_missing and fill == "none":
-        raise InputError(f"{str(path)!r} has {n_missing} missing points "
+        raise InputError(f"{str(path)!r} has {n_missing} missing "
+                         f"point{'' if n_missing == 1 else 's'} "
                          f"({100 * n_missing / missing.size:.2g} % of {h.shape[0]} x "
                          f"{h.shape[1]}): choose a fill ({', '.join(FILL_METHODS[1:])}) "
-                         "or crop them away; "
+                         f"or crop {'it' if n_missing == 1 else 'them'} away; "
                          + _defined_window_hint(missing, window, (nx0, ny0)))
     if n_missing > SCAN_FILL_WARN_FRACTION * missing.size:
         warn(f"{100 * n_missing / missing.size:.3g} % of the points are missing and filled "
