@@ -79,5 +79,6 @@ def run(args: argparse.Namespace) -> None:
     print(f"{args.scan}: {s.reader}, channel {s.channel}, {nx} x {ny} points, "
           f"{surface.lx * s.length_scale:.4g} m x {surface.ly * s.length_scale:.4g} m, "
           f"rms height {surface.heights.std() * s.length_scale:.4g} m, rms gradient "
-          f"{s.rms_gradient:.4g}, detrend {s.detrend}, {s.filled} points filled ({s.fill})"
+          f"{s.rms_gradient:.4g}, detrend {s.detrend}, {s.filled} "
+          f"point{'' if s.filled == 1 else 's'} filled ({s.fill})"
           + ("" if s.crop == "none" else f", crop {s.crop}"))
