@@ -42,7 +42,7 @@ _PLASTIC_STAGE_TOL = 1e-3
 _RESTART_SCALE = 2.0
 
 
-def check_hardness(hardness, model: str = "elastic") -> float:
+def check_hardness(hardness: float, model: str = "elastic") -> float:
     """``hardness`` as a float: a pressure cap H in E*, positive, finite and at most
     ``CONTACT_PRESSURE_MAX`` (a larger one is a hardness in pascals), for the elastic model
     (the only one with a pressure to cap); :class:`InputError` naming the value otherwise."""
