@@ -1,9 +1,9 @@
 """The elastic-perfectly-plastic contact: ``solve(..., hardness=H)`` caps the pressure at H
-(cg's active-set stages on the plastic set), ``roughflow contact --hardness``."""
+(by default gfmd's capped CG, tests/test_contact_hardness_gfmd.py; here mostly
+``method="cg"``, its active-set stages on the plastic set), ``roughflow contact
+--hardness``."""
 
 from __future__ import annotations
-
-import logging
 
 import numpy as np
 import pytest
@@ -52,7 +52,7 @@ def test_a_hardness_above_every_elastic_pressure_gives_the_elastic_solve_bit_for
     # elastic iteration itself, the same floating-point operations, and a result with no
     # pressure above the cap ends there; a cap just above the largest pressure suffices
     for cap in (el.contact_pressure.max() * (1 + 1e-9), 50.0):
-        r = solve(rough, LOAD, tol=1e-8, hardness=cap)
+        r = solve(rough, LOAD, tol=1e-8, hardness=cap, method="cg")
         assert r.method == "cg" and r.hardness == cap
         for name in ("gap", "contact_pressure", "contact"):
             assert np.array_equal(getattr(r, name), getattr(el, name)), name
@@ -66,7 +66,7 @@ def test_a_hardness_above_every_elastic_pressure_gives_the_elastic_solve_bit_for
 def test_pressures_stay_in_the_box_and_the_gap_obeys_each_cells_sign(rough, ratio):
     tol = 1e-8
     cap = ratio * LOAD
-    r = solve(rough, LOAD, tol=tol, hardness=cap)
+    r = solve(rough, LOAD, tol=tol, hardness=cap, method="cg")  # cg's exact box and load
     p = r.contact_pressure
     # the box holds exactly: cells are clipped to the cap and scaled only below it
     assert p.min() >= 0 and p.max() <= cap
@@ -120,7 +120,8 @@ def test_a_small_hardness_tends_to_the_bearing_cut(rough):
     assert excess[-1] < 0.02 and differ[-1] < 0.06
 
 
-def test_matches_tamaas_kato_saturated(small):
+@pytest.mark.parametrize("method", ["gfmd", "cg"])
+def test_matches_tamaas_kato_saturated(small, method):
     tm = pytest.importorskip("tamaas")
     nx, ny = small.shape
     tm.set_log_level(tm.LogLevel.error)
@@ -133,7 +134,8 @@ def test_matches_tamaas_kato_saturated(small):
         solver.solve(load)
         traction = np.array(model.traction).reshape(nx, ny)
         gap = np.maximum(np.array(model["gap"]).reshape(nx, ny), 0)
-        ours = solve(small, load, tol=1e-8, hardness=cap)
+        ours = solve(small, load, tol=1e-8, hardness=cap, method=method)
+        assert ours.method == method
         # The same discrete problem, ours to a gap error of 1e-8 rms(h), Tamaas to its
         # 1e-12. Measured: identical contact and plastic sets, pressures within 2.2e-7 H,
         # gaps within 1.6e-10 (2.4e-9 rms(h)), mean gaps within 2.2e-10 relative. Allowed:
@@ -150,26 +152,25 @@ def test_matches_tamaas_kato_saturated(small):
 
 def test_warm_starts_reach_the_same_state(rough):
     cap = 4 * LOAD
-    cold = solve(rough, LOAD, tol=1e-8, hardness=cap)
+    cold = solve(rough, LOAD, tol=1e-8, hardness=cap, method="cg")
     # from its own result: nothing to do but restore the load, one rescale of the cells
     # below the cap by 1 + O(1e-16) (a sum of 16384 terms): 1e-14 relative bounds it
-    again = solve(rough, LOAD, tol=1e-8, hardness=cap, init=cold)
+    again = solve(rough, LOAD, tol=1e-8, hardness=cap, init=cold, method="cg")
     assert again.iterations == 0 and np.array_equal(again.plastic, cold.plastic)
     np.testing.assert_allclose(again.contact_pressure, cold.contact_pressure, rtol=1e-14,
                                atol=0)
     # from the elastic result (pressures up to 10 x the cap) and from another load: the
     # same solution to the tolerance, so the same sets up to a marginal cell each
     for init in (solve(rough, LOAD, method="cg"), solve(rough, 0.8 * LOAD, hardness=cap)):
-        warm = solve(rough, LOAD, tol=1e-8, hardness=cap, init=init)
+        warm = solve(rough, LOAD, tol=1e-8, hardness=cap, init=init, method="cg")
         assert int((warm.contact != cold.contact).sum()) <= 2
         assert int((warm.plastic != cold.plastic).sum()) <= 2
         assert warm.mean_gap == pytest.approx(cold.mean_gap, rel=1e-6)
 
 
-def test_without_a_method_the_cap_solves_with_cg_and_says_so(rough, caplog):
-    with caplog.at_level(logging.INFO, logger="roughflow.contact.solve"):
-        r = solve(rough, LOAD, hardness=0.2)
-    assert r.method == "cg" and "method='cg'" in caplog.text
+def test_without_a_method_the_cap_solves_with_gfmd(rough):
+    r = solve(rough, LOAD, hardness=0.2)
+    assert r.method == "gfmd" and r.hardness == 0.2 and r.plastic is not None
 
 
 @pytest.mark.parametrize(
@@ -183,7 +184,6 @@ def test_without_a_method_the_cap_solves_with_cg_and_says_so(rough, caplog):
         ({"hardness": float("inf")}, "finite"),
         ({"hardness": True}, "hardness"),
         ({"hardness": 2e9}, "units of the contact modulus"),  # pascals
-        ({"hardness": 0.2, "method": "gfmd"}, "method='cg'"),
         ({"hardness": 0.2, "backend": "cupy"}, "backend='cupy'"),
     ],
 )
@@ -199,8 +199,8 @@ def test_the_cap_is_for_the_elastic_model_only(rough):
         solve(rough, model="bearing", area_fraction=0.3, hardness=0.2)
     with pytest.raises(InputError, match="model='elastic'"):
         solve(rough, LOAD, model="adhesive", adhesion=Adhesion(1e-4, 0.01), hardness=0.2)
-    with pytest.raises(InputError, match="work="):
-        solve(rough, LOAD, hardness=0.2, work=workspace(rough))
+    with pytest.raises(InputError, match="work="):  # gfmd's (with a cap too), not cg's
+        solve(rough, LOAD, hardness=0.2, work=workspace(rough), method="cg")
     with pytest.raises(InputError, match="not below the hardness"):
         polonsky_keer(rough.heights, 1.0, 1.0, 0.3, tol=1e-6, max_iter=10, hardness=0.3)
 
@@ -230,12 +230,24 @@ def test_cli_hardness_in_e_star_and_with_its_unit(cli_surface_file, tmp_path, ca
     for path in (plain, units):
         with xr.open_dataset(path) as ds:
             assert ds.attrs["hardness"] == pytest.approx(0.2, rel=1e-15)
-            assert ds.attrs["method"] == "cg"
+            assert ds.attrs["method"] == "gfmd"  # the default, with the cap too
             # the same deterministic solve as the API's: the same arrays
             np.testing.assert_array_equal(ds["plastic"].values.astype(bool), ref.plastic)
             np.testing.assert_array_equal(ds["contact_pressure"].values,
                                           ref.contact_pressure)
             np.testing.assert_array_equal(ds["gap"].values, ref.gap)
+
+
+@pytest.mark.parametrize("method", ["gfmd", "cg"])
+def test_cli_hardness_with_either_method(cli_surface_file, tmp_path, method):
+    # both methods carry the cap; each file is its method's solve
+    out = tmp_path / "c.nc"
+    assert main(["contact", str(cli_surface_file), "--pressure", str(LOAD), "--hardness",
+                 "0.2", "--method", method, "-o", str(out)]) in (0, None)
+    ref = solve(read_surface(cli_surface_file), LOAD, hardness=0.2, method=method)
+    with xr.open_dataset(out) as ds:
+        assert ds.attrs["method"] == method
+        np.testing.assert_array_equal(ds["plastic"].values.astype(bool), ref.plastic)
 
 
 @pytest.mark.parametrize(
@@ -254,7 +266,6 @@ def test_cli_hardness_in_e_star_and_with_its_unit(cli_surface_file, tmp_path, ca
          ("--model elastic only", "no pressure to cap")),
         (["--model", "adhesive", "--pressure", "0.05", "--hardness", "0.2"],
          ("--model elastic only",)),
-        (["--pressure", "0.05", "--hardness", "0.2", "--method", "gfmd"], ("--method cg",)),
     ],
 )
 def test_cli_refusals(cli_surface_file, tmp_path, capsys, argv, says):
@@ -332,7 +343,7 @@ def test_the_load_left_to_one_elastic_cell_still_spreads(afm_scan_file):
     # digit of the reference quoted (the two solvers' own difference is below it).
     surface = read_surface(afm_scan_file)
     load, cap = 1e7 / 115e9, 2e9 / 115e9
-    r = solve(surface, load, tol=1e-10, hardness=cap)
+    r = solve(surface, load, tol=1e-10, hardness=cap, method="cg")
     assert int(r.plastic.sum()) == 20 and int(r.contact.sum()) == 22
     elastic = np.sort(r.contact_pressure[r.contact & ~r.plastic])
     np.testing.assert_allclose(elastic, [5.3589e-4, 7.81194e-3], rtol=0, atol=1e-8)

@@ -236,7 +236,7 @@ def sealing_search(emb: Embedding, *, gbar: float, tol: float = THRESHOLD_TOL,
     (:mod:`roughflow.defaults`, in E* gbar) are scaled by the surface's rms gradient
     ``gbar`` and the embedding's load factor; an unbracketed axis gets NaN and a message.
     ``hardness`` (E*): the solver cell's contact pressure capped there
-    (:attr:`roughflow.search.SearchOptions.hardness`: elastic-perfectly-plastic, by cg; the
+    (:attr:`roughflow.search.SearchOptions.hardness`: elastic-perfectly-plastic; the
     range's cell pressures end below it), so the thresholds are the capped contact's."""
     opts = _sealing_options(emb, gbar=gbar, contact_tol=contact_tol, hardness=hardness)
     res = threshold(emb.surface, None, tol=tol, options=opts, threads=threads)
@@ -270,7 +270,7 @@ def leak_curve(surface: Surface, pressures: ArrayLike, *, boundary: str | None =
 
     ``hardness`` (E*, as the pressures): every row's contact, and every solve of the
     sealing search, is solved with the pressure capped there (elastic-perfectly-plastic,
-    ``contact.solve(..., hardness=)``, by cg; the thresholds carry it); each row's cell
+    ``contact.solve(..., hardness=)``; the thresholds carry it); each row's cell
     pressure must lie below it.
     """
     p = check_pressures(pressures)
@@ -446,8 +446,7 @@ def pressure_curve(emb: Embedding, pressures: np.ndarray, *, contact_tol: float 
     flows = None  # the last pressure's, whose orderings the next solves reuse
     for i, pn in enumerate(pressures):
         state = solve(emb.surface, emb.cell_pressure(pn), tol=contact_tol, init=state,
-                      threads=threads, hardness=hardness,
-                      method=None if hardness is None else "cg")  # the cap's method
+                      threads=threads, hardness=hardness)
         seen = emb.observe(state)
         area[i], gap[i] = seen.area_fraction, seen.mean_gap
         if plastic is not None:

@@ -67,7 +67,8 @@ def register(sub: argparse._SubParsersAction) -> None:
     p.add_argument("--hardness", type=number_or_quantity, default=None,
                    help=f"elastic model: cap the local pressure at this hardness (elastic-"
                         f"perfectly-plastic; in {PRESSURE_UNIT}, or with its unit, e.g. "
-                        "2GPa, and --modulus); solved by cg; writes the plastic mask and "
+                        "2GPa, and --modulus; by gfmd, or --method cg; not on the GPU); writes "
+                        "the plastic mask and "
                         "depth (docs/contact.md, 'Hardness')")
     p.add_argument("--model", choices=MODELS, default=DEFAULT_MODEL,
                    help="elastic (hard wall), adhesive (short-range adhesion) or bearing "
@@ -199,9 +200,9 @@ def _check_model_options(args: argparse.Namespace) -> None:
         raise InputError(f"--hardness applies to --model elastic only, not --model "
                          f"{args.model}" + (": it cuts the heights and has no pressure to cap"
                                             if args.model == "bearing" else ""))
-    if args.hardness is not None and (args.method == "gfmd" or args.backend != "cpu"):
-        raise InputError("--hardness is solved by --method cg on the CPU (gfmd has no "
-                         "pressure cap): leave --method and --backend out")
+    if args.hardness is not None and args.backend != "cpu":
+        raise InputError(f"--hardness is solved on the CPU (the GPU path has no pressure "
+                         f"cap): leave --backend {args.backend} out")
     if args.model != "bearing":
         if args.pressure is None:
             raise InputError(f"--model {args.model} needs --pressure (the mean pressure in "

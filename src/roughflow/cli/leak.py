@@ -78,7 +78,7 @@ def register(sub: argparse._SubParsersAction) -> None:
     p.add_argument("--hardness", type=number_or_quantity, default=None,
                    help="hardness of the softer face, with its unit (e.g. 2GPa): the contact "
                         "pressures of the rows and of the sealing search are capped there "
-                        "(elastic-perfectly-plastic, solved by cg; docs/contact.md, "
+                        "(elastic-perfectly-plastic; docs/contact.md, "
                         "'Hardness')")
     p.add_argument("--no-sealing", action="store_true",
                    help="skip the sealing-pressure search (often most of the run time); the "

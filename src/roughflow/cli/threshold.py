@@ -95,7 +95,7 @@ def register(sub: argparse._SubParsersAction) -> None:
                         "--p-max, --p-guess, --hardness are then given with their unit")
     p.add_argument("--hardness", type=number_or_quantity, default=None,
                    help=f"elastic model: cap the local contact pressure of every solve at "
-                        f"this hardness (elastic-perfectly-plastic, solved by cg; in "
+                        f"this hardness (elastic-perfectly-plastic, not on the GPU; in "
                         f"{PRESSURE_UNIT}, or with its unit, e.g. 2GPa, and --modulus): the "
                         "threshold of the capped contact; the pressure range ends below it "
                         "(docs/contact.md, 'Hardness')")
@@ -224,8 +224,8 @@ def _modulus(args: argparse.Namespace) -> float | None:
 
 
 def _hardness(args: argparse.Namespace, modulus: float | None) -> float | None:
-    """--hardness in E* (None where not given), refused with --model bearing or adhesive,
-    gfmd or the GPU (a --p-min, --p-max, --p-guess not below it: :func:`_search_options`)."""
+    """--hardness in E* (None where not given), refused with --model bearing or adhesive or
+    on the GPU (a --p-min, --p-max, --p-guess not below it: :func:`_search_options`)."""
     if args.hardness is None:
         return None
     if args.model != "elastic":
@@ -233,9 +233,9 @@ def _hardness(args: argparse.Namespace, modulus: float | None) -> float | None:
                          f"--model {args.model}" + (
                              ": it cuts the heights and has no pressure to cap"
                              if args.model == "bearing" else ""))
-    if args.method == "gfmd" or args.backend != "cpu":
-        raise InputError(f"--hardness {args.hardness} is solved by --method cg on the CPU "
-                         "(gfmd has no pressure cap): leave --method and --backend out")
+    if args.backend != "cpu":
+        raise InputError(f"--hardness {args.hardness} is solved on the CPU (the GPU path has "
+                         f"no pressure cap): leave --backend {args.backend} out")
     return hardness_in_e_star(args.hardness, modulus)
 
 

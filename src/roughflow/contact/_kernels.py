@@ -309,6 +309,114 @@ def max_abs_free(a, active):  # pragma: no cover - compiled
     return m
 
 
+# Capped forms of the hard-wall CG kernels (``gfmd._hard_wall(hardness=H)``, the
+# elastic-perfectly-plastic model; gfmd module docstring, "Hardness"). They repeat most of
+# their elastic counterparts' loops on purpose: the elastic kernels stay untouched, so the
+# elastic solve keeps its bit-identical results and its speed (no extra mask to read or
+# write). ``below``: the plastic side (g < -eps, or on the wall with f < -H), whose
+# effective force is r = f + H and whose trial gap clips at the kink g = 0 from below; the
+# active (stuck) cells are on the wall with -H <= f < 0, their step is 0.
+
+
+@njit(cache=True, inline="always")
+def _side_clip(x, b):  # pragma: no cover - compiled
+    """x clipped at the kink from the cell's own side: min(x, 0) below, max(x, 0) above."""
+    return min(x, 0.0) if b else max(x, 0.0)
+
+
+@njit(cache=True, nogil=True, fastmath=CG_FASTMATH)
+def cg_update_capped(g, f, d, fks, t, alpha, eps, r, active, below,
+                     cap):  # pragma: no cover - compiled
+    """:func:`cg_update` with the cap ``cap`` = H: the step s of
+    :func:`cg_direction_capped` (0 on the active set, side-clipped elsewhere), then the
+    three-way classification (active: on the wall with -H <= f < 0, r = 0; below: r = f + H;
+    free: r = f). Returns sum(r)."""
+    total = 0.0
+    for i in range(g.size):
+        gi = g[i]
+        b = below[i]
+        fi = f[i]
+        if t != 0.0:
+            si = 0.0 if active[i] else _side_clip(gi + alpha * d[i], b) - gi
+            gi = _side_clip(gi + t * si, b)  # round-off of a step ending on the kink
+            fi += t * fks[i]
+            g[i] = gi
+            f[i] = fi
+        wall = abs(gi) <= eps
+        on = wall & (fi < 0.0) & (fi >= -cap)
+        bn = (not on) & ((gi < -eps) | (wall & (fi < -cap)))
+        active[i] = on
+        below[i] = bn
+        ri = 0.0 if on else (fi + cap if bn else fi)
+        r[i] = ri
+        total += ri
+    return total
+
+
+@njit(cache=True, nogil=True, fastmath=CG_FASTMATH)
+def cg_direction_capped(z, d, g, f, beta, alpha, s_in, active, below,
+                        cap):  # pragma: no cover - compiled
+    """:func:`cg_direction` with the cap: the trial gap clipped at the kink from the cell's
+    side (:func:`_side_clip`), s = 0 on the active set, and r.s with r = f + H below (the
+    step is exact along s: every cell stays on one piece of the energy)."""
+    nclip = 0
+    fs = 0.0
+    zmax = 0.0
+    smax = 0.0
+    for i in range(g.size):
+        on = active[i]
+        b = below[i]
+        zi = 0.0 if on else np.float64(z[i])
+        zmax = max(zmax, abs(zi))
+        di = 0.0 if on else zi + beta * d[i]
+        d[i] = di
+        gi = g[i]
+        gt = gi + alpha * di
+        nclip += (not on) & ((gt > 0.0) if b else (gt < 0.0))
+        si = 0.0 if on else _side_clip(gt, b) - gi
+        s_in[i] = si
+        smax = max(smax, abs(si))
+        fs += (f[i] + cap if b else f[i]) * si
+    return nclip, fs, zmax, smax
+
+
+@njit(cache=True, nogil=True, fastmath=CG_FASTMATH)
+def cg_feasible_capped(g, d, alpha, active, below):  # pragma: no cover - compiled
+    """:func:`cg_feasible` with the cap: the largest t before a cell crosses its kink along
+    the trial step, from above (g >= 0 falling) or from below (g <= 0 rising)."""
+    tf = np.inf
+    for i in range(g.size):
+        gi = g[i]
+        b = below[i]
+        si = 0.0 if active[i] else _side_clip(gi + alpha * d[i], b) - gi
+        if b:
+            tf = min(tf, max(-gi, 0.0) / si if si > 0.0 else np.inf)
+        else:
+            tf = min(tf, max(gi, 0.0) / -si if si < 0.0 else np.inf)
+    return tf
+
+
+@njit(cache=True, nogil=True, fastmath=CG_FASTMATH)
+def cg_finish_capped(g, h, f, active, below, eps, cap, sigma, gap, contact, plastic,
+                     depth):  # pragma: no cover - compiled
+    """:func:`cg_finish` with the cap: contact = active, or within eps of the wall, or
+    below it; the plastic cells (below, in contact) carry H and their depth -g (0
+    elsewhere). Returns sum(g + h)."""
+    total = 0.0
+    for i in range(g.size):
+        gi = g[i]
+        total += gi + h[i]
+        a = active[i]
+        c = a | (gi <= eps)
+        p = below[i] & c
+        sigma[i] = cap if p else (-f[i] if a else 0.0)
+        gap[i] = 0.0 if c else gi
+        contact[i] = c
+        plastic[i] = p
+        depth[i] = max(-gi, 0.0) if p else 0.0
+    return total
+
+
 def warm_up() -> None:
     """Compile the kernels (cached on disk after the first run)."""
     n = 4
@@ -325,6 +433,12 @@ def warm_up() -> None:
     cg_feasible(z, z, 0.0)
     cg_stiffness(c, np.ones((4, 3), dtype=np.float32), c.copy(), 4)
     cg_finish(z, z, z, b, 0.0, z.copy(), z.copy(), b.copy())
+    cg_update_capped(z.copy(), z.copy(), z, z32, 0.0, 0.0, 0.0, z32.copy(), b.copy(),
+                     b.copy(), 1.0)
+    cg_direction_capped(z32, z.copy(), z, z, 0.0, 0.0, z32.copy(), b, b, 1.0)
+    cg_feasible_capped(z, z, 0.0, b, b)
+    cg_finish_capped(z, z, z, b, b, 0.0, 1.0, z.copy(), z.copy(), b.copy(), b.copy(),
+                     z.copy())
     max_abs(z)
     max_abs_free(z, b)
     adhesive_pressures(z, z.copy(), 1.0, 1.0, 1.0)
@@ -467,6 +581,72 @@ def max_abs_free_np(a, active):
     """numpy (or CuPy) version of :func:`max_abs_free`."""
     xp = array_module(a)
     return _amax(xp.where(active, 0.0, xp.abs(a)))
+
+
+def _trial_step_capped(g, d, alpha, active, below):
+    """The trial step of :func:`cg_direction_capped` (numpy)."""
+    x = g + alpha * d
+    s = np.where(below, np.minimum(x, 0.0), np.maximum(x, 0.0)) - g
+    s[active] = 0.0
+    return s
+
+
+def _classify_capped(g, f, eps, cap, r, active, below) -> float:
+    """The three-way classification of :func:`cg_update_capped`; returns sum(r)."""
+    wall = np.abs(g) <= eps
+    np.logical_and(wall & (f < 0.0), f >= -cap, out=active)
+    np.logical_and(~active, (g < -eps) | (wall & (f < -cap)), out=below)
+    rr = np.where(active, 0.0, np.where(below, f + cap, f))
+    r[...] = rr
+    return float(rr.sum())
+
+
+def cg_update_capped_np(g, f, d, fks, t, alpha, eps, r, active, below, cap):
+    """numpy version of :func:`cg_update_capped`."""
+    if t != 0.0:
+        g += t * _trial_step_capped(g, d, alpha, active, below)
+        g[...] = np.where(below, np.minimum(g, 0.0), np.maximum(g, 0.0))
+        f += t * fks.astype(np.float64)
+    return _classify_capped(g, f, eps, cap, r, active, below)
+
+
+def cg_direction_capped_np(z, d, g, f, beta, alpha, s_in, active, below, cap):
+    """numpy version of :func:`cg_direction_capped`."""
+    zfree = np.where(active, 0.0, z.astype(np.float64))
+    zmax = _amax(np.abs(zfree))
+    d *= beta
+    d += zfree
+    d[active] = 0.0
+    x = g + alpha * d
+    nclip = int(np.count_nonzero(~active & np.where(below, x > 0.0, x < 0.0)))
+    s = _trial_step_capped(g, d, alpha, active, below)
+    s_in[...] = s
+    fs = float(np.einsum("i,i->", np.where(below, f + cap, f), s))
+    return nclip, fs, zmax, _amax(np.abs(s))
+
+
+def cg_feasible_capped_np(g, d, alpha, active, below):
+    """numpy version of :func:`cg_feasible_capped`."""
+    s = _trial_step_capped(g, d, alpha, active, below)
+    up = ~below & (s < 0.0)
+    dn = below & (s > 0.0)
+    tf = np.inf
+    if up.any():
+        tf = min(tf, float((np.maximum(g[up], 0.0) / -s[up]).min()))
+    if dn.any():
+        tf = min(tf, float((np.maximum(-g[dn], 0.0) / s[dn]).min()))
+    return tf
+
+
+def cg_finish_capped_np(g, h, f, active, below, eps, cap, sigma, gap, contact, plastic,
+                        depth):
+    """numpy version of :func:`cg_finish_capped`."""
+    np.logical_or(active, g <= eps, out=contact)
+    np.logical_and(below, contact, out=plastic)
+    sigma[...] = np.where(plastic, cap, np.where(active, -f, 0.0))
+    gap[...] = np.where(contact, 0.0, g)
+    depth[...] = np.where(plastic, np.maximum(-g, 0.0), 0.0)
+    return float(g.sum() + h.sum())
 
 
 @njit(cache=True, nogil=True)

@@ -67,6 +67,20 @@ exact force's; when only the bound stands between a check and the tolerance, the
 decides. Same iteration counts as double precision to tol 1e-10 (256^2 - 2048^2,
 docs/contact.md "Single precision"); the residual's own round-off is 1e-8 - 2e-7 relative.
 
+Hardness (``hardness=H``, the hard wall on the CPU; docs/contact.md "Hardness"): the same CG
+on E(u) = 1/2 u.K u + p sum(u) + H sum max(0, -g), g = u - h: the wall becomes a kink of the
+energy at g = 0, which a cell may cross into the plastic side g < 0 (depth -g, pressure H).
+A cell is free (g > 0: r = f), stuck on the wall (g = 0, -H <= f < 0: r = 0, the active set)
+or plastic (g < 0, or g = 0 with f < -H: r = f + H); the trial gap clips at the kink from the
+cell's own side, so every cell stays on one quadratic piece along the step and t = r.s / s.K s
+is still exact (``_kernels.cg_*_capped``; the elastic kernels stay as they are). The residual
+and the single-precision transforms are the elastic solve's (the same contact and plastic
+sets as ``cg.polonsky_keer(hardness=)`` at tol 1e-10, pressures within 3e-9 H, over 16
+cases at 128^2 and 64 x 256, H = 1.2 - 20 x the load; the exact force is refreshed as
+often as without a cap). A cold start where the load over H exceeds the elastic law's
+area starts from the flat at bearing area p / H, its cells above it plastic; a warm start's
+negative gaps are plastic depths (``contact.solve`` passes heights + gap - plastic depth).
+
 Adhesive model (``adhesion=``, not convex): with the hard wall (the default,
 ``repulsion="hard"``), mass-weighted FIRE (Bitzek et al., PRL 97, 170201, 2006; :mod:`.fire`),
 the cosine attraction acting on the free points of the active-set wall above; with the
@@ -306,8 +320,10 @@ class HardWallWork:
     is a view of these arrays: it is overwritten by the next solve with the same work.
 
     g, f, d, active: gap, force, search direction and active set of the iteration (flat);
-    rt_old: the transform of the previous residual; sigma, gap, contact: the result's wall
-    reaction, gap and contact mask (grid shaped); u0: the warm start's elastic surface.
+    below: the plastic side of a capped solve (flat); rt_old: the transform of the previous
+    residual; sigma, gap, contact: the result's wall reaction, gap and contact mask (grid
+    shaped), plastic, depth: a capped solve's plastic mask and depth (grid shaped); u0: the
+    warm start's elastic surface.
     """
 
     g: np.ndarray
@@ -319,6 +335,9 @@ class HardWallWork:
     gap: np.ndarray
     contact: np.ndarray
     u0: np.ndarray
+    below: np.ndarray
+    plastic: np.ndarray
+    depth: np.ndarray
 
     @property
     def shape(self) -> tuple[int, int]:
@@ -334,7 +353,9 @@ def hard_wall_work(shape: tuple[int, int], xp: ModuleType = np) -> HardWallWork:
                         active=xp.empty(size, dtype=bool),
                         rt_old=xp.empty((nx, ny // 2 + 1), dtype=np.complex64),
                         sigma=xp.empty((nx, ny)), gap=xp.empty((nx, ny)),
-                        contact=xp.empty((nx, ny), dtype=bool), u0=xp.empty((nx, ny)))
+                        contact=xp.empty((nx, ny), dtype=bool), u0=xp.empty((nx, ny)),
+                        below=xp.empty(size, dtype=bool),
+                        plastic=xp.empty((nx, ny), dtype=bool), depth=xp.empty((nx, ny)))
 
 
 @functools.lru_cache(maxsize=1)  # large grids: four spectral arrays in GPU memory
@@ -370,6 +391,7 @@ def gfmd(
     setup: HardWallSetup | None = None,
     work: HardWallWork | None = None,
     backend: str = DEFAULT_BACKEND,
+    hardness: float | None = None,
 ) -> SolverOutput:
     """Minimise elastic + interaction + load energy; returns a :class:`SolverOutput`.
 
@@ -393,7 +415,11 @@ def gfmd(
     iteration with CuPy arrays, cuFFT and the CUDA forms of the fused kernels
     (``_cuda_kernels``; ``use_numba=False``: the kernels' array-module twins); ``work`` then
     holds CuPy arrays, and the output is copied to numpy.
+    ``hardness``: the hard wall's pressure cap H (module docstring, "Hardness"; CPU only),
+    None for none; ``u0`` below the heights is then a plastic depth, kept.
     """
+    if hardness is not None and (adhesion is not None or minimizer != "auto"):
+        raise InputError("hardness= serves the hard wall's CG only")
     if minimizer not in ("auto", "fire"):
         raise InputError(f"minimizer must be 'auto' or 'fire', got {minimizer!r}")
     if backend != "cpu" and (adhesion is not None or minimizer != "auto"):
@@ -406,7 +432,7 @@ def gfmd(
     if adhesion is None and minimizer == "auto":
         return _hard_wall(heights, lx, ly, load, tol=tol, max_iter=max_iter, u0=u0,
                           threads=threads, use_numba=use_numba, setup=setup, work=work,
-                          backend=backend)
+                          backend=backend, hardness=hardness)
     if adhesion is not None and adhesion.repulsion == "harmonic" and minimizer == "auto":
         return adhesive_cg(heights, lx, ly, load, adhesion=adhesion, tol=tol,
                            max_iter=max_iter, u0=u0, threads=threads,
@@ -430,6 +456,28 @@ def _hard_wall_kernels(use_numba: bool, on_gpu: bool) -> tuple:
             _k.cg_stiffness_np, _k.cg_finish_np, _k.max_abs_np, _k.max_abs_free_np)
 
 
+def _capped_kernels(use_numba: bool) -> tuple:
+    """The capped forms of update, direction, feasible and finish (``_kernels``)."""
+    if use_numba:
+        return (_k.cg_update_capped, _k.cg_direction_capped, _k.cg_feasible_capped,
+                _k.cg_finish_capped)
+    return (_k.cg_update_capped_np, _k.cg_direction_capped_np, _k.cg_feasible_capped_np,
+            _k.cg_finish_capped_np)
+
+
+def capped_cold_level(setup: HardWallSetup, load: float, hardness: float) -> float | None:
+    """The cold start of a capped solve (module docstring, "Hardness"): where the
+    rigid-plastic area load / H exceeds the elastic law's, the level whose bearing area is
+    load / H (left unclipped: the cells above it start plastic); else None (the elastic
+    start)."""
+    if setup.gbar <= 0 or load / hardness <= elastic_area(load / setup.gbar):
+        return None
+    levels = setup.levels
+    area = min(load / hardness, 1.0)
+    lp = float(levels[min(max(round((1.0 - area) * (levels.size - 1)), 0), levels.size - 1)])
+    return min(cold_start_level(setup, load), lp)
+
+
 def _hard_wall(
     heights: np.ndarray,
     lx: float,
@@ -444,10 +492,15 @@ def _hard_wall(
     setup: HardWallSetup | None = None,
     work: HardWallWork | None = None,
     backend: str = DEFAULT_BACKEND,
+    hardness: float | None = None,
 ) -> SolverOutput:
     """Projected preconditioned CG with a secant step (module docstring, "Hard wall"), its
-    transforms in single precision ("Precision"); on the GPU with ``backend="cupy"``."""
+    transforms in single precision ("Precision"); on the GPU with ``backend="cupy"``; with
+    a pressure cap ``hardness`` (CPU only; "Hardness")."""
     on_gpu = gpu.check_backend(backend) == "cupy"
+    if hardness is not None and on_gpu:
+        raise InputError("hardness= is solved on the CPU: the hard wall's CUDA kernels have "
+                         "no cap")
     update, precondition, direction, feasible, stiffness, finish, max_abs, max_free = (
         _hard_wall_kernels(use_numba, on_gpu))
     shape = heights.shape
@@ -493,15 +546,39 @@ def _hard_wall(
     d.fill(0.0)
     active.fill(False)
     rt_old.fill(0.0)  # the transform of the previous r
+    capped = hardness is not None
+    if capped:
+        # the capped kernels in the elastic ones' signatures: one iteration below for both,
+        # while the elastic solve keeps its own kernels untouched
+        cap = float(hardness)
+        below = work.below
+        below.fill(False)
+        update_c, direction_c, feasible_c, finish_c = _capped_kernels(use_numba)
+
+        def update(g, f, d, fks, t, alpha, eps, r, active):
+            return update_c(g, f, d, fks, t, alpha, eps, r, active, below, cap)
+
+        def direction(z, d, g, f, beta, alpha, s_in, active):
+            return direction_c(z, d, g, f, beta, alpha, s_in, active, below, cap)
+
+        def feasible(g, d, alpha):
+            return feasible_c(g, d, alpha, active, below)
+
     # the iteration moves the gap g = u - h (u: the elastic surface, centred heights): the
-    # wall is g >= 0 and the loops need not read h
+    # wall is g >= 0 and the loops need not read h; with a cap g < 0 is a plastic depth
+    # (a warm start's is kept, and so is the plastic cold start's)
     if u0 is not None:
         xp.subtract(xp.asarray(u0, dtype=np.float64).ravel(), h0, out=g)
         g -= h
-        xp.maximum(g, 0.0, out=g)
+        if not capped:
+            xp.maximum(g, 0.0, out=g)
     else:
-        xp.subtract(cold_start_level(setup, load), h, out=g)
-        xp.maximum(g, 0.0, out=g)
+        level = capped_cold_level(setup, load, cap) if capped else None
+        if level is None:
+            xp.subtract(cold_start_level(setup, load), h, out=g)
+            xp.maximum(g, 0.0, out=g)
+        else:
+            xp.subtract(level, h, out=g)
 
     def refresh() -> float:
         """The exact force of u = g + h (a double FFT pair), the active set and r; returns
@@ -604,6 +681,14 @@ def _hard_wall(
         drift += SINGLE_DRIFT * t * smax / hscale
 
     sigma, gap, contact = work.sigma, work.gap, work.contact
+    if capped:
+        plastic, depth = work.plastic, work.depth
+        separation = finish_c(g, h, f, active, below, eps, cap, sigma.reshape(-1),
+                              gap.reshape(-1), contact.reshape(-1), plastic.reshape(-1),
+                              depth.reshape(-1)) / size
+        return SolverOutput(pressure=sigma, gap=gap, contact=contact, separation=separation,
+                            iterations=it, residual=res, converged=res <= tol,
+                            plastic=plastic, plastic_depth=depth)
     separation = finish(g, h, f, active, eps, sigma.reshape(-1), gap.reshape(-1),
                         contact.reshape(-1)) / size
     return SolverOutput(pressure=gpu.to_host(sigma), gap=gpu.to_host(gap),

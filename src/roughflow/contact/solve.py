@@ -135,11 +135,13 @@ def solve(
       finite, above it), the elastic-perfectly-plastic (saturated pressure) model: 0 <= p
       <= H, cells at H are plastic, count as contact with gap 0, and the rigid surface
       penetrates the elastic body there by the result's ``plastic_depth``
-      (docs/contact.md, "Hardness"). Solved by ``cg`` (Polonsky-Keer stages on the
-      plastic set, ``contact/cg.py``): ``method=None`` then means ``"cg"`` (logged),
-      ``method="gfmd"`` and ``backend="cupy"`` (gfmd's), ``setup=`` and ``work=`` are
-      refused. A hardness above every pressure of the elastic cg solve gives, from a cold
-      start, its result bit for bit; ``max_iter`` bounds the iterations of all stages together.
+      (docs/contact.md, "Hardness"). Solved by gfmd (the default: its hard-wall CG with
+      the cap, ``contact/gfmd.py`` "Hardness"; on the CPU: ``backend="cupy"`` is refused;
+      ``setup=`` and ``work=`` serve it as without a cap) or by ``method="cg"``
+      (Polonsky-Keer stages on the plastic set, ``contact/cg.py``; a hardness above every
+      pressure of the elastic cg solve gives, from a cold start, its result bit for bit;
+      ``max_iter`` bounds the iterations of all stages together). A warm start from a
+      capped result carries its plastic depth.
     """
     if model not in MODELS:
         raise InputError(f"model must be one of {MODELS}, got {model!r}")
@@ -147,8 +149,7 @@ def solve(
         raise InputError(f"surface must be a roughflow Surface, got {type(surface).__name__}")
     heights = require_field("surface heights", surface.heights)
     if hardness is not None:
-        method = _check_hardness(hardness, model, method, backend, setup, work)
-        hardness = float(hardness)
+        hardness = _check_hardness(hardness, model, backend)
     if check_backend(backend, model, method, work is not None) == "cupy":
         gpu_check_memory(heights.shape, "an elastic contact solve on the GPU")
     check_memory("bearing" if model == "bearing" else "contact", heights.shape,
@@ -253,10 +254,12 @@ def solve(
             if model == "adhesive" and init.model == "adhesive":
                 gap0 = adhesion.physical_gap(init.gap, init.contact, init.contact_pressure)
             u0 = np.add(heights, gap0, out=work.u0 if work is not None else None)
+            if init.plastic_depth is not None:  # the rigid surface's penetration: u < h
+                u0 -= init.plastic_depth
         out = gfmd(
             heights, lx, ly, load, tol=tol, max_iter=int(max_iter), u0=u0,
             adhesion=adhesion if model == "adhesive" else None, threads=threads, setup=setup,
-            work=work, backend=backend,
+            work=work, backend=backend, hardness=hardness,
         )
         if (model == "adhesive" and load == 0 and warm and out.converged
                 and float(out.gap.min()) >= adhesion.range):
@@ -378,24 +381,15 @@ def check_resolved_load(pressure: float, gbar: float, shape: tuple[int, int]) ->
             "reaches round-off")
 
 
-def _check_hardness(hardness, model: str, method: str | None, backend: str, setup,
-                    work) -> str:
-    """The method of a solve with ``hardness=``: a positive finite number, for the elastic
-    model, solved by cg, the only method with the pressure cap (``method=None`` becomes
-    "cg", logged; an explicit "gfmd" is refused rather than overridden, and so are gfmd's
-    ``backend="cupy"``, ``setup=`` and ``work=``)."""
+def _check_hardness(hardness, model: str, backend: str) -> float:
+    """``hardness=`` as a float: a positive finite number, for the elastic model, solved on
+    the CPU (the hard wall's CUDA kernels have no pressure cap: ``backend="cupy"`` is
+    refused)."""
     h = check_hardness(hardness, model)
-    if method == "gfmd":
-        raise InputError("hardness= is solved by method='cg' (Polonsky-Keer with the pressure "
-                         "cap); gfmd has no cap: leave method out or give method='cg'")
-    for name, value in (("backend='cupy'", backend == "cupy"), ("setup=", setup is not None),
-                        ("work=", work is not None)):
-        if value:
-            raise InputError(f"{name} serves gfmd solves; hardness= solves with method='cg'")
-    if method is None:
-        log.info("hardness=%g: solving with method='cg' (the method with the pressure cap)",
-                 h)
-    return "cg"
+    if backend == "cupy":
+        raise InputError("hardness= is solved on the CPU, not with backend='cupy': the "
+                         "GPU's hard-wall kernels have no pressure cap")
+    return h
 
 
 def _check_method(method: str | None) -> str:
@@ -432,7 +426,8 @@ def _require_hard_wall(what: str, value, kind: type, maker: str, model: str,
 
 def workspace(surface: Surface) -> HardWallWork:
     """The arrays of elastic gfmd solves of ``surface``'s grid, reused by every solve given
-    ``work=`` (see :func:`solve`; about 54 bytes per grid point)."""
+    ``work=`` (see :func:`solve`; about 64 bytes per grid point, a capped solve's plastic
+    mask and depth included)."""
     from .gfmd import hard_wall_work
 
     if not isinstance(surface, Surface):

@@ -201,10 +201,10 @@ class SearchOptions:
     periodic: the observed state is periodic across the flow (default), or closed by
         walls there (False: a non-periodic scan); see :func:`roughflow.percolation.percolates`.
     hardness: the elastic model only: cap H of the local contact pressure (E*, as
-        ``pressure_range``), every contact solved elastic-perfectly-plastic by cg
-        (``contact.solve(..., hardness=H)``; docs/contact.md, "Hardness"); a range that
-        reaches H ends at :data:`HARDNESS_RANGE_FRACTION` x H (:func:`threshold`). None:
-        purely elastic.
+        ``pressure_range``), every contact solved elastic-perfectly-plastic (by gfmd, or
+        by cg with ``method="cg"``; ``contact.solve(..., hardness=H)``; docs/contact.md,
+        "Hardness"); a range that reaches H ends at :data:`HARDNESS_RANGE_FRACTION` x H
+        (:func:`threshold`). None: purely elastic.
     """
 
     strategy: str = THRESHOLD_STRATEGY
@@ -251,13 +251,10 @@ class SearchOptions:
 
     def _check_hardness(self, p_min: float) -> None:
         """:class:`InputError` naming the value where ``hardness`` is no pressure cap the
-        searched solves can take: not a positive finite number, one in pascals, with gfmd
-        (which has no cap), or not above the lowest pressure of the range or the first one
-        (a range reaching above it is clipped by :func:`threshold`)."""
+        searched solves can take: not a positive finite number, one in pascals, or not above
+        the lowest pressure of the range or the first one (a range reaching above it is
+        clipped by :func:`threshold`)."""
         cap = check_hardness(self.hardness)
-        if self.method == "gfmd":
-            raise InputError(f"hardness={cap:g} is solved by method='cg' (gfmd has no "
-                             "pressure cap): leave method out or give method='cg'")
         require_below_hardness(p_min, cap, load_text=f"pressure_range's lowest pressure "
                                f"{p_min:g} E*", hardness_text=f"hardness={cap:g} E*")
         if self.first_pressure is not None:
@@ -780,8 +777,10 @@ def threshold(
     scaled to the surface's rms gradient (a_c* does not depend on it). Every contact solve
     logs one line (load, area, iterations, residual, seconds) at INFO.
     ``backend="cupy"``: the elastic gfmd solves on a CUDA GPU (``contact.solve``'s backend).
-    With ``options.hardness`` H (elastic model, CPU) every solve is capped at H, by cg, and
-    the pressure range ends below H (:func:`_below_hardness`); the results carry H.
+    With ``options.hardness`` H (elastic model, CPU) every solve is capped at H (by gfmd,
+    with the prepared setup, the workspace and compact states as without a cap, or by
+    ``options.method="cg"``), and the pressure range ends below H (:func:`_below_hardness`);
+    the results carry H.
     """
     if not isinstance(surface, Surface):
         raise InputError(f"surface must be a roughflow Surface, got {type(surface).__name__}")
@@ -810,8 +809,9 @@ def threshold(
     if cap is not None:
         check_hardness(cap, model)
         if backend != "cpu":
-            raise InputError(f"options.hardness={cap!r} is solved by cg on the CPU; "
-                             f"backend={backend!r} serves the gfmd solves")
+            raise InputError(f"options.hardness={cap!r} is solved on the CPU (the GPU's "
+                             f"hard-wall kernels have no pressure cap), not backend="
+                             f"{backend!r}")
         opts, top_note = _below_hardness(opts)
     on_gpu = check_backend(backend, model, opts.method) == "cupy"
     if on_gpu:
@@ -888,8 +888,8 @@ def threshold(
 
     kwargs = {"model": model, "method": opts.method, "adhesion": adhesion, "threads": threads,
               "tol": opts.contact_tol, "backend": backend}
-    if cap is not None:  # cg, the method with the cap, named: no log line per solve
-        kwargs.update(method="cg", hardness=cap)
+    if cap is not None:
+        kwargs["hardness"] = cap
     start_out = None
     if model == "elastic" and kwargs["method"] in (None, "gfmd"):  # built once for all solves
         kwargs["setup"] = prepare(surface, threads, backend)

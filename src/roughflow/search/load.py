@@ -135,12 +135,16 @@ class CompactState:
     pressure - plastic depth: its plastic cells (pressure H, gap 0) get q below -c H by their
     depth, so they come back at a pressure above H (a capped cg solve clips its start to H
     and holds the cells there as plastic) and order below every elastic contact cell, the
-    deepest last: in the rigid-plastic limit the order of the heights, the bearing model's."""
+    deepest last: in the rigid-plastic limit the order of the heights, the bearing model's.
+    ``hardness``: that H (None for an elastic state): a start rebuilt from q gets back the
+    plastic depth c (pressure - H) where its pressure exceeds H (:func:`_from_q`), which a
+    gfmd warm start needs (its elastic surface lies below the heights there)."""
 
     q: np.ndarray
     compliance: float
     iterations: int
     residual: float
+    hardness: float | None = None
 
 
 @njit(cache=True, nogil=True)
@@ -179,7 +183,7 @@ def compact(result: ContactResult, compliance: float) -> CompactState:
               np.ascontiguousarray(result.contact_pressure, dtype=np.float64).ravel(),
               float(compliance), q.reshape(-1))
     return CompactState(q=q, compliance=float(compliance), iterations=int(result.iterations),
-                        residual=float(result.residual))
+                        residual=float(result.residual), hardness=result.hardness)
 
 
 def warm_start(points: Sequence[SolvedPoint], load: float, *,
@@ -247,7 +251,9 @@ def _from_q(q0: np.ndarray, q1: np.ndarray, w0: float, w1: float, compliance: fl
             like: ContactResult | CompactState, factor: float, load: float, *,
             out: tuple[np.ndarray, np.ndarray, np.ndarray] | None) -> ContactResult:
     """The start at ``load`` from q = w0 q0 + w1 q1: gap = max(q, 0) / factor, pressure =
-    factor max(-q, 0) / c (one pass; into ``out`` as in :func:`warm_start`)."""
+    factor max(-q, 0) / c (one pass; into ``out`` as in :func:`warm_start`). Where ``like``
+    is capped at a hardness H, also its plastic depth c max(pressure - H, 0): q below -c H
+    by the depth, after the load factor (the pressure is left above H: cg clips it)."""
     shape = q0.shape
     if out is None:
         out = (np.empty(shape), np.empty(shape), np.empty(shape, dtype=bool))
@@ -260,13 +266,18 @@ def _from_q(q0: np.ndarray, q1: np.ndarray, w0: float, w1: float, compliance: fl
     n, total = _start_kernel(np.ascontiguousarray(q0).ravel(), np.ascontiguousarray(q1).ravel(),
                              float(w0), float(w1), 1.0 / factor, factor / compliance,
                              gap.reshape(-1), pressure.reshape(-1), contact.reshape(-1))
+    cap = like.hardness
+    depth = None if cap is None else compliance * np.maximum(pressure - cap, 0.0)
     if isinstance(like, ContactResult):
-        return dataclasses.replace(like, contact_pressure=pressure, gap=gap)
+        # not like's depth: a stale one would move a gfmd warm start (solve subtracts it)
+        return dataclasses.replace(like, contact_pressure=pressure, gap=gap,
+                                   plastic_depth=depth)
     size = gap.size
     return ContactResult(gap=gap, contact_pressure=pressure, contact=contact,
                          area_fraction=n / size, mean_gap=total / size,
                          pressure=float(load), iterations=0, residual=float("nan"),
-                         converged=False, model="elastic", method="gfmd")
+                         converged=False, model="elastic", method="gfmd", hardness=cap,
+                         plastic_depth=depth)
 
 
 def _scaled(q: SolvedPoint, load: float, compliance: float,
