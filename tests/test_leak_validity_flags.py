@@ -273,7 +273,7 @@ def test_cli_contact_warns_at_or_above_e_star_and_gives_the_gap_in_metres(afm_sc
     assert main(["contact", str(afm_scan_file), "--pressure", "300GPa", "--modulus", "200GPa",
                  "-o", str(tmp_path / "c.nc")]) == 0
     out, err = capsys.readouterr()
-    assert "--pressure 300GPa (1.5 E*) is at or above E* = 2e+11 Pa: strains of order one" in err
+    assert "--pressure 300GPa is at or above E* (1.5 E* = 3e+11 Pa): strains of order one" in err
     assert main(["contact", str(afm_scan_file), "--pressure", "1GPa", "--modulus", "200GPa",
                  "-o", str(tmp_path / "d.nc")]) == 0
     out, err = capsys.readouterr()
@@ -285,7 +285,7 @@ def test_cli_contact_warns_at_or_above_e_star_and_gives_the_gap_in_metres(afm_sc
     # without a modulus, in E*
     assert main(["contact", str(afm_scan_file), "--pressure", "2", "-o",
                  str(tmp_path / "e.nc")]) == 0
-    assert "--pressure 2 E* is at or above E*" in capsys.readouterr().err
+    assert "--pressure 2 is at or above E* (2 E*)" in capsys.readouterr().err
 
 
 def test_cli_contact_refuses_an_unresolved_pressure_in_pascals(afm_scan_file, tmp_path,

@@ -164,15 +164,14 @@ def _warn_if_large_strain(given: float | str, pressure: float, modulus: float | 
     """Warn where --pressure (``given``; ``pressure`` in E*, the ``modulus`` in Pa or None)
     is at or above E* (:func:`roughflow.leak.large_strain`): solved all the same, but
     strains of order one are outside the linear-elastic model."""
-    from roughflow.leak import large_strain
+    from roughflow.leak import LARGE_STRAIN_WARNING, large_strain
 
     if not large_strain(pressure):
         return
-    said = (f"--pressure {given:g} E* is at or above E*" if modulus is None else
-            f"--pressure {given} ({pressure:.4g} E*) is at or above E* = {modulus:.4g} Pa")
-    log.warning("%s: strains of order one, outside the linear-elastic contact model (small "
-                "strains and slopes), whose contact there is not the surfaces'; check "
-                "--pressure and --modulus", said)
+    shown = given if isinstance(given, str) else f"{given:g}"
+    log.warning(LARGE_STRAIN_WARNING, f"--pressure {shown} is",
+                f"{pressure:.4g} E*" + ("" if modulus is None
+                                        else f" = {pressure * modulus:.4g} Pa"))
 
 
 def _load(args: argparse.Namespace) -> tuple[float | None, float | None, float | None]:

@@ -303,7 +303,12 @@ def cold_start_level(setup: HardWallSetup, load: float) -> float:
     levels = setup.levels
     if setup.gbar <= 0 or setup.band_ratio >= BAND_R_HI:
         return float(levels[-1])
-    area = elastic_area(load / setup.gbar)
+    return _level_at_area(setup, elastic_area(load / setup.gbar))
+
+
+def _level_at_area(setup: HardWallSetup, area: float) -> float:
+    """The centred height whose bearing area is ``area``, from the setup's sorted sample."""
+    levels = setup.levels
     return float(levels[min(max(round((1.0 - area) * (levels.size - 1)), 0), levels.size - 1)])
 
 
@@ -472,10 +477,7 @@ def capped_cold_level(setup: HardWallSetup, load: float, hardness: float) -> flo
     start)."""
     if setup.gbar <= 0 or load / hardness <= elastic_area(load / setup.gbar):
         return None
-    levels = setup.levels
-    area = min(load / hardness, 1.0)
-    lp = float(levels[min(max(round((1.0 - area) * (levels.size - 1)), 0), levels.size - 1)])
-    return min(cold_start_level(setup, load), lp)
+    return min(cold_start_level(setup, load), _level_at_area(setup, min(load / hardness, 1.0)))
 
 
 def _hard_wall(
